@@ -1,0 +1,97 @@
+# sphseg — the only build entry. Targets:
+#   make deps    install the Debian packages the build and tests need (when missing)
+#   make         build build/sphseg with $(MPICC)
+#   make run     deps, build, and the default scene inputs/shearbox_2d.yml -> out/shearbox_2d/
+#   make test    unit, validation and bad-input tests; ends with "N passed, N failed"
+#   make bench   particle-steps per second of the concentration solver (CPU)
+# Variables a cluster user may set (e.g. from modules):
+#   CC, MPICC            C compiler and MPI wrapper (mpicc)
+#   PRECISION            double (default) | single
+#   HDF5_DIR             prefix of a parallel HDF5 (include/, lib/); default: pkg-config hdf5-openmpi
+#   CYAML_DIR            prefix of libcyaml (include/, lib/); default: system
+#   METIS_DIR            prefix of METIS, read by the METIS partitioner (not built yet)
+#   NVCC, CUDA_ARCH      CUDA compiler and arch (sm_90), for the CUDA backend (not built yet)
+#   OPENMP               1 (default) to thread the CPU loops with OpenMP, 0 to build without
+#   PYTHON               interpreter with numpy, scipy, h5py, matplotlib (default /usr/bin/python3)
+
+CC        ?= gcc
+MPICC     ?= mpicc
+NVCC      ?= nvcc
+CUDA_ARCH ?= sm_90
+PRECISION ?= double
+OPENMP    ?= 1
+PYTHON    ?= /usr/bin/python3
+BUILD     ?= build
+
+CFLAGS  ?= -O3 -march=native
+CFLAGS  += -std=c11 -D_POSIX_C_SOURCE=200809L -Wall -Wextra -Wno-unknown-pragmas -I. -Isrc
+LDLIBS  := -lm
+
+ifeq ($(PRECISION),single)
+  CFLAGS += -DSPHSEG_SINGLE
+else ifneq ($(PRECISION),double)
+  $(error PRECISION must be double or single, not '$(PRECISION)')
+endif
+ifeq ($(OPENMP),1)
+  CFLAGS  += -fopenmp
+  LDFLAGS += -fopenmp
+endif
+
+ifdef HDF5_DIR
+  HDF5_CFLAGS := -I$(HDF5_DIR)/include
+  HDF5_LIBS   := -L$(HDF5_DIR)/lib -Wl,-rpath,$(HDF5_DIR)/lib -lhdf5
+else
+  HDF5_CFLAGS := $(shell pkg-config --cflags hdf5-openmpi 2>/dev/null || echo -I/usr/include/hdf5/openmpi)
+  HDF5_LIBS   := $(shell pkg-config --libs hdf5-openmpi 2>/dev/null || echo -L/usr/lib/x86_64-linux-gnu/hdf5/openmpi -lhdf5)
+endif
+ifdef CYAML_DIR
+  CYAML_CFLAGS := -I$(CYAML_DIR)/include
+  CYAML_LIBS   := -L$(CYAML_DIR)/lib -Wl,-rpath,$(CYAML_DIR)/lib -lcyaml -lyaml
+else
+  CYAML_LIBS   := -lcyaml -lyaml
+endif
+CFLAGS += $(HDF5_CFLAGS) $(CYAML_CFLAGS)
+LIBS   := $(HDF5_LIBS) $(CYAML_LIBS) $(LDLIBS)
+
+CORE_SRC := src/error.c src/scene.c src/particles.c src/nbr.c src/bound.c src/setup.c \
+            src/backend_cpu.c src/integrate.c src/diag.c src/io.c mpi/comm.c
+CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
+HEADERS  := $(wildcard src/*.h src/physics/*.h mpi/*.h)
+
+UNIT_TESTS := test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_rates
+UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
+
+.PHONY: all deps run test unit bench clean format
+all: $(BUILD)/sphseg
+
+$(BUILD)/obj/%.o: %.c $(HEADERS)
+	@mkdir -p $(dir $@)
+	$(MPICC) $(CFLAGS) -c $< -o $@
+
+$(BUILD)/sphseg: $(BUILD)/obj/src/main.o $(CORE_OBJ)
+	$(MPICC) $(LDFLAGS) $^ $(LIBS) -o $@
+
+$(BUILD)/tests/%: tests/%.c $(CORE_OBJ) $(HEADERS)
+	@mkdir -p $(dir $@)
+	$(MPICC) $(CFLAGS) $(LDFLAGS) $< $(CORE_OBJ) $(LIBS) -lcmocka -o $@
+
+deps:
+	@bash tools/deps.sh
+
+run: deps all
+	$(BUILD)/sphseg inputs/shearbox_2d.yml -o out/shearbox_2d
+	$(PYTHON) tools/shearbox_compare.py out/shearbox_2d
+
+unit: $(UNIT_BINS)
+
+test: all unit
+	@PYTHON=$(PYTHON) BUILD=$(BUILD) bash tests/run.sh
+
+bench: all
+	@PYTHON=$(PYTHON) bash tools/bench.sh $(BUILD)/sphseg
+
+format:
+	clang-format -i src/*.c src/*.h src/physics/*.h mpi/*.c mpi/*.h tests/*.c
+
+clean:
+	rm -rf $(BUILD)

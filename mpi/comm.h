@@ -1,0 +1,13 @@
+/* comm.h — global reductions over all ranks (MPI_COMM_WORLD). The slab
+ * decomposition and halo exchange of later issues live beside this file. */
+#ifndef SPHSEG_COMM_H
+#define SPHSEG_COMM_H
+
+int comm_rank(void);
+int comm_size(void);
+double comm_sum(double x);
+double comm_max(double x);
+double comm_min(double x);
+long long comm_sum_ll(long long x);
+
+#endif

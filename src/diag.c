@@ -1,0 +1,106 @@
+/* diag.c — see diag.h. */
+#include "diag.h"
+#include <math.h>
+#include <stdio.h>
+#include <time.h>
+#include "error.h"
+#include "mpi/comm.h"
+
+double diag_wall(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+diag_values diag_measure(const sim_t *s)
+{
+    const particles_t *p = &s->p;
+    double small = 0, ke = 0, vmax = 0, cmin = INFINITY, cmax = -INFINITY;
+    long long nm = 0;
+    for (size_t i = 0; i < p->n; ++i) {
+        if (p->kind[i] != KIND_MATERIAL) continue;
+        double v2 = 0;
+        for (int d = 0; d < 3; ++d) v2 += (double)p->v[d][i] * p->v[d][i];
+        small += (double)p->C[i] * p->vol[i];
+        ke += 0.5 * s->sc->physics.rho * p->vol[i] * v2;
+        vmax = fmax(vmax, sqrt(v2));
+        cmin = fmin(cmin, p->C[i]);
+        cmax = fmax(cmax, p->C[i]);
+        nm++;
+    }
+    diag_values v;
+    v.n_material = comm_sum_ll(nm);
+    v.small_volume = comm_sum(small);
+    v.kinetic_energy = comm_sum(ke);
+    v.max_speed = comm_max(vmax);
+    v.C_min = comm_min(cmin);
+    v.C_max = comm_max(cmax);
+    v.drift = 0;
+    return v;
+}
+
+void diag_open(diag *d, const char *outdir, const sim_t *s)
+{
+    diag_values v = diag_measure(s);
+    d->small0 = v.small_volume;
+    d->max_drift = 0;
+    d->warned = 0;
+    d->wall0 = d->wall_last_progress = diag_wall();
+    d->f = NULL;
+    snprintf(d->path, sizeof d->path, "%s/diagnostics.csv", outdir);
+    if (comm_rank() != 0) return;
+    char part[4200];
+    snprintf(part, sizeof part, "%s.part", d->path);
+    d->f = fopen(part, "w");
+    if (!d->f) error_exit(1, "cannot write %s", part);
+    fprintf(d->f, "step,time,dt,n_material,small_volume,small_volume_drift,kinetic_energy,"
+                  "max_speed,wall_s,C_min,C_max\n");
+}
+
+void diag_row(diag *d, const sim_t *s)
+{
+    diag_values v = diag_measure(s);
+    v.drift = d->small0 != 0 ? (v.small_volume - d->small0) / d->small0 : v.small_volume;
+    d->max_drift = fmax(d->max_drift, fabs(v.drift));
+    if (fabs(v.drift) > s->sc->segregation.drift_tol && !d->warned) {
+        d->warned = 1;
+        if (comm_rank() == 0)
+            warning("step %ld, t = %.6g s: relative drift of sum C_i V_i is %.3e, past "
+                    "Segregation:drift_tol = %.3g", s->step, s->t, v.drift, s->sc->segregation.drift_tol);
+    }
+    if (!d->f) return;
+    fprintf(d->f, "%ld,%.17g,%.17g,%lld,%.17g,%.17g,%.17g,%.17g,%.6f,%.17g,%.17g\n", s->step, s->t,
+            s->dt, v.n_material, v.small_volume, v.drift, v.kinetic_energy, v.max_speed,
+            diag_wall() - d->wall0, v.C_min, v.C_max);
+    fflush(d->f);
+}
+
+static void diag_hms(double sec, char *buf, size_t n)
+{
+    long t = (long)(sec + 0.5);
+    snprintf(buf, n, "%02ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
+}
+
+void diag_progress(diag *d, const sim_t *s, int force)
+{
+    double now = diag_wall();
+    if (!force && now - d->wall_last_progress < s->sc->run.progress_s) return;
+    d->wall_last_progress = now;
+    double el = now - d->wall0, frac = s->t / s->sc->run.t_end;
+    double rate = el > 0 ? (double)s->step * (double)s->p.n / el : 0;
+    char eta[32];
+    diag_hms(frac > 0 ? el * (1 - frac) / frac : 0, eta, sizeof eta);
+    message("step %8ld  t = %10.4f s (%5.1f%%)  dt = %.3e s  %.3e particle-steps/s  ETA %s",
+            s->step, s->t, 100 * frac, s->dt, rate, eta);
+}
+
+void diag_close(diag *d)
+{
+    if (!d->f) return;
+    fclose(d->f);
+    d->f = NULL;
+    char part[4200];
+    snprintf(part, sizeof part, "%s.part", d->path);
+    if (rename(part, d->path) != 0) warning("cannot rename %s", part);
+}

@@ -1,0 +1,33 @@
+/* diag.h — run diagnostics: the global conservation check of sum C_i V_i,
+ * OUTDIR/diagnostics.csv (DESIGN.md contract) and rank 0's progress line. */
+#ifndef SPHSEG_DIAG_H
+#define SPHSEG_DIAG_H
+#include <stdio.h>
+#include "sim.h"
+
+typedef struct diag {
+    FILE *f;          /* rank 0 only */
+    char path[4096];  /* final name; rows go to path.part until diag_close */
+    double small0;    /* sum C_i V_i at t = 0 */
+    double max_drift; /* largest |relative drift| seen */
+    int warned;
+    double wall0, wall_last_progress;
+} diag;
+
+typedef struct diag_values {
+    long long n_material;
+    double small_volume, drift, kinetic_energy, max_speed, C_min, C_max;
+} diag_values;
+
+double diag_wall(void);
+/* Global reductions of the diagnostics (collective). */
+diag_values diag_measure(const sim_t *s);
+void diag_open(diag *d, const char *outdir, const sim_t *s);
+/* Append one row (collective: reduces over ranks), warn on drift. */
+void diag_row(diag *d, const sim_t *s);
+/* Progress line on rank 0 if progress_s wall seconds have passed (or force). */
+void diag_progress(diag *d, const sim_t *s, int force);
+/* Rename diagnostics.csv.part to diagnostics.csv. */
+void diag_close(diag *d);
+
+#endif

@@ -1,0 +1,31 @@
+/* error.h — rank-aware messages and located errors (DESIGN.md "Errors").
+ * Exit status 2: bad input (before any step, nothing written).
+ * Exit status 3: numerical failure (names step, time, particle). */
+#ifndef SPHSEG_ERROR_H
+#define SPHSEG_ERROR_H
+#include <stdio.h>
+
+enum { EXIT_BAD_INPUT = 2, EXIT_NUMERICAL = 3 };
+
+/* Printed on rank 0 only (message), or by any rank (warning, error). */
+void message(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+void warning(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+/* Print "sphseg: error: ..." once and end every rank with status code. */
+void error_exit(int code, const char *fmt, ...) __attribute__((format(printf, 2, 3), noreturn));
+/* Collective-safe variant for input errors found identically on all ranks:
+ * rank 0 prints, all ranks exit with EXIT_BAD_INPUT. */
+void input_error(const char *fmt, ...) __attribute__((format(printf, 1, 2), noreturn));
+
+/* Check an HDF5 call (negative = failure). */
+#define H5CHECK(call)                                                              \
+    do {                                                                           \
+        if ((call) < 0) error_exit(1, "HDF5 call failed at %s:%d: %s", __FILE__, __LINE__, #call); \
+    } while (0)
+/* Check an MPI call. */
+#define MPICHECK(call)                                                             \
+    do {                                                                           \
+        int mpi_rc_ = (call);                                                      \
+        if (mpi_rc_ != MPI_SUCCESS) error_exit(1, "MPI call failed at %s:%d: %s", __FILE__, __LINE__, #call); \
+    } while (0)
+
+#endif

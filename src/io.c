@@ -1,0 +1,326 @@
+/* io.c — parallel HDF5 snapshots and their XDMF index (see io.h). */
+#include "io.h"
+#include "error.h"
+#include <errno.h>
+#include <hdf5.h>
+#include <mpi.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define IO_PATH_MAX 4096
+
+/* ---- the field table ---------------------------------------------------- */
+
+#define IO_ARRAY(fn, expr)                                                                                   \
+    static const void *fn(const particles_t *p, int c)                                                       \
+    {                                                                                                        \
+        (void)c;                                                                                             \
+        return (expr);                                                                                       \
+    }
+IO_ARRAY(io_x, p->x[c])
+IO_ARRAY(io_v, p->v[c])
+IO_ARRAY(io_c, p->C)
+IO_ARRAY(io_gdot, p->gdot)
+IO_ARRAY(io_vol, p->vol)
+IO_ARRAY(io_nrm, p->nrm[c])
+IO_ARRAY(io_psi, p->psi)
+IO_ARRAY(io_kind, p->kind)
+IO_ARRAY(io_bclass, p->bclass)
+IO_ARRAY(io_id, p->id)
+#undef IO_ARRAY
+
+const struct io_field io_fields[] = {
+    {"Coordinates", IO_REAL, 3, "m", "Particle position (x, y, z); z = 0 in 2D", io_x},
+    {"Velocities", IO_REAL, 3, "m/s", "Particle velocity (vx, vy, vz); vz = 0 in 2D", io_v},
+    {"Concentration", IO_REAL, 1, "-",
+     "Small-grain volume concentration C (eq. 2.10); meaningful for Kind = 0 (material) only", io_c},
+    {"ShearRate", IO_REAL, 1, "1/s", "Shear-rate magnitude gdot", io_gdot},
+    {"Volume", IO_REAL, 1, "m^d", "Particle volume m_i/rho_i (m^2 per unit depth in 2D, m^3 in 3D)", io_vol},
+    {"Normal", IO_REAL, 3, "-", "HCSR boundary normal, pointing into the material (paper section 4.2)",
+     io_nrm},
+    {"Psi", IO_REAL, 1, "-", "Smoothed degenerate function psi~ (eqs. 4.14, 4.18)", io_psi},
+    {"Kind", IO_UINT8, 1, "-", "Particle kind: 0 material, 1 dummy (wall)", io_kind},
+    {"BoundaryClass", IO_UINT8, 1, "-",
+     "HCSR boundary class (paper section 4.2.2): 0 interior, 1 free surface, "
+     "2 free-surface vicinity, 3 wall surface, 4 wall vicinity, 5 dummy",
+     io_bclass},
+    {"ParticleIDs", IO_INT64, 1, "-", "Global particle ID, unique and constant in a run", io_id},
+};
+const int io_nfields = (int)(sizeof io_fields / sizeof io_fields[0]);
+
+static hid_t io_mem_type(enum io_type t)
+{
+    return t == IO_REAL ? H5T_NATIVE_DOUBLE : t == IO_UINT8 ? H5T_NATIVE_UINT8 : H5T_NATIVE_INT64;
+}
+
+static hid_t io_file_type(enum io_type t)
+{
+    return t == IO_REAL ? H5T_IEEE_F64LE : t == IO_UINT8 ? H5T_STD_U8LE : H5T_STD_I64LE;
+}
+
+/* ---- small helpers -------------------------------------------------------- */
+
+static void io_join(char *buf, const char *outdir, const char *name, const char *suffix)
+{
+    int len = snprintf(buf, IO_PATH_MAX, "%s/%s%s", outdir, name, suffix);
+    if (len < 0 || len >= IO_PATH_MAX) error_exit(1, "output path too long: %s/%s", outdir, name);
+}
+
+static int io_rank(void)
+{
+    int rank = 0;
+    MPICHECK(MPI_Comm_rank(MPI_COMM_WORLD, &rank));
+    return rank;
+}
+
+/* Barrier, rank 0 renames tmp to path, barrier: the final name appears only
+ * once every rank has finished writing, and exists when this returns. */
+static void io_commit(const char *tmp, const char *path, int collective)
+{
+    if (collective) MPICHECK(MPI_Barrier(MPI_COMM_WORLD));
+    if (io_rank() == 0 && rename(tmp, path) != 0)
+        error_exit(1, "cannot rename %s to %s: %s", tmp, path, strerror(errno));
+    if (collective) MPICHECK(MPI_Barrier(MPI_COMM_WORLD));
+}
+
+/* Variable-length UTF-8 string attribute (any length; h5py reads a str). */
+static void io_attr_string(hid_t loc, const char *name, const char *value)
+{
+    hid_t type, space, attr;
+    const char *v = value ? value : "";
+    H5CHECK(type = H5Tcopy(H5T_C_S1));
+    H5CHECK(H5Tset_size(type, H5T_VARIABLE));
+    H5CHECK(H5Tset_cset(type, H5T_CSET_UTF8));
+    H5CHECK(space = H5Screate(H5S_SCALAR));
+    H5CHECK(attr = H5Acreate2(loc, name, type, space, H5P_DEFAULT, H5P_DEFAULT));
+    H5CHECK(H5Awrite(attr, type, &v));
+    H5CHECK(H5Aclose(attr));
+    H5CHECK(H5Sclose(space));
+    H5CHECK(H5Tclose(type));
+}
+
+static void io_attr_scalar(hid_t loc, const char *name, hid_t ftype, hid_t mtype, const void *val)
+{
+    hid_t space, attr;
+    H5CHECK(space = H5Screate(H5S_SCALAR));
+    H5CHECK(attr = H5Acreate2(loc, name, ftype, space, H5P_DEFAULT, H5P_DEFAULT));
+    H5CHECK(H5Awrite(attr, mtype, val));
+    H5CHECK(H5Aclose(attr));
+    H5CHECK(H5Sclose(space));
+}
+
+/* ---- snapshot ------------------------------------------------------------- */
+
+struct io_key {
+    int64_t id;
+    size_t i;
+};
+
+static int io_key_cmp(const void *a, const void *b)
+{
+    const struct io_key *ka = a, *kb = b;
+    return (ka->id > kb->id) - (ka->id < kb->id);
+}
+
+/* Indices of p's particles in increasing ID order (malloc'd, >= 1 element). */
+static size_t *io_order_by_id(const particles_t *p)
+{
+    size_t n = p->n;
+    struct io_key *key = malloc((n > 0 ? n : 1) * sizeof *key);
+    size_t *order = malloc((n > 0 ? n : 1) * sizeof *order);
+    if (!key || !order) error_exit(1, "out of memory sorting %zu particles for output", n);
+    for (size_t k = 0; k < n; k++)
+        key[k] = (struct io_key){p->id[k], k};
+    qsort(key, n, sizeof *key, io_key_cmp);
+    for (size_t k = 0; k < n; k++)
+        order[k] = key[k].i;
+    free(key);
+    return order;
+}
+
+/* buf[k*ncomp + c] = component c of particle order[k], in the stored type. */
+static void io_gather(const struct io_field *f, const particles_t *p, const size_t *order, void *buf)
+{
+    size_t n = p->n, nc = (size_t)f->ncomp;
+    for (int c = 0; c < f->ncomp; c++) {
+        const void *a = f->array(p, c);
+        if (f->type == IO_REAL) {
+            const real *s = a;
+            double *d = (double *)buf + c;
+            for (size_t k = 0; k < n; k++)
+                d[k * nc] = (double)s[order[k]];
+        } else if (f->type == IO_UINT8) {
+            const uint8_t *s = a;
+            uint8_t *d = (uint8_t *)buf + c;
+            for (size_t k = 0; k < n; k++)
+                d[k * nc] = s[order[k]];
+        } else {
+            const int64_t *s = a;
+            int64_t *d = (int64_t *)buf + c;
+            for (size_t k = 0; k < n; k++)
+                d[k * nc] = s[order[k]];
+        }
+    }
+}
+
+/* Create /Particles/<f->name> (ntot rows) and write this rank's n rows at
+ * row offset, collectively; buf holds the gathered rows. */
+static void io_write_field(hid_t grp, hid_t dxpl, const struct io_field *f, const void *buf, size_t n,
+                           long long ntot, long long offset)
+{
+    int rank = f->ncomp > 1 ? 2 : 1;
+    hsize_t dims[2] = {(hsize_t)ntot, (hsize_t)f->ncomp};
+    hsize_t mdims[2] = {n > 0 ? (hsize_t)n : 1, (hsize_t)f->ncomp};
+    hsize_t start[2] = {(hsize_t)offset, 0}, count[2] = {(hsize_t)n, (hsize_t)f->ncomp};
+    hid_t fspace, mspace, dset;
+    H5CHECK(fspace = H5Screate_simple(rank, dims, NULL));
+    H5CHECK(mspace = H5Screate_simple(rank, mdims, NULL));
+    H5CHECK(dset = H5Dcreate2(grp, f->name, io_file_type(f->type), fspace, H5P_DEFAULT, H5P_DEFAULT,
+                              H5P_DEFAULT));
+    if (n > 0) {
+        H5CHECK(H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, NULL, count, NULL));
+    } else { /* this rank takes part in the collective write with nothing */
+        H5CHECK(H5Sselect_none(fspace));
+        H5CHECK(H5Sselect_none(mspace));
+    }
+    if (ntot > 0) H5CHECK(H5Dwrite(dset, io_mem_type(f->type), mspace, fspace, dxpl, buf));
+    io_attr_string(dset, "Description", f->description);
+    io_attr_string(dset, "Units", f->units);
+    H5CHECK(H5Dclose(dset));
+    H5CHECK(H5Sclose(mspace));
+    H5CHECK(H5Sclose(fspace));
+}
+
+/* /Particles: every field of the table, this rank's block in ID order.
+ * With one rank this is global particle-ID order (the DESIGN.md contract).
+ * With several ranks each rank's block is sorted but blocks follow rank order;
+ * making the whole file globally ID-ordered is the domain decomposition's job
+ * (mpi/), which must hand io contiguous ID ranges per rank. */
+static void io_write_particles(hid_t file, const particles_t *p, long long ntot, long long offset)
+{
+    size_t *order = io_order_by_id(p);
+    void *buf = malloc((p->n > 0 ? p->n : 1) * 3 * sizeof(double)); /* largest row: 3 x 8 B */
+    if (!buf) error_exit(1, "out of memory gathering %zu particles for output", p->n);
+    hid_t grp, dxpl;
+    H5CHECK(grp = H5Gcreate2(file, "Particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    H5CHECK(dxpl = H5Pcreate(H5P_DATASET_XFER));
+    H5CHECK(H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE));
+    for (int i = 0; i < io_nfields; i++) {
+        io_gather(&io_fields[i], p, order, buf);
+        io_write_field(grp, dxpl, &io_fields[i], buf, p->n, ntot, offset);
+    }
+    H5CHECK(H5Pclose(dxpl));
+    H5CHECK(H5Gclose(grp));
+    free(buf);
+    free(order);
+}
+
+static void io_write_header(hid_t file, int dim, double time, long step, long long ntot,
+                            const char *scene_text, const char *code_version)
+{
+    hid_t g;
+    int64_t step64 = step, ntot64 = ntot;
+    H5CHECK(g = H5Gcreate2(file, "Header", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    io_attr_scalar(g, "Time", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &time);
+    io_attr_scalar(g, "Step", H5T_STD_I64LE, H5T_NATIVE_INT64, &step64);
+    io_attr_scalar(g, "Dimension", H5T_STD_I32LE, H5T_NATIVE_INT, &dim);
+    io_attr_scalar(g, "NumPart_Total", H5T_STD_I64LE, H5T_NATIVE_INT64, &ntot64);
+    io_attr_string(g, "Code", "sphseg");
+    io_attr_string(g, "Version", code_version);
+    io_attr_string(g, "Scene", scene_text);
+    H5CHECK(H5Gclose(g));
+}
+
+static hid_t io_create_file(const char *path)
+{
+    hid_t fapl, file;
+    H5CHECK(fapl = H5Pcreate(H5P_FILE_ACCESS));
+    H5CHECK(H5Pset_fapl_mpio(fapl, MPI_COMM_WORLD, MPI_INFO_NULL));
+    H5CHECK(H5Pset_coll_metadata_write(fapl, 1));
+    H5CHECK(H5Pset_all_coll_metadata_ops(fapl, 1));
+    file = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+    if (file < 0) error_exit(1, "cannot create %s (does the output directory exist?)", path);
+    H5CHECK(H5Pclose(fapl));
+    return file;
+}
+
+int io_write_snapshot(const char *outdir, int index, const particles_t *p, double time, long step,
+                      const char *scene_text, const char *code_version)
+{
+    char name[32], path[IO_PATH_MAX], tmp[IO_PATH_MAX];
+    snprintf(name, sizeof name, "snapshot_%05d.h5", index);
+    io_join(path, outdir, name, "");
+    io_join(tmp, outdir, name, ".tmp");
+
+    long long n = (long long)p->n, ntot = 0, offset = 0;
+    MPICHECK(MPI_Allreduce(&n, &ntot, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD));
+    MPICHECK(MPI_Exscan(&n, &offset, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD));
+    if (io_rank() == 0) offset = 0; /* MPI_Exscan leaves rank 0's result undefined */
+
+    hid_t file = io_create_file(tmp);
+    io_write_header(file, p->dim, time, step, ntot, scene_text, code_version);
+    io_write_particles(file, p, ntot, offset);
+    H5CHECK(H5Fclose(file));
+    io_commit(tmp, path, 1);
+    return 0;
+}
+
+/* ---- XDMF ----------------------------------------------------------------- */
+
+static void io_xdmf_item(FILE *fp, const struct io_field *f, const char *h5name, long long n)
+{
+    const char *nt = f->type == IO_REAL ? "Float" : f->type == IO_UINT8 ? "UChar" : "Int";
+    int prec = f->type == IO_UINT8 ? 1 : 8;
+    if (f->ncomp > 1)
+        fprintf(fp, "          <DataItem Dimensions=\"%lld %d\"", n, f->ncomp);
+    else
+        fprintf(fp, "          <DataItem Dimensions=\"%lld\"", n);
+    fprintf(fp, " NumberType=\"%s\" Precision=\"%d\" Format=\"HDF\">%s:/Particles/%s</DataItem>\n", nt, prec,
+            h5name, f->name);
+}
+
+static void io_xdmf_grid(FILE *fp, int index, double time, long long n)
+{
+    char h5name[32];
+    snprintf(h5name, sizeof h5name, "snapshot_%05d.h5", index);
+    fprintf(fp, "      <Grid Name=\"snapshot_%05d\" GridType=\"Uniform\">\n", index);
+    fprintf(fp, "        <Time Value=\"%.17g\"/>\n", time);
+    fprintf(fp,
+            "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%lld\""
+            " NodesPerElement=\"1\"/>\n",
+            n);
+    for (int i = 0; i < io_nfields; i++) {
+        const struct io_field *f = &io_fields[i];
+        int geom = strcmp(f->name, "Coordinates") == 0;
+        if (geom)
+            fprintf(fp, "        <Geometry GeometryType=\"XYZ\">\n");
+        else
+            fprintf(fp, "        <Attribute Name=\"%s\" AttributeType=\"%s\" Center=\"Node\">\n", f->name,
+                    f->ncomp > 1 ? "Vector" : "Scalar");
+        io_xdmf_item(fp, f, h5name, n);
+        fprintf(fp, geom ? "        </Geometry>\n" : "        </Attribute>\n");
+    }
+    fprintf(fp, "      </Grid>\n");
+}
+
+int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long long *npart, int dim)
+{
+    if (io_rank() != 0) return 0;
+    char path[IO_PATH_MAX], tmp[IO_PATH_MAX];
+    io_join(path, outdir, "snapshots.xmf", "");
+    io_join(tmp, outdir, "snapshots.xmf", ".tmp");
+    FILE *fp = fopen(tmp, "w");
+    if (!fp) error_exit(1, "cannot write %s: %s", tmp, strerror(errno));
+    fprintf(fp, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
+                "<Xdmf Version=\"2.0\">\n  <Domain>\n");
+    fprintf(fp, "    <Information Name=\"Dimension\" Value=\"%d\"/>\n", dim);
+    fprintf(fp, "    <Grid Name=\"snapshots\" GridType=\"Collection\""
+                " CollectionType=\"Temporal\">\n");
+    for (int i = 0; i < nsnap; i++)
+        io_xdmf_grid(fp, i, times[i], npart[i]);
+    fprintf(fp, "    </Grid>\n  </Domain>\n</Xdmf>\n");
+    int bad = ferror(fp);
+    if (fclose(fp) != 0 || bad) error_exit(1, "cannot write %s: %s", tmp, strerror(errno));
+    io_commit(tmp, path, 0);
+    return 0;
+}

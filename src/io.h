@@ -1,0 +1,53 @@
+/* io.h — snapshot output: parallel HDF5 snapshots and the XDMF index that
+ * opens them in ParaView (DESIGN.md "Files a run writes").
+ *
+ * OUTDIR/snapshot_NNNNN.h5
+ *   /Header     attributes Time (double, s), Step (int64), Dimension (int),
+ *               NumPart_Total (int64), Code ("sphseg"), Version, Scene (the
+ *               scene text). Strings are variable-length UTF-8 attributes, so
+ *               a scene of any size fits and h5py returns them as str.
+ *   /Particles/<Name> one dataset per entry of io_fields[], N (scalars) or
+ *               N x 3 (vectors, z = 0 in 2D), each with string attributes
+ *               Description and Units. Floating fields are stored as 64-bit
+ *               IEEE doubles whatever the build precision.
+ * OUTDIR/snapshots.xmf
+ *   XDMF 2 temporal collection over snapshot_00000.h5 ... (Polyvertex
+ *   topology, XYZ geometry from Coordinates, every other field an attribute).
+ *
+ * Both writers go to "<name>.tmp" and rename, so no half-written file ever
+ * exists under a final name. Any failure ends the run (error_exit, status 1);
+ * the functions return 0. */
+#ifndef SPHSEG_IO_H
+#define SPHSEG_IO_H
+#include "particles.h"
+
+enum io_type { IO_REAL = 0, IO_UINT8 = 1, IO_INT64 = 2 };
+
+/* One output field, declared once (STYLE.md "Output fields are a table"). */
+struct io_field {
+    const char *name;        /* dataset name under /Particles */
+    enum io_type type;       /* element type in memory (real is stored as double) */
+    int ncomp;               /* 1 or 3 */
+    const char *units;       /* SI units, "-" if none */
+    const char *description; /* one line */
+    /* The array holding component c (0 <= c < ncomp) of every particle. */
+    const void *(*array)(const particles_t *p, int c);
+};
+
+extern const struct io_field io_fields[];
+extern const int io_nfields;
+
+/* Collective over MPI_COMM_WORLD: write OUTDIR/snapshot_<index %05d>.h5.
+ * Each rank contributes its p->n particles (ranks may hold none); N is their
+ * sum. Within each rank's block particles appear in increasing ParticleIDs
+ * order; p itself is not modified. scene_text and code_version must be the
+ * same on every rank (scene_text may be NULL: stored as ""). */
+int io_write_snapshot(const char *outdir, int index, const particles_t *p, double time, long step,
+                      const char *scene_text, const char *code_version);
+
+/* Write OUTDIR/snapshots.xmf indexing snapshots 0 .. nsnap-1 (times[i],
+ * npart[i] particles each) for dimension dim (2 or 3). Only rank 0 writes;
+ * other ranks return at once, so it may be called by all ranks or rank 0. */
+int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long long *npart, int dim);
+
+#endif

@@ -1,0 +1,21 @@
+/* nbr.h — building the cell-linked list with sorting (paper §3.4) on the
+ * host: bin particles into cells of edge >= 2h, sort the store by cell. */
+#ifndef SPHSEG_NBR_H
+#define SPHSEG_NBR_H
+#include "particles.h"
+#include "physics/grid.h"
+
+typedef struct nbr_grid {
+    grid_view view;
+    size_t *start, *end; /* ncell each */
+    size_t ncell, cap_cell;
+    size_t *key, *perm, *count; /* scratch: n, n, ncell+1 */
+    size_t cap_part;
+} nbr_grid;
+
+/* Bin all particles of p into cells of edge `support` (2h) covering their
+ * bounding box, and permute p so that each cell's particles are contiguous. */
+void nbr_build(nbr_grid *g, particles_t *p, real support);
+void nbr_free(nbr_grid *g);
+
+#endif

@@ -1,0 +1,125 @@
+/* particles.c — the structure-of-arrays particle store (see particles.h).
+ * Every per-particle array is listed once in part_arrays[]; allocation,
+ * release, permutation and the memory estimate all loop over that list, so
+ * an array added to particles_t needs one line here (the static assertion
+ * below fails until it is added). */
+#include "particles.h"
+#include "error.h"
+#include <stdlib.h>
+#include <string.h>
+
+struct part_array {
+    size_t offset; /* offsetof(particles_t, <pointer member>) */
+    size_t size;   /* bytes per element */
+};
+
+static const struct part_array part_arrays[] = {
+    {offsetof(particles_t, x[0]), sizeof(real)},      {offsetof(particles_t, x[1]), sizeof(real)},
+    {offsetof(particles_t, x[2]), sizeof(real)},      {offsetof(particles_t, X0[0]), sizeof(real)},
+    {offsetof(particles_t, X0[1]), sizeof(real)},     {offsetof(particles_t, X0[2]), sizeof(real)},
+    {offsetof(particles_t, v[0]), sizeof(real)},      {offsetof(particles_t, v[1]), sizeof(real)},
+    {offsetof(particles_t, v[2]), sizeof(real)},      {offsetof(particles_t, vol), sizeof(real)},
+    {offsetof(particles_t, C), sizeof(real)},         {offsetof(particles_t, C_n), sizeof(real)},
+    {offsetof(particles_t, dCdt), sizeof(real)},      {offsetof(particles_t, gdot), sizeof(real)},
+    {offsetof(particles_t, nrm[0]), sizeof(real)},    {offsetof(particles_t, nrm[1]), sizeof(real)},
+    {offsetof(particles_t, nrm[2]), sizeof(real)},    {offsetof(particles_t, psi), sizeof(real)},
+    {offsetof(particles_t, id), sizeof(int64_t)},     {offsetof(particles_t, kind), sizeof(uint8_t)},
+    {offsetof(particles_t, bclass), sizeof(uint8_t)},
+};
+#define PART_NARRAYS (sizeof part_arrays / sizeof part_arrays[0])
+
+/* Every member from x onwards is one array pointer listed above. */
+_Static_assert(sizeof(particles_t) == offsetof(particles_t, x) + PART_NARRAYS * sizeof(void *),
+               "particles_t changed: update part_arrays[] in particles.c");
+
+/* Read / write the pointer member described by a. memcpy keeps this free of
+ * type punning (the member is real *, int64_t * or uint8_t *). */
+static void *part_get(const particles_t *p, const struct part_array *a)
+{
+    void *ptr;
+    memcpy(&ptr, (const char *)p + a->offset, sizeof ptr);
+    return ptr;
+}
+
+static void part_set(particles_t *p, const struct part_array *a, void *ptr)
+{
+    memcpy((char *)p + a->offset, &ptr, sizeof ptr);
+}
+
+void part_alloc(particles_t *p, int dim, size_t cap)
+{
+    memset(p, 0, sizeof *p);
+    p->dim = dim;
+    p->n = 0;
+    p->cap = cap;
+    size_t nalloc = cap > 0 ? cap : 1; /* calloc(0) may return NULL */
+    for (size_t k = 0; k < PART_NARRAYS; k++) {
+        void *buf = calloc(nalloc, part_arrays[k].size);
+        if (!buf)
+            error_exit(1, "out of memory allocating %zu particles (%zu bytes each)", cap,
+                       part_bytes_per_particle());
+        part_set(p, &part_arrays[k], buf);
+    }
+}
+
+void part_free(particles_t *p)
+{
+    for (size_t k = 0; k < PART_NARRAYS; k++)
+        free(part_get(p, &part_arrays[k]));
+    memset(p, 0, sizeof *p);
+}
+
+/* dst[k] = src[perm[k]], k < n, for elements of esize bytes. */
+static void part_gather(void *dst, const void *src, const size_t *perm, size_t n, size_t esize)
+{
+    switch (esize) {
+    case 8: {
+        uint64_t *d = dst;
+        const uint64_t *s = src;
+        for (size_t k = 0; k < n; k++)
+            d[k] = s[perm[k]];
+        break;
+    }
+    case 4: {
+        uint32_t *d = dst;
+        const uint32_t *s = src;
+        for (size_t k = 0; k < n; k++)
+            d[k] = s[perm[k]];
+        break;
+    }
+    case 1: {
+        uint8_t *d = dst;
+        const uint8_t *s = src;
+        for (size_t k = 0; k < n; k++)
+            d[k] = s[perm[k]];
+        break;
+    }
+    default:
+        for (size_t k = 0; k < n; k++)
+            memcpy((char *)dst + k * esize, (const char *)src + perm[k] * esize, esize);
+    }
+}
+
+void part_permute(particles_t *p, const size_t *perm)
+{
+    if (p->n == 0) return;
+    size_t emax = 1;
+    for (size_t k = 0; k < PART_NARRAYS; k++)
+        if (part_arrays[k].size > emax) emax = part_arrays[k].size;
+    void *scratch = malloc(p->n * emax); /* one buffer, reused for every array */
+    if (!scratch) error_exit(1, "out of memory permuting %zu particles", p->n);
+    for (size_t k = 0; k < PART_NARRAYS; k++) {
+        void *a = part_get(p, &part_arrays[k]);
+        part_gather(scratch, a, perm, p->n, part_arrays[k].size);
+        memcpy(a, scratch, p->n * part_arrays[k].size);
+    }
+    free(scratch);
+}
+
+size_t part_bytes_per_particle(void)
+{
+    size_t b = 0;
+    for (size_t k = 0; k < PART_NARRAYS; k++)
+        b += part_arrays[k].size;
+    return b;
+}

@@ -1,0 +1,47 @@
+/* particles.h — the structure-of-arrays particle store (DESIGN.md).
+ * Material particles carry C; dummy particles (walls) carry only kinematics
+ * and take part in boundary detection and wall source terms. */
+#ifndef SPHSEG_PARTICLES_H
+#define SPHSEG_PARTICLES_H
+#include <stddef.h>
+#include <stdint.h>
+#include "physics/hd.h"
+
+enum part_kind { KIND_MATERIAL = 0, KIND_DUMMY = 1 };
+
+/* HCSR boundary classes (paper §4.2.2, figure 4). */
+enum part_bclass {
+    BC_INTERIOR = 0,       /* Omega_I: full support */
+    BC_FREE_SURFACE = 1,   /* Omega_F: free-surface particle (umbrella test 4.19) */
+    BC_FREE_VICINITY = 2,  /* Omega_f: near the free surface (4.20) */
+    BC_WALL_SURFACE = 3,   /* Omega_W: surface particle with dummy neighbours */
+    BC_WALL_VICINITY = 4,  /* Omega_w: dummy neighbours, not Omega_W (4.21) */
+    BC_DUMMY = 5           /* Omega_s: dummy (fictitious) particle */
+};
+
+typedef struct particles {
+    int dim;
+    size_t n;   /* particles held (material + dummy) */
+    size_t cap; /* allocated */
+    real *x[3];   /* position, m */
+    real *X0[3];  /* reference (initial) position, m, for prescribed kinematics */
+    real *v[3];   /* velocity, m/s */
+    real *vol;    /* volume m_i/rho_i, m^d */
+    real *C;      /* small-grain concentration, - */
+    real *C_n;    /* C at the start of the step (predictor-corrector) */
+    real *dCdt;   /* concentration rate, 1/s */
+    real *gdot;   /* shear-rate magnitude, 1/s */
+    real *nrm[3]; /* HCSR normal, pointing into the material */
+    real *psi;    /* smoothed degenerate function psi~ (4.14, 4.18) */
+    int64_t *id;  /* global particle ID */
+    uint8_t *kind;   /* enum part_kind */
+    uint8_t *bclass; /* enum part_bclass */
+} particles_t;
+
+void part_alloc(particles_t *p, int dim, size_t cap);
+void part_free(particles_t *p);
+/* Apply permutation: new[k] = old[perm[k]] for every array. */
+void part_permute(particles_t *p, const size_t *perm);
+size_t part_bytes_per_particle(void);
+
+#endif

@@ -1,0 +1,136 @@
+/* bound_kern.h — HCSR boundary-particle search and normals (paper §4.2.2):
+ * stage 1 cell types, stage 2 umbrella test (4.19) and vicinity (4.20–4.21),
+ * normals (4.10, 4.17) and the smoothed degenerate function (4.14, 4.18).
+ * Every normal points into the material. Neighbour-loop bodies shared by the
+ * CPU driver (src/bound.c) and the GPU driver. */
+#ifndef SPHSEG_BOUND_KERN_H
+#define SPHSEG_BOUND_KERN_H
+#include <math.h>
+#include "../particles.h"
+#include "grid.h"
+#include "sph.h"
+
+enum cell_type { CELL_EMPTY = 0, CELL_OUTER = 1, CELL_SECOND = 2, CELL_INNER = 3 };
+
+/* Per-particle sums over the support, gathered once per classification. */
+typedef struct bound_sums {
+    real gm[3];   /* sum_{j in Omega} grad_i W_ij V_j (material) */
+    real gd[3];   /* sum_{j in Omega_s} grad_i W_ij V_j (dummies) */
+    real wm, wd;  /* sum W_ij V_j over material / dummies, self included */
+    int ndummy;   /* dummies within the support */
+} bound_sums;
+
+HD_INLINE bound_sums bound_gather(size_t i, const particles_t *p, const grid_view *g,
+                                  const sph_ctx *k)
+{
+    bound_sums s = {{0, 0, 0}, {0, 0, 0}, 0, 0, 0};
+    NBR_BEGIN(g, p->x, i, j)
+        real xij[3];
+        real r2 = grid_pair(k->dim, p->x, i, j, xij);
+        if (r2 >= k->support2) continue;
+        real r = (real)sqrt((double)r2);
+        real w = kernel_w(r, k->h, k->alpha) * p->vol[j];
+        real f = kernel_f(r, k->h, k->alpha) * p->vol[j];
+        int dum = p->kind[j] == KIND_DUMMY;
+        real *gv = dum ? s.gd : s.gm;
+        for (int d = 0; d < 3; ++d) gv[d] += f * xij[d];
+        if (dum) { s.wd += w; s.ndummy++; } else s.wm += w;
+    NBR_END
+    return s;
+}
+
+/* Umbrella test (4.19) after Marrone et al. (2010): i is a surface particle
+ * if no neighbour lies in the umbrella around the outward axis a = -gsum/|gsum|
+ * (T = x_i + h a). Neighbours are material particles, or all particles when
+ * with_dummies (then walls count as filled space). */
+HD_INLINE int bound_is_surface(size_t i, const particles_t *p, const grid_view *g,
+                               const sph_ctx *k, const real gsum[3], int with_dummies)
+{
+    real a[3] = {-gsum[0], -gsum[1], -gsum[2]};
+    sph_unit(a, R(1.0) / k->h);
+    if (sph_norm(a) == 0) return 0; /* symmetric support: interior */
+    const real sq2 = R(1.4142135623730951);
+    int surface = 1;
+    NBR_BEGIN(g, p->x, i, j)
+        if (j == i || (!with_dummies && p->kind[j] != KIND_MATERIAL) || !surface) continue;
+        real xji[3];
+        real r2 = grid_pair(k->dim, p->x, j, i, xji);
+        if (r2 >= k->support2) continue;
+        real r = (real)sqrt((double)r2);
+        if (r >= sq2 * k->h) {
+            real t[3] = {xji[0] - k->h * a[0], xji[1] - k->h * a[1], xji[2] - k->h * a[2]};
+            if (sph_norm(t) < k->h * k->h) surface = 0;
+        } else if (xji[0] * a[0] + xji[1] * a[1] + xji[2] * a[2] > R(0.5) * sq2 * r) {
+            surface = 0;
+        }
+    NBR_END
+    return surface;
+}
+
+/* Surface class of a particle in an outer cell: not a surface particle
+ * (interior), a wall surface particle Omega_W (surface of the material alone,
+ * but covered once dummies count), or a free-surface particle Omega_F (still
+ * a surface with the dummies counted: this keeps particles where a free
+ * surface meets a wall on the free surface). */
+HD_INLINE int bound_surface_class(size_t i, const particles_t *p, const grid_view *g,
+                                  const sph_ctx *k, const bound_sums *s)
+{
+    if (!bound_is_surface(i, p, g, k, s->gm, 0)) return BC_INTERIOR;
+    if (s->ndummy == 0) return BC_FREE_SURFACE;
+    real all[3] = {s->gm[0] + s->gd[0], s->gm[1] + s->gd[1], s->gm[2] + s->gd[2]};
+    return bound_is_surface(i, p, g, k, all, 1) ? BC_FREE_SURFACE : BC_WALL_SURFACE;
+}
+
+/* Vicinity test (4.20) and the direction to the nearby surface: returns 1 if a
+ * free-surface particle lies closer than 2h - dr; nf = -sum_{j in Omega_F}
+ * grad_i W_ij V_j (the sign makes it point into the material, eq. 4.17). */
+HD_INLINE int bound_near_free(size_t i, const particles_t *p, const grid_view *g,
+                              const sph_ctx *k, real nf[3])
+{
+    real lim = R(2.0) * k->h - k->dr;
+    int near = 0;
+    nf[0] = nf[1] = nf[2] = 0;
+    NBR_BEGIN(g, p->x, i, j)
+        if (j == i || p->bclass[j] != BC_FREE_SURFACE) continue;
+        real xij[3];
+        real r2 = grid_pair(k->dim, p->x, i, j, xij);
+        if (r2 >= k->support2) continue;
+        real r = (real)sqrt((double)r2);
+        if (r < lim) near = 1;
+        real f = kernel_f(r, k->h, k->alpha) * p->vol[j];
+        for (int d = 0; d < 3; ++d) nf[d] -= f * xij[d];
+    NBR_END
+    return near;
+}
+
+/* Normal and psi~ of a classified particle (4.10, 4.14, 4.17, 4.18). */
+HD_INLINE void bound_normal_psi(int bclass, const bound_sums *s, const real nf[3],
+                                const sph_ctx *k, real n[3], real *psi)
+{
+    n[0] = n[1] = n[2] = 0;
+    *psi = 1;
+    switch (bclass) {
+    case BC_FREE_SURFACE: /* (4.17), dummies counted so walls do not tilt n */
+        for (int d = 0; d < 3; ++d) n[d] = s->gm[d] + s->gd[d];
+        *psi = R(2.0) * (s->wm + s->wd) - R(1.0); /* (4.18) */
+        break;
+    case BC_FREE_VICINITY:
+        for (int d = 0; d < 3; ++d) n[d] = nf[d];
+        *psi = R(2.0) * (s->wm + s->wd) - R(1.0);
+        break;
+    case BC_WALL_SURFACE:
+    case BC_WALL_VICINITY: /* colour function c = 0 material, 1 dummy (4.10) */
+        for (int d = 0; d < 3; ++d) n[d] = -s->gd[d];
+        *psi = (s->wm - s->wd) / (s->wm + s->wd);
+        break;
+    case BC_DUMMY: /* (4.10) with c_i = 1: sum over material neighbours */
+        for (int d = 0; d < 3; ++d) n[d] = s->gm[d];
+        *psi = -1;
+        break;
+    default:
+        break;
+    }
+    sph_unit(n, R(1.0) / k->h);
+}
+
+#endif

@@ -1,0 +1,29 @@
+/* hd.h — the one precision switch and the host/device inline marker.
+ * Every per-particle or per-pair formula lives in src/physics/ as HD_INLINE so
+ * that the CPU (OpenMP) and GPU (CUDA) drivers call the same code. */
+#ifndef SPHSEG_HD_H
+#define SPHSEG_HD_H
+
+#ifdef __CUDACC__
+#define HD_INLINE __host__ __device__ static inline
+#else
+#define HD_INLINE static inline
+#endif
+
+#ifdef SPHSEG_SINGLE
+typedef float real;
+#define REAL_EPS 1.1920929e-7f
+#define R(x) ((real)(x))
+#else
+typedef double real;
+#define REAL_EPS 2.220446049250313e-16
+#define R(x) ((real)(x))
+#endif
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+#define DIM_MAX 3
+
+#endif

@@ -1,0 +1,42 @@
+/* linalg.h — tiny dense solves for the C1-consistent gradients (App. E). */
+#ifndef SPHSEG_LINALG_H
+#define SPHSEG_LINALG_H
+#include "hd.h"
+
+/* Solve A X = B in place for n <= 4 unknowns and nrhs <= 2 right-hand sides
+ * (A row-major n x n, B row-major n x nrhs), Gaussian elimination with partial
+ * pivoting. Returns 0, or 1 if A is singular relative to tol * max|A|. */
+HD_INLINE int linalg_solve(int n, real *A, real *B, int nrhs, real tol)
+{
+    real amax = 0;
+    for (int k = 0; k < n * n; ++k) amax = A[k] > amax ? A[k] : (-A[k] > amax ? -A[k] : amax);
+    if (amax == 0) return 1;
+    for (int c = 0; c < n; ++c) {
+        int piv = c;
+        for (int r = c + 1; r < n; ++r) {
+            real a = A[r * n + c] < 0 ? -A[r * n + c] : A[r * n + c];
+            real b = A[piv * n + c] < 0 ? -A[piv * n + c] : A[piv * n + c];
+            if (a > b) piv = r;
+        }
+        real pv = A[piv * n + c];
+        if ((pv < 0 ? -pv : pv) <= tol * amax) return 1;
+        if (piv != c) {
+            for (int k = 0; k < n; ++k) { real t = A[c * n + k]; A[c * n + k] = A[piv * n + k]; A[piv * n + k] = t; }
+            for (int k = 0; k < nrhs; ++k) { real t = B[c * nrhs + k]; B[c * nrhs + k] = B[piv * nrhs + k]; B[piv * nrhs + k] = t; }
+        }
+        for (int r = c + 1; r < n; ++r) {
+            real f = A[r * n + c] / pv;
+            for (int k = c; k < n; ++k) A[r * n + k] -= f * A[c * n + k];
+            for (int k = 0; k < nrhs; ++k) B[r * nrhs + k] -= f * B[c * nrhs + k];
+        }
+    }
+    for (int r = n - 1; r >= 0; --r)
+        for (int k = 0; k < nrhs; ++k) {
+            real s = B[r * nrhs + k];
+            for (int c = r + 1; c < n; ++c) s -= A[r * n + c] * B[c * nrhs + k];
+            B[r * nrhs + k] = s / A[r * n + r];
+        }
+    return 0;
+}
+
+#endif

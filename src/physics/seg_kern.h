@@ -1,0 +1,168 @@
+/* seg_kern.h — the concentration rate dC_i/dt of one material particle, the
+ * neighbour-loop body shared by the CPU (src/seg.c) and GPU drivers.
+ * Gravity-aligned derivative: grad_g X = ghat . grad X (eq. E15). */
+#ifndef SPHSEG_SEG_KERN_H
+#define SPHSEG_SEG_KERN_H
+#include <math.h>
+#include "../particles.h"
+#include "grid.h"
+#include "linalg.h"
+#include "seg.h"
+#include "sph.h"
+
+typedef struct seg_ctx {
+    sph_ctx k;
+    seg_params sp;
+    int scheme; /* enum seg_scheme (scene.h): 0 paper, 1 direct, 2 conservative */
+} seg_ctx;
+
+/* The three contributions to dC/dt, 1/s: segregation, diffusion, CSR source. */
+typedef struct seg_rate {
+    real seg, diff, src;
+} seg_rate;
+
+/* Accumulators of the C1-consistent gradient system (App. E, E9–E14) for two
+ * fields at once; unknowns ordered (X, dX/dx, dX/dy[, dX/dz]). */
+typedef struct seg_c1 {
+    real M[16]; /* (d+1) x (d+1) */
+    real B[8];  /* (d+1) x 2 */
+} seg_c1;
+
+HD_INLINE void seg_c1_add(seg_c1 *s, int dim, real w, const real grad[3], const real xij[3],
+                          real X0, real X1)
+{
+    int n = dim + 1;
+    s->M[0] += w; /* C11 (E11) */
+    s->B[0] += X0 * w;
+    s->B[1] += X1 * w; /* B1 (E9) */
+    for (int a = 0; a < dim; ++a) {
+        s->M[a + 1] -= xij[a] * w;          /* C12 (E12) */
+        s->M[(a + 1) * n] += grad[a];       /* C21 (E13) */
+        for (int b = 0; b < dim; ++b) s->M[(a + 1) * n + b + 1] -= grad[a] * xij[b]; /* C22 (E14) */
+        s->B[2 * (a + 1)] += X0 * grad[a];  /* B2 (E10) */
+        s->B[2 * (a + 1) + 1] += X1 * grad[a];
+    }
+}
+
+/* Solve (E2) and return ghat . grad X for both fields; 1 if singular. */
+HD_INLINE int seg_c1_solve(seg_c1 *s, int dim, const real ghat[3], real out[2])
+{
+    if (linalg_solve(dim + 1, s->M, s->B, 2, R(1e-10))) return 1;
+    for (int f = 0; f < 2; ++f) {
+        out[f] = 0;
+        for (int a = 0; a < dim; ++a) out[f] += ghat[a] * s->B[2 * (a + 1) + f];
+    }
+    return 0;
+}
+
+/* Fields whose gravity derivative the scheme needs: paper form (2.10) uses
+ * C and V; the direct form (2.5) uses Q = V F (second slot unused). */
+HD_INLINE void seg_fields(const seg_ctx *c, real C, real gdot, real X[2])
+{
+    if (c->scheme == 1) {
+        X[0] = seg_Q(&c->sp, C, gdot);
+        X[1] = 0;
+    } else {
+        X[0] = C;
+        X[1] = seg_V(&c->sp, C, gdot);
+    }
+}
+
+/* dC_i/dt by eq. (2.10) [scheme 0] or (2.5) [scheme 1] with the HCSR
+ * treatment: standard difference gradients inside (3.13), C1 gradients at
+ * boundary particles (App. E), diffusion with psi~ (4.13), CCSR source (4.9)
+ * at walls, MCSR source (4.16) at the free surface. */
+HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view *g,
+                                 const seg_ctx *c)
+{
+    const sph_ctx *k = &c->k;
+    const seg_params *sp = &c->sp;
+    int cls = p->bclass[i];
+    int bnd = cls != BC_INTERIOR;
+    int ccsr = cls == BC_WALL_SURFACE || cls == BC_WALL_VICINITY;
+    int mcsr = cls == BC_FREE_SURFACE || cls == BC_FREE_VICINITY;
+    real Ci = p->C[i], Di = seg_D(sp, Ci, p->gdot[i]), Xi[2];
+    seg_fields(c, Ci, p->gdot[i], Xi);
+    real ni[3] = {p->nrm[0][i], p->nrm[1][i], p->nrm[2][i]};
+    real gx[2] = {0, 0}, diff = 0, qs = 0;
+    seg_c1 s1 = {{0}, {0}};
+    NBR_BEGIN(g, p->x, i, j)
+        real xij[3];
+        real r2 = grid_pair(k->dim, p->x, i, j, xij);
+        if (r2 >= k->support2) continue;
+        real r = (real)sqrt((double)r2);
+        real f = kernel_f(r, k->h, k->alpha) * p->vol[j];
+        real grad[3] = {f * xij[0], f * xij[1], f * xij[2]};
+        if (p->kind[j] == KIND_DUMMY) {
+            if (ccsr) { /* (4.9), f taken with the dummy's normal (see below) */
+                real nj[3] = {p->nrm[0][j], p->nrm[1][j], p->nrm[2][j]};
+                real s2 = (ni[0] + nj[0]) * grad[0] + (ni[1] + nj[1]) * grad[1] + (ni[2] + nj[2]) * grad[2];
+                qs += seg_wall_flux(sp, Ci, p->gdot[i], nj) * s2;
+            }
+            else if (mcsr) /* (4.16), dummies fill the wall side */
+                qs += ni[0] * grad[0] + ni[1] * grad[1] + ni[2] * grad[2];
+            continue;
+        }
+        real Cj = p->C[j], Xj[2];
+        seg_fields(c, Cj, p->gdot[j], Xj);
+        if (bnd) seg_c1_add(&s1, k->dim, kernel_w(r, k->h, k->alpha) * p->vol[j], grad, xij, Xj[0], Xj[1]);
+        if (j == i) continue;
+        real gg = grad[0] * sp->ghat[0] + grad[1] * sp->ghat[1] + grad[2] * sp->ghat[2];
+        gx[0] += (Xj[0] - Xi[0]) * gg;
+        gx[1] += (Xj[1] - Xi[1]) * gg;
+        real Dj = seg_D(sp, Cj, p->gdot[j]);
+        diff += (p->psi[i] * Di + p->psi[j] * Dj) * (Ci - Cj) * f * r2 / (r2 + k->eta2);
+        if (mcsr) qs += ni[0] * grad[0] + ni[1] * grad[1] + ni[2] * grad[2];
+    NBR_END
+    if (bnd) {
+        real gc[2];
+        if (!seg_c1_solve(&s1, k->dim, sp->ghat, gc)) gx[0] = gc[0], gx[1] = gc[1];
+    }
+    seg_rate out;
+    if (c->scheme == 1)
+        out.seg = -gx[0];
+    else
+        out.seg = -(Xi[1] * seg_dFdC(sp, Ci) * gx[0] + seg_F(sp, Ci) * gx[1]);
+    out.diff = diff;
+    /* CCSR: q_i = -sum_{j in Omega_s} f(C_i; n_j) (n_i + n_j).grad_i W_ij V_j. On
+     * a flat wall n_j = n_i and this is (4.9); at a corner each wall adds the
+     * flux through itself (none through a vertical wall), where f(C_i; n_i)
+     * with the corner's diagonal n_i would inject flux through both. */
+    real fc = seg_wall_flux(sp, Ci, p->gdot[i], ni);
+    out.src = ccsr ? -qs : (mcsr ? R(2.0) * fc * qs : R(0.0));
+    return out;
+}
+
+/* dC_i/dt in conservative form: the divergence of J = Q ghat - D grad C by
+ * pairwise antisymmetric two-point fluxes,
+ *   dC_i/dt = sum_j V_j w_ij [ -(Q_i + Q_j) ghat.x_ij + (D_i + D_j) C_ij ],
+ *   w_ij = x_ij.grad_i W_ij / r^2   (cf. eq. 3.8),
+ * summed over material neighbours only. Distinct particles never coincide,
+ * so the clipping eta of (3.8), which biases the Laplacian by ~1.5 % at
+ * h = 1.5 dr whatever dr, is not needed. V_i dC_i/dt is antisymmetric in
+ * (i, j), so sum C_i V_i is conserved to round-off and the no-flux condition
+ * holds at every boundary without dummy particles or source terms. */
+HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const grid_view *g,
+                                         const seg_ctx *c)
+{
+    const sph_ctx *k = &c->k;
+    const seg_params *sp = &c->sp;
+    real Ci = p->C[i], Qi = seg_Q(sp, Ci, p->gdot[i]), Di = seg_D(sp, Ci, p->gdot[i]);
+    real seg = 0, diff = 0;
+    NBR_BEGIN(g, p->x, i, j)
+        if (j == i || p->kind[j] != KIND_MATERIAL) continue;
+        real xij[3];
+        real r2 = grid_pair(k->dim, p->x, i, j, xij);
+        if (r2 >= k->support2) continue;
+        real r = (real)sqrt((double)r2);
+        real w = kernel_f(r, k->h, k->alpha) * p->vol[j];
+        real Cj = p->C[j];
+        real gx = sp->ghat[0] * xij[0] + sp->ghat[1] * xij[1] + sp->ghat[2] * xij[2];
+        seg -= w * (Qi + seg_Q(sp, Cj, p->gdot[j])) * gx;
+        diff += w * (Di + seg_D(sp, Cj, p->gdot[j])) * (Ci - Cj);
+    NBR_END
+    seg_rate out = {seg, diff, 0};
+    return out;
+}
+
+#endif

@@ -1,0 +1,1208 @@
+/* scene.c — the scene file: load, -P overrides, defaults, validation and the
+ * used-parameters echo (scene.h, DESIGN.md "Errors").
+ *
+ * The file is parsed by libyaml into a document, whose node marks give line
+ * numbers. -P overrides and then defaults are edited into that document. A
+ * walk checks every key and scalar against the libcyaml schema below (unknown,
+ * duplicate and missing keys, numbers, enums), so each error names FILE:LINE
+ * (or the -P argument) and Section:key. The edited document is emitted and
+ * libcyaml loads it into struct scene; range checks follow.
+ *
+ * The walk checks scalars itself because libcyaml 1.3.1 accepts "1.74mm" as
+ * 1.74 and "2abc" as 2, and its own errors carry no file line. The schema is
+ * the one list of sections and keys; the used-parameters echo walks it too. */
+#define _POSIX_C_SOURCE 200809L
+#include "scene.h"
+#include "error.h"
+
+#include <cyaml/cyaml.h>
+#include <yaml.h>
+
+#include <ctype.h>
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#define ARRAY_LEN(a) (sizeof(a) / sizeof((a)[0]))
+
+/* ---- schema: every section and key, its type and whether it is required ---- */
+
+#define OPT CYAML_FLAG_OPTIONAL
+#define REQ CYAML_FLAG_DEFAULT
+/* Key names equal member names, so one macro argument gives both. */
+#define FLT(st, key, flags) CYAML_FIELD_FLOAT(#key, flags, struct st, key)
+#define ENM(st, key, strs)                                                                                   \
+    CYAML_FIELD_ENUM(#key, OPT | CYAML_FLAG_STRICT, struct st, key, strs, CYAML_ARRAY_LEN(strs))
+#define SEC(key, member, fields) CYAML_FIELD_MAPPING(key, OPT, struct scene, member, fields)
+
+static const cyaml_strval_t geom_types[] = {{"shearbox", GEOM_SHEARBOX}};
+static const cyaml_strval_t kin_types[] = {{"rest", KIN_REST}, {"oscillatory_shear", KIN_OSCILLATORY_SHEAR}};
+static const cyaml_strval_t seg_fluxes[] = {{"symmetric", SEG_FLUX_SYMMETRIC},
+                                            {"asymmetric", SEG_FLUX_ASYMMETRIC}};
+static const cyaml_strval_t seg_models[] = {{"constant", SEG_MODEL_CONSTANT},
+                                            {"shear_rate", SEG_MODEL_SHEAR_RATE}};
+static const cyaml_strval_t seg_schemes[] = {
+    {"paper", SEG_SCHEME_PAPER}, {"direct", SEG_SCHEME_DIRECT}, {"conservative", SEG_SCHEME_CONSERVATIVE}};
+
+static const cyaml_schema_field_t run_fields[] = {
+    FLT(scene_run, t_end, REQ),
+    FLT(scene_run, cfl_diffusion, OPT),
+    FLT(scene_run, cfl_segregation, OPT),
+    FLT(scene_run, cfl_kinematic, OPT),
+    FLT(scene_run, dt_max, OPT),
+    FLT(scene_run, progress_s, OPT),
+    CYAML_FIELD_STRING_PTR("backend", OPT, struct scene_run, backend, 0, CYAML_UNLIMITED),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t geometry_fields[] = {
+    ENM(scene_geometry, type, geom_types),
+    CYAML_FIELD_UINT("dim", OPT, struct scene_geometry, dim),
+    FLT(scene_geometry, dr, REQ),
+    FLT(scene_geometry, h_factor, OPT),
+    FLT(scene_geometry, height, OPT),
+    FLT(scene_geometry, width, OPT),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t kinematics_fields[] = {
+    ENM(scene_kinematics, velocity, kin_types),
+    FLT(scene_kinematics, gamma0, OPT),
+    FLT(scene_kinematics, period, OPT),
+    CYAML_FIELD_END,
+};
+
+/* V and D are required only for the constant model: require_model_keys(). */
+static const cyaml_schema_field_t segregation_fields[] = {
+    ENM(scene_segregation, flux, seg_fluxes),
+    FLT(scene_segregation, A, OPT),
+    FLT(scene_segregation, kappa, OPT),
+    ENM(scene_segregation, model, seg_models),
+    FLT(scene_segregation, V, OPT),
+    FLT(scene_segregation, D, OPT),
+    FLT(scene_segregation, chi_V, OPT),
+    FLT(scene_segregation, chi_D, OPT),
+    FLT(scene_segregation, d_small, OPT),
+    FLT(scene_segregation, d_large, OPT),
+    ENM(scene_segregation, scheme, seg_schemes),
+    FLT(scene_segregation, drift_tol, OPT),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t initial_fields[] = {
+    FLT(scene_initial, C_below, OPT),
+    FLT(scene_initial, C_above, OPT),
+    FLT(scene_initial, split, OPT),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t output_fields[] = {
+    FLT(scene_output, dt, REQ),
+    FLT(scene_output, diag_dt, OPT), /* default dt/20, set after loading */
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_value_t gravity_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
+
+static const cyaml_schema_field_t physics_fields[] = {
+    CYAML_FIELD_SEQUENCE_FIXED("gravity", OPT, struct scene_physics, gravity, &gravity_entry, 3),
+    FLT(scene_physics, rho, OPT),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t scene_fields[] = {
+    SEC("Run", run, run_fields),
+    SEC("Geometry", geometry, geometry_fields),
+    SEC("Kinematics", kinematics, kinematics_fields),
+    SEC("Segregation", segregation, segregation_fields),
+    SEC("Initial", initial, initial_fields),
+    SEC("Output", output, output_fields),
+    SEC("Physics", physics, physics_fields),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_value_t scene_schema = {
+    CYAML_VALUE_MAPPING(CYAML_FLAG_POINTER, struct scene, scene_fields)};
+
+/* ---- defaults (as YAML text, edited into the document when a key is absent) - */
+
+struct scene_default {
+    const char *section, *key, *value;
+};
+
+static const struct scene_default scene_defaults[] = {
+    {"Run", "cfl_diffusion", "0.1"},
+    {"Run", "cfl_segregation", "0.2"},
+    {"Run", "cfl_kinematic", "0.25"},
+    {"Run", "dt_max", "1e30"},
+    {"Run", "progress_s", "10"},
+    {"Run", "backend", "cpu"},
+    {"Geometry", "type", "shearbox"},
+    {"Geometry", "dim", "2"},
+    {"Geometry", "h_factor", "1.5"},
+    {"Geometry", "height", "0.087"},
+    {"Geometry", "width", "0.037"},
+    {"Kinematics", "velocity", "oscillatory_shear"},
+    {"Kinematics", "gamma0", "0.5773502691896257"}, /* tan 30 deg */
+    {"Kinematics", "period", "13"},
+    {"Segregation", "flux", "symmetric"},
+    {"Segregation", "A", "1.6"},
+    {"Segregation", "kappa", "0.89"},
+    {"Segregation", "model", "constant"},
+    {"Segregation", "chi_V", "0.11"},
+    {"Segregation", "chi_D", "0.0307"},
+    {"Segregation", "d_small", "0.004"},
+    {"Segregation", "d_large", "0.008"},
+    {"Segregation", "scheme", "paper"},
+    {"Segregation", "drift_tol", "1e-3"},
+    {"Initial", "C_below", "0"},
+    {"Initial", "C_above", "1"},
+    {"Initial", "split", "0.5"},
+    {"Physics", "gravity", "[0, -9.81, 0]"},
+    {"Physics", "rho", "1500"},
+};
+
+/* ---- ranges of the double parameters ----------------------------------------- */
+
+enum { ALWAYS, IF_CONSTANT, IF_SHEAR_RATE };   /* which Segregation:model checks it */
+enum { CLOSED = 0, LO_OPEN = 1, HI_OPEN = 2 }; /* bound kinds, ORed */
+
+struct scene_range {
+    const char *name; /* Section:key */
+    size_t offset;    /* of the double in struct scene */
+    double lo, hi;
+    int open, when;
+};
+
+/* clang-format off */
+#define RNG(sec, m, key, lo, hi, open, when) \
+    {sec ":" #key, offsetof(struct scene, m.key), lo, hi, open, when}
+/* clang-format on */
+#define POS(sec, m, key) RNG(sec, m, key, 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS)
+#define UNIT(sec, m, key) RNG(sec, m, key, 0, 1, CLOSED, ALWAYS)
+#define CFL(key) RNG("Run", run, key, 0, 1, LO_OPEN, ALWAYS)
+
+static const struct scene_range scene_ranges[] = {
+    POS("Run", run, t_end),
+    CFL(cfl_diffusion),
+    CFL(cfl_segregation),
+    CFL(cfl_kinematic),
+    POS("Run", run, dt_max),
+    POS("Run", run, progress_s),
+    POS("Geometry", geometry, dr),
+    RNG("Geometry", geometry, h_factor, 1, 3, CLOSED, ALWAYS),
+    POS("Geometry", geometry, height),
+    POS("Geometry", geometry, width),
+    RNG("Kinematics", kinematics, gamma0, 0, INFINITY, HI_OPEN, ALWAYS),
+    POS("Kinematics", kinematics, period),
+    POS("Segregation", segregation, A),
+    RNG("Segregation", segregation, kappa, 0, 1, HI_OPEN, ALWAYS),
+    RNG("Segregation", segregation, V, 0, INFINITY, HI_OPEN, IF_CONSTANT),
+    RNG("Segregation", segregation, D, 0, INFINITY, LO_OPEN | HI_OPEN, IF_CONSTANT),
+    RNG("Segregation", segregation, chi_V, 0, INFINITY, HI_OPEN, IF_SHEAR_RATE),
+    RNG("Segregation", segregation, chi_D, 0, INFINITY, LO_OPEN | HI_OPEN, IF_SHEAR_RATE),
+    POS("Segregation", segregation, d_small),
+    POS("Segregation", segregation, d_large),
+    POS("Segregation", segregation, drift_tol),
+    UNIT("Initial", initial, C_below),
+    UNIT("Initial", initial, C_above),
+    UNIT("Initial", initial, split),
+    POS("Output", output, dt),
+    POS("Output", output, diag_dt),
+    POS("Physics", physics, rho),
+};
+
+/* ---- parse context and error messages ------------------------------------------ */
+
+enum { SCENE_MAX_LEAVES = 96, SCENE_MAX_DEPTH = 4, SCENE_NAME = 64 };
+
+/* A key the walk met: where it was set, for errors found after loading. */
+struct scene_leaf {
+    char name[SCENE_NAME]; /* "Section" or "Section:key" */
+    int line;              /* 1-based line of the key in the file, 0 if not there */
+    int over;              /* index of the -P override that set it, or -1 */
+};
+
+/* What struct scene keeps of the walk: scene_key_line, scene_key_where. */
+struct scene_keys {
+    int n_over, n_leaf;
+    char **over; /* copies of the -P arguments */
+    struct scene_leaf leaf[];
+};
+
+struct scene_ctx {
+    const char *path;
+    int n_over;
+    char **over;
+    char *text; /* the file, NUL-terminated */
+    size_t len;
+    yaml_document_t doc;
+    int have_doc;
+    int n_file_nodes; /* nodes 1..n_file_nodes came from the file */
+    int *first_node;  /* first node of override i; [n_over]: first default node */
+    struct scene_leaf leaf[SCENE_MAX_LEAVES];
+    int n_leaf;
+    char *err;
+    size_t errlen;
+    char log[256]; /* libcyaml's first error message */
+};
+
+/* Append printf output at offset n of out[cap]; returns the new offset. */
+static size_t vcat(char *out, size_t cap, size_t n, const char *fmt, va_list ap)
+{
+    if (n >= cap) return n;
+    int k = vsnprintf(out + n, cap - n, fmt, ap);
+    return k < 0 ? n : n + (size_t)k;
+}
+
+static size_t cat(char *out, size_t cap, size_t n, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static size_t cat(char *out, size_t cap, size_t n, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    n = vcat(out, cap, n, fmt, ap);
+    va_end(ap);
+    return n;
+}
+
+/* Write "WHERE: NAME: why" to c->err: WHERE is "-P ARG" for override `over`
+ * >= 0, else FILE:LINE (FILE alone when line is 0); NAME may be NULL. Control
+ * characters become spaces so the message is one line. Returns -1. */
+static int vfail(struct scene_ctx *c, int over, int line, const char *name, const char *fmt, va_list ap)
+{
+    char *e = c->err;
+    size_t cap = c->errlen, n = 0;
+    if (!e || cap == 0) return -1;
+    if (over >= 0)
+        n = cat(e, cap, n, "-P %s: ", c->over[over]);
+    else if (line > 0)
+        n = cat(e, cap, n, "%s:%d: ", c->path, line);
+    else
+        n = cat(e, cap, n, "%s: ", c->path);
+    if (name) n = cat(e, cap, n, "%s: ", name);
+    vcat(e, cap, n, fmt, ap);
+    for (char *p = e; *p; ++p)
+        if (iscntrl((unsigned char)*p)) *p = ' ';
+    return -1;
+}
+
+static int fail(struct scene_ctx *c, int over, int line, const char *name, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+static int fail(struct scene_ctx *c, int over, int line, const char *name, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vfail(c, over, line, name, fmt, ap);
+    va_end(ap);
+    return -1;
+}
+
+static int leaf_add(struct scene_ctx *c, const char *name, int line, int over)
+{
+    if (c->n_leaf == SCENE_MAX_LEAVES) return fail(c, -1, line, name, "too many keys");
+    struct scene_leaf *l = &c->leaf[c->n_leaf++];
+    snprintf(l->name, sizeof l->name, "%s", name);
+    l->line = line;
+    l->over = over;
+    return 0;
+}
+
+static const struct scene_leaf *leaf_in(const struct scene_leaf *leaf, int n, const char *name)
+{
+    for (int i = 0; i < n; ++i)
+        if (strcmp(leaf[i].name, name) == 0) return &leaf[i];
+    return NULL;
+}
+
+static const struct scene_leaf *leaf_find(const struct scene_ctx *c, const char *name)
+{
+    return leaf_in(c->leaf, c->n_leaf, name);
+}
+
+/* Where parameter `name` ("Section:key") was set: the override (or -1), and
+ * the line of its key in the file, else of its section, else 1. */
+static void leaf_resolve(const struct scene_leaf *leaf, int n, const char *name, int *over, int *line)
+{
+    char sec[SCENE_NAME];
+    const struct scene_leaf *l = leaf_in(leaf, n, name);
+    *over = l ? l->over : -1;
+    *line = l ? l->line : 0;
+    if (*line > 0) return;
+    snprintf(sec, sizeof sec, "%.*s", (int)strcspn(name, ":"), name);
+    l = leaf_in(leaf, n, sec);
+    *line = l && l->line > 0 ? l->line : 1;
+}
+
+/* Error about parameter `name` ("Section:key") after loading, located by
+ * leaf_resolve. */
+static int fail_at(struct scene_ctx *c, const char *name, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static int fail_at(struct scene_ctx *c, const char *name, const char *fmt, ...)
+{
+    int over, line;
+    leaf_resolve(c->leaf, c->n_leaf, name, &over, &line);
+    va_list ap;
+    va_start(ap, fmt);
+    vfail(c, over, line, name, fmt, ap);
+    va_end(ap);
+    return -1;
+}
+
+/* The shortest of %.15g, %.16g, %.17g that reads back as exactly d. */
+static void fmt_double(char *out, size_t n, double d)
+{
+    for (int prec = 15; prec <= 17; ++prec) {
+        snprintf(out, n, "%.*g", prec, d);
+        if (strtod(out, NULL) == d) return;
+    }
+}
+
+/* ---- the libyaml document ------------------------------------------------------ */
+
+static yaml_node_t *node(struct scene_ctx *c, int id) { return yaml_document_get_node(&c->doc, id); }
+
+static const char *scalar(const yaml_node_t *n) { return (const char *)n->data.scalar.value; }
+
+static int node_count(const struct scene_ctx *c) { return (int)(c->doc.nodes.top - c->doc.nodes.start); }
+
+static int node_line(struct scene_ctx *c, int id)
+{
+    yaml_node_t *n = node(c, id);
+    return n ? (int)n->start_mark.line + 1 : 1;
+}
+
+/* Where node id came from: -1 the file, i >= 0 override i, -2 a default. */
+static int node_origin(const struct scene_ctx *c, int id)
+{
+    if (id <= c->n_file_nodes || !c->first_node) return -1;
+    for (int i = c->n_over; i >= 0; --i)
+        if (id >= c->first_node[i]) return i == c->n_over ? -2 : i;
+    return -1;
+}
+
+static int is_null(const yaml_node_t *n)
+{
+    static const char *const nulls[] = {"", "~", "null", "Null", "NULL"};
+    if (n->type != YAML_SCALAR_NODE || n->data.scalar.style != YAML_PLAIN_SCALAR_STYLE) return 0;
+    for (size_t i = 0; i < ARRAY_LEN(nulls); ++i)
+        if (strcmp(scalar(n), nulls[i]) == 0) return 1;
+    return 0;
+}
+
+/* The pair of mapping `map` whose key is `key`, or NULL. The pointer is valid
+ * until a pair is appended to that mapping. */
+static yaml_node_pair_t *map_pair(struct scene_ctx *c, int map, const char *key)
+{
+    yaml_node_t *m = node(c, map);
+    if (!m || m->type != YAML_MAPPING_NODE) return NULL;
+    for (yaml_node_pair_t *p = m->data.mapping.pairs.start; p < m->data.mapping.pairs.top; ++p) {
+        yaml_node_t *k = node(c, p->key);
+        if (k && k->type == YAML_SCALAR_NODE && strcmp(scalar(k), key) == 0) return p;
+    }
+    return NULL;
+}
+
+static int map_append(struct scene_ctx *c, int map, const char *key, int val)
+{
+    int k = yaml_document_add_scalar(&c->doc, NULL, (yaml_char_t *)key, -1, YAML_PLAIN_SCALAR_STYLE);
+    return k && yaml_document_append_mapping_pair(&c->doc, map, k, val) ? 0 : -1;
+}
+
+/* Copy node id of src (and what it holds) into dst; returns the new id or 0. */
+static int node_copy(yaml_document_t *dst, yaml_document_t *src, int id, int depth)
+{
+    yaml_node_t *n = yaml_document_get_node(src, id);
+    if (!n || depth > 8) return 0;
+    if (n->type == YAML_SCALAR_NODE)
+        return yaml_document_add_scalar(dst, n->tag, n->data.scalar.value, (int)n->data.scalar.length,
+                                        n->data.scalar.style);
+    if (n->type == YAML_SEQUENCE_NODE) {
+        int out = yaml_document_add_sequence(dst, n->tag, n->data.sequence.style);
+        for (yaml_node_item_t *it = n->data.sequence.items.start; out && it < n->data.sequence.items.top;
+             ++it) {
+            int k = node_copy(dst, src, *it, depth + 1);
+            if (!k || !yaml_document_append_sequence_item(dst, out, k)) return 0;
+        }
+        return out;
+    }
+    int out = yaml_document_add_mapping(dst, n->tag, n->data.mapping.style);
+    for (yaml_node_pair_t *p = n->data.mapping.pairs.start; out && p < n->data.mapping.pairs.top; ++p) {
+        int k = node_copy(dst, src, p->key, depth + 1), v = node_copy(dst, src, p->value, depth + 1);
+        if (!k || !v || !yaml_document_append_mapping_pair(dst, out, k, v)) return 0;
+    }
+    return out;
+}
+
+/* Parse `text` as YAML and add its root to the scene document; returns the
+ * node id, or 0 with the reason in why. Empty text gives an empty scalar. */
+static int doc_add_text(struct scene_ctx *c, const char *text, char *why, size_t n)
+{
+    yaml_parser_t p;
+    yaml_document_t v;
+    int id = 0;
+    snprintf(why, n, "cannot be stored: out of memory");
+    if (!yaml_parser_initialize(&p)) return 0;
+    yaml_parser_set_input_string(&p, (const unsigned char *)text, strlen(text));
+    if (!yaml_parser_load(&p, &v)) {
+        snprintf(why, n, "is not valid YAML: %s", p.problem ? p.problem : "parse error");
+    } else {
+        if (yaml_document_get_root_node(&v))
+            id = node_copy(&c->doc, &v, 1, 0);
+        else
+            id = yaml_document_add_scalar(&c->doc, NULL, (yaml_char_t *)"", 0, YAML_PLAIN_SCALAR_STYLE);
+        if (!id) snprintf(why, n, "is nested too deeply");
+        yaml_document_delete(&v);
+    }
+    yaml_parser_delete(&p);
+    return id;
+}
+
+/* Set comp[0]:...:comp[n-1] to node val, creating sections as needed. A
+ * section that is not a mapping is left alone: the walk reports it. */
+static int doc_put(struct scene_ctx *c, const char *const *comp, int n, int val)
+{
+    int map = 1; /* the root */
+    for (int j = 0; j < n - 1; ++j) {
+        yaml_node_pair_t *p = map_pair(c, map, comp[j]);
+        int sub = p ? p->value : 0;
+        if (!sub) {
+            sub = yaml_document_add_mapping(&c->doc, NULL, YAML_BLOCK_MAPPING_STYLE);
+            if (!sub || map_append(c, map, comp[j], sub)) return -1;
+        }
+        if (node(c, sub)->type != YAML_MAPPING_NODE) return 0;
+        map = sub;
+    }
+    yaml_node_pair_t *p = map_pair(c, map, comp[n - 1]);
+    if (p) {
+        p->value = val;
+        return 0;
+    }
+    return map_append(c, map, comp[n - 1], val);
+}
+
+/* ---- reading the file ---------------------------------------------------------- */
+
+static int read_text(struct scene_ctx *c)
+{
+    FILE *f = fopen(c->path, "rb");
+    if (!f) return fail(c, -1, 0, NULL, "cannot read: %s", strerror(errno));
+    size_t cap = 4096, n = 0;
+    char *t = malloc(cap);
+    while (t) {
+        size_t got = fread(t + n, 1, cap - n - 1, f);
+        n += got;
+        if (got == 0) break;
+        if (n + 1 == cap) {
+            char *bigger = realloc(t, cap *= 2);
+            if (!bigger) free(t);
+            t = bigger;
+        }
+    }
+    int eno = errno, bad = ferror(f);
+    fclose(f);
+    if (!t) return fail(c, -1, 0, NULL, "cannot read: out of memory");
+    if (bad) {
+        free(t);
+        return fail(c, -1, 0, NULL, "cannot read: %s", strerror(eno));
+    }
+    t[n] = '\0';
+    c->text = t;
+    c->len = n;
+    return 0;
+}
+
+static int yaml_fail(struct scene_ctx *c, const yaml_parser_t *p)
+{
+    size_t line = p->problem_mark.line + 1;
+    if (p->error == YAML_READER_ERROR) { /* located by byte offset only */
+        line = 1;
+        for (size_t i = 0; i < p->problem_offset && i < c->len; ++i)
+            line += c->text[i] == '\n';
+    }
+    const char *why = p->problem ? p->problem : "parse error";
+    return fail(c, -1, (int)line, NULL, "not valid YAML: %s%s%s", why, p->context ? " " : "",
+                p->context ? p->context : "");
+}
+
+/* Sections written with no keys ("Physics:" alone) become empty mappings. */
+static int empty_sections(struct scene_ctx *c)
+{
+    yaml_node_t *root = node(c, 1);
+    int n = (int)(root->data.mapping.pairs.top - root->data.mapping.pairs.start);
+    for (int i = 0; i < n; ++i) {
+        yaml_node_pair_t *p = node(c, 1)->data.mapping.pairs.start + i;
+        if (!is_null(node(c, p->value))) continue;
+        int m = yaml_document_add_mapping(&c->doc, NULL, YAML_BLOCK_MAPPING_STYLE);
+        if (!m) return fail(c, -1, 0, NULL, "out of memory");
+        node(c, 1)->data.mapping.pairs.start[i].value = m;
+    }
+    return 0;
+}
+
+/* Parse the text into c->doc: one document whose root is a mapping. */
+static int load_doc(struct scene_ctx *c)
+{
+    yaml_parser_t p;
+    yaml_document_t extra;
+    int rc = 0;
+    if (!yaml_parser_initialize(&p)) return fail(c, -1, 0, NULL, "out of memory");
+    yaml_parser_set_input_string(&p, (const unsigned char *)c->text, c->len);
+    if (!yaml_parser_load(&p, &c->doc)) {
+        rc = yaml_fail(c, &p);
+    } else if (!yaml_parser_load(&p, &extra)) {
+        c->have_doc = 1;
+        rc = yaml_fail(c, &p);
+    } else {
+        c->have_doc = 1;
+        if (yaml_document_get_root_node(&extra))
+            rc = fail(c, -1, (int)extra.start_mark.line + 1, NULL, "more than one YAML document");
+        yaml_document_delete(&extra);
+    }
+    yaml_parser_delete(&p);
+    if (rc) return rc;
+    yaml_node_t *root = yaml_document_get_root_node(&c->doc);
+    if (!root) { /* an empty file: start an empty mapping in a fresh document */
+        yaml_document_delete(&c->doc);
+        if (!yaml_document_initialize(&c->doc, NULL, NULL, NULL, 1, 1) ||
+            !yaml_document_add_mapping(&c->doc, NULL, YAML_BLOCK_MAPPING_STYLE))
+            return fail(c, -1, 0, NULL, "out of memory");
+    } else if (root->type != YAML_MAPPING_NODE) {
+        return fail(c, -1, (int)root->start_mark.line + 1, NULL,
+                    "not a scene: the top level must be a mapping of sections (Run:, ...)");
+    }
+    return empty_sections(c);
+}
+
+/* ---- -P Section:key=value overrides --------------------------------------------- */
+
+static const cyaml_schema_field_t *field_find(const cyaml_schema_field_t *f, const char *key)
+{
+    for (; f->key; ++f)
+        if (strcmp(f->key, key) == 0) return f;
+    return NULL;
+}
+
+static int fail_unknown(struct scene_ctx *c, int over, int line, const char *name,
+                        const cyaml_schema_field_t *fields, int section)
+{
+    char known[512];
+    size_t n = 0;
+    known[0] = '\0';
+    for (; fields->key; ++fields)
+        n = cat(known, sizeof known, n, "%s%s", n ? ", " : "", fields->key);
+    return fail(c, over, line, name, "unknown %s (known: %s)", section ? "section" : "key", known);
+}
+
+/* Split "A:b=value" (in buf) into path components; 0 if malformed. */
+static int over_split(const char *arg, char *buf, size_t n, char **comp, int *ncomp, const char **value)
+{
+    const char *eq = strchr(arg, '=');
+    if (!eq || (size_t)(eq - arg) >= n) return 0;
+    memcpy(buf, arg, (size_t)(eq - arg));
+    buf[eq - arg] = '\0';
+    *value = eq + 1;
+    *ncomp = 0;
+    for (char *s = buf; s; ++*ncomp) {
+        if (*ncomp == SCENE_MAX_DEPTH) return 0;
+        comp[*ncomp] = s;
+        s = strchr(s, ':');
+        if (s) *s++ = '\0';
+    }
+    for (int i = 0; i < *ncomp; ++i)
+        if (!comp[i][0]) return 0;
+    return *ncomp >= 2;
+}
+
+/* Check an override's path against the schema. */
+static int over_check(struct scene_ctx *c, int i, char *const *comp, int n)
+{
+    const cyaml_schema_field_t *fields = scene_fields;
+    char name[256];
+    size_t len = 0;
+    for (int j = 0; j < n; ++j) {
+        len = cat(name, sizeof name, len, "%s%s", j ? ":" : "", comp[j]);
+        const cyaml_schema_field_t *f = field_find(fields, comp[j]);
+        if (!f) return fail_unknown(c, i, 0, name, fields, j == 0);
+        if (j + 1 == n) break;
+        if (f->value.type != CYAML_MAPPING) return fail(c, i, 0, name, "not a section");
+        fields = f->value.mapping.fields;
+    }
+    return 0;
+}
+
+static int apply_override(struct scene_ctx *c, int i)
+{
+    char buf[256], *comp[SCENE_MAX_DEPTH], why[160];
+    const char *value;
+    int n;
+    if (!over_split(c->over[i], buf, sizeof buf, comp, &n, &value))
+        return fail(c, i, 0, NULL, "malformed override, expected -P Section:key=value");
+    if (over_check(c, i, comp, n)) return -1;
+    int val = doc_add_text(c, value, why, sizeof why);
+    if (!val) return fail(c, i, 0, NULL, "value %s", why);
+    if (doc_put(c, (const char *const *)comp, n, val)) return fail(c, i, 0, NULL, "out of memory");
+    return 0;
+}
+
+static int apply_overrides(struct scene_ctx *c)
+{
+    c->n_file_nodes = node_count(c);
+    c->first_node = malloc(((size_t)c->n_over + 1) * sizeof *c->first_node);
+    if (!c->first_node) return fail(c, -1, 0, NULL, "out of memory");
+    for (int i = 0; i < c->n_over; ++i) {
+        c->first_node[i] = node_count(c) + 1;
+        if (apply_override(c, i)) return -1;
+    }
+    c->first_node[c->n_over] = node_count(c) + 1;
+    return 0;
+}
+
+/* ---- the walk: the document against the schema ----------------------------------- */
+
+/* Write a reason into why[n]; returns -1. */
+static int why_set(char *why, size_t n, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static int why_set(char *why, size_t n, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vcat(why, n, 0, fmt, ap);
+    va_end(ap);
+    return -1;
+}
+
+static int float_check(const char *s, char *why, size_t n)
+{
+    const char *t = s + (*s == '+' || *s == '-');
+    if (strcasecmp(t, ".inf") == 0 || (t == s && strcasecmp(s, ".nan") == 0))
+        return why_set(why, n, "not a finite number: %s", s);
+    char *end = NULL;
+    double d = *s && !isspace((unsigned char)*s) ? strtod(s, &end) : 0;
+    if (!end || end == s || *end) return why_set(why, n, "expected a number, got '%.40s'", s);
+    if (!isfinite(d)) return why_set(why, n, "not a finite number: %.40s", s);
+    return 0;
+}
+
+static int uint_check(const char *s, char *why, size_t n)
+{
+    char *end;
+    errno = 0;
+    unsigned long long u = strtoull(s, &end, 10);
+    if (!isdigit((unsigned char)*s) || *end || errno || u > 0xffffffffULL)
+        return why_set(why, n, "expected a non-negative integer, got '%.40s'", s);
+    return 0;
+}
+
+static int enum_check(const char *s, const cyaml_schema_value_t *v, char *why, size_t n)
+{
+    size_t k = cat(why, n, 0, "expected one of ");
+    for (uint32_t i = 0; i < v->enumeration.count; ++i) {
+        if (strcmp(s, v->enumeration.strings[i].str) == 0) return 0;
+        k = cat(why, n, k, "%s%s", i ? "|" : "", v->enumeration.strings[i].str);
+    }
+    cat(why, n, k, ", got '%.40s'", s);
+    return -1;
+}
+
+static const char *type_word(const cyaml_schema_value_t *v)
+{
+    switch (v->type) {
+    case CYAML_FLOAT:
+        return "a number";
+    case CYAML_UINT:
+        return "a non-negative integer";
+    case CYAML_ENUM:
+        return "a name";
+    case CYAML_MAPPING:
+        return "a section (a mapping of keys)";
+    case CYAML_SEQUENCE_FIXED:
+        return "a list";
+    default:
+        return "a string";
+    }
+}
+
+/* A scalar against its schema value; 0 if fine, else -1 with why. */
+static int scalar_check(const yaml_node_t *n, const cyaml_schema_value_t *v, char *why, size_t len)
+{
+    static const char *const kinds[] = {"nothing", "a scalar", "a list", "a mapping"};
+    if (n->type != YAML_SCALAR_NODE)
+        return why_set(why, len, "expected %s, got %s", type_word(v), kinds[n->type]);
+    switch (v->type) {
+    case CYAML_FLOAT:
+        return float_check(scalar(n), why, len);
+    case CYAML_UINT:
+        return uint_check(scalar(n), why, len);
+    case CYAML_ENUM:
+        return enum_check(scalar(n), v, why, len);
+    case CYAML_STRING:
+        return 0;
+    default:
+        return why_set(why, len, "unsupported schema type");
+    }
+}
+
+static int walk_map(struct scene_ctx *c, int map, const cyaml_schema_field_t *fields, const char *prefix,
+                    int line);
+
+/* Field f (under prefix) is absent: fail at line if it, or a key of it when
+ * it is a whole section, is required. */
+static int require_absent(struct scene_ctx *c, const cyaml_schema_field_t *f, const char *prefix, int line)
+{
+    char name[SCENE_NAME];
+    cat(name, sizeof name, 0, "%s%s%s", prefix, prefix[0] ? ":" : "", f->key);
+    if (!(f->value.flags & CYAML_FLAG_OPTIONAL)) return fail(c, -1, line, name, "required key missing");
+    if (f->value.type != CYAML_MAPPING) return 0;
+    for (const cyaml_schema_field_t *g = f->value.mapping.fields; g->key; ++g)
+        if (require_absent(c, g, name, line)) return -1;
+    return 0;
+}
+
+static int walk_seq(struct scene_ctx *c, yaml_node_t *n, const cyaml_schema_value_t *v, int over, int line,
+                    const char *name)
+{
+    char why[160];
+    if (n->type != YAML_SEQUENCE_NODE)
+        return fail(c, over, line, name, "expected a list of %u numbers", v->sequence.max);
+    long count = (long)(n->data.sequence.items.top - n->data.sequence.items.start);
+    if (count != (long)v->sequence.max)
+        return fail(c, over, line, name, "expected %u entries, got %ld", v->sequence.max, count);
+    for (long i = 0; i < count; ++i) {
+        yaml_node_t *e = node(c, n->data.sequence.items.start[i]);
+        if (scalar_check(e, v->sequence.entry, why, sizeof why))
+            return fail(c, over, line, name, "entry %ld: %s", i + 1, why);
+    }
+    return 0;
+}
+
+/* The value node val of key node key, named "Section:key". */
+static int walk_value(struct scene_ctx *c, int key, int val, const cyaml_schema_value_t *v, const char *name)
+{
+    char why[160];
+    int over = node_origin(c, val);
+    int line = node_origin(c, key) == -1 ? node_line(c, key) : 0;
+    yaml_node_t *n = node(c, val);
+    if (leaf_add(c, name, line, over)) return -1;
+    if (v->type == CYAML_MAPPING) {
+        if (n->type != YAML_MAPPING_NODE) return fail(c, over, line, name, "expected %s", type_word(v));
+        return walk_map(c, val, v->mapping.fields, name, line > 0 ? line : 1);
+    }
+    if (v->type == CYAML_SEQUENCE_FIXED) return walk_seq(c, n, v, over, line, name);
+    if (scalar_check(n, v, why, sizeof why)) return fail(c, over, line, name, "%s", why);
+    return 0;
+}
+
+/* Mapping node map against fields; prefix names it ("" for the root), line is
+ * where a missing required key is reported. */
+static int walk_map(struct scene_ctx *c, int map, const cyaml_schema_field_t *fields, const char *prefix,
+                    int line)
+{
+    char name[SCENE_NAME];
+    uint64_t seen = 0;
+    yaml_node_t *m = node(c, map);
+    for (yaml_node_pair_t *p = m->data.mapping.pairs.start; p < m->data.mapping.pairs.top; ++p) {
+        yaml_node_t *k = node(c, p->key);
+        int over = node_origin(c, p->key), kline = over == -1 ? node_line(c, p->key) : 0;
+        if (k->type != YAML_SCALAR_NODE)
+            return fail(c, over, kline, prefix[0] ? prefix : NULL, "keys must be plain names");
+        snprintf(name, sizeof name, "%s%s%.40s", prefix, prefix[0] ? ":" : "", scalar(k));
+        const cyaml_schema_field_t *f = field_find(fields, scalar(k));
+        if (!f) return fail_unknown(c, over, kline, name, fields, !prefix[0]);
+        uint64_t bit = (uint64_t)1 << (f - fields);
+        if (seen & bit) return fail(c, over, kline, name, "duplicate key");
+        seen |= bit;
+        if (walk_value(c, p->key, p->value, &f->value, name)) return -1;
+    }
+    for (const cyaml_schema_field_t *f = fields; f->key; ++f)
+        if (!(seen >> (f - fields) & 1) && require_absent(c, f, prefix, line)) return -1;
+    return 0;
+}
+
+/* Segregation:V and :D are required when Segregation:model is constant. */
+static int require_model_keys(struct scene_ctx *c)
+{
+    static const char *const keys[] = {"Segregation:V", "Segregation:D"};
+    const char *model = "constant";
+    yaml_node_pair_t *sec = map_pair(c, 1, "Segregation");
+    yaml_node_pair_t *mp = sec ? map_pair(c, sec->value, "model") : NULL;
+    if (mp) model = scalar(node(c, mp->value));
+    if (strcmp(model, "constant") != 0) return 0;
+    for (size_t i = 0; i < ARRAY_LEN(keys); ++i) {
+        if (leaf_find(c, keys[i])) continue;
+        const struct scene_leaf *l = leaf_find(c, "Segregation");
+        return fail(c, -1, l && l->line > 0 ? l->line : 1, keys[i],
+                    "required key missing (Segregation:model is constant)");
+    }
+    return 0;
+}
+
+static int add_defaults(struct scene_ctx *c)
+{
+    char name[SCENE_NAME], why[160];
+    for (size_t i = 0; i < ARRAY_LEN(scene_defaults); ++i) {
+        const struct scene_default *d = &scene_defaults[i];
+        snprintf(name, sizeof name, "%s:%s", d->section, d->key);
+        if (leaf_find(c, name)) continue;
+        const char *comp[2] = {d->section, d->key};
+        int val = doc_add_text(c, d->value, why, sizeof why);
+        if (!val || doc_put(c, comp, 2, val)) return fail(c, -1, 0, name, "default %s", why);
+    }
+    return 0;
+}
+
+/* ---- loading with libcyaml ---------------------------------------------------------- */
+
+struct buf {
+    char *p;
+    size_t n, cap;
+    int bad;
+};
+
+static int buf_write(void *data, unsigned char *bytes, size_t size)
+{
+    struct buf *b = data;
+    if (b->n + size + 1 > b->cap) {
+        size_t cap = 2 * (b->n + size + 1);
+        char *p = realloc(b->p, cap);
+        if (!p) {
+            b->bad = 1;
+            return 0;
+        }
+        b->p = p;
+        b->cap = cap;
+    }
+    memcpy(b->p + b->n, bytes, size);
+    b->n += size;
+    b->p[b->n] = '\0';
+    return 1;
+}
+
+/* Emit doc as YAML text into b; the document is freed either way. */
+static int doc_emit(yaml_document_t *doc, struct buf *b)
+{
+    yaml_emitter_t em;
+    if (!yaml_emitter_initialize(&em)) {
+        yaml_document_delete(doc);
+        return 0;
+    }
+    yaml_emitter_set_output(&em, buf_write, b);
+    yaml_emitter_set_width(&em, -1);
+    yaml_emitter_set_unicode(&em, 1);
+    int ok = yaml_emitter_open(&em);
+    if (ok)
+        ok = yaml_emitter_dump(&em, doc); /* frees doc */
+    else
+        yaml_document_delete(doc);
+    ok = ok && yaml_emitter_close(&em) && yaml_emitter_flush(&em);
+    yaml_emitter_delete(&em);
+    return ok && !b->bad;
+}
+
+static void cyaml_log_capture(cyaml_log_t level, void *ctx, const char *fmt, va_list args)
+{
+    struct scene_ctx *c = ctx;
+    if (level < CYAML_LOG_ERROR || c->log[0]) return; /* keep the first error */
+    vsnprintf(c->log, sizeof c->log, fmt, args);
+    c->log[strcspn(c->log, "\n")] = '\0';
+}
+
+static int load_struct(struct scene_ctx *c, struct scene *s)
+{
+    struct buf b = {0};
+    int ok = doc_emit(&c->doc, &b);
+    c->have_doc = 0;
+    if (!ok) {
+        free(b.p);
+        return fail(c, -1, 0, NULL, "internal error: cannot emit the edited scene");
+    }
+    cyaml_config_t cfg = {.log_fn = cyaml_log_capture,
+                          .log_ctx = c,
+                          .mem_fn = cyaml_mem, /* realloc/free: free() releases it */
+                          .log_level = CYAML_LOG_ERROR,
+                          .flags = CYAML_CFG_DEFAULT};
+    struct scene *tmp = NULL;
+    cyaml_err_t e =
+        cyaml_load_data((const uint8_t *)b.p, b.n, &cfg, &scene_schema, (cyaml_data_t **)&tmp, NULL);
+    free(b.p);
+    if (e != CYAML_OK)
+        return fail(c, -1, 0, NULL, "libcyaml: %s%s%s", cyaml_strerror(e), c->log[0] ? ": " : "", c->log);
+    *s = *tmp;
+    free(tmp);
+    return 0;
+}
+
+/* ---- validation ----------------------------------------------------------------------- */
+
+static int check_ranges(struct scene_ctx *c, const struct scene *s)
+{
+    char got[32], lo[32], hi[32];
+    int constant = s->segregation.model == SEG_MODEL_CONSTANT;
+    for (size_t i = 0; i < ARRAY_LEN(scene_ranges); ++i) {
+        const struct scene_range *r = &scene_ranges[i];
+        if ((r->when == IF_CONSTANT && !constant) || (r->when == IF_SHEAR_RATE && constant)) continue;
+        double v;
+        memcpy(&v, (const char *)s + r->offset, sizeof v);
+        fmt_double(got, sizeof got, v);
+        if (!isfinite(v)) return fail_at(c, r->name, "not a finite number: %s", got);
+        int lo_ok = r->open & LO_OPEN ? v > r->lo : v >= r->lo;
+        int hi_ok = r->open & HI_OPEN ? v < r->hi : v <= r->hi;
+        if (lo_ok && hi_ok) continue;
+        fmt_double(lo, sizeof lo, r->lo);
+        fmt_double(hi, sizeof hi, r->hi);
+        if (isinf(r->hi))
+            return fail_at(c, r->name, "must be %s %s, got %s", r->open & LO_OPEN ? ">" : ">=", lo, got);
+        return fail_at(c, r->name, "must be in %c%s, %s%c, got %s", r->open & LO_OPEN ? '(' : '[', lo, hi,
+                       r->open & HI_OPEN ? ')' : ']', got);
+    }
+    return 0;
+}
+
+static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g)
+{
+    char a[32], b[32];
+    if (g->dim == 3) return fail_at(c, "Geometry:dim", "3D is not yet supported (use 2)");
+    if (g->dim != 2) return fail_at(c, "Geometry:dim", "must be 2, got %u", g->dim);
+    fmt_double(a, sizeof a, 4 * g->dr);
+    fmt_double(b, sizeof b, g->width);
+    if (g->width < 4 * g->dr) return fail_at(c, "Geometry:width", "must be >= 4*dr = %s, got %s", a, b);
+    fmt_double(b, sizeof b, g->height);
+    if (g->height < 4 * g->dr) return fail_at(c, "Geometry:height", "must be >= 4*dr = %s, got %s", a, b);
+    return 0;
+}
+
+static int check_special(struct scene_ctx *c, const struct scene *s)
+{
+    const double *g = s->physics.gravity;
+    const char *backend = s->run.backend ? s->run.backend : "";
+    if (check_geometry(c, &s->geometry)) return -1;
+    if (!(s->segregation.d_small < s->segregation.d_large))
+        return fail_at(c, "Segregation:d_large", "must be larger than Segregation:d_small");
+    for (int k = 0; k < 3; ++k)
+        if (!isfinite(g[k])) return fail_at(c, "Physics:gravity", "entry %d is not finite", k + 1);
+    if (g[0] == 0 && g[1] == 0 && g[2] == 0) return fail_at(c, "Physics:gravity", "must not be all zero");
+    if (s->geometry.dim == 2 && g[2] != 0)
+        return fail_at(c, "Physics:gravity", "z entry must be 0 in 2D (the x-y plane)");
+    if (strcmp(backend, "cpu") != 0 && strcmp(backend, "gpu") != 0)
+        return fail_at(c, "Run:backend", "expected cpu or gpu, got '%.40s'", backend);
+    return 0;
+}
+
+/* ---- public API ----------------------------------------------------------------------- */
+
+/* Copy the walk's record of keys into s->keys. */
+static int keys_keep(struct scene_ctx *c, struct scene *s)
+{
+    struct scene_keys *k = calloc(1, sizeof *k + (size_t)c->n_leaf * sizeof k->leaf[0]);
+    if (!k) return -1;
+    s->keys = k;
+    k->n_leaf = c->n_leaf;
+    memcpy(k->leaf, c->leaf, (size_t)c->n_leaf * sizeof k->leaf[0]);
+    k->over = calloc((size_t)c->n_over + 1, sizeof *k->over);
+    if (!k->over) return -1;
+    for (; k->n_over < c->n_over; ++k->n_over)
+        if (!(k->over[k->n_over] = strdup(c->over[k->n_over]))) return -1;
+    return 0;
+}
+
+static int parse_steps(struct scene_ctx *c, struct scene *s)
+{
+    if (read_text(c) || load_doc(c) || apply_overrides(c) || walk_map(c, 1, scene_fields, "", 1) ||
+        require_model_keys(c) || add_defaults(c) || load_struct(c, s))
+        return -1;
+    if (!leaf_find(c, "Output:diag_dt")) s->output.diag_dt = s->output.dt / 20;
+    if (check_ranges(c, s) || check_special(c, s)) return -1;
+    s->path = strdup(c->path);
+    if (!s->path || keys_keep(c, s)) return fail(c, -1, 0, NULL, "out of memory");
+    s->text = c->text;
+    c->text = NULL;
+    return 0;
+}
+
+int scene_parse(struct scene *s, const char *path, int n_over, char **over, char *err, size_t errlen)
+{
+    struct scene_ctx *c = calloc(1, sizeof *c);
+    memset(s, 0, sizeof *s);
+    if (err && errlen) err[0] = '\0';
+    if (!c) {
+        if (err && errlen) snprintf(err, errlen, "out of memory");
+        return -1;
+    }
+    c->path = path ? path : "(no scene file)";
+    c->n_over = over ? n_over : 0;
+    c->over = over;
+    c->err = err;
+    c->errlen = errlen;
+    int rc = path ? parse_steps(c, s) : fail(c, -1, 0, NULL, "no scene file given");
+    if (c->have_doc) yaml_document_delete(&c->doc);
+    free(c->first_node);
+    free(c->text);
+    free(c);
+    if (rc) scene_free(s);
+    return rc ? -1 : 0;
+}
+
+int scene_load(struct scene *s, const char *path, int n_over, char **over)
+{
+    char err[SCENE_ERRLEN];
+    if (scene_parse(s, path, n_over, over, err, sizeof err)) input_error("%s", err);
+    return 0;
+}
+
+static void buf_add(struct buf *b, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void buf_add(struct buf *b, const char *fmt, ...)
+{
+    char tmp[256];
+    va_list ap;
+    va_start(ap, fmt);
+    int k = vsnprintf(tmp, sizeof tmp, fmt, ap);
+    va_end(ap);
+    if (k < 0 || (size_t)k >= sizeof tmp)
+        b->bad = 1;
+    else
+        buf_write(b, (unsigned char *)tmp, (size_t)k);
+}
+
+/* An unsigned (or enum) value of `size` bytes at p. */
+static uint64_t read_uint(const char *p, uint32_t size)
+{
+    uint8_t u8;
+    uint16_t u16;
+    uint32_t u32;
+    uint64_t u64;
+    if (size == 1) {
+        memcpy(&u8, p, 1);
+        return u8;
+    }
+    if (size == 2) {
+        memcpy(&u16, p, 2);
+        return u16;
+    }
+    if (size == 4) {
+        memcpy(&u32, p, 4);
+        return u32;
+    }
+    memcpy(&u64, p, sizeof u64);
+    return u64;
+}
+
+/* One value as YAML: numbers round-trip exactly, strings double-quoted. */
+static void put_value(struct buf *b, const cyaml_schema_value_t *v, const char *p)
+{
+    char num[32];
+    double d;
+    const char *str;
+    switch (v->type) {
+    case CYAML_FLOAT:
+        memcpy(&d, p, sizeof d);
+        fmt_double(num, sizeof num, d);
+        buf_add(b, "%s", num);
+        break;
+    case CYAML_UINT:
+        buf_add(b, "%llu", (unsigned long long)read_uint(p, v->data_size));
+        break;
+    case CYAML_ENUM:
+        for (uint32_t i = 0; i < v->enumeration.count; ++i)
+            if ((uint64_t)v->enumeration.strings[i].val == read_uint(p, v->data_size))
+                buf_add(b, "%s", v->enumeration.strings[i].str);
+        break;
+    case CYAML_STRING:
+        memcpy(&str, p, sizeof str);
+        buf_add(b, "\"");
+        for (; str && *str; ++str)
+            buf_add(b, *str == '"' || *str == '\\' ? "\\%c" : "%c", *str);
+        buf_add(b, "\"");
+        break;
+    case CYAML_SEQUENCE_FIXED:
+        for (uint32_t i = 0; i < v->sequence.max; ++i) {
+            buf_add(b, i ? ", " : "[");
+            put_value(b, v->sequence.entry, p + i * v->sequence.entry->data_size);
+        }
+        buf_add(b, "]");
+        break;
+    default:
+        b->bad = 1;
+    }
+}
+
+char *scene_used_text(const struct scene *s)
+{
+    struct buf b = {0};
+    buf_add(&b, "# sphseg: every parameter with the value used, defaults included\n");
+    for (const cyaml_schema_field_t *sec = scene_fields; sec->key; ++sec) {
+        buf_add(&b, "%s:\n", sec->key);
+        for (const cyaml_schema_field_t *f = sec->value.mapping.fields; f->key; ++f) {
+            buf_add(&b, "  %s: ", f->key);
+            put_value(&b, &f->value, (const char *)s + sec->data_offset + f->data_offset);
+            buf_add(&b, "\n");
+        }
+    }
+    if (b.bad) {
+        free(b.p);
+        return NULL;
+    }
+    return b.p;
+}
+
+int scene_write_used(const struct scene *s, const char *file)
+{
+    char *text = scene_used_text(s);
+    size_t n = strlen(file) + 5;
+    char *tmp = malloc(n);
+    int ok = text && tmp;
+    FILE *f = NULL;
+    if (ok) {
+        snprintf(tmp, n, "%s.tmp", file);
+        f = fopen(tmp, "w");
+        ok = f && fputs(text, f) >= 0;
+        if (f) ok = (fclose(f) == 0) && ok;
+        if (ok) ok = rename(tmp, file) == 0;
+        if (!ok && f) remove(tmp);
+    }
+    free(tmp);
+    free(text);
+    return ok ? 0 : -1;
+}
+
+int scene_key_line(const struct scene *s, const char *section, const char *key)
+{
+    char name[2 * SCENE_NAME];
+    int over, line;
+    const struct scene_keys *k = s->keys;
+    snprintf(name, sizeof name, "%s:%s", section, key);
+    leaf_resolve(k ? k->leaf : NULL, k ? k->n_leaf : 0, name, &over, &line);
+    return line;
+}
+
+const char *scene_key_where(const struct scene *s, const char *section, const char *key, char *buf, size_t n)
+{
+    char name[2 * SCENE_NAME];
+    int over, line;
+    const struct scene_keys *k = s->keys;
+    snprintf(name, sizeof name, "%s:%s", section, key);
+    leaf_resolve(k ? k->leaf : NULL, k ? k->n_leaf : 0, name, &over, &line);
+    if (k && over >= 0 && over < k->n_over)
+        snprintf(buf, n, "-P %s", k->over[over]);
+    else
+        snprintf(buf, n, "%s:%d", s->path ? s->path : "(no scene file)", line);
+    return buf;
+}
+
+void scene_free(struct scene *s)
+{
+    if (!s) return;
+    if (s->keys) {
+        for (int i = 0; i < s->keys->n_over; ++i)
+            free(s->keys->over[i]);
+        free(s->keys->over);
+        free(s->keys);
+    }
+    free(s->run.backend);
+    free(s->path);
+    free(s->text);
+    memset(s, 0, sizeof *s);
+}

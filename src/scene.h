@@ -1,0 +1,127 @@
+/* scene.h — the parameters of one run, loaded from a YAML scene file with
+ * libcyaml (scene.c), overridden by -P Section:key=value, validated, and
+ * echoed to OUTDIR/used_params.yml. Physical SI units throughout.
+ * The key names are a contract (users and scripts rely on them). */
+#ifndef SPHSEG_SCENE_H
+#define SPHSEG_SCENE_H
+#include <stddef.h>
+
+enum seg_flux { SEG_FLUX_SYMMETRIC = 0, SEG_FLUX_ASYMMETRIC = 1 };
+enum seg_model { SEG_MODEL_CONSTANT = 0, SEG_MODEL_SHEAR_RATE = 1 };
+/* paper: eq. (2.10)/(3.13) with HCSR boundaries (§4.2) and C1 boundary
+ * gradients (App. E); direct: eq. (2.5) with the same boundaries (App. A);
+ * conservative: pairwise antisymmetric fluxes, no source terms. */
+enum seg_scheme { SEG_SCHEME_PAPER = 0, SEG_SCHEME_DIRECT = 1, SEG_SCHEME_CONSERVATIVE = 2 };
+enum geom_type { GEOM_SHEARBOX = 0 };
+enum kin_type { KIN_REST = 0, KIN_OSCILLATORY_SHEAR = 1 };
+
+struct scene_run {
+    double t_end;           /* s, required */
+    double cfl_diffusion;   /* dt <= cfl_diffusion h^2 / D_max; default 0.1, stable < 1/7 */
+    double cfl_segregation; /* dt <= cfl_segregation h / max|d(VF)/dC|; default 0.2 */
+    double cfl_kinematic;   /* dt <= cfl_kinematic h / |u|_max; default 0.25 */
+    double dt_max;          /* s, upper bound on dt; default 1e30 (none) */
+    double progress_s;      /* wall seconds between progress lines; default 10 */
+    char *backend;          /* "cpu" (default) | "gpu" (later issue) */
+};
+
+struct scene_geometry {
+    enum geom_type type; /* shearbox */
+    unsigned dim;        /* 2 (3 later); default 2 */
+    double dr;           /* initial particle spacing, m, required */
+    double h_factor;     /* h = h_factor * dr; default 1.5 (lattice moments within 0.5 %, tests/test_kernel.c) */
+    double height;       /* material height H, m; default 0.087 */
+    double width;        /* box width, m; default 0.037 */
+};
+
+struct scene_kinematics {
+    enum kin_type velocity; /* rest | oscillatory_shear; default oscillatory_shear */
+    double gamma0;          /* shear amplitude (tan of max wall angle); default tan 30 deg */
+    double period;          /* T, s; default 13 */
+};
+
+struct scene_segregation {
+    enum seg_flux flux;     /* symmetric (2.8) | asymmetric (2.9); default symmetric */
+    double A;               /* eq. (2.9); default 1.6 */
+    double kappa;           /* eq. (2.9), in [0,1); default 0.89 */
+    enum seg_model model;   /* constant | shear_rate (2.7); default constant */
+    double V;               /* m/s, constant model */
+    double D;               /* m^2/s, constant model */
+    double chi_V;           /* eq. (2.7b), shear_rate model; default 0.11 */
+    double chi_D;           /* eq. (2.7a), shear_rate model; default 0.0307 */
+    double d_small;         /* d^S, m; default 0.004 */
+    double d_large;         /* d^L, m; default 0.008 */
+    enum seg_scheme scheme; /* paper | direct | conservative; default paper */
+    double drift_tol;       /* relative drift of sum C_i V_i that triggers a warning; default 1e-3 */
+};
+
+struct scene_initial {
+    double C_below; /* C for y/H <= split; default 0 */
+    double C_above; /* C for y/H > split; default 1 */
+    double split;   /* split height as a fraction of H; default 0.5 */
+};
+
+struct scene_output {
+    double dt;      /* s between snapshots, required */
+    double diag_dt; /* s between diagnostics rows; default dt/20 */
+};
+
+struct scene_physics {
+    double gravity[3]; /* m/s^2; default (0, -9.81, 0); 2D lives in the x-y plane */
+    double rho;        /* bulk density, kg/m^3 (eqs. 2.3-2.4; paper Table 1); default 1500 */
+};
+
+struct scene_keys; /* where each key was set (scene.c) */
+
+struct scene {
+    struct scene_run run;
+    struct scene_geometry geometry;
+    struct scene_kinematics kinematics;
+    struct scene_segregation segregation;
+    struct scene_initial initial;
+    struct scene_output output;
+    struct scene_physics physics;
+    char *path; /* the scene file as given */
+    char *text; /* the scene file's text, for snapshot headers */
+    struct scene_keys *keys; /* for scene_key_line / scene_key_where */
+};
+
+/* The core of scene_load, which does not exit: load path, apply the overrides
+ * over[0..n_over-1] ("Section:key=value", later ones win), fill defaults,
+ * validate. Returns 0, or nonzero with *s zeroed and err holding one line
+ * "FILE:LINE: Section:key: why" (no "sphseg: error: " prefix; "-P ARG" in
+ * place of FILE:LINE for an override; "FILE: why" when the file cannot be
+ * read). SCENE_ERRLEN bytes always suffice. */
+enum { SCENE_ERRLEN = 1024 };
+int scene_parse(struct scene *s, const char *path, int n_over, char **over, char *err,
+                size_t errlen);
+
+/* Load, apply overrides ("Section:key=value"), fill defaults, validate.
+ * On any bad input: prints one line "sphseg: error: FILE:LINE: Section:key: why"
+ * (on rank 0) and exits with status 2, before anything is written.
+ * Returns 0 on success. */
+int scene_load(struct scene *s, const char *path, int n_over, char **over);
+
+/* Write every parameter with the value used (defaults included) as YAML, with
+ * the same section and key names; numbers read back exactly. Writes
+ * file.tmp, then renames it to file. Returns 0, or -1 on failure. */
+int scene_write_used(const struct scene *s, const char *file);
+
+/* The used parameters as a YAML string (malloc'd), for snapshot headers. */
+char *scene_used_text(const struct scene *s);
+
+/* For errors found after loading (DESIGN.md "Errors"): the 1-based line of
+ * Section:key in the scene file; for a key not written there (a default, or
+ * given only by -P) the line of its section, or 1. */
+int scene_key_line(const struct scene *s, const char *section, const char *key);
+
+/* Where Section:key was set, into buf[n]: "FILE:LINE" as above, or
+ * "-P Section:key=value" when an override set it. Returns buf. Use as
+ * input_error("%s: Geometry:dr: why", scene_key_where(s, "Geometry", "dr", b, sizeof b)). */
+const char *scene_key_where(const struct scene *s, const char *section, const char *key, char *buf,
+                            size_t n);
+
+/* Free what scene_load/scene_parse allocated; *s is zeroed. */
+void scene_free(struct scene *s);
+
+#endif

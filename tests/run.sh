@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Runs every test: cmocka unit tests, the bad-input tests, one- and two-rank
+# launch checks and the validation cases against reference solutions.
+# Ends with the line "N passed, N failed" and exits nonzero on any failure.
+set -u
+cd "$(dirname "$0")/.."
+BUILD=${BUILD:-build}
+PYTHON=${PYTHON:-/usr/bin/python3}
+export OMP_NUM_THREADS=${OMP_NUM_THREADS:-2}
+pass=0; fail=0; failed=()
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+
+run_one() { # name, command...
+    local name=$1; shift
+    local t0=$SECONDS
+    if "$@" >"$tmp/$name.log" 2>&1; then
+        pass=$((pass + 1)); echo "PASS $name ($((SECONDS - t0)) s)"
+    else
+        fail=$((fail + 1)); failed+=("$name"); echo "FAIL $name ($((SECONDS - t0)) s)"
+        tail -n 30 "$tmp/$name.log" | sed 's/^/    /'
+    fi
+}
+
+for t in "$BUILD"/tests/test_*; do
+    [ -x "$t" ] && run_one "$(basename "$t")" "$t"
+done
+run_one badinput bash tests/test_badinput.sh "$BUILD/sphseg"
+run_one mpi_launch bash tests/test_launch.sh "$BUILD/sphseg"
+for v in tests/validate_*.py; do
+    run_one "$(basename "$v" .py)" "$PYTHON" "$v" --sphseg "$BUILD/sphseg" --work "$tmp/$(basename "$v" .py)"
+done
+
+[ $fail -gt 0 ] && echo "failed: ${failed[*]}"
+echo "$pass passed, $fail failed"
+[ $fail -eq 0 ]

@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# test_badinput.sh BINARY — every kind of bad input must stop sphseg before it
+# writes anything (DESIGN.md "Errors"): exit status 2, exactly one line on
+# stderr, "sphseg: error: FILE:LINE: Section:key: why" (or "-P ARG: ..." for a
+# bad override), and no output directory.
+#
+# Cases: each tests/scenes_bad/*.yml, whose first line "# expect: NAME:LINE: ..."
+# gives the start of the message after the directory; a missing file; a
+# directory; bad -P overrides on inputs/shearbox_2d.yml.
+# Prints PASS name / FAIL name lines; exits 1 if any case fails.
+#   tests/test_badinput.sh build/sphseg
+set -u
+
+bin=${1:?usage: $0 BINARY}
+here=$(cd "$(dirname "$0")" && pwd)
+bad=$here/scenes_bad
+good=$(dirname "$here")/inputs/shearbox_2d.yml
+if [ ! -x "$bin" ]; then
+    echo "FAIL setup: $bin is not an executable"
+    exit 1
+fi
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+n_fail=0
+n_pass=0
+
+# check NAME PREFIX SCENE [ARGS...]: run BINARY SCENE -o OUT ARGS..., and want
+# exit 2, one stderr line starting "sphseg: error: PREFIX", no OUT.
+check() {
+    local name=$1 prefix=$2 scene=$3
+    shift 3
+    local out=$tmp/out why="" rc lines line
+    rm -rf "$out"
+    "$bin" "$scene" -o "$out" "$@" >"$tmp/stdout" 2>"$tmp/stderr" </dev/null
+    rc=$?
+    lines=$(awk 'END { print NR }' "$tmp/stderr")
+    line=$(head -n 1 "$tmp/stderr")
+    [ "$rc" -eq 2 ] || why="$why; exit status $rc, want 2"
+    [ "$lines" -eq 1 ] || why="$why; $lines lines on stderr, want 1"
+    [[ "$line" == "sphseg: error: $prefix"* ]] || why="$why; stderr does not start with 'sphseg: error: $prefix'"
+    [ ! -e "$out" ] || why="$why; $out was created"
+    if [ -z "$why" ]; then
+        echo "PASS $name"
+        n_pass=$((n_pass + 1))
+    else
+        echo "FAIL $name: ${why#; }"
+        sed -n '1,5s/^/    stderr: /p' "$tmp/stderr"
+        n_fail=$((n_fail + 1))
+    fi
+}
+
+for f in "$bad"/*.yml; do
+    expect=$(sed -n '1s/^# expect: //p' "$f")
+    if [ -z "$expect" ]; then
+        echo "FAIL $(basename "$f"): no '# expect: ' first line"
+        n_fail=$((n_fail + 1))
+        continue
+    fi
+    check "$(basename "$f" .yml)" "$bad/$expect" "$f"
+done
+
+check missing_file "$bad/does_not_exist.yml: cannot read" "$bad/does_not_exist.yml"
+check directory "$bad: cannot read" "$bad"
+check override_unknown_key "-P Run:foo=1: Run:foo: unknown key" "$good" -P Run:foo=1
+check override_unknown_section "-P Foo:dr=1: Foo: unknown section" "$good" -P Foo:dr=1
+check override_malformed "-P Geometry:dr: malformed override" "$good" -P Geometry:dr
+check override_range "-P Geometry:dr=-1: Geometry:dr: must be > 0" "$good" -P Geometry:dr=-1
+check override_type "-P Run:t_end=abc: Run:t_end: expected a number" "$good" -P Run:t_end=abc
+check override_nan "-P Segregation:D=.nan: Segregation:D: not a finite number" \
+    "$good" -P Segregation:D=.nan
+check override_gravity "-P Physics:gravity=[0,0,0]: Physics:gravity: must not be all zero" \
+    "$good" -P "Physics:gravity=[0,0,0]"
+check override_enum "-P Segregation:flux=fast: Segregation:flux: expected one of" \
+    "$good" -P Segregation:flux=fast
+check override_after_good "-P Run:t_end=0: Run:t_end: must be > 0" \
+    "$good" -P Run:t_end=2 -P Run:t_end=0
+
+echo "test_badinput: $n_pass passed, $n_fail failed"
+[ "$n_fail" -eq 0 ]

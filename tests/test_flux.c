@@ -1,0 +1,63 @@
+/* test_flux.c — segregation flux functions and coefficients (paper §2.2):
+ * F of (2.8)–(2.9), dF/dC against a central difference, the equal-maximum
+ * property that fixes A = 1.6 for kappa = 0.89 (Gajjar & Gray 2014), V and D
+ * of the shear-rate model (2.7), and the boundary flux f(C) of (4.5).
+ * References: the closed forms and their derivatives. */
+#include "physics/seg.h"
+#include "testutil.h"
+
+static seg_params sym(void)
+{
+    seg_params s = {1, 0, 0, 2e-4, 3e-7, 0.11, 0.0307, 0.004, 0.008, {0, -1, 0}};
+    return s;
+}
+
+static void test_symmetric(void **st)
+{
+    (void)st;
+    seg_params s = sym();
+    assert_true(fabs(seg_F(&s, 0.5) - 0.25) < 1e-15);
+    assert_true(seg_F(&s, 0) == 0 && seg_F(&s, 1) == 0);
+    assert_true(fabs(seg_F(&s, 0.3) - seg_F(&s, 0.7)) < 1e-15); /* symmetric about 1/2 */
+    assert_true(fabs(seg_dFdC(&s, 0.5)) < 1e-15);
+}
+
+static void test_asymmetric(void **st)
+{
+    (void)st;
+    seg_params s = sym();
+    s.A = 1.6, s.kappa = 0.89;
+    double fmaxv = 0;
+    for (double C = 0; C <= 1; C += 1e-5) fmaxv = fmax(fmaxv, seg_F(&s, C));
+    assert_true(fabs(fmaxv - 0.25) < 0.01 * 0.25); /* same maximum as C(1 - C) */
+    for (double C = 0.01; C < 1; C += 0.07) {
+        double e = 1e-6;
+        double fd = (seg_F(&s, C + e) - seg_F(&s, C - e)) / (2 * e);
+        assert_true(fabs(fd - seg_dFdC(&s, C)) < 1e-8);
+    }
+    assert_true(seg_F(&s, 0.3) > seg_F(&s, 0.7)); /* small grains sink faster */
+}
+
+static void test_coefficients(void **st)
+{
+    (void)st;
+    seg_params s = sym();
+    assert_true(seg_V(&s, 0.2, 5.0) == s.V && seg_D(&s, 0.9, 0.0) == s.D);
+    s.shear_model = 1;
+    double C = 0.25, gd = 3.0, d = 0.004 * C + 0.008 * (1 - C);
+    assert_true(fabs(seg_V(&s, C, gd) - 0.11 * gd * d) < 1e-15);
+    assert_true(fabs(seg_D(&s, C, gd) - 0.0307 * gd * d * d) < 1e-18);
+    double e = 1e-6;
+    double fd = (seg_Q(&s, C + e, gd) - seg_Q(&s, C - e, gd)) / (2 * e);
+    assert_true(fabs(fd - seg_wave_speed(&s, C, gd)) < 1e-8 * fabs(fd) + 1e-14);
+    real up[3] = {0, 1, 0}, down[3] = {0, -1, 0};
+    assert_true(seg_wall_flux(&s, C, gd, up) > 0);   /* base: small grains arrive */
+    assert_true(seg_wall_flux(&s, C, gd, down) < 0); /* free surface: they leave */
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_symmetric), cmocka_unit_test(test_asymmetric),
+                                       cmocka_unit_test(test_coefficients)};
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,80 @@
+/* test_nbr.c — the sorted cell-linked list (paper §3.4) finds exactly the
+ * neighbours that an all-pairs brute-force search finds (r < 2h), in 2D and
+ * 3D, and sorts the store by cell. Reference: O(N^2) brute force. */
+#include <stdlib.h>
+#include "testutil.h"
+
+static void check_against_brute_force(int dim, size_t n, double L, double h)
+{
+    particles_t p = {0};
+    part_alloc(&p, dim, n);
+    srand(12345u + (unsigned)dim);
+    for (size_t k = 0; k < n; ++k)
+        tu_put(&p, L * rand() / RAND_MAX, L * rand() / RAND_MAX, dim == 3 ? L * rand() / RAND_MAX : 0,
+               k % 5 ? KIND_MATERIAL : KIND_DUMMY, 1.0);
+    nbr_grid g = {0};
+    nbr_build(&g, &p, (real)(2 * h));
+    double s2 = 4 * h * h;
+    size_t total = 0;
+    char *mark = calloc(n, 1);
+    for (size_t i = 0; i < p.n; ++i) {
+        size_t found = 0;
+        NBR_BEGIN(&g.view, p.x, i, j)
+            real xij[3];
+            if (grid_pair(dim, p.x, i, j, xij) < s2) {
+                assert_int_equal(mark[j], 0); /* no pair visited twice */
+                mark[j] = 1;
+                found++;
+            }
+        NBR_END
+        size_t brute = 0;
+        for (size_t j = 0; j < p.n; ++j) {
+            real xij[3];
+            if (grid_pair(dim, p.x, i, j, xij) < s2) {
+                assert_int_equal(mark[j], 1); /* every brute-force neighbour was found */
+                brute++;
+                mark[j] = 0;
+            }
+        }
+        assert_int_equal(found, brute);
+        total += found;
+    }
+    assert_true(total > n); /* the test had real neighbours to find */
+    for (size_t c = 0; c < g.ncell; ++c)
+        for (size_t i = g.start[c]; i < g.end[c]; ++i) {
+            int cc[3];
+            grid_cell_coords(&g.view, p.x[0], p.x[1], p.x[2], i, cc);
+            assert_int_equal(grid_cell_index(&g.view, cc[0], cc[1], cc[2]), c);
+        }
+    free(mark);
+    nbr_free(&g);
+    part_free(&p);
+}
+
+static void test_nbr_2d(void **st) { (void)st; check_against_brute_force(2, 3000, 1.0, 0.012); }
+static void test_nbr_3d(void **st) { (void)st; check_against_brute_force(3, 4000, 1.0, 0.04); }
+
+/* IDs and fields travel with their particle through the sort. */
+static void test_nbr_permutes_fields(void **st)
+{
+    (void)st;
+    particles_t p = {0};
+    part_alloc(&p, 2, 500);
+    srand(7);
+    for (size_t k = 0; k < 500; ++k) {
+        tu_put(&p, rand() / (double)RAND_MAX, rand() / (double)RAND_MAX, 0, KIND_MATERIAL, 1.0);
+        p.C[k] = (real)(p.x[0][k] + 2 * p.x[1][k]);
+    }
+    nbr_grid g = {0};
+    nbr_build(&g, &p, R(0.05));
+    for (size_t i = 0; i < p.n; ++i) assert_true(fabs(p.C[i] - (p.x[0][i] + 2 * p.x[1][i])) < 1e-12);
+    nbr_free(&g);
+    part_free(&p);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_nbr_2d), cmocka_unit_test(test_nbr_3d),
+                                       cmocka_unit_test(test_nbr_permutes_fields)};
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,55 @@
+/* testutil.h — small particle sets for the unit tests. */
+#ifndef SPHSEG_TESTUTIL_H
+#define SPHSEG_TESTUTIL_H
+#include <math.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include "nbr.h"
+#include "particles.h"
+
+/* Append one particle. */
+static inline void tu_put(particles_t *p, double x, double y, double z, int kind, double vol)
+{
+    size_t k = p->n++;
+    assert_true(k < p->cap);
+    p->x[0][k] = p->X0[0][k] = (real)x;
+    p->x[1][k] = p->X0[1][k] = (real)y;
+    p->x[2][k] = p->X0[2][k] = (real)z;
+    p->kind[k] = (uint8_t)kind;
+    p->vol[k] = (real)vol;
+    p->id[k] = (int64_t)k;
+    p->psi[k] = 1;
+}
+
+/* A 2D lattice block of nx x ny material particles of spacing dr with its
+ * lower-left particle at (dr/2, dr/2); optional dummy layers below (nl_base)
+ * and at both sides (nl_side), as in the shear box. */
+static inline void tu_block2d(particles_t *p, int nx, int ny, double dr, int nl_base, int nl_side)
+{
+    size_t cap = (size_t)(nx + 2 * nl_side) * (size_t)(ny + nl_base + nl_side + 1) + 16;
+    part_alloc(p, 2, cap);
+    double v = dr * dr;
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) tu_put(p, (i + 0.5) * dr, (j + 0.5) * dr, 0, KIND_MATERIAL, v);
+    for (int l = 0; l < nl_base; ++l)
+        for (int i = -nl_side; i < nx + nl_side; ++i) tu_put(p, (i + 0.5) * dr, -(l + 0.5) * dr, 0, KIND_DUMMY, v);
+    for (int j = 0; j < ny + nl_side; ++j) /* walls reach nl_side layers above */
+        for (int l = 0; l < nl_side; ++l) {
+            tu_put(p, -(l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, v);
+            tu_put(p, (nx + l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, v);
+        }
+}
+
+/* Index of the particle with the given id (the store is sorted by cell). */
+static inline size_t tu_find(const particles_t *p, int64_t id)
+{
+    for (size_t i = 0; i < p->n; ++i)
+        if (p->id[i] == id) return i;
+    fail_msg("no particle with id %lld", (long long)id);
+    return 0;
+}
+
+#endif
