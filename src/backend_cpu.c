@@ -24,6 +24,12 @@ static void cpu_conc_rates(sim_t *s)
     const long n = (long)p->n;
     const int cons = s->seg.scheme == SEG_SCHEME_CONSERVATIVE;
 #pragma omp parallel for schedule(static)
+    for (long i = 0; i < n; ++i)
+        if (p->kind[i] == KIND_MATERIAL) {
+            seg_coeffs((size_t)i, p, &s->seg);
+            if (cons && s->seg.renorm) seg_renorm((size_t)i, p, &s->grid.view, &s->seg);
+        }
+#pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) {
             p->dCdt[i] = 0;

@@ -23,6 +23,11 @@ static const struct part_array part_arrays[] = {
     {offsetof(particles_t, dCdt), sizeof(real)},      {offsetof(particles_t, gdot), sizeof(real)},
     {offsetof(particles_t, nrm[0]), sizeof(real)},    {offsetof(particles_t, nrm[1]), sizeof(real)},
     {offsetof(particles_t, nrm[2]), sizeof(real)},    {offsetof(particles_t, psi), sizeof(real)},
+    {offsetof(particles_t, segV), sizeof(real)},     {offsetof(particles_t, segQ), sizeof(real)},
+    {offsetof(particles_t, segD), sizeof(real)},
+    {offsetof(particles_t, L[0]), sizeof(real)},     {offsetof(particles_t, L[1]), sizeof(real)},
+    {offsetof(particles_t, L[2]), sizeof(real)},     {offsetof(particles_t, L[3]), sizeof(real)},
+    {offsetof(particles_t, L[4]), sizeof(real)},     {offsetof(particles_t, L[5]), sizeof(real)},
     {offsetof(particles_t, id), sizeof(int64_t)},     {offsetof(particles_t, kind), sizeof(uint8_t)},
     {offsetof(particles_t, bclass), sizeof(uint8_t)},
 };

@@ -33,6 +33,11 @@ typedef struct particles {
     real *gdot;   /* shear-rate magnitude, 1/s */
     real *nrm[3]; /* HCSR normal, pointing into the material */
     real *psi;    /* smoothed degenerate function psi~ (4.14, 4.18) */
+    real *segV;   /* segregation velocity V(C, gdot), m/s, per rate evaluation */
+    real *segQ;   /* segregation flux Q = V F(C), m/s (eq. 2.6) */
+    real *segD;   /* diffusivity D(C, gdot), m^2/s */
+    real *L[6];   /* renormalisation (-sum_j V_j w_ij x_ij x_ij)^-1, symmetric:
+                   * xx, yy, zz, xy, xz, yz (conservative scheme) */
     int64_t *id;  /* global particle ID */
     uint8_t *kind;   /* enum part_kind */
     uint8_t *bclass; /* enum part_bclass */

@@ -48,6 +48,7 @@ static const cyaml_strval_t seg_models[] = {{"constant", SEG_MODEL_CONSTANT},
                                             {"shear_rate", SEG_MODEL_SHEAR_RATE}};
 static const cyaml_strval_t seg_schemes[] = {
     {"paper", SEG_SCHEME_PAPER}, {"direct", SEG_SCHEME_DIRECT}, {"conservative", SEG_SCHEME_CONSERVATIVE}};
+static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
 
 static const cyaml_schema_field_t run_fields[] = {
     FLT(scene_run, t_end, REQ),
@@ -90,6 +91,7 @@ static const cyaml_schema_field_t segregation_fields[] = {
     FLT(scene_segregation, d_small, OPT),
     FLT(scene_segregation, d_large, OPT),
     ENM(scene_segregation, scheme, seg_schemes),
+    ENM(scene_segregation, renormalize, on_off),
     FLT(scene_segregation, drift_tol, OPT),
     CYAML_FIELD_END,
 };
@@ -158,7 +160,8 @@ static const struct scene_default scene_defaults[] = {
     {"Segregation", "chi_D", "0.0307"},
     {"Segregation", "d_small", "0.004"},
     {"Segregation", "d_large", "0.008"},
-    {"Segregation", "scheme", "paper"},
+    {"Segregation", "scheme", "conservative"},
+    {"Segregation", "renormalize", "on"},
     {"Segregation", "drift_tol", "1e-3"},
     {"Initial", "C_below", "0"},
     {"Initial", "C_above", "1"},

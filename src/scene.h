@@ -51,7 +51,10 @@ struct scene_segregation {
     double chi_D;           /* eq. (2.7a), shear_rate model; default 0.0307 */
     double d_small;         /* d^S, m; default 0.004 */
     double d_large;         /* d^L, m; default 0.008 */
-    enum seg_scheme scheme; /* paper | direct | conservative; default paper */
+    enum seg_scheme scheme; /* paper | direct | conservative; default conservative */
+    int renormalize;        /* on | off: conservative scheme's symmetric kernel
+                             * renormalisation (restores consistency where the
+                             * support is cut); default on */
     double drift_tol;       /* relative drift of sum C_i V_i that triggers a warning; default 1e-3 */
 };
 

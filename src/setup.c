@@ -96,6 +96,7 @@ void setup_contexts(sim_t *s)
     double gn = sqrt(gv[0] * gv[0] + gv[1] * gv[1] + gv[2] * gv[2]);
     for (int d = 0; d < 3; ++d) sp->ghat[d] = (real)(gv[d] / gn);
     s->seg.scheme = (int)g->scheme;
+    s->seg.renorm = g->renormalize;
     s->hcsr = g->scheme != SEG_SCHEME_CONSERVATIVE;
     s->kin.type = (int)sc->kinematics.velocity;
     s->kin.gamma0 = sc->kinematics.gamma0;

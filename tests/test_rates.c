@@ -34,6 +34,12 @@ static void setup_fixture(fixture *f, int scheme, double V, double D)
     bound_classify(&f->w, &f->p, &f->g, &f->c.k);
 }
 
+/* V, Q, D of every particle for the current C (as the backends do). */
+static void coeffs(fixture *f)
+{
+    for (size_t i = 0; i < f->p.n; ++i) seg_coeffs(i, &f->p, &f->c);
+}
+
 static double rate(const fixture *f, size_t i)
 {
     seg_rate r = f->c.scheme == 2 ? seg_rate_conservative(i, &f->p, &f->g.view, &f->c)
@@ -56,6 +62,7 @@ static void check_interior(int scheme)
     fixture f;
     setup_fixture(&f, scheme, V, 0.0);
     for (size_t i = 0; i < f.p.n; ++i) f.p.C[i] = (real)(0.2 + b * f.p.x[1][i]); /* C in (0.2, 1.2) */
+    coeffs(&f);
     for (size_t i = 0; i < f.p.n; ++i)
         if (deep_inside(&f, i)) {
             double C = f.p.C[i], exact = V * (1 - 2 * C) * b; /* d/dy(V C(1 - C)) */
@@ -63,6 +70,7 @@ static void check_interior(int scheme)
         }
     f.c.sp.V = 0, f.c.sp.D = (real)D;
     for (size_t i = 0; i < f.p.n; ++i) f.p.C[i] = (real)(f.p.x[1][i] * f.p.x[1][i] / (N * N * DR * DR));
+    coeffs(&f);
     double lap = 2.0 * D / (N * N * DR * DR);
     for (size_t i = 0; i < f.p.n; ++i)
         if (deep_inside(&f, i)) assert_true(fabs(rate(&f, i) - lap) < tol_lap * lap);
@@ -80,6 +88,7 @@ static void test_conservative_sum(void **st)
     srand(3);
     double sum = 0, mag = 0;
     for (size_t i = 0; i < f.p.n; ++i) f.p.C[i] = (real)(rand() / (double)RAND_MAX);
+    coeffs(&f);
     for (size_t i = 0; i < f.p.n; ++i)
         if (f.p.kind[i] == KIND_MATERIAL) {
             double r = rate(&f, i) * f.p.vol[i];
@@ -97,6 +106,7 @@ static void test_uniform_sources(void **st)
     fixture f;
     setup_fixture(&f, 0, 1e-3, 1e-7);
     for (size_t i = 0; i < f.p.n; ++i) f.p.C[i] = R(0.5);
+    coeffs(&f);
     int base = 0, top = 0;
     for (size_t i = 0; i < f.p.n; ++i) {
         if (f.p.kind[i] != KIND_MATERIAL) continue;

@@ -93,7 +93,7 @@ static void test_shearbox(void **state)
     assert_bits(s.geometry.height, H);
     assert_bits(s.geometry.width, 0.037);
     assert_bits(s.geometry.dr, 0.02 * H);
-    assert_bits(s.geometry.h_factor, 1.2);
+    assert_bits(s.geometry.h_factor, 1.5);
     assert_int_equal(s.kinematics.velocity, KIN_OSCILLATORY_SHEAR);
     assert_true(fabs(s.kinematics.gamma0 - g0) <= 1e-16);
     assert_bits(s.kinematics.period, T);
@@ -102,7 +102,7 @@ static void test_shearbox(void **state)
     assert_true(fabs(s.segregation.D / (1.01e-3 * B * B / T) - 1) < 5e-6);
     assert_int_equal(s.segregation.model, SEG_MODEL_CONSTANT);
     assert_int_equal(s.segregation.flux, SEG_FLUX_SYMMETRIC);
-    assert_int_equal(s.segregation.scheme, SEG_SCHEME_PAPER);
+    assert_int_equal(s.segregation.scheme, SEG_SCHEME_CONSERVATIVE);
     /* eq. (5.6) with dbar = 6 mm and gammadot_m = 4 gamma0 / T, to 2-3 digits */
     double gm = 4 * g0 / T, dbar = 0.5 * (s.segregation.d_small + s.segregation.d_large);
     assert_true(fabs(s.segregation.chi_V - B * 3.0e-2 / (T * gm * dbar)) < 0.005);
@@ -136,7 +136,7 @@ static void test_defaults(void **state)
     assert_string_equal(s.run.backend, "cpu");
     assert_int_equal(s.geometry.type, GEOM_SHEARBOX);
     assert_int_equal(s.geometry.dim, 2);
-    assert_bits(s.geometry.h_factor, 1.2);
+    assert_bits(s.geometry.h_factor, 1.5);
     assert_bits(s.geometry.height, 0.087);
     assert_bits(s.geometry.width, 0.037);
     assert_int_equal(s.kinematics.velocity, KIN_OSCILLATORY_SHEAR);
@@ -151,7 +151,8 @@ static void test_defaults(void **state)
     assert_bits(s.segregation.chi_D, 0.0307);
     assert_bits(s.segregation.d_small, 0.004);
     assert_bits(s.segregation.d_large, 0.008);
-    assert_int_equal(s.segregation.scheme, SEG_SCHEME_PAPER);
+    assert_int_equal(s.segregation.scheme, SEG_SCHEME_CONSERVATIVE);
+    assert_int_equal(s.segregation.renormalize, 1);
     assert_bits(s.segregation.drift_tol, 1e-3);
     assert_bits(s.initial.C_below, 0);
     assert_bits(s.initial.C_above, 1);
@@ -251,7 +252,7 @@ static void assert_scene_equal(const struct scene *a, const struct scene *b)
     EQ(kinematics.velocity), EQ(kinematics.gamma0), EQ(kinematics.period);
     EQ(segregation.flux), EQ(segregation.A), EQ(segregation.kappa), EQ(segregation.model);
     EQ(segregation.V), EQ(segregation.D), EQ(segregation.chi_V), EQ(segregation.chi_D);
-    EQ(segregation.d_small), EQ(segregation.d_large), EQ(segregation.scheme);
+    EQ(segregation.d_small), EQ(segregation.d_large), EQ(segregation.scheme), EQ(segregation.renormalize);
     EQ(segregation.drift_tol);
     EQ(initial.C_below), EQ(initial.C_above), EQ(initial.split);
     EQ(output.dt), EQ(output.diag_dt), EQ(physics.gravity), EQ(physics.rho);
@@ -288,7 +289,7 @@ static void test_round_trip(void **state)
                              "Segregation:V=1.0000000000000002",
                              "Physics:gravity=[-0.0, -9.8066499999999994, 0]",
                              "Run:backend=gpu",
-                             "Segregation:scheme=conservative"};
+                             "Segregation:scheme=direct"};
     round_trip(GOOD, 0, NULL);
     round_trip(GOOD, 7, awkward);
     write_text(tmp_path("minimal.yml"), minimal_yaml);

@@ -14,6 +14,7 @@ typedef struct seg_ctx {
     sph_ctx k;
     seg_params sp;
     int scheme; /* enum seg_scheme (scene.h): 0 paper, 1 direct, 2 conservative */
+    int renorm; /* conservative scheme: symmetric renormalisation on/off */
 } seg_ctx;
 
 /* The three contributions to dC/dt, 1/s: segregation, diffusion, CSR source. */
@@ -55,17 +56,22 @@ HD_INLINE int seg_c1_solve(seg_c1 *s, int dim, const real ghat[3], real out[2])
     return 0;
 }
 
+/* Per-particle coefficients V, Q = V F and D, computed once per rate
+ * evaluation so that pair loops only read them. */
+HD_INLINE void seg_coeffs(size_t i, const particles_t *p, const seg_ctx *c)
+{
+    real C = p->C[i], gd = p->gdot[i];
+    p->segV[i] = seg_V(&c->sp, C, gd);
+    p->segQ[i] = p->segV[i] * seg_F(&c->sp, C);
+    p->segD[i] = seg_D(&c->sp, C, gd);
+}
+
 /* Fields whose gravity derivative the scheme needs: paper form (2.10) uses
  * C and V; the direct form (2.5) uses Q = V F (second slot unused). */
-HD_INLINE void seg_fields(const seg_ctx *c, real C, real gdot, real X[2])
+HD_INLINE void seg_fields(const seg_ctx *c, const particles_t *p, size_t j, real X[2])
 {
-    if (c->scheme == 1) {
-        X[0] = seg_Q(&c->sp, C, gdot);
-        X[1] = 0;
-    } else {
-        X[0] = C;
-        X[1] = seg_V(&c->sp, C, gdot);
-    }
+    X[0] = c->scheme == 1 ? p->segQ[j] : p->C[j];
+    X[1] = c->scheme == 1 ? R(0.0) : p->segV[j];
 }
 
 /* dC_i/dt by eq. (2.10) [scheme 0] or (2.5) [scheme 1] with the HCSR
@@ -81,8 +87,8 @@ HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view
     int bnd = cls != BC_INTERIOR;
     int ccsr = cls == BC_WALL_SURFACE || cls == BC_WALL_VICINITY;
     int mcsr = cls == BC_FREE_SURFACE || cls == BC_FREE_VICINITY;
-    real Ci = p->C[i], Di = seg_D(sp, Ci, p->gdot[i]), Xi[2];
-    seg_fields(c, Ci, p->gdot[i], Xi);
+    real Ci = p->C[i], Di = p->segD[i], Xi[2];
+    seg_fields(c, p, i, Xi);
     real ni[3] = {p->nrm[0][i], p->nrm[1][i], p->nrm[2][i]};
     real gx[2] = {0, 0}, diff = 0, qs = 0;
     seg_c1 s1 = {{0}, {0}};
@@ -104,14 +110,13 @@ HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view
             continue;
         }
         real Cj = p->C[j], Xj[2];
-        seg_fields(c, Cj, p->gdot[j], Xj);
+        seg_fields(c, p, j, Xj);
         if (bnd) seg_c1_add(&s1, k->dim, kernel_w(r, k->h, k->alpha) * p->vol[j], grad, xij, Xj[0], Xj[1]);
         if (j == i) continue;
         real gg = grad[0] * sp->ghat[0] + grad[1] * sp->ghat[1] + grad[2] * sp->ghat[2];
         gx[0] += (Xj[0] - Xi[0]) * gg;
         gx[1] += (Xj[1] - Xi[1]) * gg;
-        real Dj = seg_D(sp, Cj, p->gdot[j]);
-        diff += (p->psi[i] * Di + p->psi[j] * Dj) * (Ci - Cj) * f * r2 / (r2 + k->eta2);
+        diff += (p->psi[i] * Di + p->psi[j] * p->segD[j]) * (Ci - Cj) * f * r2 / (r2 + k->eta2);
         if (mcsr) qs += ni[0] * grad[0] + ni[1] * grad[1] + ni[2] * grad[2];
     NBR_END
     if (bnd) {
@@ -133,21 +138,64 @@ HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view
     return out;
 }
 
+/* Renormalisation of the conservative scheme: L_i = M_i^-1 with the moment
+ * M_i = -sum_{j in Omega} V_j w_ij x_ij (x) x_ij, w_ij = x_ij.grad_i W_ij / r^2
+ * (M = I in the interior of a regular lattice, tests/test_kernel.c). Stored
+ * as xx, yy, zz, xy, xz, yz. Where M is singular L = I. */
+HD_INLINE void seg_renorm(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c)
+{
+    const sph_ctx *k = &c->k;
+    real M[9] = {0}, B[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    NBR_BEGIN(g, p->x, i, j)
+        if (j == i || p->kind[j] != KIND_MATERIAL) continue;
+        real xij[3];
+        real r2 = grid_pair(k->dim, p->x, i, j, xij);
+        if (r2 >= k->support2) continue;
+        real w = kernel_f((real)sqrt((double)r2), k->h, k->alpha) * p->vol[j];
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) M[3 * a + b] -= w * xij[a] * xij[b];
+    NBR_END
+    int n = k->dim;
+    real A[9];
+    for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b) A[n * a + b] = M[3 * a + b];
+    real Bn[9] = {0};
+    for (int a = 0; a < n; ++a) Bn[n * a + a] = 1;
+    if (!linalg_solve(n, A, Bn, n, R(1e-6)))
+        for (int a = 0; a < n; ++a)
+            for (int b = 0; b < n; ++b) B[3 * a + b] = Bn[n * a + b];
+    p->L[0][i] = B[0], p->L[1][i] = B[4], p->L[2][i] = B[8];
+    p->L[3][i] = B[1], p->L[4][i] = B[2], p->L[5][i] = B[5];
+}
+
+/* (L_i + L_j)/2 applied to v. */
+HD_INLINE void seg_Lbar(const particles_t *p, size_t i, size_t j, const real v[3], real out[3])
+{
+    real l[6];
+    for (int m = 0; m < 6; ++m) l[m] = R(0.5) * (p->L[m][i] + p->L[m][j]);
+    out[0] = l[0] * v[0] + l[3] * v[1] + l[4] * v[2];
+    out[1] = l[3] * v[0] + l[1] * v[1] + l[5] * v[2];
+    out[2] = l[4] * v[0] + l[5] * v[1] + l[2] * v[2];
+}
+
 /* dC_i/dt in conservative form: the divergence of J = Q ghat - D grad C by
  * pairwise antisymmetric two-point fluxes,
- *   dC_i/dt = sum_j V_j w_ij [ -(Q_i + Q_j) ghat.x_ij + (D_i + D_j) C_ij ],
- *   w_ij = x_ij.grad_i W_ij / r^2   (cf. eq. 3.8),
- * summed over material neighbours only. Distinct particles never coincide,
- * so the clipping eta of (3.8), which biases the Laplacian by ~1.5 % at
- * h = 1.5 dr whatever dr, is not needed. V_i dC_i/dt is antisymmetric in
- * (i, j), so sum C_i V_i is conserved to round-off and the no-flux condition
- * holds at every boundary without dummy particles or source terms. */
+ *   dC_i/dt = sum_j V_j w_ij [ -(Q_i + Q_j) ghat.Lbar_ij x_ij
+ *                              + (D_i + D_j) C_ij x_ij.Lbar_ij x_ij / r^2 ],
+ *   w_ij = x_ij.grad_i W_ij / r^2   (cf. eq. 3.8),  Lbar_ij = (L_i + L_j)/2,
+ * summed over material neighbours only. Lbar_ij is symmetric in (i, j), so
+ * V_i dC_i/dt is antisymmetric: sum C_i V_i is conserved to round-off and the
+ * no-flux condition holds at every boundary without dummy particles or
+ * source terms; L restores first-order consistency where the support is cut
+ * (side walls). Distinct particles never coincide, so the clipping eta of
+ * (3.8), which lowers the Laplacian by ~1.5 % at h = 1.5 dr whatever dr, is
+ * not needed. With renorm = 0, Lbar = I. */
 HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const grid_view *g,
                                          const seg_ctx *c)
 {
     const sph_ctx *k = &c->k;
     const seg_params *sp = &c->sp;
-    real Ci = p->C[i], Qi = seg_Q(sp, Ci, p->gdot[i]), Di = seg_D(sp, Ci, p->gdot[i]);
+    real Ci = p->C[i], Qi = p->segQ[i], Di = p->segD[i];
     real seg = 0, diff = 0;
     NBR_BEGIN(g, p->x, i, j)
         if (j == i || p->kind[j] != KIND_MATERIAL) continue;
@@ -156,10 +204,12 @@ HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const g
         if (r2 >= k->support2) continue;
         real r = (real)sqrt((double)r2);
         real w = kernel_f(r, k->h, k->alpha) * p->vol[j];
-        real Cj = p->C[j];
-        real gx = sp->ghat[0] * xij[0] + sp->ghat[1] * xij[1] + sp->ghat[2] * xij[2];
-        seg -= w * (Qi + seg_Q(sp, Cj, p->gdot[j])) * gx;
-        diff += w * (Di + seg_D(sp, Cj, p->gdot[j])) * (Ci - Cj);
+        real lx[3] = {xij[0], xij[1], xij[2]};
+        if (c->renorm) seg_Lbar(p, i, j, xij, lx);
+        real gx = sp->ghat[0] * lx[0] + sp->ghat[1] * lx[1] + sp->ghat[2] * lx[2];
+        real xlx = (xij[0] * lx[0] + xij[1] * lx[1] + xij[2] * lx[2]) / r2;
+        seg -= w * (Qi + p->segQ[j]) * gx;
+        diff += w * (Di + p->segD[j]) * (Ci - p->C[j]) * xlx;
     NBR_END
     seg_rate out = {seg, diff, 0};
     return out;

@@ -1,0 +1,213 @@
+"""The full shear-box study (paper §5): accuracy, convergence, conservation
+and speed of the concentration schemes against the 1D FV reference.
+
+  python3 tools/shearbox_study.py run --out DIR [--res 0.04 0.02 0.01 0.005]
+        [--schemes paper direct conservative] [--cases sym_const ...] [--jobs N]
+        [--sphseg build/sphseg]
+      runs sphseg once per (case, scheme, dr/H), OMP_NUM_THREADS=1 each, N at a
+      time, and records the wall time of every run in DIR/runs.csv (needs only
+      the Python standard library, so it runs on any machine with the binary);
+  python3 tools/shearbox_study.py analyze --out DIR [--docs docs]
+      compares every run with the reference at t/T = 20, 40, 80 (MAE, RMSE,
+      eqs. 5.3-5.4), and writes docs/shearbox_validation.md (error table,
+      observed orders, drift of sum C_i V_i, wall times) and the charts
+      docs/shearbox_convergence.png, docs/shearbox_speed_accuracy.png,
+      docs/shearbox_drift.png.
+A run that stops with exit status 3 (numerical blow-up) is recorded as
+unstable with the time it reached.
+"""
+import argparse
+import concurrent.futures as cf
+import csv
+import os
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+H, T = 0.087, 13.0
+SCENE = os.path.join(HERE, "..", "inputs", "shearbox_2d.yml")
+CASES = {
+    "sym_const": {"Segregation:flux": "symmetric", "Segregation:model": "constant"},
+    "asym_const": {"Segregation:flux": "asymmetric", "Segregation:model": "constant"},
+    "sym_shear": {"Segregation:flux": "symmetric", "Segregation:model": "shear_rate"},
+    "asym_shear": {"Segregation:flux": "asymmetric", "Segregation:model": "shear_rate"},
+}
+TAUS = (20, 40, 80)
+
+
+def run_dir(out, case, scheme, res):
+    return os.path.join(out, f"{case}_{scheme}_{res:g}")
+
+
+def run_one(sphseg, out, case, scheme, res):
+    """One sphseg run; returns a row for runs.csv."""
+    d = run_dir(out, case, scheme, res)
+    over = dict(CASES[case])
+    over.update({"Segregation:scheme": scheme, "Geometry:dr": repr(res * H),
+                 "Run:t_end": repr(max(TAUS) * T), "Output:dt": repr(min(TAUS) * T),
+                 "Output:diag_dt": repr(T), "Run:progress_s": "1e9"})
+    cmd = [sphseg, SCENE, "-o", d] + sum([["-P", f"{k}={v}"] for k, v in over.items()], [])
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    t0 = time.perf_counter()
+    r = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    wall = time.perf_counter() - t0
+    with open(d + ".log", "w") as f:
+        f.write(r.stdout + r.stderr)
+    return {"case": case, "scheme": scheme, "res": res, "rc": r.returncode, "wall_s": f"{wall:.3f}",
+            "message": (r.stderr.strip().splitlines() or [""])[-1][:300]}
+
+
+def cmd_run(a):
+    os.makedirs(a.out, exist_ok=True)
+    jobs = [(c, s, r) for r in a.res for s in a.schemes for c in a.cases]
+    jobs.sort(key=lambda j: j[2])  # the long fine runs last... start them first instead
+    jobs.reverse()
+    rows = []
+    with cf.ThreadPoolExecutor(max_workers=a.jobs) as ex:
+        futs = [ex.submit(run_one, a.sphseg, a.out, c, s, r) for c, s, r in jobs]
+        for f in cf.as_completed(futs):
+            row = f.result()
+            rows.append(row)
+            print(f"{row['case']:10s} {row['scheme']:12s} dr/H={row['res']:<6g} rc={row['rc']} "
+                  f"wall={row['wall_s']} s {row['message'] if row['rc'] else ''}", flush=True)
+    with open(os.path.join(a.out, "runs.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(sorted(rows, key=lambda r: (r["case"], r["scheme"], -r["res"])))
+
+
+def _analyze_rows(out):
+    import numpy as np  # noqa: F401
+    import study
+    rows = []
+    with open(os.path.join(out, "runs.csv")) as f:
+        for r in csv.DictReader(f):
+            r["res"], r["rc"], r["wall_s"] = float(r["res"]), int(r["rc"]), float(r["wall_s"])
+            d = run_dir(out, r["case"], r["scheme"], r["res"])
+            if r["rc"] == 0:
+                e = study.case_errors(d, TAUS)
+                r.update(e)
+            else:
+                import snap
+                diag = snap.read_diagnostics(d)
+                r["t_fail"] = float(diag["time"][-1]) if len(diag["time"]) else 0.0
+            rows.append(r)
+    return rows
+
+
+def _table(rows):
+    import study
+    lines = ["| case | scheme | dr/H | MAE t/T=20 | MAE 40 | MAE 80 | RMSE 80 | order (MAE 80) | max drift | wall s |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    key = {}
+    for r in rows:
+        key[(r["case"], r["scheme"], r["res"])] = r
+    for r in sorted(rows, key=lambda r: (r["case"], r["scheme"], -r["res"])):
+        if r["rc"] != 0:
+            lines.append(f"| {r['case']} | {r['scheme']} | {r['res']:g} | unstable: stopped (exit {r['rc']}) "
+                         f"at t/T = {r['t_fail'] / T:.1f} | | | | | | {r['wall_s']:.1f} |")
+            continue
+        e = r["errors"]
+        coarse = key.get((r["case"], r["scheme"], r["res"] * 2))
+        order = ""
+        if coarse is not None and coarse["rc"] == 0:
+            order = f"{study.order(coarse['errors'][80]['mae'], e[80]['mae']):.2f}"
+        lines.append(f"| {r['case']} | {r['scheme']} | {r['res']:g} | {e[20]['mae']:.4f} | {e[40]['mae']:.4f} | "
+                     f"{e[80]['mae']:.4f} | {e[80]['rmse']:.4f} | {order} | {r['drift_max']:.1e} | "
+                     f"{r['wall_s']:.1f} |")
+    return "\n".join(lines)
+
+
+def _charts(rows, docs):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    ok = [r for r in rows if r["rc"] == 0]
+    colors = {"paper": "C0", "direct": "C1", "conservative": "C2"}
+    marks = {"sym_const": "o", "asym_const": "s", "sym_shear": "^", "asym_shear": "v"}
+    # convergence
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for (case, scheme) in sorted({(r["case"], r["scheme"]) for r in ok}):
+        rr = sorted([r for r in ok if r["case"] == case and r["scheme"] == scheme], key=lambda r: r["res"])
+        ax.loglog([r["res"] for r in rr], [r["errors"][80]["mae"] for r in rr], marker=marks[case],
+                  color=colors[scheme], label=f"{scheme}, {case}")
+    x = np.array([0.005, 0.04])
+    ax.loglog(x, 0.05 * (x / 0.04) ** 1.25, "k:", label="order 1.25 (paper)")
+    ax.loglog(x, 0.05 * (x / 0.04) ** 2, "k--", label="order 2")
+    ax.set_xlabel("dr / H")
+    ax.set_ylabel("MAE of C at t/T = 80")
+    ax.legend(fontsize=6)
+    ax.set_title("Shear box: convergence to the 1D FV reference")
+    fig.tight_layout()
+    fig.savefig(os.path.join(docs, "shearbox_convergence.png"), dpi=130)
+    # speed vs accuracy
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for r in ok:
+        ax.loglog(r["wall_s"], r["errors"][80]["mae"], marker=marks[r["case"]], color=colors[r["scheme"]],
+                  linestyle="none")
+        ax.annotate(f"{r['res']:g}", (r["wall_s"], r["errors"][80]["mae"]), fontsize=5)
+    for s, c in colors.items():
+        ax.plot([], [], color=c, marker="o", linestyle="none", label=s)
+    for k, m in marks.items():
+        ax.plot([], [], color="gray", marker=m, linestyle="none", label=k)
+    ax.set_xlabel("wall time of the run to t/T = 80, s (one core)")
+    ax.set_ylabel("MAE of C at t/T = 80")
+    ax.legend(fontsize=6)
+    ax.set_title("Speed against accuracy (labels: dr/H)")
+    fig.tight_layout()
+    fig.savefig(os.path.join(docs, "shearbox_speed_accuracy.png"), dpi=130)
+    # drift
+    fig, axs = plt.subplots(1, 2, figsize=(10, 4))
+    for r in ok:
+        if r["case"] != "sym_const":
+            continue
+        t = np.asarray(r["diag"]["time"], float) / T
+        dft = np.abs(np.asarray(r["diag"]["small_volume_drift"], float)) + 1e-17
+        axs[0].semilogy(t, dft, color=colors[r["scheme"]], alpha=0.4 + 0.15 * np.log2(0.04 / r["res"]),
+                        label=f"{r['scheme']} dr/H={r['res']:g}")
+    axs[0].set_xlabel("t / T")
+    axs[0].set_ylabel("|relative drift of sum C_i V_i|")
+    axs[0].legend(fontsize=6)
+    axs[0].set_title("Conservation, sym_const")
+    for r in ok:
+        axs[1].loglog(r["drift_max"] + 1e-17, r["errors"][80]["mae"], marker=marks[r["case"]],
+                      color=colors[r["scheme"]], linestyle="none")
+    axs[1].set_xlabel("max |drift| over the run")
+    axs[1].set_ylabel("MAE at t/T = 80")
+    axs[1].set_title("Accuracy against drift (all runs)")
+    fig.tight_layout()
+    fig.savefig(os.path.join(docs, "shearbox_drift.png"), dpi=130)
+
+
+def cmd_analyze(a):
+    rows = _analyze_rows(a.out)
+    os.makedirs(a.docs, exist_ok=True)
+    _charts(rows, a.docs)
+    table = _table(rows)
+    with open(os.path.join(a.docs, "shearbox_table.md"), "w") as f:
+        f.write(table + "\n")
+    print(table)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("run")
+    r.add_argument("--out", required=True)
+    r.add_argument("--res", type=float, nargs="+", default=[0.04, 0.02, 0.01])
+    r.add_argument("--schemes", nargs="+", default=["paper", "direct", "conservative"])
+    r.add_argument("--cases", nargs="+", default=list(CASES))
+    r.add_argument("--jobs", type=int, default=os.cpu_count())
+    r.add_argument("--sphseg", default=os.path.join(HERE, "..", "build", "sphseg"))
+    z = sub.add_parser("analyze")
+    z.add_argument("--out", required=True)
+    z.add_argument("--docs", default=os.path.join(HERE, "..", "docs"))
+    a = ap.parse_args(argv)
+    return cmd_run(a) if a.cmd == "run" else cmd_analyze(a)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
