@@ -93,7 +93,7 @@ typedef struct outputs {
 
 static void write_snapshot(outputs *o, sim_t *s)
 {
-    s->be->prepare(s, s->t); /* positions, classes and normals at t */
+    s->be->prepare(s, s->t, 1); /* positions, classes and normals at t */
     io_write_snapshot(o->dir, o->n, &s->p, s->t, s->step, o->text, SPHSEG_VERSION);
     o->times = realloc(o->times, (size_t)(o->n + 1) * sizeof(double));
     o->npart = realloc(o->npart, (size_t)(o->n + 1) * sizeof(long long));

@@ -140,7 +140,7 @@ struct scene_default {
 static const struct scene_default scene_defaults[] = {
     {"Run", "cfl_diffusion", "0.1"},
     {"Run", "cfl_segregation", "0.2"},
-    {"Run", "cfl_kinematic", "0.25"},
+    {"Run", "cfl_kinematic", "1"},
     {"Run", "dt_max", "1e30"},
     {"Run", "progress_s", "10"},
     {"Run", "backend", "cpu"},

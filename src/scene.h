@@ -19,7 +19,7 @@ struct scene_run {
     double t_end;           /* s, required */
     double cfl_diffusion;   /* dt <= cfl_diffusion h^2 / D_max; default 0.1, stable < 1/7 */
     double cfl_segregation; /* dt <= cfl_segregation h / max|d(VF)/dC|; default 0.2 */
-    double cfl_kinematic;   /* dt <= cfl_kinematic h / |u|_max; default 0.25 */
+    double cfl_kinematic;   /* dt <= cfl_kinematic h / |u|_max; default 1 (time resolution of the moving geometry, not stability) */
     double dt_max;          /* s, upper bound on dt; default 1e30 (none) */
     double progress_s;      /* wall seconds between progress lines; default 10 */
     char *backend;          /* "cpu" (default) | "gpu" (later issue) */

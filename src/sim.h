@@ -17,8 +17,10 @@ struct sim;
 struct backend {
     const char *name;
     /* Place particles at time t (prescribed kinematics), rebuild the sorted
-     * cell list and, where the scheme needs it, classify boundary particles. */
-    void (*prepare)(struct sim *s, double t);
+     * cell list and, if classify and the scheme needs it, classify boundary
+     * particles (classes, normals and psi~ otherwise travel with the
+     * particles from the last classification). */
+    void (*prepare)(struct sim *s, double t, int classify);
     /* dC/dt of every material particle into p.dCdt. */
     void (*conc_rates)(struct sim *s);
     /* C = C_n + a dC/dt for material particles; a in seconds. */

@@ -130,7 +130,7 @@ static void test_defaults(void **state)
     assert_bits(s.run.t_end, 2.5);
     assert_bits(s.run.cfl_diffusion, 0.1);
     assert_bits(s.run.cfl_segregation, 0.2);
-    assert_bits(s.run.cfl_kinematic, 0.25);
+    assert_bits(s.run.cfl_kinematic, 1.0);
     assert_bits(s.run.dt_max, 1e30);
     assert_bits(s.run.progress_s, 10);
     assert_string_equal(s.run.backend, "cpu");

@@ -41,40 +41,48 @@ def run_dir(out, case, scheme, res):
     return os.path.join(out, f"{case}_{scheme}_{res:g}")
 
 
-def run_one(sphseg, out, case, scheme, res):
+def run_one(sphseg, out, case, scheme, res, threads=1, extra=()):
     """One sphseg run; returns a row for runs.csv."""
     d = run_dir(out, case, scheme, res)
     over = dict(CASES[case])
     over.update({"Segregation:scheme": scheme, "Geometry:dr": repr(res * H),
                  "Run:t_end": repr(max(TAUS) * T), "Output:dt": repr(min(TAUS) * T),
                  "Output:diag_dt": repr(T), "Run:progress_s": "1e9"})
+    over.update(dict(kv.split("=", 1) for kv in extra))
     cmd = [sphseg, SCENE, "-o", d] + sum([["-P", f"{k}={v}"] for k, v in over.items()], [])
-    env = dict(os.environ, OMP_NUM_THREADS="1")
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
     t0 = time.perf_counter()
     r = subprocess.run(cmd, capture_output=True, text=True, env=env)
     wall = time.perf_counter() - t0
     with open(d + ".log", "w") as f:
         f.write(r.stdout + r.stderr)
+    rate = ""
+    for line in r.stdout.splitlines():
+        if line.startswith("done:"):
+            rate = line.split(",")[2].split()[0]
     return {"case": case, "scheme": scheme, "res": res, "rc": r.returncode, "wall_s": f"{wall:.3f}",
+            "threads": threads, "particle_steps_per_s": rate,
             "message": (r.stderr.strip().splitlines() or [""])[-1][:300]}
 
 
 def cmd_run(a):
     os.makedirs(a.out, exist_ok=True)
     jobs = [(c, s, r) for r in a.res for s in a.schemes for c in a.cases]
-    jobs.sort(key=lambda j: j[2])  # the long fine runs last... start them first instead
-    jobs.reverse()
+    jobs.sort(key=lambda j: j[2])  # finest (longest) runs first
     rows = []
     with cf.ThreadPoolExecutor(max_workers=a.jobs) as ex:
-        futs = [ex.submit(run_one, a.sphseg, a.out, c, s, r) for c, s, r in jobs]
+        futs = [ex.submit(run_one, a.sphseg, a.out, c, s, r, a.threads, a.set) for c, s, r in jobs]
         for f in cf.as_completed(futs):
             row = f.result()
             rows.append(row)
             print(f"{row['case']:10s} {row['scheme']:12s} dr/H={row['res']:<6g} rc={row['rc']} "
                   f"wall={row['wall_s']} s {row['message'] if row['rc'] else ''}", flush=True)
-    with open(os.path.join(a.out, "runs.csv"), "w", newline="") as f:
+    path = os.path.join(a.out, "runs.csv")
+    new = not os.path.exists(path)
+    with open(path, "a", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
+        if new:
+            w.writeheader()
         w.writerows(sorted(rows, key=lambda r: (r["case"], r["scheme"], -r["res"])))
 
 
@@ -201,6 +209,8 @@ def main(argv=None):
     r.add_argument("--schemes", nargs="+", default=["paper", "direct", "conservative"])
     r.add_argument("--cases", nargs="+", default=list(CASES))
     r.add_argument("--jobs", type=int, default=os.cpu_count())
+    r.add_argument("--threads", type=int, default=1, help="OMP_NUM_THREADS of each run")
+    r.add_argument("--set", nargs="*", default=[], help="extra Section:key=value overrides")
     r.add_argument("--sphseg", default=os.path.join(HERE, "..", "build", "sphseg"))
     z = sub.add_parser("analyze")
     z.add_argument("--out", required=True)
