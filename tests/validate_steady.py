@@ -23,6 +23,12 @@ import study  # noqa: E402
 
 MAE_TOL = 0.02
 CASES = [(0.5, 5.0), (0.3, 20.0), (0.7, 40.0)]
+# The paper scheme is unstable once the particle Peclet number V h / D passes
+# about 2 (Pe = 40 here gives 2.4; docs/shearbox.md), and where it is stable
+# its steady state is shifted by its drift of sum C_i V_i (its mean C moves):
+# its errors are printed for the record, not held to MAE_TOL; a blow-up must
+# end the run with exit status 3.
+PAPER_STABLE_PE = 20.0
 
 
 def run(sphseg, out, phi0, Pe, scheme, dr_over_H=0.04, D=1e-6):
@@ -36,10 +42,12 @@ def run(sphseg, out, phi0, Pe, scheme, dr_over_H=0.04, D=1e-6):
             "Run:t_end": repr(t_end), "Output:dt": repr(t_end), "Output:diag_dt": repr(t_end / 20),
             "Run:progress_s": "1e9"}
     cmd = [sphseg, study.SCENE, "-o", out] + sum([["-P", f"{k}={v}"] for k, v in over.items()], [])
-    subprocess.run(cmd, check=True, capture_output=True)
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        return r.returncode, r.stderr.strip(), None
     s = snap.read_snapshot(snap.list_snapshots(out)[-1])
     y, C = snap.row_profile(s, dr_over_H * H)
-    return y / H, C
+    return 0, y / H, C
 
 
 def main():
@@ -50,12 +58,21 @@ def main():
     ok = True
     for scheme in ("paper", "conservative"):
         for phi0, Pe in CASES:
-            z, C = run(a.sphseg, os.path.join(a.work, f"{scheme}_{phi0}_{Pe}"), phi0, Pe, scheme)
+            rc, z, C = run(a.sphseg, os.path.join(a.work, f"{scheme}_{phi0}_{Pe}"), phi0, Pe, scheme)
+            if rc != 0:
+                good = scheme == "paper" and Pe > PAPER_STABLE_PE and rc == 3
+                ok &= good
+                print(f"{'ok ' if good else 'BAD'} {scheme:12s} phi0={phi0} Pe={Pe:5.1f}: exit {rc}: {z}")
+                continue
             ref = seg1d.steady_analytic(z, phi0, Pe)
             e = seg1d.mae(C, ref)
             good = e <= MAE_TOL
-            ok &= good
-            print(f"{'ok ' if good else 'BAD'} {scheme:12s} phi0={phi0} Pe={Pe:5.1f}: MAE={e:.4f} "
+            if scheme == "conservative":
+                ok &= good
+                tag = "ok " if good else "BAD"
+            else:
+                tag = "inf"
+            print(f"{tag} {scheme:12s} phi0={phi0} Pe={Pe:5.1f}: MAE={e:.4f} "
                   f"max={np.max(np.abs(C - ref)):.4f} mean C={np.mean(C):.4f}")
     return 0 if ok else 1
 

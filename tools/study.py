@@ -29,6 +29,14 @@ CASES = {
 }
 
 
+class RunFailed(RuntimeError):
+    """sphseg ended with a nonzero exit status."""
+
+    def __init__(self, cmd, returncode, stderr):
+        super().__init__(f"{' '.join(cmd)} failed ({returncode}):\n{stderr}")
+        self.returncode, self.stderr = returncode, stderr
+
+
 def run_case(sphseg, outdir, case, scheme, dr_over_H, taus=(20, 40, 80), extra=None):
     """Run sphseg for one case; returns the wall time in seconds."""
     T = 13.0
@@ -44,7 +52,7 @@ def run_case(sphseg, outdir, case, scheme, dr_over_H, taus=(20, 40, 80), extra=N
     res = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.perf_counter() - t0
     if res.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed ({res.returncode}):\n{res.stderr}")
+        raise RunFailed(cmd, res.returncode, res.stderr)
     return wall
 
 
