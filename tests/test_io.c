@@ -350,12 +350,12 @@ static void test_part_alloc(void **state)
     part_alloc(&p, 3, 0); /* empty store is valid */
     assert_non_null(p.id);
     part_free(&p);
-    /* 18 real arrays (x, X0, v, nrm: 3 each; vol, C, C_n, dCdt, gdot, psi),
-     * id (8 B), kind and bclass (1 B each). */
-    assert_int_equal(part_bytes_per_particle(), 18 * sizeof(real) + 8 + 2);
+    /* 27 real arrays (x, X0, v, nrm: 3 each; vol, C, C_n, dCdt, gdot, psi,
+     * segV, segQ, segD; L: 6), id (8 B), kind and bclass (1 B each). */
+    assert_int_equal(part_bytes_per_particle(), 27 * sizeof(real) + 8 + 2);
 }
 
-/* Value of array a (0..20) for a particle originally at index k. */
+/* Value of array a (0..26) for a particle originally at index k. */
 static double perm_val(int a, size_t k) { return 1000.0 * a + (double)k; }
 
 static void test_part_permute(void **state)
@@ -366,7 +366,8 @@ static void test_part_permute(void **state)
     part_alloc(&p, 2, N + 5);
     p.n = N;
     real **r[] = {&p.x[0], &p.x[1], &p.x[2], &p.X0[0], &p.X0[1], &p.X0[2],  &p.v[0],   &p.v[1],   &p.v[2],
-                  &p.vol,  &p.C,    &p.C_n,  &p.dCdt,  &p.gdot,  &p.nrm[0], &p.nrm[1], &p.nrm[2], &p.psi};
+                  &p.vol,  &p.C,    &p.C_n,  &p.dCdt,  &p.gdot,  &p.nrm[0], &p.nrm[1], &p.nrm[2], &p.psi,
+                  &p.segV, &p.segQ, &p.segD, &p.L[0],  &p.L[1],  &p.L[2],   &p.L[3],   &p.L[4],   &p.L[5]};
     int nr = (int)(sizeof r / sizeof r[0]);
     for (size_t k = 0; k < N; k++) {
         for (int a = 0; a < nr; a++)

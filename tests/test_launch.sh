@@ -8,7 +8,7 @@ tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 MPIRUN="mpirun --allow-run-as-root --oversubscribe"
 fail=0
 check() { if eval "$2"; then echo "PASS $1"; else echo "FAIL $1"; fail=1; fi; }
-args=(inputs/shearbox_2d.yml -P Geometry:dr=0.00348 -P Run:t_end=26 -P Output:dt=13 -P Run:progress_s=0)
+args=(inputs/shearbox_2d.yml -P Geometry:dr=0.00348 -P Run:t_end=26 -P Output:dt=13 -P Run:progress_s=0.001)
 
 "$bin" "${args[@]}" -o "$tmp/a" >"$tmp/a.out" 2>"$tmp/a.err"
 check "singleton exit 0" '[ $? -eq 0 ]'

@@ -7,9 +7,10 @@ and speed of the concentration schemes against the 1D FV reference.
       runs sphseg once per (case, scheme, dr/H), OMP_NUM_THREADS=1 each, N at a
       time, and records the wall time of every run in DIR/runs.csv (needs only
       the Python standard library, so it runs on any machine with the binary);
-  python3 tools/shearbox_study.py analyze --out DIR [--docs docs]
+  python3 tools/shearbox_study.py analyze --out DIR [DIR ...] [--docs docs]
       compares every run with the reference at t/T = 20, 40, 80 (MAE, RMSE,
-      eqs. 5.3-5.4), and writes docs/shearbox_validation.md (error table,
+      eqs. 5.3-5.4; saved in DIR/errors.csv, which later analyses reuse when
+      DIR/runs.csv and the snapshots are gone), merges the folders, and writes docs/shearbox_validation.md (error table,
       observed orders, drift of sum C_i V_i, wall times) and the charts
       docs/shearbox_convergence.png, docs/shearbox_speed_accuracy.png,
       docs/shearbox_drift.png.
@@ -86,22 +87,57 @@ def cmd_run(a):
         w.writerows(sorted(rows, key=lambda r: (r["case"], r["scheme"], -r["res"])))
 
 
-def _analyze_rows(out):
-    import numpy as np  # noqa: F401
+ERR_FIELDS = ["case", "scheme", "res", "rc", "wall_s", "t_fail", "drift_max"] + \
+    [f"{m}_{t}" for t in TAUS for m in ("mae", "rmse", "max")]
+
+
+def _errors_from_runs(out):
+    """Compare every run in OUT/runs.csv with the reference; also saved to
+    OUT/errors.csv so that charts can be redrawn without the snapshots."""
     import study
+    import snap
     rows = []
     with open(os.path.join(out, "runs.csv")) as f:
         for r in csv.DictReader(f):
-            r["res"], r["rc"], r["wall_s"] = float(r["res"]), int(r["rc"]), float(r["wall_s"])
-            d = run_dir(out, r["case"], r["scheme"], r["res"])
-            if r["rc"] == 0:
+            row = {"case": r["case"], "scheme": r["scheme"], "res": float(r["res"]), "rc": int(r["rc"]),
+                   "wall_s": float(r["wall_s"]), "t_fail": "", "drift_max": ""}
+            d = run_dir(out, r["case"], r["scheme"], row["res"])
+            if row["rc"] == 0:
                 e = study.case_errors(d, TAUS)
-                r.update(e)
+                row["drift_max"] = e["drift_max"]
+                for t in TAUS:
+                    for m in ("mae", "rmse", "max"):
+                        row[f"{m}_{t}"] = e["errors"][t][m]
             else:
-                import snap
                 diag = snap.read_diagnostics(d)
-                r["t_fail"] = float(diag["time"][-1]) if len(diag["time"]) else 0.0
-            rows.append(r)
+                row["t_fail"] = float(diag["time"][-1]) if len(diag["time"]) else 0.0
+            rows.append(row)
+    with open(os.path.join(out, "errors.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=ERR_FIELDS)
+        w.writeheader()
+        w.writerows(rows)
+    return rows
+
+
+def _load_rows(out):
+    """Rows of errors (from OUT/errors.csv if the snapshots are gone), each
+    with its diagnostics when OUT/<run>/diagnostics.csv exists."""
+    import snap
+    path = os.path.join(out, "errors.csv")
+    if os.path.exists(path) and not os.path.exists(os.path.join(out, "runs.csv")):
+        with open(path) as f:
+            rows = list(csv.DictReader(f))
+    else:
+        rows = _errors_from_runs(out)
+    for r in rows:
+        r["res"], r["rc"], r["wall_s"] = float(r["res"]), int(r["rc"]), float(r["wall_s"])
+        if r["rc"] != 0:
+            r["t_fail"] = float(r["t_fail"])
+            continue
+        r["drift_max"] = float(r["drift_max"])
+        r["errors"] = {t: {m: float(r[f"{m}_{t}"]) for m in ("mae", "rmse", "max")} for t in TAUS}
+        d = run_dir(out, r["case"], r["scheme"], r["res"])
+        r["diag"] = snap.read_diagnostics(d) if os.path.exists(os.path.join(d, "diagnostics.csv")) else None
     return rows
 
 
@@ -170,7 +206,7 @@ def _charts(rows, docs):
     # drift
     fig, axs = plt.subplots(1, 2, figsize=(10, 4))
     for r in ok:
-        if r["case"] != "sym_const":
+        if r["case"] != "sym_const" or r["diag"] is None:
             continue
         t = np.asarray(r["diag"]["time"], float) / T
         dft = np.abs(np.asarray(r["diag"]["small_volume_drift"], float)) + 1e-17
@@ -191,7 +227,7 @@ def _charts(rows, docs):
 
 
 def cmd_analyze(a):
-    rows = _analyze_rows(a.out)
+    rows = [r for out in a.out for r in _load_rows(out)]
     os.makedirs(a.docs, exist_ok=True)
     _charts(rows, a.docs)
     table = _table(rows)
@@ -213,7 +249,7 @@ def main(argv=None):
     r.add_argument("--set", nargs="*", default=[], help="extra Section:key=value overrides")
     r.add_argument("--sphseg", default=os.path.join(HERE, "..", "build", "sphseg"))
     z = sub.add_parser("analyze")
-    z.add_argument("--out", required=True)
+    z.add_argument("--out", required=True, nargs="+", help="study folders (merged)")
     z.add_argument("--docs", default=os.path.join(HERE, "..", "docs"))
     a = ap.parse_args(argv)
     return cmd_run(a) if a.cmd == "run" else cmd_analyze(a)
