@@ -15,7 +15,7 @@ static void cpu_prepare(sim_t *s, double t, int classify)
         p->gdot[i] = gd;
     }
     nbr_build(&s->grid, p, R(2.0) * s->seg.k.h);
-    if (s->hcsr && classify) bound_classify(&s->bw, p, &s->grid, &s->seg.k);
+    if ((s->hcsr && classify) || classify == 2) bound_classify(&s->bw, p, &s->grid, &s->seg.k);
 }
 
 static void cpu_conc_rates(sim_t *s)

@@ -9,18 +9,19 @@
  * step, X^{n+1/2} = X^n + (dt/2) Gamma^n, and the corrector takes the full
  * step with the mid-point rate, X^{n+1} = X^n + dt Gamma^{n+1/2}. Positions
  * follow the prescribed kinematics exactly at t^{n+1/2} and t^{n+1}. The
- * HCSR boundary classification runs once per step, at t^n; the corrector
- * uses the same classes and normals (particles move less than h per step). */
+ * HCSR boundary classification runs once per step, at t^{n+1} for the next
+ * step's predictor; the corrector reuses it (particles move less than h per
+ * step). On return positions, velocities and classes are those at t^{n+1}. */
 void integrate_step(sim_t *s, double dt)
 {
-    const struct backend *be = s->be;
-    be->prepare(s, s->t, 1);
+    const struct backend *be = s->be; /* the state is prepared at t (run start, last step) */
     be->conc_rates(s);
     be->save_start(s);
     be->advance(s, 0.5 * dt);
     be->prepare(s, s->t + 0.5 * dt, 0);
     be->conc_rates(s);
     be->advance(s, dt);
+    be->prepare(s, s->t + dt, 1);
     s->t += dt;
     s->step++;
     s->dt = dt;

@@ -93,7 +93,7 @@ typedef struct outputs {
 
 static void write_snapshot(outputs *o, sim_t *s)
 {
-    s->be->prepare(s, s->t, 1); /* positions, classes and normals at t */
+    if (!s->hcsr) s->be->prepare(s, s->t, 2); /* classes and normals for the record */
     io_write_snapshot(o->dir, o->n, &s->p, s->t, s->step, o->text, SPHSEG_VERSION);
     o->times = realloc(o->times, (size_t)(o->n + 1) * sizeof(double));
     o->npart = realloc(o->npart, (size_t)(o->n + 1) * sizeof(long long));
@@ -131,6 +131,7 @@ static void run(sim_t *s, outputs *o)
 {
     const struct scene *sc = s->sc;
     diag d;
+    s->be->prepare(s, s->t, 1);
     diag_open(&d, o->dir, s);
     diag_row(&d, s);
     write_snapshot(o, s);
@@ -180,7 +181,7 @@ int main(int argc, char **argv)
     make_dirs(o.dir);
     char used[4200];
     snprintf(used, sizeof used, "%s/used_params.yml", o.dir);
-    if (comm_rank() == 0) scene_write_used(&sc, used);
+    if (comm_rank() == 0 && scene_write_used(&sc, used) != 0) error_exit(1, "cannot write %s", used);
     o.text = scene_used_text(&sc);
     message("sphseg %s: %s, %zu material + %zu dummy particles, h = %.4g m, scheme %s, %d rank(s), output %s",
             SPHSEG_VERSION, sc.path, s.n_material, s.p.n - s.n_material, (double)s.seg.k.h,

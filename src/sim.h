@@ -19,7 +19,8 @@ struct backend {
     /* Place particles at time t (prescribed kinematics), rebuild the sorted
      * cell list and, if classify and the scheme needs it, classify boundary
      * particles (classes, normals and psi~ otherwise travel with the
-     * particles from the last classification). */
+     * particles from the last classification); classify == 2 classifies
+     * whatever the scheme (snapshots show boundary classes and normals). */
     void (*prepare)(struct sim *s, double t, int classify);
     /* dC/dt of every material particle into p.dCdt. */
     void (*conc_rates)(struct sim *s);
@@ -43,7 +44,6 @@ typedef struct sim {
     long step;
     double dt;         /* last time step, s */
     size_t n_material; /* local material particles */
-    double small0;     /* sum C_i V_i at t = 0 (all ranks) */
 } sim_t;
 
 /* Build the particles of the scene at t = 0 (src/setup.c). Exits with status

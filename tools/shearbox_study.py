@@ -10,7 +10,7 @@ and speed of the concentration schemes against the 1D FV reference.
   python3 tools/shearbox_study.py analyze --out DIR [DIR ...] [--docs docs]
       compares every run with the reference at t/T = 20, 40, 80 (MAE, RMSE,
       eqs. 5.3-5.4; saved in DIR/errors.csv, which later analyses reuse when
-      DIR/runs.csv and the snapshots are gone), merges the folders, and writes docs/shearbox_validation.md (error table,
+      DIR/runs.csv and the snapshots are gone), merges the folders, and writes docs/shearbox_table.md (error table,
       observed orders, drift of sum C_i V_i, wall times) and the charts
       docs/shearbox_convergence.png, docs/shearbox_speed_accuracy.png,
       docs/shearbox_drift.png.

@@ -3,7 +3,7 @@
 #define SPHSEG_LINALG_H
 #include "hd.h"
 
-/* Solve A X = B in place for n <= 4 unknowns and nrhs <= 2 right-hand sides
+/* Solve A X = B in place for n <= 4 unknowns and nrhs <= 4 right-hand sides
  * (A row-major n x n, B row-major n x nrhs), Gaussian elimination with partial
  * pivoting. Returns 0, or 1 if A is singular relative to tol * max|A|. */
 HD_INLINE int linalg_solve(int n, real *A, real *B, int nrhs, real tol)

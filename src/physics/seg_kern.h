@@ -1,5 +1,5 @@
 /* seg_kern.h — the concentration rate dC_i/dt of one material particle, the
- * neighbour-loop body shared by the CPU (src/seg.c) and GPU drivers.
+ * neighbour-loop body shared by the CPU (src/backend_cpu.c) and GPU drivers.
  * Gravity-aligned derivative: grad_g X = ghat . grad X (eq. E15). */
 #ifndef SPHSEG_SEG_KERN_H
 #define SPHSEG_SEG_KERN_H
