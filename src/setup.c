@@ -32,9 +32,10 @@ static void setup_check_memory(const struct scene *sc, size_t n)
 {
     double need = (double)n * (double)(part_bytes_per_particle() + 64); /* + grid, scratch */
     double have = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
+    char where[512];
     if (need > 0.8 * have)
-        input_error("%s:%d: Geometry:dr: %.3g m gives %zu particles needing %.1f GiB; this machine has %.1f GiB",
-                    sc->path, scene_key_line(sc, "Geometry", "dr"), sc->geometry.dr, n,
+        input_error("%s: Geometry:dr: %.3g m gives %zu particles needing %.1f GiB; this machine has %.1f GiB",
+                    scene_key_where(sc, "Geometry", "dr", where, sizeof where), sc->geometry.dr, n,
                     need / 1073741824.0, have / 1073741824.0);
 }
 

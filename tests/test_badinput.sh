@@ -65,6 +65,7 @@ check override_unknown_key "-P Run:foo=1: Run:foo: unknown key" "$good" -P Run:f
 check override_unknown_section "-P Foo:dr=1: Foo: unknown section" "$good" -P Foo:dr=1
 check override_malformed "-P Geometry:dr: malformed override" "$good" -P Geometry:dr
 check override_range "-P Geometry:dr=-1: Geometry:dr: must be > 0" "$good" -P Geometry:dr=-1
+check memory_need "-P Geometry:dr=1e-7: Geometry:dr: 1e-07 m gives" "$good" -P Geometry:dr=1e-7
 check override_type "-P Run:t_end=abc: Run:t_end: expected a number" "$good" -P Run:t_end=abc
 check override_nan "-P Segregation:D=.nan: Segregation:D: not a finite number" \
     "$good" -P Segregation:D=.nan
