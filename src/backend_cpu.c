@@ -16,6 +16,11 @@ static void cpu_prepare(sim_t *s, double t, int classify)
     }
     nbr_build(&s->grid, p, R(2.0) * s->seg.k.h);
     if ((s->hcsr && classify) || classify == 2) bound_classify(&s->bw, p, &s->grid, &s->seg.k);
+    if (classify && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) {
+#pragma omp parallel for schedule(static)
+        for (long i = 0; i < n; ++i)
+            if (p->kind[i] == KIND_MATERIAL) seg_renorm((size_t)i, p, &s->grid.view, &s->seg);
+    }
 }
 
 static void cpu_conc_rates(sim_t *s)
@@ -25,10 +30,7 @@ static void cpu_conc_rates(sim_t *s)
     const int cons = s->seg.scheme == SEG_SCHEME_CONSERVATIVE;
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i)
-        if (p->kind[i] == KIND_MATERIAL) {
-            seg_coeffs((size_t)i, p, &s->seg);
-            if (cons && s->seg.renorm) seg_renorm((size_t)i, p, &s->grid.view, &s->seg);
-        }
+        if (p->kind[i] == KIND_MATERIAL) seg_coeffs((size_t)i, p, &s->seg);
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) {

@@ -20,7 +20,9 @@ struct backend {
      * cell list and, if classify and the scheme needs it, classify boundary
      * particles (classes, normals and psi~ otherwise travel with the
      * particles from the last classification); classify == 2 classifies
-     * whatever the scheme (snapshots show boundary classes and normals). */
+     * whatever the scheme (snapshots show boundary classes and normals).
+     * The conservative scheme's renormalisation L is computed here too,
+     * when classify is set: once per step, like the classification. */
     void (*prepare)(struct sim *s, double t, int classify);
     /* dC/dt of every material particle into p.dCdt. */
     void (*conc_rates)(struct sim *s);

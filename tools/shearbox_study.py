@@ -66,25 +66,27 @@ def run_one(sphseg, out, case, scheme, res, threads=1, extra=()):
             "message": (r.stderr.strip().splitlines() or [""])[-1][:300]}
 
 
+RUN_FIELDS = ["case", "scheme", "res", "rc", "wall_s", "threads", "particle_steps_per_s", "message"]
+
+
 def cmd_run(a):
+    """Runs every job; each finished run is appended to DIR/runs.csv at once,
+    so a study cut short keeps what it finished."""
     os.makedirs(a.out, exist_ok=True)
     jobs = [(c, s, r) for r in a.res for s in a.schemes for c in a.cases]
     jobs.sort(key=lambda j: j[2])  # finest (longest) runs first
-    rows = []
+    path = os.path.join(a.out, "runs.csv")
+    if not os.path.exists(path):
+        with open(path, "w", newline="") as f:
+            csv.DictWriter(f, fieldnames=RUN_FIELDS).writeheader()
     with cf.ThreadPoolExecutor(max_workers=a.jobs) as ex:
         futs = [ex.submit(run_one, a.sphseg, a.out, c, s, r, a.threads, a.set) for c, s, r in jobs]
         for f in cf.as_completed(futs):
             row = f.result()
-            rows.append(row)
+            with open(path, "a", newline="") as fh:
+                csv.DictWriter(fh, fieldnames=RUN_FIELDS).writerow(row)
             print(f"{row['case']:10s} {row['scheme']:12s} dr/H={row['res']:<6g} rc={row['rc']} "
                   f"wall={row['wall_s']} s {row['message'] if row['rc'] else ''}", flush=True)
-    path = os.path.join(a.out, "runs.csv")
-    new = not os.path.exists(path)
-    with open(path, "a", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        if new:
-            w.writeheader()
-        w.writerows(sorted(rows, key=lambda r: (r["case"], r["scheme"], -r["res"])))
 
 
 ERR_FIELDS = ["case", "scheme", "res", "rc", "wall_s", "t_fail", "drift_max"] + \

@@ -141,31 +141,40 @@ HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view
 /* Renormalisation of the conservative scheme: L_i = M_i^-1 with the moment
  * M_i = -sum_{j in Omega} V_j w_ij x_ij (x) x_ij, w_ij = x_ij.grad_i W_ij / r^2
  * (M = I in the interior of a regular lattice, tests/test_kernel.c). Stored
- * as xx, yy, zz, xy, xz, yz. Where M is singular L = I. */
+ * as xx, yy, zz, xy, xz, yz (zz = 1, xz = yz = 0 in 2D). Where M is singular
+ * L = I. */
 HD_INLINE void seg_renorm(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c)
 {
     const sph_ctx *k = &c->k;
-    real M[9] = {0}, B[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    real m[6] = {0, 0, 0, 0, 0, 0}; /* xx, yy, zz, xy, xz, yz */
     NBR_BEGIN(g, p->x, i, j)
         if (j == i || p->kind[j] != KIND_MATERIAL) continue;
         real xij[3];
         real r2 = grid_pair(k->dim, p->x, i, j, xij);
         if (r2 >= k->support2) continue;
-        real w = kernel_f((real)sqrt((double)r2), k->h, k->alpha) * p->vol[j];
-        for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b) M[3 * a + b] -= w * xij[a] * xij[b];
+        real w = -kernel_f((real)sqrt((double)r2), k->h, k->alpha) * p->vol[j];
+        m[0] += w * xij[0] * xij[0];
+        m[1] += w * xij[1] * xij[1];
+        m[3] += w * xij[0] * xij[1];
+        if (k->dim == 3) {
+            m[2] += w * xij[2] * xij[2];
+            m[4] += w * xij[0] * xij[2];
+            m[5] += w * xij[1] * xij[2];
+        }
     NBR_END
-    int n = k->dim;
-    real A[9];
-    for (int a = 0; a < n; ++a)
-        for (int b = 0; b < n; ++b) A[n * a + b] = M[3 * a + b];
-    real Bn[9] = {0};
-    for (int a = 0; a < n; ++a) Bn[n * a + a] = 1;
-    if (!linalg_solve(n, A, Bn, n, R(1e-6)))
-        for (int a = 0; a < n; ++a)
-            for (int b = 0; b < n; ++b) B[3 * a + b] = Bn[n * a + b];
-    p->L[0][i] = B[0], p->L[1][i] = B[4], p->L[2][i] = B[8];
-    p->L[3][i] = B[1], p->L[4][i] = B[2], p->L[5][i] = B[5];
+    real l[6] = {1, 1, 1, 0, 0, 0};
+    if (k->dim == 2) {
+        real det = m[0] * m[1] - m[3] * m[3];
+        if (det > R(1e-6) * (m[0] * m[0] + m[1] * m[1])) {
+            l[0] = m[1] / det, l[1] = m[0] / det, l[3] = -m[3] / det;
+        }
+    } else {
+        real A[9] = {m[0], m[3], m[4], m[3], m[1], m[5], m[4], m[5], m[2]};
+        real B[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+        if (!linalg_solve(3, A, B, 3, R(1e-6)))
+            l[0] = B[0], l[1] = B[4], l[2] = B[8], l[3] = B[1], l[4] = B[2], l[5] = B[5];
+    }
+    for (int q = 0; q < 6; ++q) p->L[q][i] = l[q];
 }
 
 /* (L_i + L_j)/2 applied to v. */
