@@ -125,14 +125,21 @@ def _load_rows(out):
     """Rows of errors (from OUT/errors.csv if the snapshots are gone), each
     with its diagnostics when OUT/<run>/diagnostics.csv exists."""
     import snap
-    path = os.path.join(out, "errors.csv")
-    if os.path.exists(path) and not os.path.exists(os.path.join(out, "runs.csv")):
+    path, runs = os.path.join(out, "errors.csv"), os.path.join(out, "runs.csv")
+    rows = []
+    if os.path.exists(path):
         with open(path) as f:
             rows = list(csv.DictReader(f))
-    else:
-        rows = _errors_from_runs(out)
+    threads = {}
+    if os.path.exists(runs):
+        with open(runs) as f:
+            threads = {(r["case"], r["scheme"], float(r["res"])): int(r.get("threads") or 1)
+                       for r in csv.DictReader(f)}
+        if set(threads) != {(r["case"], r["scheme"], float(r["res"])) for r in rows}:
+            rows = _errors_from_runs(out)  # new runs since errors.csv was written
     for r in rows:
         r["res"], r["rc"], r["wall_s"] = float(r["res"]), int(r["rc"]), float(r["wall_s"])
+        r["core_s"] = r["wall_s"] * threads.get((r["case"], r["scheme"], r["res"]), 1)
         if r["rc"] != 0:
             r["t_fail"] = float(r["t_fail"])
             continue
@@ -145,15 +152,15 @@ def _load_rows(out):
 
 def _table(rows):
     import study
-    lines = ["| case | scheme | dr/H | MAE t/T=20 | MAE 40 | MAE 80 | RMSE 80 | order (MAE 80) | max drift | wall s |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| case | scheme | dr/H | MAE t/T=20 | MAE 40 | MAE 80 | RMSE 80 | order (MAE 80) | max drift | "
+             "wall s x threads |", "|---|---|---|---|---|---|---|---|---|---|"]
     key = {}
     for r in rows:
         key[(r["case"], r["scheme"], r["res"])] = r
     for r in sorted(rows, key=lambda r: (r["case"], r["scheme"], -r["res"])):
         if r["rc"] != 0:
             lines.append(f"| {r['case']} | {r['scheme']} | {r['res']:g} | unstable: stopped (exit {r['rc']}) "
-                         f"at t/T = {r['t_fail'] / T:.1f} | | | | | | {r['wall_s']:.1f} |")
+                         f"at t/T = {r['t_fail'] / T:.1f} | | | | | | {r['core_s']:.0f} |")
             continue
         e = r["errors"]
         coarse = key.get((r["case"], r["scheme"], r["res"] * 2))
@@ -162,7 +169,7 @@ def _table(rows):
             order = f"{study.order(coarse['errors'][80]['mae'], e[80]['mae']):.2f}"
         lines.append(f"| {r['case']} | {r['scheme']} | {r['res']:g} | {e[20]['mae']:.4f} | {e[40]['mae']:.4f} | "
                      f"{e[80]['mae']:.4f} | {e[80]['rmse']:.4f} | {order} | {r['drift_max']:.1e} | "
-                     f"{r['wall_s']:.1f} |")
+                     f"{r['core_s']:.0f} |")
     return "\n".join(lines)
 
 
@@ -192,14 +199,14 @@ def _charts(rows, docs):
     # speed vs accuracy
     fig, ax = plt.subplots(figsize=(6, 4.5))
     for r in ok:
-        ax.loglog(r["wall_s"], r["errors"][80]["mae"], marker=marks[r["case"]], color=colors[r["scheme"]],
+        ax.loglog(r["core_s"], r["errors"][80]["mae"], marker=marks[r["case"]], color=colors[r["scheme"]],
                   linestyle="none")
-        ax.annotate(f"{r['res']:g}", (r["wall_s"], r["errors"][80]["mae"]), fontsize=5)
+        ax.annotate(f"{r['res']:g}", (r["core_s"], r["errors"][80]["mae"]), fontsize=5)
     for s, c in colors.items():
         ax.plot([], [], color=c, marker="o", linestyle="none", label=s)
     for k, m in marks.items():
         ax.plot([], [], color="gray", marker=m, linestyle="none", label=k)
-    ax.set_xlabel("wall time of the run to t/T = 80, s (one core)")
+    ax.set_xlabel("cost of the run to t/T = 80: wall s x OpenMP threads")
     ax.set_ylabel("MAE of C at t/T = 80")
     ax.legend(fontsize=6)
     ax.set_title("Speed against accuracy (labels: dr/H)")
