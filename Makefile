@@ -58,7 +58,7 @@ CORE_SRC := src/error.c src/scene.c src/particles.c src/nbr.c src/bound.c src/se
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
 HEADERS  := $(wildcard src/*.h src/physics/*.h mpi/*.h)
 
-UNIT_TESTS := test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_rates
+UNIT_TESTS := test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_rates test_stress
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
 
 .PHONY: all deps run test unit bench clean format
@@ -84,7 +84,13 @@ run: deps all
 
 unit: $(UNIT_BINS)
 
+# The unit tests' tolerances are set for double precision (several compare
+# with closed forms to 1e-9..1e-15); a single-precision build is run, not
+# unit-tested, until the GPU issue brings precision-aware tolerances.
 test: all unit
+ifeq ($(PRECISION),single)
+	$(error make test needs PRECISION=double: the unit tolerances assume double precision)
+endif
 	@PYTHON=$(PYTHON) BUILD=$(BUILD) bash tests/run.sh
 
 bench: all

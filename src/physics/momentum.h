@@ -1,0 +1,61 @@
+/* momentum.h — pair terms of the SPH momentum and kinematics equations
+ * (paper §3.2): the velocity gradient behind the strain rate and spin
+ * (3.14–3.15), the momentum pair term (3.9) and Monaghan's artificial
+ * viscosity (3.10). Groundwork for the issue "Granular flow": not yet
+ * called by the driver. Stress convention as in stress.h (tension positive);
+ * grad_i W_ij = kernel_f(r) x_ij with x_ij = x_i - x_j. */
+#ifndef SPHSEG_MOMENTUM_H
+#define SPHSEG_MOMENTUM_H
+#include "hd.h"
+
+/* Adds the pair j to the velocity gradient L_ab = du_a/dx_b of particle i:
+ * L -= V_j u_ij (x) grad_i W_ij (the difference form of 3.14–3.15, with the
+ * sign that makes it +grad u for C_ij = u_i - u_j; cf. 3.16). L row-major 3x3. */
+HD_INLINE void mom_velgrad_add(real L[9], real vol_j, const real uij[3], const real gradW[3])
+{
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) L[3 * a + b] -= vol_j * uij[a] * gradW[b];
+}
+
+/* Strain rate eps = (L + L^T)/2 as (xx, yy, zz, xy, xz, yz) and spin
+ * w = (L - L^T)/2 as (xy, xz, yz), eqs. (3.14)–(3.15), 1/s. */
+HD_INLINE void mom_strain_spin(const real L[9], real eps[6], real w[3])
+{
+    eps[0] = L[0], eps[1] = L[4], eps[2] = L[8];
+    eps[3] = R(0.5) * (L[1] + L[3]);
+    eps[4] = R(0.5) * (L[2] + L[6]);
+    eps[5] = R(0.5) * (L[5] + L[7]);
+    w[0] = R(0.5) * (L[1] - L[3]);
+    w[1] = R(0.5) * (L[2] - L[6]);
+    w[2] = R(0.5) * (L[5] - L[7]);
+}
+
+/* Monaghan (1992) artificial viscosity, eq. (3.10), in the units of
+ * sigma/rho^2 (m^5/(kg s^2)): Pi_ij = alpha c h (u_ij.x_ij) /
+ * (rho_bar (r^2 + 0.01 h^2)) for approaching pairs (u_ij.x_ij < 0), else 0;
+ * negative, so it acts as a pressure between approaching particles. */
+HD_INLINE real mom_av(real alpha, real cs, real h, real rho_i, real rho_j, const real uij[3],
+                      const real xij[3])
+{
+    real ux = uij[0] * xij[0] + uij[1] * xij[1] + uij[2] * xij[2];
+    if (ux >= 0) return 0;
+    real r2 = xij[0] * xij[0] + xij[1] * xij[1] + xij[2] * xij[2];
+    return alpha * cs * h / (R(0.5) * (rho_i + rho_j)) * ux / (r2 + R(0.01) * h * h);
+}
+
+/* Adds the pair j to the acceleration of i, eq. (3.9):
+ * a_i += m_j (sigma_i/rho_i^2 + sigma_j/rho_j^2 + Pi_ij I) . grad_i W_ij.
+ * Symmetric in (i, j) but for grad W, so m_i a_ij = -m_j a_ji. */
+HD_INLINE void mom_accel_add(real a[3], real m_j, const real si[6], real rho_i, const real sj[6], real rho_j,
+                             real Pi, const real gradW[3])
+{
+    real ci = R(1.0) / (rho_i * rho_i), cj = R(1.0) / (rho_j * rho_j);
+    real T[6];
+    for (int c = 0; c < 6; ++c) T[c] = si[c] * ci + sj[c] * cj;
+    T[0] += Pi, T[1] += Pi, T[2] += Pi;
+    a[0] += m_j * (T[0] * gradW[0] + T[3] * gradW[1] + T[4] * gradW[2]);
+    a[1] += m_j * (T[3] * gradW[0] + T[1] * gradW[1] + T[5] * gradW[2]);
+    a[2] += m_j * (T[4] * gradW[0] + T[5] * gradW[1] + T[2] * gradW[2]);
+}
+
+#endif

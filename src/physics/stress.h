@@ -1,0 +1,128 @@
+/* stress.h — the regularized mu(I) elastoplastic model of the paper (§2.3,
+ * §2.4, App. C): elastic moduli, mu(I) (2.13–2.14), the Drucker–Prager yield
+ * function (2.11–2.12), the Jaumann-rate elastic trial stress and the
+ * one-step return mapping with tension cut-off.
+ * Groundwork for the issue "Granular flow": not yet called by the driver.
+ *
+ * Conventions: stress is a symmetric tensor stored as (xx, yy, zz, xy, xz,
+ * yz), Pa, tension positive; the pressure p = -tr(sigma)/3 is positive in
+ * compression (the sign that makes f = sqrt(J2) - k_mu p of (2.11) a
+ * cone opening into compression). Velocity gradient L_ab = du_a/dx_b; strain
+ * rate eps = (L + L^T)/2, spin w = (L - L^T)/2, both 1/s. */
+#ifndef SPHSEG_STRESS_H
+#define SPHSEG_STRESS_H
+#include <math.h>
+#include "hd.h"
+
+typedef struct mat_params {
+    real G, K;         /* shear and bulk moduli, Pa */
+    real rho_s;        /* intrinsic grain density, kg/m^3 (inertial number) */
+    real mu_s, mu_d;   /* static and dynamic friction (2.13) */
+    real I0;           /* reference inertial number (2.13) */
+    real lambda;       /* regularization of (2.14), 1/s; 0.001 in the paper */
+} mat_params;
+
+/* Shear and bulk moduli from Young's modulus E (Pa) and Poisson's ratio nu. */
+HD_INLINE void stress_moduli(real E, real nu, real *G, real *K)
+{
+    *G = E / (R(2.0) * (R(1.0) + nu));
+    *K = E / (R(3.0) * (R(1.0) - R(2.0) * nu));
+}
+
+/* Elastic sound speed sqrt((K + 4G/3)/rho), m/s (the c_s of 3.10 and 3.19). */
+HD_INLINE real stress_sound_speed(real G, real K, real rho)
+{
+    return (real)sqrt((double)((K + R(4.0) / R(3.0) * G) / rho));
+}
+
+/* p = -tr(sigma)/3, Pa, positive in compression. */
+HD_INLINE real stress_pressure(const real s[6]) { return -(s[0] + s[1] + s[2]) / R(3.0); }
+
+/* J2 = s:s/2 of the deviator s = sigma + p I, Pa^2. */
+HD_INLINE real stress_J2(const real s[6])
+{
+    real p = stress_pressure(s);
+    real d0 = s[0] + p, d1 = s[1] + p, d2 = s[2] + p;
+    return R(0.5) * (d0 * d0 + d1 * d1 + d2 * d2) + s[3] * s[3] + s[4] * s[4] + s[5] * s[5];
+}
+
+/* Shear-rate magnitude gdot = sqrt(2 e:e) of the deviatoric strain rate e
+ * (below eq. 2.7), 1/s; eps stored like stress. */
+HD_INLINE real stress_shear_rate(const real e[6])
+{
+    real v = (e[0] + e[1] + e[2]) / R(3.0);
+    real d0 = e[0] - v, d1 = e[1] - v, d2 = e[2] - v;
+    real ee = d0 * d0 + d1 * d1 + d2 * d2 + R(2.0) * (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]);
+    return (real)sqrt((double)(R(2.0) * ee));
+}
+
+/* k_mu = 3 mu / sqrt(9 + 12 mu^2), eq. (2.12). */
+HD_INLINE real stress_kmu(real mu) { return R(3.0) * mu / (real)sqrt((double)(R(9.0) + R(12.0) * mu * mu)); }
+
+/* Regularized mu(I), eq. (2.14): mu_s + (mu_d - mu_s) gdot /
+ * (I0 sqrt(p / (rho_s d^2)) + sqrt(gdot^2 + lambda^2)); finite at gdot = 0
+ * (gives mu_s) and at p = 0 (gives mu_s + (mu_d - mu_s) gdot / |..|). */
+HD_INLINE real stress_mu(const mat_params *m, real gdot, real p, real davg)
+{
+    real pp = p > 0 ? p : R(0.0);
+    real den = m->I0 * (real)sqrt((double)(pp / (m->rho_s * davg * davg))) +
+               (real)sqrt((double)(gdot * gdot + m->lambda * m->lambda));
+    return m->mu_s + (m->mu_d - m->mu_s) * gdot / den;
+}
+
+/* Elastic trial increment rate of (C1): w sigma - sigma w + 2 G e + K tr(eps) I,
+ * with e the deviatoric strain rate. (2.16) writes K eps_v with eps_v =
+ * tr(eps)/3 as defined below (2.7); linear elasticity needs K tr(eps), which
+ * is what is used. w: (xy, xz, yz) components of the spin (w_yx = -w_xy). */
+HD_INLINE void stress_rate_elastic(const real s[6], const real eps[6], const real w[3], real G, real K,
+                                   real out[6])
+{
+    real S[3][3] = {{s[0], s[3], s[4]}, {s[3], s[1], s[5]}, {s[4], s[5], s[2]}};
+    real W[3][3] = {{0, w[0], w[1]}, {-w[0], 0, w[2]}, {-w[1], -w[2], 0}};
+    real J[3][3];
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+            real t = 0;
+            for (int c = 0; c < 3; ++c) t += W[a][c] * S[c][b] - S[a][c] * W[c][b];
+            J[a][b] = t;
+        }
+    real tr = eps[0] + eps[1] + eps[2];
+    out[0] = J[0][0] + R(2.0) * G * (eps[0] - tr / R(3.0)) + K * tr;
+    out[1] = J[1][1] + R(2.0) * G * (eps[1] - tr / R(3.0)) + K * tr;
+    out[2] = J[2][2] + R(2.0) * G * (eps[2] - tr / R(3.0)) + K * tr;
+    out[3] = J[0][1] + R(2.0) * G * eps[3];
+    out[4] = J[0][2] + R(2.0) * G * eps[4];
+    out[5] = J[1][2] + R(2.0) * G * eps[5];
+}
+
+/* One-step return mapping (App. C) for the cohesionless Drucker–Prager cone
+ * with the non-associated potential g = sqrt(J2) (2.15), applied to a trial
+ * stress in place. Returns 0 elastic, 1 returned to the cone, 2 apex.
+ *  - apex / tension cut-off: a trial pressure p <= 0 (grains cannot carry
+ *    tension, as at a free surface) maps to the apex, sigma = 0;
+ *  - otherwise, if f = sqrt(J2) - k_mu p > 0, the deviator is scaled onto the
+ *    cone, s = s* k_mu p / sqrt(J2*), keeping p (g has no volumetric part). */
+HD_INLINE int stress_return_map(real s[6], real kmu)
+{
+    real p = stress_pressure(s);
+    if (p <= 0) {
+        for (int c = 0; c < 6; ++c) s[c] = 0;
+        return 2;
+    }
+    real tau = (real)sqrt((double)stress_J2(s));
+    if (tau <= kmu * p) return 0;
+    real r = kmu * p / tau;
+    for (int c = 0; c < 3; ++c) s[c] = -p + r * (s[c] + p);
+    for (int c = 3; c < 6; ++c) s[c] *= r;
+    return 1;
+}
+
+/* Time step of (3.19): chi_CFL min(sqrt(h / a_max), h / c_s), s. */
+HD_INLINE real stress_dt(real chi, real h, real amax, real cs)
+{
+    real a = amax > 0 ? (real)sqrt((double)(h / amax)) : (real)1e30;
+    real b = h / cs;
+    return chi * (a < b ? a : b);
+}
+
+#endif

@@ -1,0 +1,140 @@
+/* test_stress.c — the mu(I) elastoplastic pieces (paper §2.3–2.4, App. C)
+ * and the momentum pair terms (3.9, 3.10, 3.14–3.15), ahead of the granular
+ * solver. References: linear elasticity (E, nu -> G, K), the closed forms of
+ * (2.12)–(2.14) and their limits, the geometry of the Drucker–Prager cone,
+ * the invariance of p and J2 under the Jaumann spin terms, Newton's third
+ * law for the pair force, and exact velocity gradients of linear fields on
+ * a lattice (up to the 0.3 % lattice moment at h = 1.5 dr). */
+#include "physics/kernel.h"
+#include "physics/momentum.h"
+#include "physics/stress.h"
+#include "testutil.h"
+
+static mat_params table1(void)
+{
+    mat_params m;
+    stress_moduli(10e6, 0.3, &m.G, &m.K); /* paper Table 1 */
+    m.rho_s = 2500, m.mu_s = 0.382, m.mu_d = 0.682, m.I0 = 0.279, m.lambda = 0.001;
+    return m;
+}
+
+static void test_moduli(void **st)
+{
+    (void)st;
+    mat_params m = table1();
+    assert_true(fabs(m.G - 10e6 / 2.6) < 1e-6 && fabs(m.K - 10e6 / 1.2) < 1e-6);
+    double c = stress_sound_speed(m.G, m.K, 1500);
+    assert_true(fabs(c * c * 1500 - (m.K + 4.0 / 3.0 * m.G)) < 1e-3);
+    assert_true(fabs(stress_dt(0.1, 1e-3, 0, c) - 0.1 * 1e-3 / c) < 1e-15);
+    assert_true(fabs(stress_dt(0.1, 1e-3, 1e9, c) - 0.1 * sqrt(1e-3 / 1e9)) < 1e-15); /* acceleration-bound */
+}
+
+static void test_mu(void **st)
+{
+    (void)st;
+    mat_params m = table1();
+    assert_true(fabs(stress_kmu(0.382) - 3 * 0.382 / sqrt(9 + 12 * 0.382 * 0.382)) < 1e-15);
+    assert_true(stress_mu(&m, 0, 1000, 3.75e-4) == m.mu_s);               /* no shear: mu_s */
+    assert_true(fabs(stress_mu(&m, 1e9, 1000, 3.75e-4) - m.mu_d) < 1e-5); /* fast shear: mu_d */
+    double prev = m.mu_s;
+    for (double g = 0.01; g < 1000; g *= 3) { /* monotone in the shear rate */
+        double mu = stress_mu(&m, g, 1000, 3.75e-4);
+        assert_true(mu > prev && mu < m.mu_d);
+        prev = mu;
+    }
+    double p0 = stress_mu(&m, 1.0, 0, 3.75e-4); /* free surface: finite */
+    assert_true(isfinite(p0) && p0 > m.mu_s && p0 < m.mu_d);
+    /* far from the regularization (gdot >> lambda), (2.14) is (2.13) with
+     * I = gdot d / sqrt(p / rho_s) */
+    double g = 5, p = 800, d = 3.75e-4, I = g * d / sqrt(p / m.rho_s);
+    double mu13 = m.mu_s + (m.mu_d - m.mu_s) / (m.I0 / I + 1);
+    assert_true(fabs(stress_mu(&m, g, p, d) - mu13) < 1e-6);
+}
+
+static void test_return_map(void **st)
+{
+    (void)st;
+    real k = stress_kmu(0.5);
+    real in[6] = {-1000, -1200, -1100, 50, 0, 20}; /* inside the cone */
+    real s[6];
+    for (int c = 0; c < 6; ++c) s[c] = in[c];
+    assert_int_equal(stress_return_map(s, k), 0);
+    for (int c = 0; c < 6; ++c) assert_true(s[c] == in[c]);
+    real out[6] = {-1000, -3000, -500, 900, 100, -300}; /* far outside */
+    for (int c = 0; c < 6; ++c) s[c] = out[c];
+    real p = stress_pressure(out), tau = sqrt(stress_J2(out));
+    assert_true(tau > k * p);
+    assert_int_equal(stress_return_map(s, k), 1);
+    assert_true(fabs(stress_pressure(s) - p) < 1e-9 * p);          /* pressure kept */
+    assert_true(fabs(sqrt(stress_J2(s)) - k * p) < 1e-9 * k * p);   /* on the cone */
+    assert_true(fabs(s[3] / out[3] - s[5] / out[5]) < 1e-12);       /* same deviator direction */
+    real ten[6] = {100, -20, 10, 5, 0, 0}; /* mean tension: apex */
+    assert_int_equal(stress_return_map(ten, k), 2);
+    for (int c = 0; c < 6; ++c) assert_true(ten[c] == 0);
+}
+
+static void test_elastic_rate(void **st)
+{
+    (void)st;
+    mat_params m = table1();
+    real s[6] = {-1000, -3000, -500, 900, 100, -300}, zero[6] = {0}, w[3] = {0.7, -0.2, 0.4}, r[6];
+    stress_rate_elastic(s, zero, w, m.G, m.K, r); /* spin only: p and J2 unchanged */
+    real p = stress_pressure(s), dd[3] = {s[0] + p, s[1] + p, s[2] + p};
+    double sdot = dd[0] * r[0] + dd[1] * r[1] + dd[2] * r[2] + 2 * (s[3] * r[3] + s[4] * r[4] + s[5] * r[5]);
+    assert_true(fabs(r[0] + r[1] + r[2]) < 1e-9 && fabs(sdot) < 1e-6);
+    real comp[6] = {-1e-3, -1e-3, -1e-3, 0, 0, 0}, nw[3] = {0, 0, 0}; /* isotropic compression */
+    stress_rate_elastic(zero, comp, nw, m.G, m.K, r);
+    assert_true(fabs(stress_pressure(r) - m.K * 3e-3) < 1e-6 && fabs(r[0] - r[1]) < 1e-9);
+    real shear[6] = {0, 0, 0, 0.5, 0, 0}; /* simple shear, gdot = 1 */
+    stress_rate_elastic(zero, shear, nw, m.G, m.K, r);
+    assert_true(fabs(r[3] - m.G) < 1e-6 && fabs(stress_pressure(r)) < 1e-9);
+    assert_true(fabs(stress_shear_rate(shear) - 1) < 1e-12);
+}
+
+static void test_pair_terms(void **st)
+{
+    (void)st;
+    real si[6] = {-900, -1500, -1000, 200, 0, 30}, sj[6] = {-1200, -700, -800, -50, 10, 0};
+    real xij[3] = {0.3e-3, -0.2e-3, 0}, uij[3] = {-0.01, 0.02, 0}; /* approaching */
+    real h = 0.75e-3, alpha = kernel_alpha(2, h), r = sqrt(xij[0] * xij[0] + xij[1] * xij[1]);
+    real g[3] = {kernel_f(r, h, alpha) * xij[0], kernel_f(r, h, alpha) * xij[1], 0};
+    real gm[3] = {-g[0], -g[1], 0}, xji[3] = {-xij[0], -xij[1], 0}, uji[3] = {-uij[0], -uij[1], 0};
+    real Pij = mom_av(0.1, 100, h, 1500, 1510, uij, xij), Pji = mom_av(0.1, 100, h, 1510, 1500, uji, xji);
+    assert_true(Pij < 0 && Pij == Pji);
+    real ai[3] = {0, 0, 0}, aj[3] = {0, 0, 0}, mi = 2e-4, mj = 3e-4;
+    mom_accel_add(ai, mj, si, 1500, sj, 1510, Pij, g);
+    mom_accel_add(aj, mi, sj, 1510, si, 1500, Pji, gm);
+    for (int d = 0; d < 2; ++d) assert_true(fabs(mi * ai[d] + mj * aj[d]) < 1e-12 * fabs(mi * ai[d]));
+    real sep[3] = {-uij[0], -uij[1], 0};
+    assert_true(mom_av(0.1, 100, h, 1500, 1500, sep, xij) == 0); /* separating pairs: none */
+}
+
+/* Velocity gradient of u = A x on a 2D lattice (interior particle). */
+static void test_velgrad_lattice(void **st)
+{
+    (void)st;
+    double dr = 1e-3, h = 1.5 * dr, alpha = kernel_alpha(2, h);
+    real A[2][2] = {{0.3, 1.1}, {-0.4, -0.2}}, L[9] = {0};
+    for (int i = -3; i <= 3; ++i)
+        for (int j = -3; j <= 3; ++j) {
+            real xj[3] = {i * dr, j * dr, 0}, xij[3] = {-xj[0], -xj[1], 0};
+            real r = sqrt(xij[0] * xij[0] + xij[1] * xij[1]);
+            real f = kernel_f(r, h, alpha), g[3] = {f * xij[0], f * xij[1], 0};
+            real uij[3] = {-(A[0][0] * xj[0] + A[0][1] * xj[1]), -(A[1][0] * xj[0] + A[1][1] * xj[1]), 0};
+            mom_velgrad_add(L, dr * dr, uij, g);
+        }
+    for (int a = 0; a < 2; ++a)
+        for (int b = 0; b < 2; ++b) assert_true(fabs(L[3 * a + b] - A[a][b]) < 0.005 * 1.1);
+    real eps[6], w[3];
+    mom_strain_spin(L, eps, w);
+    assert_true(fabs(eps[3] - 0.5 * (1.1 - 0.4)) < 0.005 && fabs(w[0] - 0.5 * (1.1 + 0.4)) < 0.005);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_moduli),       cmocka_unit_test(test_mu),
+        cmocka_unit_test(test_return_map),   cmocka_unit_test(test_elastic_rate),
+        cmocka_unit_test(test_pair_terms),   cmocka_unit_test(test_velgrad_lattice)};
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
