@@ -1,0 +1,80 @@
+/* test_wall.c — dummy-wall extrapolation (paper eqs. 4.1–4.3) and the
+ * Shepard filter (3.12), ahead of the granular solver. References: a
+ * hydrostatic column (sigma_yy = -rho g (H - y), linear, so the extrapolated
+ * dummy stress must equal the column's stress at the dummy's depth exactly),
+ * the no-slip mirror condition (the dummy and material velocities average to
+ * the wall's), free slip (tangential velocity passes, normal is mirrored),
+ * and the Shepard filter reproducing a constant field. */
+#include "physics/kernel.h"
+#include "physics/wall.h"
+#include "testutil.h"
+
+static const double DR = 1e-3, H = 0.02, RHO = 1500, G = 9.81;
+
+/* Gather a dummy at (xd, yd) over a lattice column of material y in (0, H). */
+static wall_sums gather(double xd, double yd, const real u[3])
+{
+    wall_sums ws = {0, {0, 0, 0}, {0, 0, 0, 0, 0, 0}, {0, 0, 0}};
+    double h = 1.5 * DR, alpha = kernel_alpha(2, h), V = DR * DR;
+    real g[3] = {0, (real)-G, 0};
+    for (int i = -10; i <= 10; ++i)
+        for (int j = 0; j < (int)(H / DR); ++j) {
+            double x = (i + 0.5) * DR, y = (j + 0.5) * DR;
+            double r = hypot(xd - x, yd - y);
+            real W = kernel_w(r, h, alpha);
+            if (W == 0) continue;
+            real s[6] = {0, (real)(-RHO * G * (H - y)), 0, 0, 0, 0};
+            real rdm[3] = {(real)(xd - x), (real)(yd - y), 0};
+            wall_add(&ws, W, V, RHO * V, u, s, g, rdm);
+        }
+    return ws;
+}
+
+static void test_hydrostatic_dummy(void **st)
+{
+    (void)st;
+    real u[3] = {0, 0, 0};
+    for (int l = 0; l < 2; ++l) { /* layers whose support reaches material */
+        double yd = -(l + 0.5) * DR;
+        wall_sums ws = gather(0.3 * DR, yd, u);
+        real sd[6];
+        wall_stress(&ws, sd);
+        double exact = -RHO * G * (H - yd);
+        assert_true(ws.w > 0 && fabs(sd[1] - exact) < 1e-9 * fabs(exact));
+        assert_true(sd[0] == 0 && sd[3] == 0);
+    }
+    wall_sums far = gather(0, -2.5 * DR, u); /* 3rd layer: 3 dr = 2h away, no material */
+    real sd[6];
+    wall_stress(&far, sd);
+    assert_true(far.w == 0 && sd[1] == 0); /* no division by zero */
+}
+
+static void test_velocity(void **st)
+{
+    (void)st;
+    real u[3] = {0.2, -0.05, 0}, uw[3] = {0.1, 0, 0}, n[3] = {0, 1, 0}, ud[3];
+    wall_sums ws = gather(0, -0.5 * DR, u);
+    wall_velocity(&ws, uw, n, 0, ud); /* no slip: (u_d + u_avg)/2 = u_w */
+    for (int a = 0; a < 2; ++a) assert_true(fabs(0.5 * (ud[a] + u[a]) - uw[a]) < 1e-12);
+    wall_velocity(&ws, uw, n, 1, ud); /* free slip */
+    assert_true(fabs(ud[0] - u[0]) < 1e-12);           /* tangential passes */
+    assert_true(fabs(0.5 * (ud[1] + u[1]) - 0) < 1e-12); /* normal mirrored about u_w.n = 0 */
+}
+
+static void test_shepard_constant(void **st)
+{
+    (void)st;
+    double h = 1.5 * DR, alpha = kernel_alpha(2, h);
+    real acc[6] = {0}, ws = 0, s[6] = {-3, -5, -4, 1, 0, 0.5};
+    for (int i = -3; i <= 3; ++i)
+        for (int j = -1; j <= 3; ++j) /* a cut support, as at a wall */
+            shepard_add(acc, &ws, kernel_w(hypot(i * DR, j * DR), h, alpha), s);
+    for (int c = 0; c < 6; ++c) assert_true(fabs(acc[c] / ws - s[c]) < 1e-12);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_hydrostatic_dummy), cmocka_unit_test(test_velocity),
+                                       cmocka_unit_test(test_shepard_constant)};
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
