@@ -173,66 +173,76 @@ def _table(rows):
     return "\n".join(lines)
 
 
-def _charts(rows, docs):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-    ok = [r for r in rows if r["rc"] == 0]
-    colors = {"paper": "C0", "direct": "C1", "conservative": "C2"}
-    marks = {"sym_const": "o", "asym_const": "s", "sym_shear": "^", "asym_shear": "v"}
-    # convergence
+COLORS = {"paper": "C0", "direct": "C1", "conservative": "C2"}
+MARKS = {"sym_const": "o", "asym_const": "s", "sym_shear": "^", "asym_shear": "v"}
+
+
+def _save(fig, ax, xlabel, title, path):
+    """Common labels, legend and file output of the study's charts."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("MAE of C at t/T = 80")
+    ax.legend(fontsize=6)
+    ax.set_title(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+
+
+def _chart_convergence(plt, np, ok, path):
     fig, ax = plt.subplots(figsize=(6, 4.5))
     for (case, scheme) in sorted({(r["case"], r["scheme"]) for r in ok}):
         rr = sorted([r for r in ok if r["case"] == case and r["scheme"] == scheme], key=lambda r: r["res"])
-        ax.loglog([r["res"] for r in rr], [r["errors"][80]["mae"] for r in rr], marker=marks[case],
-                  color=colors[scheme], label=f"{scheme}, {case}")
+        ax.loglog([r["res"] for r in rr], [r["errors"][80]["mae"] for r in rr], marker=MARKS[case],
+                  color=COLORS[scheme], label=f"{scheme}, {case}")
     x = np.array([0.005, 0.04])
     ax.loglog(x, 0.05 * (x / 0.04) ** 1.25, "k:", label="order 1.25 (paper)")
     ax.loglog(x, 0.05 * (x / 0.04) ** 2, "k--", label="order 2")
-    ax.set_xlabel("dr / H")
-    ax.set_ylabel("MAE of C at t/T = 80")
-    ax.legend(fontsize=6)
-    ax.set_title("Shear box: convergence to the 1D FV reference")
-    fig.tight_layout()
-    fig.savefig(os.path.join(docs, "shearbox_convergence.png"), dpi=130)
-    # speed vs accuracy
+    _save(fig, ax, "dr / H", "Shear box: convergence to the 1D FV reference", path)
+
+
+def _chart_speed(plt, ok, path):
     fig, ax = plt.subplots(figsize=(6, 4.5))
     for r in ok:
-        ax.loglog(r["core_s"], r["errors"][80]["mae"], marker=marks[r["case"]], color=colors[r["scheme"]],
+        ax.loglog(r["core_s"], r["errors"][80]["mae"], marker=MARKS[r["case"]], color=COLORS[r["scheme"]],
                   linestyle="none")
         ax.annotate(f"{r['res']:g}", (r["core_s"], r["errors"][80]["mae"]), fontsize=5)
-    for s, c in colors.items():
+    for s, c in COLORS.items():
         ax.plot([], [], color=c, marker="o", linestyle="none", label=s)
-    for k, m in marks.items():
+    for k, m in MARKS.items():
         ax.plot([], [], color="gray", marker=m, linestyle="none", label=k)
-    ax.set_xlabel("cost of the run to t/T = 80: wall s x OpenMP threads")
-    ax.set_ylabel("MAE of C at t/T = 80")
-    ax.legend(fontsize=6)
-    ax.set_title("Speed against accuracy (labels: dr/H)")
-    fig.tight_layout()
-    fig.savefig(os.path.join(docs, "shearbox_speed_accuracy.png"), dpi=130)
-    # drift
+    _save(fig, ax, "cost of the run to t/T = 80: wall s x OpenMP threads",
+          "Speed against accuracy (labels: dr/H)", path)
+
+
+def _chart_drift(plt, np, ok, path):
     fig, axs = plt.subplots(1, 2, figsize=(10, 4))
     for r in ok:
         if r["case"] != "sym_const" or r["diag"] is None:
             continue
         t = np.asarray(r["diag"]["time"], float) / T
         dft = np.abs(np.asarray(r["diag"]["small_volume_drift"], float)) + 1e-17
-        axs[0].semilogy(t, dft, color=colors[r["scheme"]], alpha=0.4 + 0.15 * np.log2(0.04 / r["res"]),
+        axs[0].semilogy(t, dft, color=COLORS[r["scheme"]], alpha=min(1.0, 0.4 + 0.15 * np.log2(0.04 / r["res"])),
                         label=f"{r['scheme']} dr/H={r['res']:g}")
     axs[0].set_xlabel("t / T")
     axs[0].set_ylabel("|relative drift of sum C_i V_i|")
     axs[0].legend(fontsize=6)
     axs[0].set_title("Conservation, sym_const")
     for r in ok:
-        axs[1].loglog(r["drift_max"] + 1e-17, r["errors"][80]["mae"], marker=marks[r["case"]],
-                      color=colors[r["scheme"]], linestyle="none")
-    axs[1].set_xlabel("max |drift| over the run")
-    axs[1].set_ylabel("MAE at t/T = 80")
-    axs[1].set_title("Accuracy against drift (all runs)")
-    fig.tight_layout()
-    fig.savefig(os.path.join(docs, "shearbox_drift.png"), dpi=130)
+        axs[1].loglog(r["drift_max"] + 1e-17, r["errors"][80]["mae"], marker=MARKS[r["case"]],
+                      color=COLORS[r["scheme"]], linestyle="none")
+    for s, c in COLORS.items():
+        axs[1].plot([], [], color=c, marker="o", linestyle="none", label=s)
+    _save(fig, axs[1], "max |drift| over the run", "Accuracy against drift (all runs)", path)
+
+
+def _charts(rows, docs):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    ok = [r for r in rows if r["rc"] == 0]
+    _chart_convergence(plt, np, ok, os.path.join(docs, "shearbox_convergence.png"))
+    _chart_speed(plt, ok, os.path.join(docs, "shearbox_speed_accuracy.png"))
+    _chart_drift(plt, np, ok, os.path.join(docs, "shearbox_drift.png"))
 
 
 def cmd_analyze(a):
