@@ -227,6 +227,7 @@ static void io_write_header(hid_t file, int dim, double time, long step, long lo
     io_attr_scalar(g, "NumPart_Total", H5T_STD_I64LE, H5T_NATIVE_INT64, &ntot64);
     io_attr_string(g, "Code", "sphseg");
     io_attr_string(g, "Version", code_version);
+    io_attr_string(g, "Precision", sizeof(real) == sizeof(float) ? "single" : "double");
     io_attr_string(g, "Scene", scene_text);
     H5CHECK(H5Gclose(g));
 }

@@ -36,10 +36,10 @@ static void test_square(void **st)
         else if (depth * DR < 2 * HF * DR - DR) assert_int_equal(p.bclass[i], BC_FREE_VICINITY);
         else assert_int_equal(p.bclass[i], BC_INTERIOR);
         if (edge && ci == 0 && cj > 2 && cj < N - 3) { /* left edge: normal +x */
-            assert_true(fabs(p.nrm[0][i] - 1) < 1e-9 && fabs(p.nrm[1][i]) < 1e-9);
+            assert_true(fabs(p.nrm[0][i] - 1) < RT(1e-9) && fabs(p.nrm[1][i]) < RT(1e-9));
         }
         if (edge && ci == N - 1 && cj == N - 1) { /* corner: along the diagonal, inward */
-            assert_true(fabs(p.nrm[0][i] + 0.70710678118654752) < 1e-9 && fabs(p.nrm[1][i] + 0.70710678118654752) < 1e-9);
+            assert_true(fabs(p.nrm[0][i] + 0.70710678118654752) < RT(1e-9) && fabs(p.nrm[1][i] + 0.70710678118654752) < RT(1e-9));
         }
         if (p.bclass[i] == BC_FREE_VICINITY && ci == 1 && cj > 3 && cj < N - 4) {
             assert_true(p.nrm[0][i] > 0.99); /* vicinity normal (4.17) points inward too */
@@ -100,14 +100,14 @@ static void test_walls(void **st)
         if (cj == N - 1) { /* free surface up to the walls, normal straight down */
             assert_int_equal(p.bclass[i], BC_FREE_SURFACE);
             assert_true(p.nrm[1][i] < -0.9);
-            if (ci >= 3 && ci <= N - 4) assert_true(fabs(p.nrm[1][i] + 1) < 1e-9);
+            if (ci >= 3 && ci <= N - 4) assert_true(fabs(p.nrm[1][i] + 1) < RT(1e-9));
         }
         else if (cj == 0 && ci > 3 && ci < N - 4) {
             assert_int_equal(p.bclass[i], BC_WALL_SURFACE);
-            assert_true(fabs(p.nrm[1][i] - 1) < 1e-9 && fabs(p.nrm[0][i]) < 1e-9);
+            assert_true(fabs(p.nrm[1][i] - 1) < RT(1e-9) && fabs(p.nrm[0][i]) < RT(1e-9));
         } else if (cj < N - 3 && near_wall) {
             assert_true(p.bclass[i] == BC_WALL_SURFACE || p.bclass[i] == BC_WALL_VICINITY);
-            if (cj > 3 && ci == 0) assert_true(fabs(p.nrm[0][i] - 1) < 1e-9); /* left wall: +x */
+            if (cj > 3 && ci == 0) assert_true(fabs(p.nrm[0][i] - 1) < RT(1e-9)); /* left wall: +x */
         } else if (cj < N - 3) {
             assert_int_equal(p.bclass[i], BC_INTERIOR);
         }

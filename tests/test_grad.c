@@ -54,7 +54,7 @@ static void test_c1_linear(void **st)
         double c1[2], sd[2];
         grads_at(&p, &g.view, &k, i, ghat, c1, sd);
         for (int f = 0; f < 2; ++f) {
-            assert_true(fabs(c1[f] - exact[f]) < 1e-9 * fabs(exact[f]));
+            assert_true(fabs(c1[f] - exact[f]) < (sizeof(real) == sizeof(float) ? 2e-3 : 1e-9) * fabs(exact[f])); /* single: cancellation in the solve */
             worst_std = fmax(worst_std, fabs(sd[f] - exact[f]) / fabs(exact[f]));
         }
         nb++;

@@ -40,7 +40,7 @@ static void test_hydrostatic_dummy(void **st)
         real sd[6];
         wall_stress(&ws, sd);
         double exact = -RHO * G * (H - yd);
-        assert_true(ws.w > 0 && fabs(sd[1] - exact) < 1e-9 * fabs(exact));
+        assert_true(ws.w > 0 && fabs(sd[1] - exact) < RT(1e-9) * fabs(exact));
         assert_true(sd[0] == 0 && sd[3] == 0);
     }
     wall_sums far = gather(0, -2.5 * DR, u); /* 3rd layer: 3 dr = 2h away, no material */
@@ -55,10 +55,10 @@ static void test_velocity(void **st)
     real u[3] = {0.2, -0.05, 0}, uw[3] = {0.1, 0, 0}, n[3] = {0, 1, 0}, ud[3];
     wall_sums ws = gather(0, -0.5 * DR, u);
     wall_velocity(&ws, uw, n, 0, ud); /* no slip: (u_d + u_avg)/2 = u_w */
-    for (int a = 0; a < 2; ++a) assert_true(fabs(0.5 * (ud[a] + u[a]) - uw[a]) < 1e-12);
+    for (int a = 0; a < 2; ++a) assert_true(fabs(0.5 * (ud[a] + u[a]) - uw[a]) < RT(1e-12));
     wall_velocity(&ws, uw, n, 1, ud); /* free slip */
-    assert_true(fabs(ud[0] - u[0]) < 1e-12);           /* tangential passes */
-    assert_true(fabs(0.5 * (ud[1] + u[1]) - 0) < 1e-12); /* normal mirrored about u_w.n = 0 */
+    assert_true(fabs(ud[0] - u[0]) < RT(1e-12));           /* tangential passes */
+    assert_true(fabs(0.5 * (ud[1] + u[1]) - 0) < RT(1e-12)); /* normal mirrored about u_w.n = 0 */
 }
 
 static void test_shepard_constant(void **st)
@@ -69,7 +69,7 @@ static void test_shepard_constant(void **st)
     for (int i = -3; i <= 3; ++i)
         for (int j = -1; j <= 3; ++j) /* a cut support, as at a wall */
             shepard_add(acc, &ws, kernel_w(hypot(i * DR, j * DR), h, alpha), s);
-    for (int c = 0; c < 6; ++c) assert_true(fabs(acc[c] / ws - s[c]) < 1e-12);
+    for (int c = 0; c < 6; ++c) assert_true(fabs(acc[c] / ws - s[c]) < RT(1e-12));
 }
 
 int main(void)

@@ -10,6 +10,14 @@
 #include "nbr.h"
 #include "particles.h"
 
+/* Tolerances for both precisions. RT(x): a check that holds to round-off,
+ * with x chosen for double precision; in single precision it becomes
+ * max(x, 2e-5), about 170 float epsilons. FD_STEP: the step of a central
+ * finite-difference check (1e-6 in double, 1e-3 in single, where a smaller
+ * step drowns in round-off). */
+#define RT(x) (sizeof(real) == sizeof(float) && (x) < 2e-5 ? 2e-5 : (x))
+#define FD_STEP (sizeof(real) == sizeof(float) ? 1e-3 : 1e-6)
+
 /* Append one particle. */
 static inline void tu_put(particles_t *p, double x, double y, double z, int kind, double vol)
 {

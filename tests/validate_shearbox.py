@@ -6,7 +6,7 @@ profile C(z) (row means) is compared at t/T = 20, 40, 80 by MAE and RMSE
 (eqs. 5.3-5.4). Tolerances, from the full study (docs/shearbox.md):
   - conservative scheme, all four cases (flux x V/D model) at dr/H = 0.04:
     MAE <= 0.03 (measured 0.019-0.024) and drift of sum C_i V_i <= 1e-12
-    (measured 2e-15);
+    (measured 2e-15; single precision: <= 1e-5, measured 2e-7 to 8e-7);
   - its observed order from dr/H = 0.04 to 0.02, sym_const, t/T = 80: >= 2
     (measured 2.8);
   - direct form (2.5), sym_const at 0.04: MAE <= 0.06 (measured <= 0.050);
@@ -25,7 +25,9 @@ import study  # noqa: E402
 
 MAE_CONS, MAE_DIRECT = 0.03, 0.06
 ORDER_MIN = 2.0
-DRIFT_CONSERVATIVE = 1e-12
+# round-off of sum C_i V_i over ~2e4 steps: measured 2e-15 in double,
+# 2e-7 to 8e-7 in single precision (the snapshot header says which)
+DRIFT_CONSERVATIVE = {"double": 1e-12, "single": 1e-5}
 
 
 def check(ok, msg):
@@ -42,7 +44,8 @@ def conservative_cases(sphseg, work):
         for tau, e in r["errors"].items():
             ok &= check(e["mae"] <= MAE_CONS, f"{case:10s} conservative 0.04 t/T={tau:2d} MAE={e['mae']:.4f} "
                         f"RMSE={e['rmse']:.4f} ({wall:.1f} s)")
-        ok &= check(r["drift_max"] <= DRIFT_CONSERVATIVE, f"{case:10s} drift {r['drift_max']:.2e}")
+        prec = snap.read_snapshot(snap.list_snapshots(out)[0]).get("Precision", "double")
+        ok &= check(r["drift_max"] <= DRIFT_CONSERVATIVE[prec], f"{case:10s} drift {r['drift_max']:.2e} ({prec})")
         if case == "sym_const":
             coarse = r["errors"][80]["mae"]
     out = os.path.join(work, "sym_const_conservative_020")
