@@ -49,8 +49,8 @@ double integrate_dt(const sim_t *s)
         if (p->kind[i] != KIND_MATERIAL) continue;
         double C = p->C[i];
         double D = seg_D(sp, (real)C, (real)gmax), a = seg_wave_speed(sp, (real)C, (real)gmax);
-        double u = p->X0[1][i] > 0 ? sc->kinematics.gamma0 * s->kin.omega * p->X0[1][i] : 0;
-        if (s->kin.type == 0) u = 0;
+        real X0[3] = {p->X0[0][i], p->X0[1][i], p->X0[2][i]};
+        double u = kin_max_speed(&s->kin, X0);
         dmax = D > dmax ? D : dmax;
         amax = a > amax ? a : amax;
         umax = u > umax ? u : umax;

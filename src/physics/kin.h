@@ -25,11 +25,17 @@ HD_INLINE void kin_state(const kin_params *kp, const real X0[3], double t, real 
     v[0] = v[1] = v[2] = 0;
     *gdot = 0;
     if (kp->type != 1) return;
-    double y = X0[1] > 0 ? (double)X0[1] : 0.0;
+    double y = X0[1] > 0 ? (double)X0[1] : 0.0; /* the base stays put */
     double rate = kp->gamma0 * kp->omega * cos(kp->omega * t);
     x[0] = (real)((double)X0[0] + kp->gamma0 * sin(kp->omega * t) * y);
     v[0] = (real)(rate * y);
     *gdot = (real)fabs(rate);
+}
+
+/* Largest speed over a cycle of the particle at X0, m/s (time-step bound). */
+HD_INLINE double kin_max_speed(const kin_params *kp, const real X0[3])
+{
+    return kp->type == 1 && X0[1] > 0 ? kp->gamma0 * kp->omega * (double)X0[1] : 0.0;
 }
 
 /* Largest shear rate over a cycle, 1/s (time-step bound, shear-rate model). */
