@@ -11,20 +11,26 @@
  * follow the prescribed kinematics exactly at t^{n+1/2} and t^{n+1}. The
  * HCSR boundary classification runs once per step, at t^{n+1} for the next
  * step's predictor; the corrector reuses it (particles move less than h per
- * step). On return positions, velocities and classes are those at t^{n+1}. */
+ * step). On return positions, velocities and classes are those at t^{n+1}.
+ * With computed flow, x, u and sigma take the same two stages (sigma
+ * returned to the yield cone after each), and every Flow:shepard_every
+ * steps the Shepard filter (3.12) smooths the stress at t^{n+1}. */
 void integrate_step(sim_t *s, double dt)
 {
     const struct backend *be = s->be; /* the state is prepared at t (run start, last step) */
-    be->conc_rates(s);
+    s->flow.damping = (real)(s->t < s->sc->flow.damping_until ? s->sc->flow.damping : 0.0);
+    be->rates(s);
     be->save_start(s);
     be->advance(s, 0.5 * dt);
     be->prepare(s, s->t + 0.5 * dt, 0);
-    be->conc_rates(s);
+    be->rates(s);
     be->advance(s, dt);
     be->prepare(s, s->t + dt, 1);
     s->t += dt;
     s->step++;
     s->dt = dt;
+    unsigned every = s->sc->flow.shepard_every;
+    if (s->flow_on && every > 0 && s->step % (long)every == 0) be->filter(s);
 }
 
 /* Time-step bounds (derivation in docs/numerics.md):
@@ -37,28 +43,41 @@ void integrate_step(sim_t *s, double dt)
  *               speed dQ/dC = V F' + F dV/dC must cross less than h per step);
  *  kinematics:  dt <= cfl_kinematic h / |u|_max (particles move less than a
  *               fraction of h per step, so that the neighbour geometry is
- *               resolved in time). */
+ *               resolved in time);
+ *  flow:        (3.19), dt <= chi_CFL min(sqrt(h / a_max), h / c_s), with
+ *               the elastic sound speed c_s and the largest acceleration of
+ *               the last rate evaluation (0 at the start). */
 double integrate_dt(const sim_t *s)
 {
     const struct scene *sc = s->sc;
     const particles_t *p = &s->p;
     const seg_params *sp = &s->seg.sp;
-    double gmax = kin_max_shear_rate(&s->kin), h = s->seg.k.h;
+    double gkin = kin_max_shear_rate(&s->kin), h = s->seg.k.h;
     double dmax = 0, amax = 0, umax = 0;
     for (size_t i = 0; i < p->n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
+        double u, gmax = gkin;
+        if (s->flow_on) {
+            gmax = p->gdot[i];
+            u = sqrt((double)p->v[0][i] * p->v[0][i] + (double)p->v[1][i] * p->v[1][i] +
+                     (double)p->v[2][i] * p->v[2][i]);
+        } else {
+            real X0[3] = {p->X0[0][i], p->X0[1][i], p->X0[2][i]};
+            u = kin_max_speed(&s->kin, X0);
+        }
+        umax = u > umax ? u : umax;
+        if (!s->seg_on) continue;
         double C = p->C[i];
         double D = seg_D(sp, (real)C, (real)gmax), a = seg_wave_speed(sp, (real)C, (real)gmax);
-        real X0[3] = {p->X0[0][i], p->X0[1][i], p->X0[2][i]};
-        double u = kin_max_speed(&s->kin, X0);
         dmax = D > dmax ? D : dmax;
         amax = a > amax ? a : amax;
-        umax = u > umax ? u : umax;
     }
     dmax = comm_max(dmax), amax = comm_max(amax), umax = comm_max(umax);
     double dt = sc->run.dt_max;
     if (dmax > 0) dt = fmin(dt, sc->run.cfl_diffusion * h * h / dmax);
     if (amax > 0) dt = fmin(dt, sc->run.cfl_segregation * h / amax);
     if (umax > 0) dt = fmin(dt, sc->run.cfl_kinematic * h / umax);
+    if (s->flow_on) /* (3.19); amax from the last rate evaluation */
+        dt = fmin(dt, stress_dt((real)sc->run.cfl_flow, (real)h, (real)comm_max(s->amax), s->flow.cs));
     return dt;
 }

@@ -21,6 +21,7 @@ IO_ARRAY(io_x, p->x[c])
 IO_ARRAY(io_v, p->v[c])
 IO_ARRAY(io_c, p->C)
 IO_ARRAY(io_gdot, p->gdot)
+IO_ARRAY(io_sig, p->sig[c])
 IO_ARRAY(io_vol, p->vol)
 IO_ARRAY(io_nrm, p->nrm[c])
 IO_ARRAY(io_psi, p->psi)
@@ -35,6 +36,10 @@ const struct io_field io_fields[] = {
     {"Concentration", IO_REAL, 1, "-",
      "Small-grain volume concentration C (eq. 2.10); meaningful for Kind = 0 (material) only", io_c},
     {"ShearRate", IO_REAL, 1, "1/s", "Shear-rate magnitude gdot", io_gdot},
+    {"Stress", IO_REAL, 6, "Pa",
+     "Cauchy stress, tension positive, (xx, yy, zz, xy, xz, yz); 2D is plane strain (zz from the "
+     "model); dummies carry the extrapolated wall stress (eq. 4.3); zero with prescribed velocity",
+     io_sig},
     {"Volume", IO_REAL, 1, "m^d", "Particle volume m_i/rho_i (m^2 per unit depth in 2D, m^3 in 3D)", io_vol},
     {"Normal", IO_REAL, 3, "-", "HCSR boundary normal, pointing into the material (paper section 4.2)",
      io_nrm},
@@ -199,7 +204,9 @@ static void io_write_field(hid_t grp, hid_t dxpl, const struct io_field *f, cons
 static void io_write_particles(hid_t file, const particles_t *p, long long ntot, long long offset)
 {
     size_t *order = io_order_by_id(p);
-    void *buf = malloc((p->n > 0 ? p->n : 1) * 3 * sizeof(double)); /* largest row: 3 x 8 B */
+    int ncmax = 1;
+    for (int k = 0; k < io_nfields; ++k) ncmax = io_fields[k].ncomp > ncmax ? io_fields[k].ncomp : ncmax;
+    void *buf = malloc((p->n > 0 ? p->n : 1) * (size_t)ncmax * sizeof(double)); /* largest row */
     if (!buf) error_exit(1, "out of memory gathering %zu particles for output", p->n);
     hid_t grp, dxpl;
     H5CHECK(grp = H5Gcreate2(file, "Particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
@@ -297,7 +304,7 @@ static void io_xdmf_grid(FILE *fp, int index, double time, long long n)
             fprintf(fp, "        <Geometry GeometryType=\"XYZ\">\n");
         else
             fprintf(fp, "        <Attribute Name=\"%s\" AttributeType=\"%s\" Center=\"Node\">\n", f->name,
-                    f->ncomp > 1 ? "Vector" : "Scalar");
+                    f->ncomp == 6 ? "Tensor6" : f->ncomp > 1 ? "Vector" : "Scalar");
         io_xdmf_item(fp, f, h5name, n);
         fprintf(fp, geom ? "        </Geometry>\n" : "        </Attribute>\n");
     }

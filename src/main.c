@@ -6,6 +6,7 @@
 #include <errno.h>
 #include <math.h>
 #include <mpi.h>
+#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -103,20 +104,64 @@ static void write_snapshot(outputs *o, sim_t *s)
     if (comm_rank() == 0) io_write_xdmf(o->dir, o->n, o->times, o->npart, s->p.dim);
 }
 
-/* A blow-up stops the run with exit status 3 (DESIGN.md "Errors"): a
- * non-finite concentration, or one far outside [0, 1] (below -1 or above 2;
- * small overshoots of an explicit scheme are tolerated and show in
- * diagnostics.csv as C_min, C_max). The last snapshot written stays intact. */
+/* A blow-up stops the run with exit status 3 (DESIGN.md "Errors"), naming
+ * the step, time and particle; the last snapshot written stays intact:
+ *  - a non-finite concentration, or one far outside [0, 1] (below -1 or
+ *    above 2; small overshoots of an explicit scheme are tolerated and show
+ *    in diagnostics.csv as C_min, C_max);
+ *  - computed flow: a non-finite position, velocity or stress; a particle
+ *    outside its container (beyond a wall by more than h); a particle that
+ *    moved more than h in one step (the CFL condition violated: the
+ *    neighbour geometry was not resolved in time). */
+static void blowup(const sim_t *s, diag *d, size_t i, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static void blowup(const sim_t *s, diag *d, size_t i, const char *fmt, ...)
+{
+    const particles_t *p = &s->p;
+    char why[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(why, sizeof why, fmt, ap);
+    va_end(ap);
+    diag_close(d);
+    error_exit(EXIT_NUMERICAL, "step %ld, t = %.9g s: particle %lld at (%.6g, %.6g) m %s (dt = %.3g s)", s->step,
+               s->t, (long long)p->id[i], (double)p->x[0][i], (double)p->x[1][i], why, s->dt);
+}
+
+static int outside(const sim_t *s, size_t i)
+{
+    const particles_t *p = &s->p;
+    const wall_geom *w = &s->flow.w;
+    double h = s->seg.k.h, x = p->x[0][i], y = p->x[1][i];
+    if (w->type == WALL_DRUM) return hypot(x - w->centre[0], y - w->centre[1]) > w->radius + h;
+    return x < -h || x > w->width + h || y < -h;
+}
+
 static void check_finite(const sim_t *s, diag *d)
 {
     const particles_t *p = &s->p;
+    const double h = s->seg.k.h;
     for (size_t i = 0; i < p->n; ++i) {
+        if (p->kind[i] != KIND_MATERIAL) continue;
         double C = p->C[i];
-        if (p->kind[i] != KIND_MATERIAL || (isfinite(C) && C >= -1.0 && C <= 2.0)) continue;
-        diag_close(d);
-        error_exit(EXIT_NUMERICAL, "step %ld, t = %.9g s: particle %lld at (%.6g, %.6g) m has concentration %g: "
-                   "the scheme went unstable (dt = %.3g s; see docs/shearbox.md for where each scheme is stable)",
-                   s->step, s->t, (long long)p->id[i], (double)p->x[0][i], (double)p->x[1][i], C, s->dt);
+        if (s->seg_on && !(isfinite(C) && C >= -1.0 && C <= 2.0))
+            blowup(s, d, i, "has concentration %g: the scheme went unstable (see docs/shearbox.md for where "
+                   "each scheme is stable)", C);
+        if (!s->flow_on) continue;
+        double sum = 0, mv = 0;
+        for (int c = 0; c < 3; ++c) {
+            sum += (double)p->x[c][i] + (double)p->v[c][i];
+            double dx = (double)p->x[c][i] - (double)p->x_n[c][i];
+            mv += dx * dx;
+        }
+        for (int q = 0; q < 6; ++q) sum += (double)p->sig[q][i];
+        if (!isfinite(sum))
+            blowup(s, d, i, "has a non-finite position, velocity or stress: the flow went unstable "
+                   "(see docs/granular.md, stability limits)");
+        if (outside(s, i)) blowup(s, d, i, "left its container through a wall");
+        if (mv > h * h)
+            blowup(s, d, i, "moved %.3g m > h = %.3g m in one step: CFL condition violated (lower Run:cfl_flow)",
+                   sqrt(mv), h);
     }
 }
 
@@ -183,11 +228,15 @@ int main(int argc, char **argv)
     snprintf(used, sizeof used, "%s/used_params.yml", o.dir);
     if (comm_rank() == 0 && scene_write_used(&sc, used) != 0) error_exit(1, "cannot write %s", used);
     o.text = scene_used_text(&sc);
-    message("sphseg %s: %s, %zu material + %zu dummy particles, h = %.4g m, scheme %s, %d rank(s), output %s",
-            SPHSEG_VERSION, sc.path, s.n_material, s.p.n - s.n_material, (double)s.seg.k.h,
-            sc.segregation.scheme == SEG_SCHEME_CONSERVATIVE ? "conservative"
-            : sc.segregation.scheme == SEG_SCHEME_DIRECT     ? "direct" : "paper",
-            comm_size(), o.dir);
+    const char *scheme = !s.seg_on ? "off"
+                         : sc.segregation.scheme == SEG_SCHEME_CONSERVATIVE ? "conservative"
+                         : sc.segregation.scheme == SEG_SCHEME_DIRECT       ? "direct" : "paper";
+    message("sphseg %s: %s, %zu material + %zu dummy particles, h = %.4g m, flow %s, segregation %s, "
+            "%d rank(s), output %s", SPHSEG_VERSION, sc.path, s.n_material, s.p.n - s.n_material,
+            (double)s.seg.k.h, s.flow_on ? "computed" : "prescribed", scheme, comm_size(), o.dir);
+    if (s.flow_on)
+        message("flow: c_s = %.4g m/s, h/c_s = %.3g s, Shepard filter every %u steps, alpha_av = %g",
+                (double)s.flow.cs, (double)(s.seg.k.h / s.flow.cs), sc.flow.shepard_every, sc.flow.alpha_av);
     run(&s, &o);
     s.be->finish(&s);
     part_free(&s.p);

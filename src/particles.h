@@ -36,6 +36,14 @@ typedef struct particles {
     real *segV;   /* segregation velocity V(C, gdot), m/s, per rate evaluation */
     real *segQ;   /* segregation flux Q = V F(C), m/s (eq. 2.6) */
     real *segD;   /* diffusivity D(C, gdot), m^2/s */
+    real *sig[6];   /* Cauchy stress, Pa, tension positive: xx, yy, zz, xy, xz, yz
+                     * (material: integrated; dummy: extrapolated, eq. 4.3) */
+    real *sig_n[6]; /* stress at the start of the step */
+    real *dsig[6];  /* stress rate (Jaumann elastic trial rate, C1), Pa/s;
+                     * also the Shepard filter's scratch */
+    real *x_n[3];   /* position at the start of the step, m */
+    real *v_n[3];   /* velocity at the start of the step, m/s */
+    real *acc[3];   /* acceleration (3.9) with gravity, m/s^2 */
     real *L[6];   /* renormalisation (-sum_j V_j w_ij x_ij x_ij)^-1, symmetric:
                    * xx, yy, zz, xy, xz, yz (conservative scheme) */
     int64_t *id;  /* global particle ID */

@@ -40,8 +40,15 @@
     CYAML_FIELD_ENUM(#key, OPT | CYAML_FLAG_STRICT, struct st, key, strs, CYAML_ARRAY_LEN(strs))
 #define SEC(key, member, fields) CYAML_FIELD_MAPPING(key, OPT, struct scene, member, fields)
 
-static const cyaml_strval_t geom_types[] = {{"shearbox", GEOM_SHEARBOX}};
-static const cyaml_strval_t kin_types[] = {{"rest", KIN_REST}, {"oscillatory_shear", KIN_OSCILLATORY_SHEAR}};
+static const cyaml_strval_t geom_types[] = {
+    {"shearbox", GEOM_SHEARBOX}, {"column", GEOM_COLUMN}, {"drum", GEOM_DRUM}};
+static const cyaml_strval_t kin_types[] = {
+    {"rest", KIN_REST}, {"oscillatory_shear", KIN_OSCILLATORY_SHEAR}, {"computed", KIN_COMPUTED}};
+static const cyaml_strval_t slips[] = {{"no_slip", SLIP_NO}, {"free_slip", SLIP_FREE}};
+static const cyaml_strval_t rot_dirs[] = {{"clockwise", ROT_CLOCKWISE},
+                                          {"counterclockwise", ROT_COUNTERCLOCKWISE}};
+static const cyaml_strval_t init_stresses[] = {{"zero", INIT_STRESS_ZERO},
+                                               {"geostatic", INIT_STRESS_GEOSTATIC}};
 static const cyaml_strval_t seg_fluxes[] = {{"symmetric", SEG_FLUX_SYMMETRIC},
                                             {"asymmetric", SEG_FLUX_ASYMMETRIC}};
 static const cyaml_strval_t seg_models[] = {{"constant", SEG_MODEL_CONSTANT},
@@ -55,6 +62,7 @@ static const cyaml_schema_field_t run_fields[] = {
     FLT(scene_run, cfl_diffusion, OPT),
     FLT(scene_run, cfl_segregation, OPT),
     FLT(scene_run, cfl_kinematic, OPT),
+    FLT(scene_run, cfl_flow, OPT),
     FLT(scene_run, dt_max, OPT),
     FLT(scene_run, progress_s, OPT),
     CYAML_FIELD_STRING_PTR("backend", OPT, struct scene_run, backend, 0, CYAML_UNLIMITED),
@@ -68,6 +76,8 @@ static const cyaml_schema_field_t geometry_fields[] = {
     FLT(scene_geometry, h_factor, OPT),
     FLT(scene_geometry, height, OPT),
     FLT(scene_geometry, width, OPT),
+    FLT(scene_geometry, radius, OPT),
+    FLT(scene_geometry, fill, OPT),
     CYAML_FIELD_END,
 };
 
@@ -80,6 +90,7 @@ static const cyaml_schema_field_t kinematics_fields[] = {
 
 /* V and D are required only for the constant model: require_model_keys(). */
 static const cyaml_schema_field_t segregation_fields[] = {
+    ENM(scene_segregation, enabled, on_off),
     ENM(scene_segregation, flux, seg_fluxes),
     FLT(scene_segregation, A, OPT),
     FLT(scene_segregation, kappa, OPT),
@@ -100,6 +111,34 @@ static const cyaml_schema_field_t initial_fields[] = {
     FLT(scene_initial, C_below, OPT),
     FLT(scene_initial, C_above, OPT),
     FLT(scene_initial, split, OPT),
+    ENM(scene_initial, stress, init_stresses),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t material_fields[] = {
+    FLT(scene_material, E, OPT),
+    FLT(scene_material, nu, OPT),
+    FLT(scene_material, rho_s, OPT),
+    FLT(scene_material, mu_s, OPT),
+    FLT(scene_material, mu_d, OPT),
+    FLT(scene_material, I0, OPT),
+    FLT(scene_material, lambda, OPT),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t flow_fields[] = {
+    FLT(scene_flow, alpha_av, OPT),
+    CYAML_FIELD_UINT("shepard_every", OPT, struct scene_flow, shepard_every),
+    FLT(scene_flow, damping, OPT),
+    FLT(scene_flow, damping_until, OPT),
+    CYAML_FIELD_END,
+};
+
+static const cyaml_schema_field_t walls_fields[] = {
+    ENM(scene_walls, slip, slips),
+    ENM(scene_walls, side_slip, slips),
+    FLT(scene_walls, rpm, OPT),
+    ENM(scene_walls, direction, rot_dirs),
     CYAML_FIELD_END,
 };
 
@@ -125,6 +164,9 @@ static const cyaml_schema_field_t scene_fields[] = {
     SEC("Initial", initial, initial_fields),
     SEC("Output", output, output_fields),
     SEC("Physics", physics, physics_fields),
+    SEC("Material", material, material_fields),
+    SEC("Flow", flow, flow_fields),
+    SEC("Walls", walls, walls_fields),
     CYAML_FIELD_END,
 };
 
@@ -141,6 +183,7 @@ static const struct scene_default scene_defaults[] = {
     {"Run", "cfl_diffusion", "0.1"},
     {"Run", "cfl_segregation", "0.2"},
     {"Run", "cfl_kinematic", "1"},
+    {"Run", "cfl_flow", "0.1"},
     {"Run", "dt_max", "1e30"},
     {"Run", "progress_s", "10"},
     {"Run", "backend", "cpu"},
@@ -149,9 +192,12 @@ static const struct scene_default scene_defaults[] = {
     {"Geometry", "h_factor", "1.5"},
     {"Geometry", "height", "0.087"},
     {"Geometry", "width", "0.037"},
+    {"Geometry", "radius", "0.035"},
+    {"Geometry", "fill", "0.42"},
     {"Kinematics", "velocity", "oscillatory_shear"},
     {"Kinematics", "gamma0", "0.5773502691896257"}, /* tan 30 deg */
     {"Kinematics", "period", "13"},
+    {"Segregation", "enabled", "on"},
     {"Segregation", "flux", "symmetric"},
     {"Segregation", "A", "1.6"},
     {"Segregation", "kappa", "0.89"},
@@ -166,8 +212,24 @@ static const struct scene_default scene_defaults[] = {
     {"Initial", "C_below", "0"},
     {"Initial", "C_above", "1"},
     {"Initial", "split", "0.5"},
+    {"Initial", "stress", "geostatic"},
     {"Physics", "gravity", "[0, -9.81, 0]"},
     {"Physics", "rho", "1500"},
+    {"Material", "E", "1e7"},
+    {"Material", "nu", "0.3"},
+    {"Material", "rho_s", "2500"},
+    {"Material", "mu_s", "0.382"},
+    {"Material", "mu_d", "0.682"},
+    {"Material", "I0", "0.279"},
+    {"Material", "lambda", "0.001"},
+    {"Flow", "alpha_av", "0.1"},
+    {"Flow", "shepard_every", "30"},
+    {"Flow", "damping", "0"},
+    {"Flow", "damping_until", "0"},
+    {"Walls", "slip", "no_slip"},
+    {"Walls", "side_slip", "free_slip"},
+    {"Walls", "rpm", "0"},
+    {"Walls", "direction", "clockwise"},
 };
 
 /* ---- ranges of the double parameters ----------------------------------------- */
@@ -195,12 +257,15 @@ static const struct scene_range scene_ranges[] = {
     CFL(cfl_diffusion),
     CFL(cfl_segregation),
     CFL(cfl_kinematic),
+    CFL(cfl_flow),
     POS("Run", run, dt_max),
     POS("Run", run, progress_s),
     POS("Geometry", geometry, dr),
     RNG("Geometry", geometry, h_factor, 1, 3, CLOSED, ALWAYS),
     POS("Geometry", geometry, height),
     POS("Geometry", geometry, width),
+    POS("Geometry", geometry, radius),
+    RNG("Geometry", geometry, fill, 0, 1, LO_OPEN | HI_OPEN, ALWAYS),
     RNG("Kinematics", kinematics, gamma0, 0, INFINITY, HI_OPEN, ALWAYS),
     POS("Kinematics", kinematics, period),
     POS("Segregation", segregation, A),
@@ -218,11 +283,22 @@ static const struct scene_range scene_ranges[] = {
     POS("Output", output, dt),
     POS("Output", output, diag_dt),
     POS("Physics", physics, rho),
+    POS("Material", material, E),
+    RNG("Material", material, nu, 0, 0.5, HI_OPEN, ALWAYS),
+    POS("Material", material, rho_s),
+    RNG("Material", material, mu_s, 0, INFINITY, HI_OPEN, ALWAYS),
+    RNG("Material", material, mu_d, 0, INFINITY, HI_OPEN, ALWAYS),
+    POS("Material", material, I0),
+    RNG("Material", material, lambda, 0, INFINITY, HI_OPEN, ALWAYS),
+    RNG("Flow", flow, alpha_av, 0, INFINITY, HI_OPEN, ALWAYS),
+    RNG("Flow", flow, damping, 0, INFINITY, HI_OPEN, ALWAYS),
+    RNG("Flow", flow, damping_until, 0, INFINITY, HI_OPEN, ALWAYS),
+    RNG("Walls", walls, rpm, 0, INFINITY, HI_OPEN, ALWAYS),
 };
 
 /* ---- parse context and error messages ------------------------------------------ */
 
-enum { SCENE_MAX_LEAVES = 96, SCENE_MAX_DEPTH = 4, SCENE_NAME = 64 };
+enum { SCENE_MAX_LEAVES = 160, SCENE_MAX_DEPTH = 4, SCENE_NAME = 64 };
 
 /* A key the walk met: where it was set, for errors found after loading. */
 struct scene_leaf {
@@ -833,8 +909,10 @@ static int require_model_keys(struct scene_ctx *c)
     const char *model = "constant";
     yaml_node_pair_t *sec = map_pair(c, 1, "Segregation");
     yaml_node_pair_t *mp = sec ? map_pair(c, sec->value, "model") : NULL;
+    yaml_node_pair_t *en = sec ? map_pair(c, sec->value, "enabled") : NULL;
     if (mp) model = scalar(node(c, mp->value));
     if (strcmp(model, "constant") != 0) return 0;
+    if (en && !strcmp(scalar(node(c, en->value)), "off")) return 0; /* not solved */
     for (size_t i = 0; i < ARRAY_LEN(keys); ++i) {
         if (leaf_find(c, keys[i])) continue;
         const struct scene_leaf *l = leaf_find(c, "Segregation");
@@ -948,6 +1026,7 @@ static int check_ranges(struct scene_ctx *c, const struct scene *s)
     for (size_t i = 0; i < ARRAY_LEN(scene_ranges); ++i) {
         const struct scene_range *r = &scene_ranges[i];
         if ((r->when == IF_CONSTANT && !constant) || (r->when == IF_SHEAR_RATE && constant)) continue;
+        if (r->when != ALWAYS && !s->segregation.enabled) continue;
         double v;
         memcpy(&v, (const char *)s + r->offset, sizeof v);
         fmt_double(got, sizeof got, v);
@@ -970,6 +1049,12 @@ static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g)
     char a[32], b[32];
     if (g->dim == 3) return fail_at(c, "Geometry:dim", "3D is not yet supported (use 2)");
     if (g->dim != 2) return fail_at(c, "Geometry:dim", "must be 2, got %u", g->dim);
+    if (g->type == GEOM_DRUM) {
+        fmt_double(a, sizeof a, 8 * g->dr);
+        fmt_double(b, sizeof b, g->radius);
+        if (g->radius < 8 * g->dr) return fail_at(c, "Geometry:radius", "must be >= 8*dr = %s, got %s", a, b);
+        return 0;
+    }
     fmt_double(a, sizeof a, 4 * g->dr);
     fmt_double(b, sizeof b, g->width);
     if (g->width < 4 * g->dr) return fail_at(c, "Geometry:width", "must be >= 4*dr = %s, got %s", a, b);
@@ -983,6 +1068,16 @@ static int check_special(struct scene_ctx *c, const struct scene *s)
     const double *g = s->physics.gravity;
     const char *backend = s->run.backend ? s->run.backend : "";
     if (check_geometry(c, &s->geometry)) return -1;
+    if (!(s->material.mu_s <= s->material.mu_d))
+        return fail_at(c, "Material:mu_d", "must be >= Material:mu_s");
+    int box = s->geometry.type == GEOM_SHEARBOX, vel = s->kinematics.velocity;
+    if (vel == KIN_OSCILLATORY_SHEAR && !box)
+        return fail_at(c, "Kinematics:velocity", "oscillatory_shear needs Geometry:type shearbox");
+    if (vel == KIN_COMPUTED && box)
+        return fail_at(c, "Kinematics:velocity",
+                       "computed needs Geometry:type column or drum (the shear box's walls are prescribed)");
+    if (!s->segregation.enabled && vel != KIN_COMPUTED)
+        return fail_at(c, "Segregation:enabled", "off with prescribed velocity leaves nothing to solve");
     if (!(s->segregation.d_small < s->segregation.d_large))
         return fail_at(c, "Segregation:d_large", "must be larger than Segregation:d_small");
     for (int k = 0; k < 3; ++k)

@@ -12,35 +12,44 @@ enum seg_model { SEG_MODEL_CONSTANT = 0, SEG_MODEL_SHEAR_RATE = 1 };
  * gradients (App. E); direct: eq. (2.5) with the same boundaries (App. A);
  * conservative: pairwise antisymmetric fluxes, no source terms. */
 enum seg_scheme { SEG_SCHEME_PAPER = 0, SEG_SCHEME_DIRECT = 1, SEG_SCHEME_CONSERVATIVE = 2 };
-enum geom_type { GEOM_SHEARBOX = 0 };
-enum kin_type { KIN_REST = 0, KIN_OSCILLATORY_SHEAR = 1 };
+enum geom_type { GEOM_SHEARBOX = 0, GEOM_COLUMN = 1, GEOM_DRUM = 2 };
+/* rest and oscillatory_shear prescribe the velocity (no momentum or stress
+ * solved); computed solves the granular flow (momentum 3.9, stress 2.16). */
+enum kin_type { KIN_REST = 0, KIN_OSCILLATORY_SHEAR = 1, KIN_COMPUTED = 2 };
+enum wall_slip { SLIP_NO = 0, SLIP_FREE = 1 };
+enum rot_dir { ROT_CLOCKWISE = 0, ROT_COUNTERCLOCKWISE = 1 };
+enum init_stress { INIT_STRESS_ZERO = 0, INIT_STRESS_GEOSTATIC = 1 };
 
 struct scene_run {
     double t_end;           /* s, required */
     double cfl_diffusion;   /* dt <= cfl_diffusion h^2 / D_max; default 0.1, stable < 1/7 */
     double cfl_segregation; /* dt <= cfl_segregation h / max|d(VF)/dC|; default 0.2 */
     double cfl_kinematic;   /* dt <= cfl_kinematic h / |u|_max; default 1 (time resolution of the moving geometry, not stability) */
+    double cfl_flow;        /* chi_CFL of (3.19): dt <= chi min(sqrt(h/a_max), h/c_s); default 0.1 */
     double dt_max;          /* s, upper bound on dt; default 1e30 (none) */
     double progress_s;      /* wall seconds between progress lines; default 10 */
     char *backend;          /* "cpu" (default) | "gpu" (later issue) */
 };
 
 struct scene_geometry {
-    enum geom_type type; /* shearbox */
+    enum geom_type type; /* shearbox | column | drum */
     unsigned dim;        /* 2 (3 later); default 2 */
     double dr;           /* initial particle spacing, m, required */
     double h_factor;     /* h = h_factor * dr; default 1.5 (lattice moments within 0.5 %, tests/test_kernel.c) */
     double height;       /* material height H, m; default 0.087 */
     double width;        /* box width, m; default 0.037 */
+    double radius;       /* drum: inner radius R, m; default 0.035 */
+    double fill;         /* drum: filling level R_f = (H + R)/2R (paper §6), in (0,1); default 0.42 */
 };
 
 struct scene_kinematics {
-    enum kin_type velocity; /* rest | oscillatory_shear; default oscillatory_shear */
+    enum kin_type velocity; /* rest | oscillatory_shear | computed; default oscillatory_shear */
     double gamma0;          /* shear amplitude (tan of max wall angle); default tan 30 deg */
     double period;          /* T, s; default 13 */
 };
 
 struct scene_segregation {
+    int enabled;            /* on | off: solve the concentration equation; default on */
     enum seg_flux flux;     /* symmetric (2.8) | asymmetric (2.9); default symmetric */
     double A;               /* eq. (2.9); default 1.6 */
     double kappa;           /* eq. (2.9), in [0,1); default 0.89 */
@@ -62,6 +71,37 @@ struct scene_initial {
     double C_below; /* C for y/H <= split; default 0 */
     double C_above; /* C for y/H > split; default 1 */
     double split;   /* split height as a fraction of H; default 0.5 */
+    enum init_stress stress; /* zero | geostatic (sigma_yy = -rho g depth, sigma_xx = sigma_zz
+                              * = K0 sigma_yy, K0 = nu/(1-nu), then returned to the yield
+                              * cone); default geostatic */
+};
+
+/* The mu(I) elastoplastic material (paper §2.3, Table 1); computed flow only. */
+struct scene_material {
+    double E;      /* Young's modulus, Pa; default 1e7 */
+    double nu;     /* Poisson's ratio, [0, 0.5); default 0.3 */
+    double rho_s;  /* intrinsic grain density, kg/m^3; default 2500 */
+    double mu_s;   /* static friction; default 0.382 */
+    double mu_d;   /* dynamic friction, >= mu_s; default 0.682 */
+    double I0;     /* reference inertial number; default 0.279 */
+    double lambda; /* regularization of (2.14), 1/s; default 0.001 */
+};
+
+/* Momentum and stress solver options; computed flow only. */
+struct scene_flow {
+    double alpha_av;        /* artificial viscosity coefficient (3.10); default 0.1; 0 = off */
+    unsigned shepard_every; /* Shepard filter (3.12) every N steps; default 30; 0 = off */
+    double damping;         /* velocity damping -zeta u added to (3.9), 1/s, for settling
+                             * (dynamic relaxation); default 0 */
+    double damping_until;   /* damping acts while t < damping_until, s; default 0 */
+};
+
+/* Rigid walls by dummy particles (paper §4.1). */
+struct scene_walls {
+    enum wall_slip slip;      /* box base and drum wall: no_slip (4.1) | free_slip (4.2); default no_slip */
+    enum wall_slip side_slip; /* box side walls; default free_slip */
+    double rpm;               /* drum rotation speed, rev/min, >= 0; default 0 */
+    enum rot_dir direction;   /* clockwise | counterclockwise (seen with y up); default clockwise */
 };
 
 struct scene_output {
@@ -84,6 +124,9 @@ struct scene {
     struct scene_initial initial;
     struct scene_output output;
     struct scene_physics physics;
+    struct scene_material material;
+    struct scene_flow flow;
+    struct scene_walls walls;
     char *path; /* the scene file as given */
     char *text; /* the scene file's text, for snapshot headers */
     struct scene_keys *keys; /* for scene_key_line / scene_key_where */

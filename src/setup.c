@@ -1,5 +1,5 @@
 /* setup.c — initial particles and physics contexts of a scene.
- * Shear box (paper §5): material on a square lattice of spacing dr filling
+ * Shear box (paper §5) and granular column: material on a square lattice of spacing dr filling
  * [0, W] x [0, H]; ceil(2h/dr) layers of dummy particles below the base and
  * outside both side walls (the walls reach the same number of layers above
  * the material); no dummies at the top, which is a free surface. */
@@ -49,7 +49,7 @@ static void setup_put(particles_t *p, size_t k, double x, double y, int kind, do
     p->psi[k] = 1;
 }
 
-void setup_particles(sim_t *s)
+static void setup_box(sim_t *s)
 {
     const struct scene *sc = s->sc;
     double dr = sc->geometry.dr, vol = dr * dr;
@@ -75,8 +75,82 @@ void setup_particles(sim_t *s)
         }
     p->n = k;
     s->n_material = b.n_mat;
+    s->surface_y = H;
     if (fabs(H - sc->geometry.height) > 1e-6 * sc->geometry.height)
         warning("Geometry:height %.6g m is not a multiple of dr; the box is %.6g m high", sc->geometry.height, H);
+}
+
+/* Drum (paper §6, figure 15), centre at the origin: material on the square
+ * lattice (i + 1/2) dr, (j + 1/2) dr inside r <= R - dr/2 and below the flat
+ * free surface y = H = (2 R_f - 1) R; ceil(2h/dr) rings of dummies at radii
+ * R + (l + 1/2) dr, each with round(2 pi r / dr) equally spaced particles of
+ * volume dr^2. Concentration C_below below split * (H + R) - R, else C_above. */
+static void setup_drum(sim_t *s)
+{
+    const struct scene *sc = s->sc;
+    double dr = sc->geometry.dr, vol = dr * dr, Rd = sc->geometry.radius;
+    double H = (2 * sc->geometry.fill - 1) * Rd, split = -Rd + sc->initial.split * (H + Rd);
+    long nh = (long)ceil(Rd / dr) + 1, nl = (long)ceil(2.0 * sc->geometry.h_factor - 1e-9);
+    size_t n_mat = 0, n_dum = 0;
+    for (long j = -nh; j < nh; ++j)
+        for (long i = -nh; i < nh; ++i) {
+            double x = (i + 0.5) * dr, y = (j + 0.5) * dr;
+            n_mat += (sqrt(x * x + y * y) <= Rd - 0.5 * dr && y <= H);
+        }
+    for (long l = 0; l < nl; ++l) n_dum += (size_t)lround(2 * M_PI * (Rd + (l + 0.5) * dr) / dr);
+    setup_check_memory(sc, n_mat + n_dum);
+    part_alloc(&s->p, 2, n_mat + n_dum);
+    particles_t *p = &s->p;
+    size_t k = 0;
+    for (long j = -nh; j < nh; ++j)
+        for (long i = -nh; i < nh; ++i) {
+            double x = (i + 0.5) * dr, y = (j + 0.5) * dr;
+            if (!(sqrt(x * x + y * y) <= Rd - 0.5 * dr && y <= H)) continue;
+            setup_put(p, k, x, y, KIND_MATERIAL, vol);
+            p->C[k++] = (real)(y <= split ? sc->initial.C_below : sc->initial.C_above);
+        }
+    for (long l = 0; l < nl; ++l) {
+        double r = Rd + (l + 0.5) * dr;
+        long m = lround(2 * M_PI * r / dr);
+        for (long q = 0; q < m; ++q, ++k)
+            setup_put(p, k, r * cos(2 * M_PI * q / m), r * sin(2 * M_PI * q / m), KIND_DUMMY, vol);
+    }
+    p->n = k;
+    s->n_material = n_mat;
+    /* the topmost material row: the geostatic depth is measured from there */
+    s->surface_y = -INFINITY;
+    for (size_t i = 0; i < n_mat; ++i) s->surface_y = fmax(s->surface_y, (double)p->x[1][i] + 0.5 * dr);
+}
+
+/* Geostatic initial stress of a material at rest under a flat surface at
+ * y = surface_y (gravity along -y): sigma_yy = -rho |g| depth, sigma_xx =
+ * sigma_zz = K0 sigma_yy with K0 = nu / (1 - nu) (uniaxial strain), returned
+ * to the yield cone with mu = mu_s (at rest). It only shortens the elastic
+ * transient of a start from zero stress. */
+static void setup_stress(sim_t *s)
+{
+    const struct scene *sc = s->sc;
+    particles_t *p = &s->p;
+    if (sc->initial.stress != INIT_STRESS_GEOSTATIC) return;
+    const double *gv = sc->physics.gravity;
+    double gn = sqrt(gv[0] * gv[0] + gv[1] * gv[1]), K0 = sc->material.nu / (1 - sc->material.nu);
+    real kmu = stress_kmu((real)sc->material.mu_s);
+    for (size_t i = 0; i < p->n; ++i) {
+        if (p->kind[i] != KIND_MATERIAL) continue;
+        double depth = fmax(0.0, s->surface_y - (double)p->x[1][i]);
+        real sg[6] = {0, 0, 0, 0, 0, 0};
+        sg[1] = (real)(-sc->physics.rho * gn * depth);
+        sg[0] = sg[2] = (real)(K0 * sg[1]);
+        stress_return_map(sg, kmu);
+        for (int q = 0; q < 6; ++q) p->sig[q][i] = sg[q];
+    }
+}
+
+void setup_particles(sim_t *s)
+{
+    if (s->sc->geometry.type == GEOM_DRUM) setup_drum(s);
+    else setup_box(s);
+    if (s->flow_on) setup_stress(s);
 }
 
 void setup_contexts(sim_t *s)
@@ -98,8 +172,31 @@ void setup_contexts(sim_t *s)
     for (int d = 0; d < 3; ++d) sp->ghat[d] = (real)(gv[d] / gn);
     s->seg.scheme = (int)g->scheme;
     s->seg.renorm = g->renormalize;
-    s->hcsr = g->scheme != SEG_SCHEME_CONSERVATIVE;
+    s->hcsr = g->enabled && g->scheme != SEG_SCHEME_CONSERVATIVE;
     s->kin.type = (int)sc->kinematics.velocity;
     s->kin.gamma0 = sc->kinematics.gamma0;
     s->kin.omega = 2.0 * M_PI / sc->kinematics.period;
+    s->seg_on = g->enabled;
+    s->flow_on = sc->kinematics.velocity == KIN_COMPUTED;
+
+    flow_ctx *f = &s->flow;
+    const struct scene_material *m = &sc->material;
+    f->k = s->seg.k;
+    stress_moduli((real)m->E, (real)m->nu, &f->m.G, &f->m.K);
+    f->m.rho_s = (real)m->rho_s;
+    f->m.mu_s = (real)m->mu_s, f->m.mu_d = (real)m->mu_d;
+    f->m.I0 = (real)m->I0, f->m.lambda = (real)m->lambda;
+    f->rho = (real)sc->physics.rho;
+    f->cs = stress_sound_speed(f->m.G, f->m.K, f->rho);
+    f->alpha_av = (real)sc->flow.alpha_av;
+    for (int d = 0; d < 3; ++d) f->g[d] = (real)gv[d];
+    f->sp = *sp;
+    wall_geom *w = &f->w;
+    w->type = sc->geometry.type == GEOM_DRUM ? WALL_DRUM : WALL_BOX;
+    w->width = (real)(lround(sc->geometry.width / sc->geometry.dr) * sc->geometry.dr);
+    w->centre[0] = w->centre[1] = w->centre[2] = 0;
+    w->radius = (real)sc->geometry.radius;
+    w->omega = sc->walls.rpm * 2.0 * M_PI / 60.0 * (sc->walls.direction == ROT_CLOCKWISE ? -1.0 : 1.0);
+    w->slip_base = sc->walls.slip == SLIP_FREE;
+    w->slip_sides = sc->walls.side_slip == SLIP_FREE;
 }

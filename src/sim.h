@@ -8,6 +8,7 @@
 #include "bound.h"
 #include "nbr.h"
 #include "particles.h"
+#include "physics/flow.h"
 #include "physics/kin.h"
 #include "physics/seg_kern.h"
 #include "scene.h"
@@ -16,20 +17,30 @@ struct sim;
 
 struct backend {
     const char *name;
-    /* Place particles at time t (prescribed kinematics), rebuild the sorted
-     * cell list and, if classify and the scheme needs it, classify boundary
-     * particles (classes, normals and psi~ otherwise travel with the
-     * particles from the last classification); classify == 2 classifies
-     * whatever the scheme (snapshots show boundary classes and normals).
-     * The conservative scheme's renormalisation L is computed here too,
-     * when classify is set: once per step, like the classification. */
+    /* Place particles at time t and rebuild the sorted cell list. Prescribed
+     * velocity: every particle from kin_state. Computed flow: the material
+     * stays where the integrator put it and the dummies follow the walls
+     * (wall_motion); after the sort the dummies' velocity and stress are
+     * extrapolated from the material (flow_wall, §4.1). If classify and the
+     * scheme needs it, classify boundary particles (classes, normals and
+     * psi~ otherwise travel with the particles from the last
+     * classification); classify == 2 classifies whatever the scheme
+     * (snapshots show boundary classes and normals). The conservative
+     * scheme's renormalisation L is computed here too, when classify is set:
+     * once per step, like the classification. */
     void (*prepare)(struct sim *s, double t, int classify);
-    /* dC/dt of every material particle into p.dCdt. */
-    void (*conc_rates)(struct sim *s);
-    /* C = C_n + a dC/dt for material particles; a in seconds. */
+    /* Rates of every solved equation at the current state: with computed
+     * flow acc, dsig and gdot (flow_rates; s->amax is set); then, with
+     * segregation on, dC/dt into p.dCdt (which reads gdot). */
+    void (*rates)(struct sim *s);
+    /* X = X_n + a dX/dt for the solved fields of material particles (C; and
+     * x, u, sigma with the return mapping when the flow is computed); a in
+     * seconds. */
     void (*advance)(struct sim *s, double a);
-    /* Copy C into C_n (start of a step). */
+    /* Copy the solved fields into their start-of-step copies. */
     void (*save_start)(struct sim *s);
+    /* Shepard filter of the material stress (3.12), then the dummies again. */
+    void (*filter)(struct sim *s);
     void (*finish)(struct sim *s);
 };
 
@@ -41,7 +52,12 @@ typedef struct sim {
     bound_work bw;
     seg_ctx seg;
     kin_params kin;
+    flow_ctx flow;
+    int flow_on;       /* Kinematics:velocity computed: momentum and stress solved */
+    int seg_on;        /* Segregation:enabled: the concentration equation solved */
     int hcsr;          /* scheme needs the boundary classification */
+    double surface_y;  /* initial free-surface height, m (geostatic stress) */
+    double amax;       /* largest |acceleration| of the last rate evaluation, m/s^2 */
     double t;          /* simulated time, s */
     long step;
     double dt;         /* last time step, s */

@@ -40,6 +40,7 @@ static double ref_value(const char *name, int c, int64_t id)
     if (!strcmp(name, "Concentration")) return (id % 7) / 7.0;
     if (!strcmp(name, "ShearRate")) return 1.5 + d;
     if (!strcmp(name, "Volume")) return 1e-6 * (1 + id % 3);
+    if (!strcmp(name, "Stress")) return -100.0 * (c + 1) - 0.5 * d;
     if (!strcmp(name, "Normal")) return c == 0 ? cos(0.3 * d) : c == 1 ? sin(0.3 * d) : 0;
     if (!strcmp(name, "Psi")) return 0.1 * (id % 11);
     if (!strcmp(name, "Kind")) return (double)(id % 2);
@@ -67,6 +68,10 @@ static void fill_particle(particles_t *p, size_t k, int64_t id)
         p->v[c][k] = (real)ref_value("Velocities", c, id);
         p->nrm[c][k] = (real)ref_value("Normal", c, id);
         p->X0[c][k] = (real)(-1000.0 - id);
+    }
+    for (int c = 0; c < 6; c++) {
+        p->sig[c][k] = (real)ref_value("Stress", c, id);
+        p->sig_n[c][k] = p->dsig[c][k] = (real)(7777.0 + id);
     }
     p->C[k] = (real)ref_value("Concentration", 0, id);
     p->gdot[k] = (real)ref_value("ShearRate", 0, id);
@@ -141,10 +146,10 @@ static double *read_field(hid_t file, const struct io_field *f, long long n)
     assert_int_equal(H5Sget_simple_extent_ndims(space), f->ncomp > 1 ? 2 : 1);
     H5Sget_simple_extent_dims(space, dims, NULL);
     assert_int_equal(dims[0], n);
-    if (f->ncomp > 1) assert_int_equal(dims[1], 3);
+    if (f->ncomp > 1) assert_int_equal(dims[1], f->ncomp);
     hid_t want = f->type == IO_REAL ? H5T_IEEE_F64LE : f->type == IO_UINT8 ? H5T_STD_U8LE : H5T_STD_I64LE;
     assert_true(H5Tequal(type, want) > 0);
-    double *buf = malloc((n > 0 ? n : 1) * 3 * sizeof *buf);
+    double *buf = malloc((n > 0 ? n : 1) * (size_t)f->ncomp * sizeof *buf);
     if (n > 0) assert_true(H5Dread(dset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0);
     char *desc = read_attr_string(dset, "Description"), *units = read_attr_string(dset, "Units");
     assert_true(strlen(desc) > 10);
@@ -350,12 +355,13 @@ static void test_part_alloc(void **state)
     part_alloc(&p, 3, 0); /* empty store is valid */
     assert_non_null(p.id);
     part_free(&p);
-    /* 27 real arrays (x, X0, v, nrm: 3 each; vol, C, C_n, dCdt, gdot, psi,
-     * segV, segQ, segD; L: 6), id (8 B), kind and bclass (1 B each). */
-    assert_int_equal(part_bytes_per_particle(), 27 * sizeof(real) + 8 + 2);
+    /* 54 real arrays (x, X0, v, nrm, x_n, v_n, acc: 3 each; vol, C, C_n,
+     * dCdt, gdot, psi, segV, segQ, segD; L, sig, sig_n, dsig: 6 each), id
+     * (8 B), kind and bclass (1 B each). */
+    assert_int_equal(part_bytes_per_particle(), 54 * sizeof(real) + 8 + 2);
 }
 
-/* Value of array a (0..26) for a particle originally at index k. */
+/* Value of array a (0..53) for a particle originally at index k. */
 static double perm_val(int a, size_t k) { return 1000.0 * a + (double)k; }
 
 static void test_part_permute(void **state)
@@ -367,7 +373,12 @@ static void test_part_permute(void **state)
     p.n = N;
     real **r[] = {&p.x[0], &p.x[1], &p.x[2], &p.X0[0], &p.X0[1], &p.X0[2],  &p.v[0],   &p.v[1],   &p.v[2],
                   &p.vol,  &p.C,    &p.C_n,  &p.dCdt,  &p.gdot,  &p.nrm[0], &p.nrm[1], &p.nrm[2], &p.psi,
-                  &p.segV, &p.segQ, &p.segD, &p.L[0],  &p.L[1],  &p.L[2],   &p.L[3],   &p.L[4],   &p.L[5]};
+                  &p.segV, &p.segQ, &p.segD, &p.L[0],  &p.L[1],  &p.L[2],   &p.L[3],   &p.L[4],   &p.L[5],
+                  &p.sig[0], &p.sig[1], &p.sig[2], &p.sig[3], &p.sig[4], &p.sig[5],
+                  &p.sig_n[0], &p.sig_n[1], &p.sig_n[2], &p.sig_n[3], &p.sig_n[4], &p.sig_n[5],
+                  &p.dsig[0], &p.dsig[1], &p.dsig[2], &p.dsig[3], &p.dsig[4], &p.dsig[5],
+                  &p.x_n[0], &p.x_n[1], &p.x_n[2], &p.v_n[0], &p.v_n[1], &p.v_n[2],
+                  &p.acc[0], &p.acc[1], &p.acc[2]};
     int nr = (int)(sizeof r / sizeof r[0]);
     for (size_t k = 0; k < N; k++) {
         for (int a = 0; a < nr; a++)

@@ -1,8 +1,7 @@
 /* momentum.h — pair terms of the SPH momentum and kinematics equations
  * (paper §3.2): the velocity gradient behind the strain rate and spin
  * (3.14–3.15), the momentum pair term (3.9) and Monaghan's artificial
- * viscosity (3.10). Groundwork for the issue "Granular flow": not yet
- * called by the driver. Stress convention as in stress.h (tension positive);
+ * viscosity (3.10); called by the flow bodies (flow.h). Stress convention as in stress.h (tension positive);
  * grad_i W_ij = kernel_f(r) x_ij with x_ij = x_i - x_j. */
 #ifndef SPHSEG_MOMENTUM_H
 #define SPHSEG_MOMENTUM_H

@@ -2,7 +2,7 @@
  * §2.4, App. C): elastic moduli, mu(I) (2.13–2.14), the Drucker–Prager yield
  * function (2.11–2.12), the Jaumann-rate elastic trial stress and the
  * one-step return mapping with tension cut-off.
- * Groundwork for the issue "Granular flow": not yet called by the driver.
+ * Called by the flow bodies (flow.h).
  *
  * Conventions: stress is a symmetric tensor stored as (xx, yy, zz, xy, xz,
  * yz), Pa, tension positive; the pressure p = -tr(sigma)/3 is positive in
@@ -67,6 +67,7 @@ HD_INLINE real stress_mu(const mat_params *m, real gdot, real p, real davg)
     real pp = p > 0 ? p : R(0.0);
     real den = m->I0 * (real)sqrt((double)(pp / (m->rho_s * davg * davg))) +
                (real)sqrt((double)(gdot * gdot + m->lambda * m->lambda));
+    if (!(den > 0)) return m->mu_s; /* lambda = 0 at gdot = 0, p = 0: the unregularized limit */
     return m->mu_s + (m->mu_d - m->mu_s) * gdot / den;
 }
 

@@ -1,11 +1,75 @@
-/* wall.h — dummy-particle walls (paper §4.1) and the Shepard stress filter
- * (3.12). Groundwork for the issue "Granular flow": not yet called by the
- * driver. A dummy d gathers over the material particles m in its support;
+/* wall.h — dummy-particle walls (paper §4.1): wall geometry and motion,
+ * dummy velocity (4.1, 4.2) and stress (4.3), and the Shepard stress filter
+ * sums (3.12); called by the flow bodies (flow.h). A dummy d gathers over the material particles m in its support;
  * stress is tension-positive (stress.h), so the hydrostatic term of (4.3),
  * written by the paper for compression-positive stress, enters with a minus. */
 #ifndef SPHSEG_WALL_H
 #define SPHSEG_WALL_H
+#include <math.h>
 #include "hd.h"
+
+/* The rigid container of a scene. Box (shear box, column): a base below
+ * y = 0 and side walls at x = 0 and x = width, at rest. Drum: a circle of
+ * radius R about centre, turning at omega (rad/s, counter-clockwise
+ * positive) about the z axis. */
+enum wall_type { WALL_BOX = 0, WALL_DRUM = 1 };
+
+typedef struct wall_geom {
+    int type;        /* enum wall_type */
+    real width;      /* box: inner width, m */
+    real centre[3];  /* drum: axis position, m */
+    real radius;     /* drum: inner radius R, m */
+    double omega;    /* drum: angular velocity, rad/s, counter-clockwise > 0 */
+    int slip_base;   /* box base and drum wall: 1 free slip (4.2), 0 no slip (4.1) */
+    int slip_sides;  /* box side walls: 1 free slip, 0 no slip */
+} wall_geom;
+
+/* Position and velocity at time t of the wall point (dummy) whose reference
+ * position is X0: the drum turns rigidly by omega t; the box stays put. */
+HD_INLINE void wall_motion(const wall_geom *w, const real X0[3], double t, real x[3], real u[3])
+{
+    x[0] = X0[0], x[1] = X0[1], x[2] = X0[2];
+    u[0] = u[1] = u[2] = 0;
+    if (w->type != WALL_DRUM) return;
+    double th = w->omega * t, c = cos(th), s = sin(th);
+    double rx = (double)X0[0] - w->centre[0], ry = (double)X0[1] - w->centre[1];
+    double qx = c * rx - s * ry, qy = s * rx + c * ry;
+    x[0] = (real)(w->centre[0] + qx);
+    x[1] = (real)(w->centre[1] + qy);
+    u[0] = (real)(-w->omega * qy); /* omega e_z x r */
+    u[1] = (real)(w->omega * qx);
+}
+
+/* Unit wall normal at dummy position x, pointing into the material, and
+ * whether that wall is free-slip. Box: below the base (y < 0, corners
+ * included) the base, else the nearer side wall. */
+HD_INLINE int wall_normal(const wall_geom *w, const real x[3], real n[3])
+{
+    n[0] = n[1] = n[2] = 0;
+    if (w->type == WALL_DRUM) {
+        real dx = w->centre[0] - x[0], dy = w->centre[1] - x[1];
+        real r = (real)sqrt((double)(dx * dx + dy * dy));
+        if (r > 0) n[0] = dx / r, n[1] = dy / r;
+        return w->slip_base;
+    }
+    if (x[1] < 0) {
+        n[1] = 1;
+        return w->slip_base;
+    }
+    n[0] = x[0] < R(0.5) * w->width ? R(1.0) : R(-1.0);
+    return w->slip_sides;
+}
+
+/* Acceleration of the wall at x (drum: centripetal -omega^2 (x - centre));
+ * the wall stress (4.3) extrapolates with g - a_w (Adami et al. 2012). */
+HD_INLINE void wall_accel(const wall_geom *w, const real x[3], real a[3])
+{
+    a[0] = a[1] = a[2] = 0;
+    if (w->type != WALL_DRUM) return;
+    real o2 = (real)(w->omega * w->omega);
+    a[0] = -o2 * (x[0] - w->centre[0]);
+    a[1] = -o2 * (x[1] - w->centre[1]);
+}
 
 typedef struct wall_sums {
     real w;     /* sum W_dm V_m */

@@ -1,0 +1,148 @@
+/* flow.h — the granular-flow bodies shared by the CPU (src/backend_cpu.c)
+ * and GPU drivers, one particle per call, gather style (a particle sums over
+ * its neighbours and writes only its own entries):
+ *   flow_wall     dummy velocity (4.1/4.2) and stress (4.3) from the
+ *                 material in its support;
+ *   flow_rates    velocity gradient, strain rate and spin (3.14–3.15),
+ *                 acceleration (3.9) with artificial viscosity (3.10) and
+ *                 gravity, shear rate, Jaumann elastic stress rate (C1);
+ *   flow_advance  x, u, sigma = start-of-step value + a * rate, then the
+ *                 one-step return mapping (App. C) with mu(I) (2.14);
+ *   flow_shepard  the Shepard filter (3.12) into dsig (scratch).
+ * Density is constant (the paper's incompressible bulk, §2.1: 2.3 is not
+ * solved), so m_j = rho V_j. Stress is tension positive (stress.h). */
+#ifndef SPHSEG_FLOW_H
+#define SPHSEG_FLOW_H
+#include <math.h>
+#include "../particles.h"
+#include "grid.h"
+#include "momentum.h"
+#include "seg.h"
+#include "sph.h"
+#include "stress.h"
+#include "wall.h"
+
+typedef struct flow_ctx {
+    sph_ctx k;
+    mat_params m;
+    real rho;      /* bulk density, kg/m^3 */
+    real cs;       /* elastic sound speed, m/s (3.10, 3.19) */
+    real alpha_av; /* Monaghan coefficient of (3.10); 0 switches it off */
+    real g[3];     /* gravity, m/s^2 */
+    real damping;  /* zeta of the settling term -zeta u, 1/s (0 when off) */
+    seg_params sp; /* d_avg = d^S C + d^L (1 - C) for mu(I) */
+    wall_geom w;
+} flow_ctx;
+
+/* Dummy particle d: velocity and stress extrapolated from the material in
+ * its support (paper §4.1). A dummy with no material in reach takes the
+ * wall velocity and zero stress. */
+HD_INLINE void flow_wall(size_t d, particles_t *p, const grid_view *g, const flow_ctx *c)
+{
+    const sph_ctx *k = &c->k;
+    wall_sums ws = {0, {0, 0, 0}, {0, 0, 0, 0, 0, 0}, {0, 0, 0}};
+    real xd[3] = {p->x[0][d], p->x[1][d], p->x[2][d]}, aw[3], geff[3];
+    wall_accel(&c->w, xd, aw);
+    for (int a = 0; a < 3; ++a) geff[a] = c->g[a] - aw[a];
+    NBR_BEGIN(g, p->x, d, m)
+        if (p->kind[m] != KIND_MATERIAL) continue;
+        real xdm[3];
+        real r2 = grid_pair(k->dim, p->x, d, m, xdm);
+        if (r2 >= k->support2) continue;
+        real W = kernel_w((real)sqrt((double)r2), k->h, k->alpha);
+        real um[3] = {p->v[0][m], p->v[1][m], p->v[2][m]};
+        real sm[6] = {p->sig[0][m], p->sig[1][m], p->sig[2][m], p->sig[3][m], p->sig[4][m], p->sig[5][m]};
+        wall_add(&ws, W, p->vol[m], c->rho * p->vol[m], um, sm, geff, xdm);
+    NBR_END
+    /* the wall velocity at d: drum rotation omega e_z x (x_d - centre) */
+    real uw[3] = {0, 0, 0}, n[3], ud[3], sd[6];
+    if (c->w.type == WALL_DRUM) {
+        uw[0] = (real)(-c->w.omega * (double)(xd[1] - c->w.centre[1]));
+        uw[1] = (real)(c->w.omega * (double)(xd[0] - c->w.centre[0]));
+    }
+    int free_slip = wall_normal(&c->w, xd, n);
+    if (ws.w > 0) {
+        wall_velocity(&ws, uw, n, free_slip, ud);
+        wall_stress(&ws, sd);
+        /* (4.3) extrapolates with the hydrostatic term, which turns tensile
+         * for a dummy above the material it sees (a wall that reaches past
+         * a free surface); grains carry no tension: the cut-off of the
+         * return mapping applies to the wall stress too */
+        if (stress_pressure(sd) <= 0)
+            for (int q = 0; q < 6; ++q) sd[q] = 0;
+    } else {
+        for (int a = 0; a < 3; ++a) ud[a] = uw[a];
+        for (int q = 0; q < 6; ++q) sd[q] = 0;
+    }
+    for (int a = 0; a < 3; ++a) p->v[a][d] = ud[a];
+    for (int q = 0; q < 6; ++q) p->sig[q][d] = sd[q];
+}
+
+/* Material particle i: acc (3.9 + g), dsig (C1) and gdot from the current
+ * positions, velocities and stresses of i and its neighbours (material and
+ * dummy). Returns |acc|. */
+HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)
+{
+    const sph_ctx *k = &c->k;
+    real L[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, a[3] = {0, 0, 0};
+    real si[6] = {p->sig[0][i], p->sig[1][i], p->sig[2][i], p->sig[3][i], p->sig[4][i], p->sig[5][i]};
+    NBR_BEGIN(g, p->x, i, j)
+        if (j == i) continue;
+        real xij[3];
+        real r2 = grid_pair(k->dim, p->x, i, j, xij);
+        if (r2 >= k->support2) continue;
+        real f = kernel_f((real)sqrt((double)r2), k->h, k->alpha);
+        real gradW[3] = {f * xij[0], f * xij[1], f * xij[2]};
+        real uij[3] = {p->v[0][i] - p->v[0][j], p->v[1][i] - p->v[1][j], p->v[2][i] - p->v[2][j]};
+        mom_velgrad_add(L, p->vol[j], uij, gradW);
+        real Pi = c->alpha_av > 0 ? mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij) : R(0.0);
+        real sj[6] = {p->sig[0][j], p->sig[1][j], p->sig[2][j], p->sig[3][j], p->sig[4][j], p->sig[5][j]};
+        mom_accel_add(a, c->rho * p->vol[j], si, c->rho, sj, c->rho, Pi, gradW);
+    NBR_END
+    real eps[6], w[3], ds[6];
+    mom_strain_spin(L, eps, w);
+    stress_rate_elastic(si, eps, w, c->m.G, c->m.K, ds);
+    for (int q = 0; q < 6; ++q) p->dsig[q][i] = ds[q];
+    for (int d = 0; d < 3; ++d) p->acc[d][i] = a[d] + c->g[d] - c->damping * p->v[d][i];
+    p->gdot[i] = stress_shear_rate(eps);
+    real a2 = p->acc[0][i] * p->acc[0][i] + p->acc[1][i] * p->acc[1][i] + p->acc[2][i] * p->acc[2][i];
+    return (real)sqrt((double)a2);
+}
+
+/* Material particle i, a in seconds: x = x_n + a u, u = u_n + a acc,
+ * sigma = return_map(sigma_n + a dsig) with k_mu from mu(I) at the current
+ * shear rate, the trial pressure and d_avg(C). The position uses the
+ * velocity of the rate evaluation (read before u is overwritten). Returns
+ * the return-mapping case (stress_return_map). */
+HD_INLINE int flow_advance(size_t i, particles_t *p, real a, const flow_ctx *c)
+{
+    for (int d = 0; d < c->k.dim; ++d) {
+        p->x[d][i] = p->x_n[d][i] + a * p->v[d][i];
+        p->v[d][i] = p->v_n[d][i] + a * p->acc[d][i];
+    }
+    real s[6];
+    for (int q = 0; q < 6; ++q) s[q] = p->sig_n[q][i] + a * p->dsig[q][i];
+    real mu = stress_mu(&c->m, p->gdot[i], stress_pressure(s), seg_davg(&c->sp, p->C[i]));
+    int r = stress_return_map(s, stress_kmu(mu));
+    for (int q = 0; q < 6; ++q) p->sig[q][i] = s[q];
+    return r;
+}
+
+/* Shepard filter (3.12) for material particle i, over its material
+ * neighbours (self included), into dsig[] (the caller copies it back). */
+HD_INLINE void flow_shepard(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)
+{
+    const sph_ctx *k = &c->k;
+    real acc[6] = {0, 0, 0, 0, 0, 0}, wsum = 0;
+    NBR_BEGIN(g, p->x, i, j)
+        if (p->kind[j] != KIND_MATERIAL) continue;
+        real xij[3];
+        real r2 = grid_pair(k->dim, p->x, i, j, xij);
+        if (r2 >= k->support2) continue;
+        real sj[6] = {p->sig[0][j], p->sig[1][j], p->sig[2][j], p->sig[3][j], p->sig[4][j], p->sig[5][j]};
+        shepard_add(acc, &wsum, kernel_w((real)sqrt((double)r2), k->h, k->alpha), sj);
+    NBR_END
+    for (int q = 0; q < 6; ++q) p->dsig[q][i] = acc[q] / wsum; /* wsum >= W(0) > 0 */
+}
+
+#endif
