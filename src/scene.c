@@ -257,7 +257,7 @@ static const struct scene_range scene_ranges[] = {
     CFL(cfl_diffusion),
     CFL(cfl_segregation),
     CFL(cfl_kinematic),
-    CFL(cfl_flow),
+    RNG("Run", run, cfl_flow, 0, 10, LO_OPEN, ALWAYS), /* above 1 only to find the stability limit */
     POS("Run", run, dt_max),
     POS("Run", run, progress_s),
     POS("Geometry", geometry, dr),

@@ -1,0 +1,217 @@
+/* test_flow.c — the granular-flow bodies of src/physics/flow.h on lattice
+ * blocks, against exact answers:
+ *  - a uniform stress field exerts no force in the interior (the symmetric
+ *    form 3.9 sums 2 sigma/rho^2 m_j grad W_ij over a symmetric lattice):
+ *    acc = g to round-off;
+ *  - a linear velocity field u = A x gives the velocity gradient A in the
+ *    interior within the lattice-moment error of the kernel at h = 1.5 dr
+ *    (0.3 %, tests/test_kernel.c): the shear rate sqrt(2 e:e) and the
+ *    elastic stress rate 2G e + K tr(eps) I within 1 %;
+ *  - momentum: on a perturbed block with random velocities and stresses,
+ *    no gravity and no walls, sum m_i a_i = 0 to round-off (the pair terms
+ *    of 3.9 and 3.10 are antisymmetric);
+ *  - the Shepard filter (3.12) leaves a uniform stress unchanged;
+ *  - advance: a trial stress outside the cone ends on it (f = 0), a tensile
+ *    one at the apex (0); x and u advance with the rate-state velocity;
+ *  - wall motion: a drum dummy keeps its radius, turns by omega t and moves
+ *    at omega e_z x r. */
+#include "physics/flow.h"
+#include <string.h>
+#include "testutil.h"
+
+static const double DR = 1e-3;
+
+static flow_ctx make_ctx(void)
+{
+    flow_ctx c;
+    memset(&c, 0, sizeof c);
+    c.k = sph_make(2, (real)(1.5 * DR), (real)DR);
+    stress_moduli((real)1e7, (real)0.3, &c.m.G, &c.m.K);
+    c.m.rho_s = 2500, c.m.mu_s = (real)0.382, c.m.mu_d = (real)0.682, c.m.I0 = (real)0.279;
+    c.m.lambda = (real)0.001;
+    c.rho = 1500;
+    c.cs = stress_sound_speed(c.m.G, c.m.K, c.rho);
+    c.alpha_av = (real)0.1;
+    c.g[1] = (real)-9.81;
+    c.sp.d_small = (real)0.25e-3, c.sp.d_large = (real)0.5e-3;
+    c.w.type = WALL_BOX;
+    return c;
+}
+
+/* Interior particle of an n x n block: the one nearest the centre. */
+static size_t centre(const particles_t *p, int n)
+{
+    return tu_find(p, (int64_t)((n / 2) * n + n / 2));
+}
+
+static void test_uniform_stress(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    int n = 12;
+    tu_block2d(&p, n, n, DR, 0, 0);
+    real s0[6] = {-3000, -5000, -2400, 700, 0, 0};
+    for (size_t i = 0; i < p.n; ++i)
+        for (int q = 0; q < 6; ++q) p.sig[q][i] = s0[q];
+    nbr_build(&g, &p, R(2.0) * c.k.h);
+    size_t i = centre(&p, n);
+    flow_rates(i, &p, &g.view, &c);
+    double scale = 5000 / (c.rho * DR); /* one term's size */
+    assert_true(fabs(p.acc[0][i]) < RT(1e-10) * scale);
+    assert_true(fabs(p.acc[1][i] - c.g[1]) < RT(1e-10) * scale);
+    assert_true(p.gdot[i] == 0);
+    nbr_free(&g);
+    part_free(&p);
+}
+
+static void test_linear_velocity(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    int n = 12;
+    tu_block2d(&p, n, n, DR, 0, 0);
+    const double A[2][2] = {{0.3, 2.0}, {-0.5, -0.1}}; /* du_a/dx_b, 1/s */
+    for (size_t k = 0; k < p.n; ++k)
+        for (int a = 0; a < 2; ++a) p.v[a][k] = (real)(A[a][0] * p.x[0][k] + A[a][1] * p.x[1][k]);
+    nbr_build(&g, &p, R(2.0) * c.k.h);
+    size_t i = centre(&p, n);
+    flow_rates(i, &p, &g.view, &c);
+    real eps[6] = {(real)A[0][0], (real)A[1][1], 0, (real)(0.5 * (A[0][1] + A[1][0])), 0, 0};
+    real w[3] = {(real)(0.5 * (A[0][1] - A[1][0])), 0, 0};
+    real s0[6] = {0, 0, 0, 0, 0, 0}, ds[6];
+    stress_rate_elastic(s0, eps, w, c.m.G, c.m.K, ds);
+    double gd = stress_shear_rate(eps);
+    assert_true(fabs(p.gdot[i] - gd) < 0.01 * gd);
+    double dmax = 0;
+    for (int q = 0; q < 6; ++q) dmax = fmax(dmax, fabs(ds[q]));
+    for (int q = 0; q < 6; ++q) assert_true(fabs(p.dsig[q][i] - ds[q]) < 0.01 * dmax);
+    nbr_free(&g);
+    part_free(&p);
+}
+
+/* Deterministic pseudo-random numbers in [-1, 1). */
+static double rnd(unsigned *s)
+{
+    *s = *s * 1103515245u + 12345u;
+    return ((*s >> 8) & 0xffff) / 32768.0 - 1.0;
+}
+
+static void test_momentum_conservation(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    c.g[1] = 0;
+    int n = 10;
+    unsigned seed = 7;
+    tu_block2d(&p, n, n, DR, 0, 0);
+    for (size_t k = 0; k < p.n; ++k) {
+        p.x[0][k] += (real)(0.2 * DR * rnd(&seed));
+        p.x[1][k] += (real)(0.2 * DR * rnd(&seed));
+        p.v[0][k] = (real)(0.05 * rnd(&seed));
+        p.v[1][k] = (real)(0.05 * rnd(&seed));
+        for (int q = 0; q < 6; ++q) p.sig[q][k] = (real)(-1000 + 500 * rnd(&seed));
+    }
+    nbr_build(&g, &p, R(2.0) * c.k.h);
+    double sum[2] = {0, 0}, mag = 0;
+    for (size_t k = 0; k < p.n; ++k) {
+        flow_rates(k, &p, &g.view, &c);
+        for (int a = 0; a < 2; ++a) sum[a] += c.rho * p.vol[k] * p.acc[a][k];
+        mag += c.rho * p.vol[k] * fabs(p.acc[0][k]);
+    }
+    assert_true(mag > 0);
+    assert_true(fabs(sum[0]) < RT(1e-12) * mag && fabs(sum[1]) < RT(1e-12) * mag);
+    nbr_free(&g);
+    part_free(&p);
+}
+
+static void test_shepard_uniform(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    tu_block2d(&p, 8, 8, DR, 3, 3);
+    for (size_t k = 0; k < p.n; ++k) {
+        real s0[6] = {-100, -200, -90, 15, 0, 0};
+        for (int q = 0; q < 6; ++q) p.sig[q][k] = p.kind[k] == KIND_MATERIAL ? s0[q] : 12345;
+    }
+    nbr_build(&g, &p, R(2.0) * c.k.h);
+    for (size_t k = 0; k < p.n; ++k) {
+        if (p.kind[k] != KIND_MATERIAL) continue;
+        flow_shepard(k, &p, &g.view, &c); /* dummies (12345) must not enter */
+        for (int q = 0; q < 6; ++q) assert_true(fabs(p.dsig[q][k] - p.sig[q][k]) < RT(1e-12) * 200);
+    }
+    nbr_free(&g);
+    part_free(&p);
+}
+
+static void test_advance(void **st)
+{
+    (void)st;
+    particles_t p;
+    flow_ctx c = make_ctx();
+    part_alloc(&p, 2, 2);
+    p.n = 2;
+    for (size_t i = 0; i < 2; ++i) {
+        p.x_n[0][i] = 1, p.x_n[1][i] = 2;
+        p.v_n[0][i] = 0.5, p.v_n[1][i] = 0;
+        p.v[0][i] = 0.25, p.v[1][i] = -1; /* rate-state velocity */
+        p.acc[0][i] = 0, p.acc[1][i] = -10;
+        p.C[i] = (real)0.5;
+        p.gdot[i] = 2;
+    }
+    /* particle 0: compressive trial with a large shear -> on the cone */
+    real s0[6] = {-1000, -1000, -1000, 900, 0, 0};
+    /* particle 1: tensile trial -> apex */
+    real s1[6] = {500, 200, 100, 10, 0, 0};
+    for (int q = 0; q < 6; ++q) p.sig_n[q][0] = s0[q], p.sig_n[q][1] = s1[q], p.dsig[q][0] = p.dsig[q][1] = 0;
+    real a = (real)0.01;
+    assert_int_equal(flow_advance(0, &p, a, &c), 1);
+    assert_int_equal(flow_advance(1, &p, a, &c), 2);
+    assert_true(fabs(p.x[0][0] - (1 + 0.01 * 0.25)) < RT(1e-14) && fabs(p.x[1][0] - (2 - 0.01)) < RT(1e-14));
+    assert_true(fabs(p.v[0][0] - 0.5) < RT(1e-14) && fabs(p.v[1][0] + 0.1) < RT(1e-14));
+    real s[6];
+    for (int q = 0; q < 6; ++q) s[q] = p.sig[q][0];
+    real pr = stress_pressure(s);
+    real mu = stress_mu(&c.m, 2, pr, seg_davg(&c.sp, (real)0.5));
+    assert_true(fabs(pr - 1000) < RT(1e-9) * 1000); /* g = sqrt(J2): the pressure stays */
+    assert_true(fabs(sqrt(stress_J2(s)) - stress_kmu(mu) * pr) < RT(1e-9) * 1000);
+    for (int q = 0; q < 6; ++q) assert_true(p.sig[q][1] == 0);
+    part_free(&p);
+}
+
+static void test_drum_wall_motion(void **st)
+{
+    (void)st;
+    wall_geom w;
+    memset(&w, 0, sizeof w);
+    w.type = WALL_DRUM;
+    w.radius = (real)0.035;
+    w.omega = -5 * 2 * M_PI / 60; /* 5 rpm clockwise */
+    real X0[3] = {(real)0.036, 0, 0}, x[3], u[3];
+    double t = 1.5;
+    wall_motion(&w, X0, t, x, u);
+    assert_true(fabs(hypot(x[0], x[1]) - 0.036) < RT(1e-14));
+    assert_true(fabs(atan2(x[1], x[0]) - w.omega * t) < RT(1e-12));
+    assert_true(fabs(u[0] + w.omega * x[1]) < RT(1e-14) && fabs(u[1] - w.omega * x[0]) < RT(1e-14));
+    real n[3];
+    w.slip_base = 1;
+    assert_int_equal(wall_normal(&w, x, n), 1);
+    assert_true(fabs(n[0] * x[0] + n[1] * x[1] + 0.036) < RT(1e-12)); /* points to the centre */
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_uniform_stress),        cmocka_unit_test(test_linear_velocity),
+        cmocka_unit_test(test_momentum_conservation), cmocka_unit_test(test_shepard_uniform),
+        cmocka_unit_test(test_advance),               cmocka_unit_test(test_drum_wall_motion),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

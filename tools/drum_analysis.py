@@ -1,0 +1,295 @@
+#!/usr/bin/env python3
+"""Analysis of a rotating-drum run (inputs/drum_2d_EV.yml, drum_2d_EN.yml),
+after paper §6:
+
+  tools/drum_analysis.py OUTDIR [--times 20 30 40] [--png PREFIX]
+
+prints, per snapshot time asked (nearest snapshot): the dynamic angle of the
+free surface and how flat it is (rolling regime), the largest speed on the
+mid-chord (the surface speed), the segregation index (below), and writes
+  PREFIX_midchord.png  speed, shear rate and C along the mid-chord (figs 19-21, 26)
+  PREFIX_rates.png     the three concentration-rate contributions along the
+                       mid-chord (figs 28-29): C1 = -F grad_g V,
+                       C2 = -V F' grad_g C, C3 = div(D grad C)
+  PREFIX_maps.png      C, speed and shear rate over the bed (figs 17, 18, 24, 25)
+  PREFIX_global.png    mean C and the drift of sum C_i V_i against time (fig 27)
+
+Definitions.
+Free surface: the highest material particle in vertical bins of width 2 dr;
+a line is fitted to the bins in the middle 60 % of the bed's horizontal
+extent; dynamic angle = atan |slope|; flatness = rms distance of those bins
+from the line, in dr. Mid-chord: from M, the foot of the perpendicular from
+the drum centre to the surface line, along the inward normal of the line
+down to the drum wall; depth d_mc = distance from M, normalised by R (the
+paper's normalised mid-chord depth). Fields on the mid-chord are Shepard
+interpolations of the material particles within 2h.
+Segregation index: (<r> - <r>_C) / <r>, with <r> the mean distance of the
+material particles from the bed's centroid and <r>_C the same mean weighted
+by C: positive when small grains gather in the core (figs 24-25), 0 when
+mixed.
+Concentration-rate contributions: SPH gradients with a renormalised kernel
+gradient (first-order consistent), grad_g = (g/|g|) . grad, and the
+diffusion term in the form of eq. (3.8); V, D from eq. (2.7) with the run's
+chi_V, chi_D, d^S, d^L and the snapshot's shear rate.
+"""
+import argparse
+import os
+import sys
+
+import numpy as np
+import yaml
+from scipy.spatial import cKDTree
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import snap  # noqa: E402
+
+
+def used_params(outdir):
+    with open(os.path.join(outdir, "used_params.yml")) as f:
+        return yaml.safe_load(f)
+
+
+class Drum:
+    """One snapshot of a drum run with the derived quantities."""
+
+    def __init__(self, path, par):
+        s = snap.read_snapshot(path)
+        self.t = float(s["Time"])
+        m = np.asarray(s["Kind"]) == snap.MATERIAL
+        self.x = np.asarray(s["Coordinates"])[m, :2]
+        self.v = np.asarray(s["Velocities"])[m, :2]
+        self.C = np.asarray(s["Concentration"])[m]
+        self.gdot = np.asarray(s["ShearRate"])[m]
+        self.vol = np.asarray(s["Volume"])[m]
+        self.speed = np.hypot(self.v[:, 0], self.v[:, 1])
+        g = par["Geometry"]
+        self.dr, self.R = g["dr"], g["radius"]
+        self.h = g["h_factor"] * self.dr
+        self.par = par
+        self.tree = cKDTree(self.x)
+        self._surface()
+
+    def _surface(self):
+        x, dr = self.x, self.dr
+        lo, hi = x[:, 0].min(), x[:, 0].max()
+        edges = np.arange(lo, hi + 2 * dr, 2 * dr)
+        k = np.digitize(x[:, 0], edges)
+        bx, by = [], []
+        for b in np.unique(k):
+            sel = k == b
+            j = np.argmax(np.where(sel, x[:, 1], -np.inf))
+            bx.append(x[j, 0])
+            by.append(x[j, 1])
+        bx, by = np.array(bx), np.array(by)
+        mid = 0.5 * (lo + hi)
+        core = np.abs(bx - mid) <= 0.3 * (hi - lo)
+        a, b = np.polyfit(bx[core], by[core], 1)
+        self.slope = a
+        self.angle = float(np.degrees(np.arctan(abs(a))))
+        # distance of the bins from the line y = a x + b
+        self.flatness = float(np.sqrt(np.mean(((by[core] - (a * bx[core] + b)) / np.hypot(1, a)) ** 2)) / dr)
+        # foot of the perpendicular from the centre (0, 0) onto a x - y + b = 0
+        n = np.array([a, -1.0]) / np.hypot(a, 1.0)  # unit normal, points down into the bed
+        self.M = -b * np.array([a, -1.0]) / (a * a + 1.0)
+        self.n = n if n[1] < 0 else -n
+
+    def interp(self, pts, field):
+        """Shepard interpolation of a particle field at points pts (k x 2)."""
+        out = np.full(len(pts), np.nan)
+        for q, p in enumerate(pts):
+            idx = self.tree.query_ball_point(p, 2 * self.h)
+            if not idx:
+                continue
+            r = np.hypot(*(self.x[idx] - p).T) / self.h
+            w = np.where(r < 2, (1 - r / 2) ** 4 * (2 * r + 1), 0) * self.vol[idx]
+            if w.sum() > 0:
+                out[q] = np.dot(w, field[idx]) / w.sum()
+        return out
+
+    def midchord(self, npts=120):
+        """Depth d_mc / R and sample points from the surface to the wall."""
+        # |M + d n| = R: d^2 + 2 d M.n + |M|^2 - R^2 = 0
+        Mn, M2 = float(np.dot(self.M, self.n)), float(np.dot(self.M, self.M))
+        dmax = -Mn + np.sqrt(max(Mn * Mn - M2 + self.R ** 2, 0.0))
+        d = np.linspace(0, dmax, npts)
+        return d / self.R, self.M[None, :] + d[:, None] * self.n[None, :]
+
+    def segregation_index(self):
+        c = np.average(self.x, axis=0, weights=self.vol)
+        r = np.hypot(*(self.x - c).T)
+        return float((np.average(r, weights=self.vol) - np.average(r, weights=self.vol * self.C))
+                     / np.average(r, weights=self.vol))
+
+    def rate_terms(self):
+        """C1 = -F grad_g V, C2 = -V F' grad_g C, C3 = div(D grad C), 1/s."""
+        seg = self.par["Segregation"]
+        dS, dL = seg["d_small"], seg["d_large"]
+        C = self.C
+        davg = dS * C + dL * (1 - C)
+        V = seg["chi_V"] * self.gdot * davg
+        D = seg["chi_D"] * self.gdot * davg ** 2
+        F = C * (1 - C)
+        dF = 1 - 2 * C
+        if seg.get("flux") == "asymmetric":
+            A, kap = seg["A"], seg["kappa"]
+            F = A * C * (1 - C) * (1 - kap * C)
+            dF = A * (3 * kap * C * C - 2 * (1 + kap) * C + 1)
+        gv = np.asarray(self.par["Physics"]["gravity"][:2], float)
+        ghat = gv / np.linalg.norm(gv)
+        n = len(C)
+        h = self.h
+        alpha = 7.0 / (4 * np.pi * h * h)
+        pairs = self.tree.query_pairs(2 * h, output_type="ndarray")
+        i, j = np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
+        xij = self.x[i] - self.x[j]
+        r = np.hypot(xij[:, 0], xij[:, 1])
+        q = r / h
+        f = -5 * alpha * (1 - q / 2) ** 3 / (h * h)  # (1/r) dW/dr
+        gW = f[:, None] * xij  # grad_i W_ij
+        Vj = self.vol[j]
+        # renormalisation L_i = (sum_j V_j (x_j - x_i) (x) grad_i W_ij)^-1
+        Mm = np.zeros((n, 2, 2))
+        np.add.at(Mm, i, (Vj[:, None, None] * (-xij)[:, :, None] * gW[:, None, :]))
+        det = Mm[:, 0, 0] * Mm[:, 1, 1] - Mm[:, 0, 1] * Mm[:, 1, 0]
+        ok = np.abs(det) > 1e-6
+        Linv = np.zeros_like(Mm)
+        Linv[ok, 0, 0], Linv[ok, 1, 1] = Mm[ok, 1, 1] / det[ok], Mm[ok, 0, 0] / det[ok]
+        Linv[ok, 0, 1], Linv[ok, 1, 0] = -Mm[ok, 0, 1] / det[ok], -Mm[ok, 1, 0] / det[ok]
+        Linv[~ok] = np.eye(2)
+
+        def grad_g(fld):
+            g = np.zeros((n, 2))
+            np.add.at(g, i, (Vj * (fld[j] - fld[i]))[:, None] * gW)
+            g = np.einsum("nab,nb->na", Linv.transpose(0, 2, 1), g)
+            return g @ ghat
+
+        c3 = np.zeros(n)
+        xg = np.einsum("ka,ka->k", xij, gW) / (r * r + 0.01 * h * h)
+        np.add.at(c3, i, Vj * (D[i] + D[j]) * (C[i] - C[j]) * xg)
+        return -F * grad_g(V), -V * dF * grad_g(C), c3
+
+
+def pick(paths, times):
+    ts = np.array([snap.snapshot_time(p) for p in paths])
+    return [paths[int(np.argmin(np.abs(ts - t)))] for t in times]
+
+
+def plot_midchord(drums, png):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 3, figsize=(11, 3.6), sharey=True)
+    for d in drums:
+        dm, pts = d.midchord()
+        lab = "t = %g s" % d.t
+        ax[0].plot(100 * d.interp(pts, d.speed), dm, label=lab)
+        ax[1].plot(d.interp(pts, d.gdot), dm, label=lab)
+        ax[2].plot(d.interp(pts, d.C), dm, label=lab)
+    ax[0].set_xlabel("speed |u| (cm/s)")
+    ax[1].set_xlabel(r"shear rate $\dot\gamma$ (1/s)")
+    ax[2].set_xlabel("small-grain concentration C")
+    ax[0].set_ylabel(r"mid-chord depth $d_{mc}/R$")
+    ax[0].invert_yaxis()
+    for a in ax:
+        a.grid(alpha=0.3)
+    ax[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
+
+
+def plot_rates(drums, png):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, len(drums), figsize=(3.6 * len(drums), 3.6), sharey=True, squeeze=False)
+    for a, d in zip(ax[0], drums):
+        dm, pts = d.midchord()
+        names = [r"$\dot C_1 = -F\nabla_g V$", r"$\dot C_2 = -V F'\nabla_g C$", r"$\dot C_3 = \nabla\cdot(D\nabla C)$"]
+        for name, term in zip(names, d.rate_terms()):
+            a.plot(d.interp(pts, term), dm, label=name)
+        a.set_title("t = %g s" % d.t, fontsize=9)
+        a.set_xlabel("rate (1/s)")
+        a.grid(alpha=0.3)
+    ax[0][0].set_ylabel(r"mid-chord depth $d_{mc}/R$")
+    ax[0][0].invert_yaxis()
+    ax[0][0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
+
+
+def plot_maps(d, png):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 3, figsize=(12, 4))
+    ms = (d.dr / (2.2 * d.R) * 3.0 * 72) ** 2  # markers about one spacing wide (points^2)
+    for a, (fld, lab, cmap) in zip(ax, [(d.C, "C", "coolwarm"), (100 * d.speed, "|u| (cm/s)", "viridis"),
+                                        (d.gdot, r"$\dot\gamma$ (1/s)", "magma")]):
+        sc = a.scatter(d.x[:, 0] * 1e3, d.x[:, 1] * 1e3, c=fld, s=ms, cmap=cmap, linewidths=0)
+        th = np.linspace(0, 2 * np.pi, 200)
+        a.plot(d.R * 1e3 * np.cos(th), d.R * 1e3 * np.sin(th), "k-", lw=0.8)
+        dm, pts = d.midchord()
+        a.plot(pts[:, 0] * 1e3, pts[:, 1] * 1e3, "w--", lw=0.8)
+        a.set_aspect("equal")
+        a.set_title("%s, t = %g s" % (lab, d.t), fontsize=9)
+        a.set_xlabel("x (mm)")
+        fig.colorbar(sc, ax=a, shrink=0.7)
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
+
+
+def plot_global(outdir, png):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    dg = snap.read_diagnostics(outdir)
+    d0 = Drum(snap.list_snapshots(outdir)[0], used_params(outdir))
+    total = d0.vol.sum()
+    fig, ax = plt.subplots(1, 2, figsize=(9, 3.4))
+    ax[0].plot(dg["time"], dg["small_volume"] / total)
+    ax[0].set_xlabel("t (s)")
+    ax[0].set_ylabel(r"global concentration $\sum C_i V_i / \sum V_i$")
+    ax[1].semilogy(dg["time"], np.maximum(np.abs(dg["small_volume_drift"]), 1e-17))
+    ax[1].set_xlabel("t (s)")
+    ax[1].set_ylabel(r"|relative drift of $\sum C_i V_i$|")
+    for a in ax:
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("outdir")
+    ap.add_argument("--times", type=float, nargs="+", help="snapshot times (default: all)")
+    ap.add_argument("--png", help="plot file prefix")
+    a = ap.parse_args()
+    par = used_params(a.outdir)
+    paths = snap.list_snapshots(a.outdir)
+    if a.times:
+        paths = pick(paths, a.times)
+    drums = [Drum(p, par) for p in paths]
+    print("%8s %9s %10s %12s %12s %10s" % ("t (s)", "angle", "flatness", "max |u| mc", "seg index", "C range"))
+    for d in drums:
+        dm, pts = d.midchord()
+        print("%8.3f %8.2f° %8.2f dr %9.2f cm/s %12.4f %5.3f-%5.3f"
+              % (d.t, d.angle, d.flatness, 100 * np.nanmax(d.interp(pts, d.speed)), d.segregation_index(),
+                 d.C.min(), d.C.max()))
+    dg = snap.read_diagnostics(a.outdir)
+    print("max |relative drift of sum C_i V_i|: %.3e" % np.abs(dg["small_volume_drift"]).max())
+    if a.png:
+        sel = drums[1:] if len(drums) > 3 and not a.times else drums
+        sel = sel[-3:] if not a.times else sel
+        plot_midchord(sel, a.png + "_midchord.png")
+        plot_rates(sel, a.png + "_rates.png")
+        plot_maps(drums[-1], a.png + "_maps.png")
+        plot_global(a.outdir, a.png + "_global.png")
+        print("wrote %s_{midchord,rates,maps,global}.png" % a.png)
+
+
+if __name__ == "__main__":
+    main()
