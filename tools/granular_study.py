@@ -4,6 +4,7 @@
 
   tools/granular_study.py run --out DIR [--jobs N] [--sphseg B] [--sphseg-single B] [--quick]
   tools/granular_study.py analyze --out DIR [--docs docs]
+  tools/granular_study.py chart --out DIR [--docs docs]     # from the CSV files alone
 
 run: every case below as its own sphseg process, N at a time (one OpenMP
 thread each unless the case says more), recording exit status, wall time,
@@ -237,31 +238,71 @@ def chart_stability(res, png):
 
 
 def chart_trades(res, runs, png):
+    """Top: error against cost (the reference of each trade is the dashed
+    line at its cost); bottom: surface speed and dynamic angle."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(1, 3, figsize=(12, 3.6))
-    for a, pre, lab in [(ax[0], "res_", "dr (mm)"), (ax[1], "mod_", "E (MPa)"), (ax[2], "prec", "")]:
+    fig, ax = plt.subplots(2, 3, figsize=(12, 6.4))
+    trades = [("res_", "resolution: dr (mm)", "res_1"), ("mod_", "elastic modulus: E (MPa)", "mod_10"),
+              ("prec", "precision", "cfl_0.1")]
+    for k, (pre, title, ref) in enumerate(trades):
         if pre == "prec":
-            rows = [res.get("cfl_0.1"), res.get("prec_single")]
-            tags = ["double", "single"]
+            rows = [("double", res.get("cfl_0.1")), ("single", res.get("prec_single"))]
         else:
-            rows = sorted([r for n, r in res.items() if n.startswith(pre)], key=lambda r: float(r["name"][4:]))
-            tags = [r["name"][4:] for r in rows]
-        rows_ok = [(t, r) for t, r in zip(tags, rows) if r and r["rc"] == 0]
-        for t, r in rows_ok:
+            rows = sorted([(n[4:], r) for n, r in res.items() if n.startswith(pre)], key=lambda t: float(t[0]))
+        rows = [(t, r) for t, r in rows if r and r["rc"] == 0]
+        a = ax[0][k]
+        for t, r in rows:
             cpu = r["wall_s"] * int(runs[r["name"]]["threads"])
-            a.loglog(cpu, max(r.get("profile_err", 0), 1e-4), "o")
-            a.annotate(t, (cpu, max(r.get("profile_err", 0), 1e-4)), fontsize=8, xytext=(3, 3),
-                       textcoords="offset points")
+            if r["name"] == ref:
+                a.axvline(cpu, ls="--", color="0.5")
+                a.annotate("reference " + t, (cpu, 0.5), xycoords=("data", "axes fraction"), rotation=90,
+                           fontsize=7, xytext=(-9, 0), textcoords="offset points", va="center")
+                continue
+            a.loglog(cpu, r["profile_err"], "o", color="C0")
+            a.annotate(t, (cpu, r["profile_err"]), fontsize=8, xytext=(3, 3), textcoords="offset points")
         a.set_xlabel("cost: wall time x threads (core-s)")
         a.set_ylabel("mid-chord speed error / surface speed")
-        a.set_title({"res_": "resolution " + lab, "mod_": "elastic modulus " + lab, "prec": "precision"}[pre],
-                    fontsize=9)
+        a.set_title(title, fontsize=9)
         a.grid(alpha=0.3, which="both")
+        b = ax[1][k]
+        xs = list(range(len(rows)))
+        b.plot(xs, [100 * r["surface_speed"] for _, r in rows], "o-", color="C0")
+        b.set_ylabel("surface speed (cm/s)", color="C0")
+        b2 = b.twinx()
+        b2.plot(xs, [r["angle"] for _, r in rows], "s--", color="C1")
+        b2.set_ylabel("dynamic angle (deg)", color="C1")
+        b.set_xticks(xs)
+        b.set_xticklabels([t for t, _ in rows])
+        b.set_xlabel(title.split(": ")[-1] + " (t = %g s)" % rows[0][1]["t"])
+        b.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(png, dpi=120)
     plt.close(fig)
+
+
+def cmd_chart(args):
+    """Redraw the stability and trade charts and the table from results.csv
+    and runs.csv alone (the noise chart needs the snapshots)."""
+    runs = load_runs(args.out)
+    res = {}
+    with open(os.path.join(args.out, "results.csv")) as f:
+        for r in csv.DictReader(f):
+            row = {"name": r["name"], "rc": int(r["rc"]), "wall_s": float(r["wall_s"]),
+                   "steps": int(r["steps"]), "error": r["error"]}
+            for k in ("noise", "angle", "surface_speed", "seg_index", "profile_err"):
+                if r.get(k):
+                    row[k] = float(r[k])
+            res[r["name"]] = row
+    for name, r in res.items():
+        if "angle" in r:
+            with open(os.path.join(args.out, name, "used_params.yml")) as f:
+                import yaml
+                r["t"] = yaml.safe_load(f)["Run"]["t_end"]
+    chart_stability(res, os.path.join(args.docs, "granular_stability.png"))
+    chart_trades(res, runs, os.path.join(args.docs, "granular_tradeoffs.png"))
+    table(res, os.path.join(args.docs, "granular_study.md"))
 
 
 def table(res, md):
@@ -298,8 +339,11 @@ def main():
     a = sub.add_parser("analyze")
     a.add_argument("--out", required=True)
     a.add_argument("--docs", default=os.path.join(HERE, "..", "docs"))
+    c = sub.add_parser("chart", help="redraw the stability and trade charts from the CSV files")
+    c.add_argument("--out", required=True)
+    c.add_argument("--docs", default=os.path.join(HERE, "..", "docs"))
     args = ap.parse_args()
-    cmd_run(args) if args.cmd == "run" else cmd_analyze(args)
+    {"run": cmd_run, "analyze": cmd_analyze, "chart": cmd_chart}[args.cmd](args)
 
 
 if __name__ == "__main__":
