@@ -134,7 +134,9 @@ static int outside(const sim_t *s, size_t i)
     const wall_geom *w = &s->flow.w;
     double h = s->seg.k.h, x = p->x[0][i], y = p->x[1][i];
     if (w->type == WALL_DRUM) return hypot(x - w->centre[0], y - w->centre[1]) > w->radius + h;
-    return x < -h || x > w->width + h || y < -h;
+    double z = p->x[2][i];
+    int outz = w->depth > 0 && (z < -h || z > w->depth + h);
+    return x < -h || x > w->width + h || y < -h || outz;
 }
 
 static void check_finite(const sim_t *s, diag *d)

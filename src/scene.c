@@ -76,6 +76,7 @@ static const cyaml_schema_field_t geometry_fields[] = {
     FLT(scene_geometry, h_factor, OPT),
     FLT(scene_geometry, height, OPT),
     FLT(scene_geometry, width, OPT),
+    FLT(scene_geometry, depth, OPT),
     FLT(scene_geometry, radius, OPT),
     FLT(scene_geometry, fill, OPT),
     CYAML_FIELD_END,
@@ -192,6 +193,7 @@ static const struct scene_default scene_defaults[] = {
     {"Geometry", "h_factor", "1.5"},
     {"Geometry", "height", "0.087"},
     {"Geometry", "width", "0.037"},
+    {"Geometry", "depth", "0.037"},
     {"Geometry", "radius", "0.035"},
     {"Geometry", "fill", "0.42"},
     {"Kinematics", "velocity", "oscillatory_shear"},
@@ -264,6 +266,7 @@ static const struct scene_range scene_ranges[] = {
     RNG("Geometry", geometry, h_factor, 1, 3, CLOSED, ALWAYS),
     POS("Geometry", geometry, height),
     POS("Geometry", geometry, width),
+    POS("Geometry", geometry, depth),
     POS("Geometry", geometry, radius),
     RNG("Geometry", geometry, fill, 0, 1, LO_OPEN | HI_OPEN, ALWAYS),
     RNG("Kinematics", kinematics, gamma0, 0, INFINITY, HI_OPEN, ALWAYS),
@@ -1047,8 +1050,14 @@ static int check_ranges(struct scene_ctx *c, const struct scene *s)
 static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g)
 {
     char a[32], b[32];
-    if (g->dim == 3) return fail_at(c, "Geometry:dim", "3D is not yet supported (use 2)");
-    if (g->dim != 2) return fail_at(c, "Geometry:dim", "must be 2, got %u", g->dim);
+    if (g->dim == 3 && g->type != GEOM_COLUMN)
+        return fail_at(c, "Geometry:dim", "3D is supported for Geometry:type column only (use 2)");
+    if (g->dim != 2 && g->dim != 3) return fail_at(c, "Geometry:dim", "must be 2 or 3, got %u", g->dim);
+    if (g->dim == 3 && g->depth < 4 * g->dr) {
+        fmt_double(a, sizeof a, 4 * g->dr);
+        fmt_double(b, sizeof b, g->depth);
+        return fail_at(c, "Geometry:depth", "must be >= 4*dr = %s, got %s", a, b);
+    }
     if (g->type == GEOM_DRUM) {
         fmt_double(a, sizeof a, 8 * g->dr);
         fmt_double(b, sizeof b, g->radius);

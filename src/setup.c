@@ -146,9 +146,46 @@ static void setup_stress(sim_t *s)
     }
 }
 
+/* 3D column: material on the lattice of spacing dr filling [0, W] x [0, H]
+ * x [0, D]; nl = ceil(2h/dr) layers of dummies below the base (corners
+ * included) and outside the four side walls, which reach nl layers above
+ * the material; the top is a free surface. */
+static void setup_box3d(sim_t *s)
+{
+    const struct scene *sc = s->sc;
+    const struct scene_geometry *g = &sc->geometry;
+    double dr = g->dr, vol = dr * dr * dr;
+    long nx = lround(g->width / dr), ny = lround(g->height / dr), nz = lround(g->depth / dr);
+    long nl = (long)ceil(2.0 * g->h_factor - 1e-9);
+    size_t cap = (size_t)((nx + 2 * nl) * (ny + 2 * nl) * (nz + 2 * nl));
+    setup_check_memory(sc, cap);
+    part_alloc(&s->p, 3, cap);
+    particles_t *p = &s->p;
+    size_t k = 0;
+    double H = ny * dr, split = sc->initial.split * H;
+    for (int pass = 0; pass < 2; ++pass) /* material first, then dummies */
+        for (long j = -nl; j < ny + nl; ++j)
+            for (long q = -nl; q < nz + nl; ++q)
+                for (long i = -nl; i < nx + nl; ++i) {
+                    int inside = i >= 0 && i < nx && q >= 0 && q < nz;
+                    if (inside && j >= ny) continue; /* above the free surface */
+                    int mat = inside && j >= 0;
+                    if (mat != (pass == 0)) continue;
+                    double y = (j + 0.5) * dr;
+                    setup_put(p, k, (i + 0.5) * dr, y, mat ? KIND_MATERIAL : KIND_DUMMY, vol);
+                    p->X0[2][k] = p->x[2][k] = (real)((q + 0.5) * dr);
+                    if (mat) p->C[k] = (real)(y <= split ? sc->initial.C_below : sc->initial.C_above);
+                    k++;
+                }
+    p->n = k;
+    s->n_material = (size_t)(nx * ny * nz);
+    s->surface_y = H;
+}
+
 void setup_particles(sim_t *s)
 {
     if (s->sc->geometry.type == GEOM_DRUM) setup_drum(s);
+    else if (s->sc->geometry.dim == 3) setup_box3d(s);
     else setup_box(s);
     if (s->flow_on) setup_stress(s);
 }
@@ -194,6 +231,7 @@ void setup_contexts(sim_t *s)
     wall_geom *w = &f->w;
     w->type = sc->geometry.type == GEOM_DRUM ? WALL_DRUM : WALL_BOX;
     w->width = (real)(lround(sc->geometry.width / sc->geometry.dr) * sc->geometry.dr);
+    w->depth = sc->geometry.dim == 3 ? (real)(lround(sc->geometry.depth / sc->geometry.dr) * sc->geometry.dr) : 0;
     w->centre[0] = w->centre[1] = w->centre[2] = 0;
     w->radius = (real)sc->geometry.radius;
     w->omega = sc->walls.rpm * 2.0 * M_PI / 60.0 * (sc->walls.direction == ROT_CLOCKWISE ? -1.0 : 1.0);

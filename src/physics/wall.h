@@ -9,14 +9,16 @@
 #include "hd.h"
 
 /* The rigid container of a scene. Box (shear box, column): a base below
- * y = 0 and side walls at x = 0 and x = width, at rest. Drum: a circle of
+ * y = 0 and side walls at x = 0 and x = width (in 3D also z = 0 and
+ * z = depth), at rest. Drum: a circle of
  * radius R about centre, turning at omega (rad/s, counter-clockwise
  * positive) about the z axis. */
 enum wall_type { WALL_BOX = 0, WALL_DRUM = 1 };
 
 typedef struct wall_geom {
     int type;        /* enum wall_type */
-    real width;      /* box: inner width, m */
+    real width;      /* box: inner width (x), m */
+    real depth;      /* 3D box: inner depth (z), m; 0 in 2D */
     real centre[3];  /* drum: axis position, m */
     real radius;     /* drum: inner radius R, m */
     double omega;    /* drum: angular velocity, rad/s, counter-clockwise > 0 */
@@ -56,7 +58,11 @@ HD_INLINE int wall_normal(const wall_geom *w, const real x[3], real n[3])
         n[1] = 1;
         return w->slip_base;
     }
-    n[0] = x[0] < R(0.5) * w->width ? R(1.0) : R(-1.0);
+    /* side walls: the one the dummy lies furthest beyond (x or, in 3D, z) */
+    real ox = x[0] < 0 ? -x[0] : x[0] - w->width;
+    real oz = w->depth > 0 ? (x[2] < 0 ? -x[2] : x[2] - w->depth) : (real)-1e30;
+    if (oz > ox) n[2] = x[2] < R(0.5) * w->depth ? R(1.0) : R(-1.0);
+    else n[0] = x[0] < R(0.5) * w->width ? R(1.0) : R(-1.0);
     return w->slip_sides;
 }
 
