@@ -75,6 +75,20 @@ check override_enum "-P Segregation:flux=fast: Segregation:flux: expected one of
     "$good" -P Segregation:flux=fast
 check override_after_good "-P Run:t_end=0: Run:t_end: must be > 0" \
     "$good" -P Run:t_end=2 -P Run:t_end=0
+# granular-flow keys (inputs/drum_2d_EV.yml documents them)
+check flow_nu "-P Material:nu=0.5: Material:nu: must be in [0, 0.5), got 0.5" "$good" -P Material:nu=0.5
+check flow_cfl "-P Run:cfl_flow=11: Run:cfl_flow: must be in (0, 10], got 11" "$good" -P Run:cfl_flow=11
+check flow_mu "-P Material:mu_d=0.1: Material:mu_d: must be >= Material:mu_s" "$good" -P Material:mu_d=0.1
+check flow_in_shearbox "-P Kinematics:velocity=computed: Kinematics:velocity: computed needs Geometry:type column or drum" \
+    "$good" -P Kinematics:velocity=computed
+check flow_direction "-P Walls:direction=up: Walls:direction: expected one of clockwise|counterclockwise" \
+    "$good" -P Walls:direction=up
+check drum_small "-P Geometry:radius=0.01: Geometry:radius: must be >= 8*dr" \
+    "$good" -P Geometry:type=drum -P Kinematics:velocity=computed -P Geometry:radius=0.01
+check drum_3d "-P Geometry:dim=3: Geometry:dim: 3D is supported for Geometry:type column only" \
+    "$good" -P Geometry:dim=3
+check nothing_to_solve "-P Segregation:enabled=off: Segregation:enabled: off with prescribed velocity leaves nothing to solve" \
+    "$good" -P Segregation:enabled=off
 
 echo "test_badinput: $n_pass passed, $n_fail failed"
 [ "$n_fail" -eq 0 ]

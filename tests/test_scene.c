@@ -401,7 +401,7 @@ static void test_bad_overrides(void **state)
         {"Physics:gravity=&a [*a, 1, 2]", "-P Physics:gravity=&a [*a, 1, 2]: value is nested"},
         {"Run:backend=tpu", "-P Run:backend=tpu: Run:backend: expected cpu or gpu, got 'tpu'"},
         {"Segregation:scheme=best", "Segregation:scheme: expected one of paper|direct|conservative"},
-        {"Geometry:dim=3", "-P Geometry:dim=3: Geometry:dim: 3D is not yet supported"},
+        {"Geometry:dim=3", "-P Geometry:dim=3: Geometry:dim: 3D is supported for Geometry:type column only"},
         {"Geometry:dim=-2", "Geometry:dim: expected a non-negative integer, got '-2'"},
         {"Initial:split=1.5", "-P Initial:split=1.5: Initial:split: must be in [0, 1], got 1.5"},
     };
