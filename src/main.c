@@ -135,6 +135,7 @@ static int outside(const sim_t *s, size_t i)
     double h = s->seg.k.h, x = p->x[0][i], y = p->x[1][i];
     if (w->type == WALL_DRUM) return hypot(x - w->centre[0], y - w->centre[1]) > w->radius + h;
     double z = p->x[2][i];
+    x -= w->u[0] * s->t, y -= w->u[1] * s->t, z -= w->u[2] * s->t; /* the box's own frame */
     int outz = w->depth > 0 && (z < -h || z > w->depth + h);
     return x < -h || x > w->width + h || y < -h || outz;
 }

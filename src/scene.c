@@ -57,6 +57,8 @@ static const cyaml_strval_t seg_schemes[] = {
     {"paper", SEG_SCHEME_PAPER}, {"direct", SEG_SCHEME_DIRECT}, {"conservative", SEG_SCHEME_CONSERVATIVE}};
 static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
 
+static const cyaml_schema_value_t gravity_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
+
 static const cyaml_schema_field_t run_fields[] = {
     FLT(scene_run, t_end, REQ),
     FLT(scene_run, cfl_diffusion, OPT),
@@ -140,6 +142,7 @@ static const cyaml_schema_field_t walls_fields[] = {
     ENM(scene_walls, side_slip, slips),
     FLT(scene_walls, rpm, OPT),
     ENM(scene_walls, direction, rot_dirs),
+    CYAML_FIELD_SEQUENCE_FIXED("velocity", OPT, struct scene_walls, velocity, &gravity_entry, 3),
     CYAML_FIELD_END,
 };
 
@@ -149,7 +152,6 @@ static const cyaml_schema_field_t output_fields[] = {
     CYAML_FIELD_END,
 };
 
-static const cyaml_schema_value_t gravity_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
 
 static const cyaml_schema_field_t physics_fields[] = {
     CYAML_FIELD_SEQUENCE_FIXED("gravity", OPT, struct scene_physics, gravity, &gravity_entry, 3),
@@ -232,6 +234,7 @@ static const struct scene_default scene_defaults[] = {
     {"Walls", "side_slip", "free_slip"},
     {"Walls", "rpm", "0"},
     {"Walls", "direction", "clockwise"},
+    {"Walls", "velocity", "[0, 0, 0]"},
 };
 
 /* ---- ranges of the double parameters ----------------------------------------- */
@@ -1092,6 +1095,13 @@ static int check_special(struct scene_ctx *c, const struct scene *s)
     for (int k = 0; k < 3; ++k)
         if (!isfinite(g[k])) return fail_at(c, "Physics:gravity", "entry %d is not finite", k + 1);
     if (g[0] == 0 && g[1] == 0 && g[2] == 0) return fail_at(c, "Physics:gravity", "must not be all zero");
+    const double *wv = s->walls.velocity;
+    for (int k = 0; k < 3; ++k)
+        if (!isfinite(wv[k])) return fail_at(c, "Walls:velocity", "entry %d is not finite", k + 1);
+    if (s->geometry.dim == 2 && wv[2] != 0)
+        return fail_at(c, "Walls:velocity", "z entry must be 0 in 2D (the x-y plane)");
+    if ((wv[0] != 0 || wv[1] != 0 || wv[2] != 0) && s->geometry.type != GEOM_COLUMN)
+        return fail_at(c, "Walls:velocity", "a translating container needs Geometry:type column");
     if (s->geometry.dim == 2 && g[2] != 0)
         return fail_at(c, "Physics:gravity", "z entry must be 0 in 2D (the x-y plane)");
     if (strcmp(backend, "cpu") != 0 && strcmp(backend, "gpu") != 0)

@@ -103,6 +103,8 @@ struct scene_walls {
     enum wall_slip side_slip; /* box side walls; default free_slip */
     double rpm;               /* drum rotation speed, rev/min, >= 0; default 0 */
     enum rot_dir direction;   /* clockwise | counterclockwise (seen with y up); default clockwise */
+    double velocity[3];       /* box walls (shear box excepted): prescribed translation velocity,
+                               * m/s, of the whole container; default [0, 0, 0] */
 };
 
 struct scene_output {

@@ -237,4 +237,5 @@ void setup_contexts(sim_t *s)
     w->omega = sc->walls.rpm * 2.0 * M_PI / 60.0 * (sc->walls.direction == ROT_CLOCKWISE ? -1.0 : 1.0);
     w->slip_base = sc->walls.slip == SLIP_FREE;
     w->slip_sides = sc->walls.side_slip == SLIP_FREE;
+    for (int d = 0; d < 3; ++d) w->u[d] = (real)sc->walls.velocity[d];
 }

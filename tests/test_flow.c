@@ -14,7 +14,7 @@
  *  - advance: a trial stress outside the cone ends on it (f = 0), a tensile
  *    one at the apex (0); x and u advance with the rate-state velocity;
  *  - wall motion: a drum dummy keeps its radius, turns by omega t and moves
- *    at omega e_z x r. */
+ *    at omega e_z x r; a translating box moves its dummies by u t. */
 #include "physics/flow.h"
 #include <string.h>
 #include "testutil.h"
@@ -206,12 +206,29 @@ static void test_drum_wall_motion(void **st)
     assert_true(fabs(n[0] * x[0] + n[1] * x[1] + 0.036) < RT(1e-12)); /* points to the centre */
 }
 
+static void test_box_translation(void **st)
+{
+    (void)st;
+    wall_geom w;
+    memset(&w, 0, sizeof w);
+    w.type = WALL_BOX;
+    w.width = (real)0.05;
+    w.u[0] = (real)0.1, w.u[1] = (real)-0.02;
+    real X0[3] = {(real)-0.001, (real)0.02, 0}, x[3], u[3], n[3];
+    wall_motion(&w, X0, 2.0, x, u);
+    assert_true(fabs(x[0] - (-0.001 + 0.2)) < RT(1e-14) && fabs(x[1] - (0.02 - 0.04)) < RT(1e-14));
+    assert_true(u[0] == w.u[0] && u[1] == w.u[1] && u[2] == 0);
+    wall_normal(&w, X0, n); /* in the box frame: the left wall, normal +x */
+    assert_true(n[0] == 1 && n[1] == 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_uniform_stress),        cmocka_unit_test(test_linear_velocity),
         cmocka_unit_test(test_momentum_conservation), cmocka_unit_test(test_shepard_uniform),
         cmocka_unit_test(test_advance),               cmocka_unit_test(test_drum_wall_motion),
+        cmocka_unit_test(test_box_translation),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

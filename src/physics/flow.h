@@ -54,13 +54,16 @@ HD_INLINE void flow_wall(size_t d, particles_t *p, const grid_view *g, const flo
         real sm[6] = {p->sig[0][m], p->sig[1][m], p->sig[2][m], p->sig[3][m], p->sig[4][m], p->sig[5][m]};
         wall_add(&ws, W, p->vol[m], c->rho * p->vol[m], um, sm, geff, xdm);
     NBR_END
-    /* the wall velocity at d: drum rotation omega e_z x (x_d - centre) */
-    real uw[3] = {0, 0, 0}, n[3], ud[3], sd[6];
+    /* the wall velocity at d: drum rotation omega e_z x (x_d - centre), or the
+     * box's translation; the normal from d's reference position (the box
+     * translates rigidly, so X0 is d in the box frame) */
+    real uw[3] = {c->w.u[0], c->w.u[1], c->w.u[2]}, n[3], ud[3], sd[6];
     if (c->w.type == WALL_DRUM) {
         uw[0] = (real)(-c->w.omega * (double)(xd[1] - c->w.centre[1]));
         uw[1] = (real)(c->w.omega * (double)(xd[0] - c->w.centre[0]));
     }
-    int free_slip = wall_normal(&c->w, xd, n);
+    real X0[3] = {p->X0[0][d], p->X0[1][d], p->X0[2][d]};
+    int free_slip = wall_normal(&c->w, c->w.type == WALL_DRUM ? xd : X0, n);
     if (ws.w > 0) {
         wall_velocity(&ws, uw, n, free_slip, ud);
         wall_stress(&ws, sd);

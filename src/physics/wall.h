@@ -24,15 +24,20 @@ typedef struct wall_geom {
     double omega;    /* drum: angular velocity, rad/s, counter-clockwise > 0 */
     int slip_base;   /* box base and drum wall: 1 free slip (4.2), 0 no slip (4.1) */
     int slip_sides;  /* box side walls: 1 free slip, 0 no slip */
+    real u[3];       /* box: translation velocity of the whole container, m/s */
 } wall_geom;
 
 /* Position and velocity at time t of the wall point (dummy) whose reference
- * position is X0: the drum turns rigidly by omega t; the box stays put. */
+ * position is X0: the drum turns rigidly by omega t; the box translates by
+ * u t (at rest when u = 0). */
 HD_INLINE void wall_motion(const wall_geom *w, const real X0[3], double t, real x[3], real u[3])
 {
+    if (w->type != WALL_DRUM) {
+        for (int a = 0; a < 3; ++a) x[a] = (real)((double)X0[a] + (double)w->u[a] * t), u[a] = w->u[a];
+        return;
+    }
     x[0] = X0[0], x[1] = X0[1], x[2] = X0[2];
     u[0] = u[1] = u[2] = 0;
-    if (w->type != WALL_DRUM) return;
     double th = w->omega * t, c = cos(th), s = sin(th);
     double rx = (double)X0[0] - w->centre[0], ry = (double)X0[1] - w->centre[1];
     double qx = c * rx - s * ry, qy = s * rx + c * ry;
@@ -44,7 +49,8 @@ HD_INLINE void wall_motion(const wall_geom *w, const real X0[3], double t, real 
 
 /* Unit wall normal at dummy position x, pointing into the material, and
  * whether that wall is free-slip. Box: below the base (y < 0, corners
- * included) the base, else the nearer side wall. */
+ * included) the base, else the nearer side wall. x is in the box's own frame
+ * (a translating box: the caller subtracts u t, wall_frame). */
 HD_INLINE int wall_normal(const wall_geom *w, const real x[3], real n[3])
 {
     n[0] = n[1] = n[2] = 0;
