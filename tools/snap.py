@@ -68,7 +68,10 @@ def row_profile(snap, dr):
 
 
 def read_diagnostics(outdir):
-    """diagnostics.csv as a dict of 1D numpy arrays keyed by column name."""
+    """diagnostics.csv as a dict of 1D numpy arrays keyed by column name
+    (diagnostics.csv.part while the run is still going)."""
     path = os.path.join(outdir, "diagnostics.csv")
+    if not os.path.exists(path) and os.path.exists(path + ".part"):
+        path += ".part"
     data = np.genfromtxt(path, delimiter=",", names=True)
     return {name: np.atleast_1d(data[name]) for name in data.dtype.names}
