@@ -54,7 +54,9 @@ double integrate_dt(const sim_t *s)
     const seg_params *sp = &s->seg.sp;
     double gkin = kin_max_shear_rate(&s->kin), h = s->seg.k.h;
     double dmax = 0, amax = 0, umax = 0;
-    for (size_t i = 0; i < p->n; ++i) {
+    const long n = (long)p->n;
+#pragma omp parallel for schedule(static) reduction(max : dmax, amax, umax)
+    for (long i = 0; i < n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
         double u, gmax = gkin;
         if (s->flow_on) {

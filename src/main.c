@@ -140,31 +140,53 @@ static int outside(const sim_t *s, size_t i)
     return x < -h || x > w->width + h || y < -h || outz;
 }
 
+/* Which blow-up condition particle i meets: 0 none, 1 concentration, 2 non-finite
+ * flow state, 3 outside its container, 4 moved more than h in the step. */
+static int bad_state(const sim_t *s, size_t i)
+{
+    const particles_t *p = &s->p;
+    const double h = s->seg.k.h, C = p->C[i];
+    if (s->seg_on && !(isfinite(C) && C >= -1.0 && C <= 2.0)) return 1;
+    if (!s->flow_on) return 0;
+    double sum = 0, mv = 0;
+    for (int c = 0; c < 3; ++c) {
+        sum += (double)p->x[c][i] + (double)p->v[c][i];
+        double dx = (double)p->x[c][i] - (double)p->x_n[c][i];
+        mv += dx * dx;
+    }
+    for (int q = 0; q < 6; ++q) sum += (double)p->sig[q][i];
+    if (!isfinite(sum)) return 2;
+    if (outside(s, i)) return 3;
+    return mv > h * h ? 4 : 0;
+}
+
 static void check_finite(const sim_t *s, diag *d)
 {
     const particles_t *p = &s->p;
-    const double h = s->seg.k.h;
-    for (size_t i = 0; i < p->n; ++i) {
-        if (p->kind[i] != KIND_MATERIAL) continue;
-        double C = p->C[i];
-        if (s->seg_on && !(isfinite(C) && C >= -1.0 && C <= 2.0))
-            blowup(s, d, i, "has concentration %g: the scheme went unstable (see docs/shearbox.md for where "
-                   "each scheme is stable)", C);
-        if (!s->flow_on) continue;
-        double sum = 0, mv = 0;
-        for (int c = 0; c < 3; ++c) {
-            sum += (double)p->x[c][i] + (double)p->v[c][i];
-            double dx = (double)p->x[c][i] - (double)p->x_n[c][i];
-            mv += dx * dx;
-        }
-        for (int q = 0; q < 6; ++q) sum += (double)p->sig[q][i];
-        if (!isfinite(sum))
-            blowup(s, d, i, "has a non-finite position, velocity or stress: the flow went unstable "
-                   "(see docs/granular.md, stability limits)");
-        if (outside(s, i)) blowup(s, d, i, "left its container through a wall");
-        if (mv > h * h)
-            blowup(s, d, i, "moved %.3g m > h = %.3g m in one step: CFL condition violated (lower Run:cfl_flow)",
-                   sqrt(mv), h);
+    const long n = (long)p->n;
+    long first = n; /* the lowest index meeting a condition: deterministic */
+#pragma omp parallel for schedule(static) reduction(min : first)
+    for (long i = 0; i < n; ++i)
+        if (p->kind[i] == KIND_MATERIAL && i < first && bad_state(s, (size_t)i)) first = i;
+    if (first == n) return;
+    size_t i = (size_t)first;
+    double mv = 0;
+    for (int c = 0; c < 3; ++c) mv += pow((double)p->x[c][i] - (double)p->x_n[c][i], 2);
+    switch (bad_state(s, i)) {
+    case 1:
+        blowup(s, d, i, "has concentration %g: the scheme went unstable (see docs/shearbox.md for where "
+               "each scheme is stable)", (double)p->C[i]);
+        break;
+    case 2:
+        blowup(s, d, i, "has a non-finite position, velocity or stress: the flow went unstable "
+               "(see docs/granular.md, stability limits)");
+        break;
+    case 3:
+        blowup(s, d, i, "left its container through a wall");
+        break;
+    default:
+        blowup(s, d, i, "moved %.3g m > h = %.3g m in one step: CFL condition violated (lower Run:cfl_flow)",
+               sqrt(mv), (double)s->seg.k.h);
     }
 }
 

@@ -138,14 +138,22 @@ void part_permute(particles_t *p, const size_t *perm)
     size_t emax = 1;
     for (size_t k = 0; k < PART_NARRAYS; k++)
         if (part_arrays[k].size > emax) emax = part_arrays[k].size;
-    void *scratch = malloc(p->n * emax); /* one buffer, reused for every array */
-    if (!scratch) error_exit(1, "out of memory permuting %zu particles", p->n);
-    for (size_t k = 0; k < PART_NARRAYS; k++) {
-        void *a = part_get(p, &part_arrays[k]);
-        part_gather(scratch, a, perm, p->n, part_arrays[k].size);
-        memcpy(a, scratch, p->n * part_arrays[k].size);
+    int fail = 0;
+    /* the arrays are independent: one scratch buffer per thread, reused */
+#pragma omp parallel reduction(| : fail)
+    {
+        void *scratch = malloc(p->n * emax);
+        if (!scratch) fail = 1;
+#pragma omp for schedule(dynamic, 1)
+        for (size_t k = 0; k < PART_NARRAYS; k++) {
+            if (!scratch) continue;
+            void *a = part_get(p, &part_arrays[k]);
+            part_gather(scratch, a, perm, p->n, part_arrays[k].size);
+            memcpy(a, scratch, p->n * part_arrays[k].size);
+        }
+        free(scratch);
     }
-    free(scratch);
+    if (fail) error_exit(1, "out of memory permuting %zu particles", p->n);
 }
 
 size_t part_bytes_per_particle(void)
