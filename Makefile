@@ -3,14 +3,16 @@
 #   make         build build/sphseg with $(MPICC)
 #   make run     deps, build, and the default scene inputs/shearbox_2d.yml -> out/shearbox_2d/
 #   make test    unit, validation and bad-input tests; ends with "N passed, N failed"
-#   make bench   particle-steps per second of the concentration solver (CPU)
+#   make bench   particle-steps per second, CPU (tools/bench.sh) and, where a GPU is visible, GPU (tools/bench_gpu.sh)
 # Variables a cluster user may set (e.g. from modules):
 #   CC, MPICC            C compiler and MPI wrapper (mpicc)
 #   PRECISION            double (default) | single
 #   HDF5_DIR             prefix of a parallel HDF5 (include/, lib/); default: pkg-config hdf5-openmpi
 #   CYAML_DIR            prefix of libcyaml (include/, lib/); default: system
 #   METIS_DIR            prefix of METIS, read by the METIS partitioner (not built yet)
-#   NVCC, CUDA_ARCH      CUDA compiler and arch (sm_90), for the CUDA backend (not built yet)
+#   GPU                  1 to build the CUDA backend (default when $(NVCC) is found), 0 to skip it
+#   NVCC, CUDA_ARCH      CUDA compiler and target arch for the CUDA backend (default nvcc, sm_90)
+#   CUDA_HOME            CUDA toolkit prefix (default: from the location of $(NVCC))
 #   OPENMP               1 (default) to thread the CPU loops with OpenMP, 0 to build without
 #   PYTHON               interpreter with numpy, scipy, h5py, matplotlib (default /usr/bin/python3)
 
@@ -35,6 +37,24 @@ endif
 ifeq ($(OPENMP),1)
   CFLAGS  += -fopenmp
   LDFLAGS += -fopenmp
+endif
+
+NVCC_PATH := $(shell command -v $(NVCC) 2>/dev/null)
+GPU ?= $(if $(NVCC_PATH),1,0)
+GPU_OBJ :=
+ifeq ($(GPU),1)
+  ifeq ($(NVCC_PATH),)
+    $(error GPU=1 but $(NVCC) is not on the PATH: load a CUDA module, set NVCC=, or build with GPU=0)
+  endif
+  CUDA_HOME ?= $(patsubst %/bin/,%,$(dir $(NVCC_PATH)))
+  NVFLAGS   ?= -O3
+  NVFLAGS   += -std=c++17 -arch=$(CUDA_ARCH) --extended-lambda -I. -Isrc -Xcompiler -Wall
+  CFLAGS    += -DSPHSEG_CUDA
+  GPU_OBJ   := $(BUILD)/obj/gpu/backend_gpu.o
+  GPU_LIBS  := -L$(CUDA_HOME)/lib64 -Wl,-rpath,$(CUDA_HOME)/lib64 -lcudart -lstdc++
+endif
+ifeq ($(PRECISION),single)
+  NVFLAGS += -DSPHSEG_SINGLE
 endif
 
 ifdef HDF5_DIR
@@ -68,8 +88,12 @@ $(BUILD)/obj/%.o: %.c $(HEADERS)
 	@mkdir -p $(dir $@)
 	$(MPICC) $(CFLAGS) -c $< -o $@
 
-$(BUILD)/sphseg: $(BUILD)/obj/src/main.o $(CORE_OBJ)
-	$(MPICC) $(LDFLAGS) $^ $(LIBS) -o $@
+$(BUILD)/obj/gpu/%.o: gpu/%.cu $(HEADERS)
+	@mkdir -p $(dir $@)
+	$(NVCC) $(NVFLAGS) -c $< -o $@
+
+$(BUILD)/sphseg: $(BUILD)/obj/src/main.o $(CORE_OBJ) $(GPU_OBJ)
+	$(MPICC) $(LDFLAGS) $^ $(LIBS) $(GPU_LIBS) -o $@
 
 $(BUILD)/tests/%: tests/%.c $(CORE_OBJ) $(HEADERS)
 	@mkdir -p $(dir $@)
@@ -89,6 +113,10 @@ test: all unit
 
 bench: all
 	@PYTHON=$(PYTHON) bash tools/bench.sh $(BUILD)/sphseg
+	@if [ "$(GPU)" = 1 ] && nvidia-smi >/dev/null 2>&1; then \
+	    $(MAKE) PRECISION=single BUILD=$(BUILD)-single $(BUILD)-single/sphseg >/dev/null && \
+	    bash tools/bench_gpu.sh $(BUILD)/bench_gpu.csv $(BUILD)/sphseg $(BUILD)-single/sphseg; \
+	else echo "(no GPU visible: GPU benchmark skipped)"; fi
 
 format:
 	clang-format -i src/*.c src/*.h src/physics/*.h mpi/*.c mpi/*.h tests/*.c

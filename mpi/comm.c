@@ -34,3 +34,13 @@ long long comm_sum_ll(long long x)
     MPICHECK(MPI_Allreduce(&x, &y, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD));
     return y;
 }
+
+int comm_local_rank(void)
+{
+    MPI_Comm node;
+    int r;
+    MPICHECK(MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+    MPICHECK(MPI_Comm_rank(node, &r));
+    MPICHECK(MPI_Comm_free(&node));
+    return r;
+}

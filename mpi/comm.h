@@ -5,6 +5,8 @@
 
 int comm_rank(void);
 int comm_size(void);
+/* Rank among the ranks of this node (picks the GPU). */
+int comm_local_rank(void);
 double comm_sum(double x);
 double comm_max(double x);
 double comm_min(double x);

@@ -123,6 +123,37 @@ static void cpu_filter(sim_t *s)
     cpu_walls(s);
 }
 
+static void cpu_bounds(sim_t *s, double out[STEP_NBOUNDS])
+{
+    const particles_t *p = &s->p;
+    const long n = (long)p->n;
+    double dmax = 0, wmax = 0, umax = 0;
+#pragma omp parallel for schedule(static) reduction(max : dmax, wmax, umax)
+    for (long i = 0; i < n; ++i) {
+        if (p->kind[i] != KIND_MATERIAL) continue;
+        double b[3];
+        step_bounds_of((size_t)i, p, &s->step_c, b);
+        dmax = b[0] > dmax ? b[0] : dmax;
+        wmax = b[1] > wmax ? b[1] : wmax;
+        umax = b[2] > umax ? b[2] : umax;
+    }
+    out[STEP_D] = dmax, out[STEP_WAVE] = wmax, out[STEP_SPEED] = umax, out[STEP_ACC] = s->amax;
+}
+
+/* The lowest index meeting a blow-up condition: deterministic. */
+static long cpu_check(sim_t *s)
+{
+    const particles_t *p = &s->p;
+    const long n = (long)p->n;
+    long first = n;
+#pragma omp parallel for schedule(static) reduction(min : first)
+    for (long i = 0; i < n; ++i)
+        if (p->kind[i] == KIND_MATERIAL && i < first && step_guard((size_t)i, p, &s->step_c, s->t)) first = i;
+    return first == n ? -1 : first;
+}
+
+static void cpu_to_host(sim_t *s) { (void)s; }
+
 static void cpu_finish(sim_t *s)
 {
     nbr_free(&s->grid);
@@ -131,7 +162,7 @@ static void cpu_finish(sim_t *s)
 
 const struct backend *backend_cpu(void)
 {
-    static const struct backend b = {"cpu",          cpu_prepare, cpu_rates, cpu_advance,
-                                      cpu_save_start, cpu_filter,  cpu_finish};
+    static const struct backend b = {"cpu",      cpu_prepare, cpu_rates,   cpu_advance, cpu_save_start,
+                                      cpu_filter, cpu_bounds,  cpu_check,   cpu_to_host, cpu_finish};
     return &b;
 }

@@ -47,39 +47,17 @@ void integrate_step(sim_t *s, double dt)
  *  flow:        (3.19), dt <= chi_CFL min(sqrt(h / a_max), h / c_s), with
  *               the elastic sound speed c_s and the largest acceleration of
  *               the last rate evaluation (0 at the start). */
-double integrate_dt(const sim_t *s)
+double integrate_dt(sim_t *s)
 {
     const struct scene *sc = s->sc;
-    const particles_t *p = &s->p;
-    const seg_params *sp = &s->seg.sp;
-    double gkin = kin_max_shear_rate(&s->kin), h = s->seg.k.h;
-    double dmax = 0, amax = 0, umax = 0;
-    const long n = (long)p->n;
-#pragma omp parallel for schedule(static) reduction(max : dmax, amax, umax)
-    for (long i = 0; i < n; ++i) {
-        if (p->kind[i] != KIND_MATERIAL) continue;
-        double u, gmax = gkin;
-        if (s->flow_on) {
-            gmax = p->gdot[i];
-            u = sqrt((double)p->v[0][i] * p->v[0][i] + (double)p->v[1][i] * p->v[1][i] +
-                     (double)p->v[2][i] * p->v[2][i]);
-        } else {
-            real X0[3] = {p->X0[0][i], p->X0[1][i], p->X0[2][i]};
-            u = kin_max_speed(&s->kin, X0);
-        }
-        umax = u > umax ? u : umax;
-        if (!s->seg_on) continue;
-        double C = p->C[i];
-        double D = seg_D(sp, (real)C, (real)gmax), a = seg_wave_speed(sp, (real)C, (real)gmax);
-        dmax = D > dmax ? D : dmax;
-        amax = a > amax ? a : amax;
-    }
-    dmax = comm_max(dmax), amax = comm_max(amax), umax = comm_max(umax);
+    double h = s->seg.k.h, b[STEP_NBOUNDS];
+    s->be->bounds(s, b);
+    double dmax = comm_max(b[STEP_D]), amax = comm_max(b[STEP_WAVE]), umax = comm_max(b[STEP_SPEED]);
     double dt = sc->run.dt_max;
     if (dmax > 0) dt = fmin(dt, sc->run.cfl_diffusion * h * h / dmax);
     if (amax > 0) dt = fmin(dt, sc->run.cfl_segregation * h / amax);
     if (umax > 0) dt = fmin(dt, sc->run.cfl_kinematic * h / umax);
-    if (s->flow_on) /* (3.19); amax from the last rate evaluation */
-        dt = fmin(dt, stress_dt((real)sc->run.cfl_flow, (real)h, (real)comm_max(s->amax), s->flow.cs));
+    if (s->flow_on) /* (3.19); |acc| from the last rate evaluation */
+        dt = fmin(dt, stress_dt((real)sc->run.cfl_flow, (real)h, (real)comm_max(b[STEP_ACC]), s->flow.cs));
     return dt;
 }

@@ -25,10 +25,11 @@ typedef struct cli {
 
 static void usage(void)
 {
-    message("usage: sphseg SCENE.yml [-o OUTDIR] [-P Section:key=value ...] [--backend cpu]\n"
+    message("usage: sphseg SCENE.yml [-o OUTDIR] [-P Section:key=value ...] [--backend auto|cpu|gpu]\n"
             "  -o OUTDIR   output folder (default out/<scene name>)\n"
             "  -P ...      override one scene parameter, e.g. -P Geometry:dr=0.00087\n"
-            "  --backend   cpu (the CUDA backend arrives with the GPU issue)\n"
+            "  --backend   auto (default: gpu when built with CUDA and a device is present), cpu or gpu;\n"
+            "              overrides Run:backend\n"
             "  --version   print the version");
 }
 
@@ -94,7 +95,9 @@ typedef struct outputs {
 
 static void write_snapshot(outputs *o, sim_t *s)
 {
+    if (!s->sc->output.snapshots) return;
     if (!s->hcsr) s->be->prepare(s, s->t, 2); /* classes and normals for the record */
+    s->be->to_host(s);
     io_write_snapshot(o->dir, o->n, &s->p, s->t, s->step, o->text, SPHSEG_VERSION);
     o->times = realloc(o->times, (size_t)(o->n + 1) * sizeof(double));
     o->npart = realloc(o->npart, (size_t)(o->n + 1) * sizeof(long long));
@@ -128,60 +131,27 @@ static void blowup(const sim_t *s, diag *d, size_t i, const char *fmt, ...)
                s->t, (long long)p->id[i], (double)p->x[0][i], (double)p->x[1][i], why, s->dt);
 }
 
-static int outside(const sim_t *s, size_t i)
+/* The backend finds the lowest-index material particle in a blow-up state
+ * (step_guard, physics/step.h); the host copy names it. */
+static void check_finite(sim_t *s, diag *d)
 {
+    long first = s->be->check(s);
+    if (first < 0) return;
+    s->be->to_host(s);
     const particles_t *p = &s->p;
-    const wall_geom *w = &s->flow.w;
-    double h = s->seg.k.h, x = p->x[0][i], y = p->x[1][i];
-    if (w->type == WALL_DRUM) return hypot(x - w->centre[0], y - w->centre[1]) > w->radius + h;
-    double z = p->x[2][i];
-    x -= w->u[0] * s->t, y -= w->u[1] * s->t, z -= w->u[2] * s->t; /* the box's own frame */
-    int outz = w->depth > 0 && (z < -h || z > w->depth + h);
-    return x < -h || x > w->width + h || y < -h || outz;
-}
-
-/* Which blow-up condition particle i meets: 0 none, 1 concentration, 2 non-finite
- * flow state, 3 outside its container, 4 moved more than h in the step. */
-static int bad_state(const sim_t *s, size_t i)
-{
-    const particles_t *p = &s->p;
-    const double h = s->seg.k.h, C = p->C[i];
-    if (s->seg_on && !(isfinite(C) && C >= -1.0 && C <= 2.0)) return 1;
-    if (!s->flow_on) return 0;
-    double sum = 0, mv = 0;
-    for (int c = 0; c < 3; ++c) {
-        sum += (double)p->x[c][i] + (double)p->v[c][i];
-        double dx = (double)p->x[c][i] - (double)p->x_n[c][i];
-        mv += dx * dx;
-    }
-    for (int q = 0; q < 6; ++q) sum += (double)p->sig[q][i];
-    if (!isfinite(sum)) return 2;
-    if (outside(s, i)) return 3;
-    return mv > h * h ? 4 : 0;
-}
-
-static void check_finite(const sim_t *s, diag *d)
-{
-    const particles_t *p = &s->p;
-    const long n = (long)p->n;
-    long first = n; /* the lowest index meeting a condition: deterministic */
-#pragma omp parallel for schedule(static) reduction(min : first)
-    for (long i = 0; i < n; ++i)
-        if (p->kind[i] == KIND_MATERIAL && i < first && bad_state(s, (size_t)i)) first = i;
-    if (first == n) return;
     size_t i = (size_t)first;
     double mv = 0;
     for (int c = 0; c < 3; ++c) mv += pow((double)p->x[c][i] - (double)p->x_n[c][i], 2);
-    switch (bad_state(s, i)) {
-    case 1:
+    switch (step_guard(i, p, &s->step_c, s->t)) {
+    case STEP_BAD_C:
         blowup(s, d, i, "has concentration %g: the scheme went unstable (see docs/shearbox.md for where "
                "each scheme is stable)", (double)p->C[i]);
         break;
-    case 2:
+    case STEP_BAD_STATE:
         blowup(s, d, i, "has a non-finite position, velocity or stress: the flow went unstable "
                "(see docs/granular.md, stability limits)");
         break;
-    case 3:
+    case STEP_BAD_OUTSIDE:
         blowup(s, d, i, "left its container through a wall");
         break;
     default:
@@ -201,7 +171,9 @@ static void run(sim_t *s, outputs *o)
 {
     const struct scene *sc = s->sc;
     diag d;
+    double io = 0; /* wall seconds in snapshots and diagnostics rows after the start */
     s->be->prepare(s, s->t, 1);
+    s->be->to_host(s);
     diag_open(&d, o->dir, s);
     diag_row(&d, s);
     write_snapshot(o, s);
@@ -213,20 +185,29 @@ static void run(sim_t *s, outputs *o)
         integrate_step(s, dt);
         if (fabs(s->t - t_next) <= 1e-9 * fmax(1.0, t_next)) s->t = t_next;
         check_finite(s, &d);
-        if (s->t >= t_diag) {
+        int last = sc->run.max_steps > 0 && s->step >= (long)sc->run.max_steps;
+        double t_io = diag_wall();
+        if (s->t >= t_diag || last) {
+            s->be->to_host(s);
             diag_row(&d, s);
             t_diag = next_event(s->t, sc->output.diag_dt, sc->run.t_end);
         }
-        if (s->t >= t_out) {
+        if (s->t >= t_out || last) {
             write_snapshot(o, s);
             t_out = next_event(s->t, sc->output.dt, sc->run.t_end);
         }
+        io += diag_wall() - t_io;
         diag_progress(&d, s, 0);
+        if (last) {
+            message("stopping after Run:max_steps = %u steps at t = %.9g s", sc->run.max_steps, s->t);
+            break;
+        }
     }
     diag_progress(&d, s, 1);
-    double wall = diag_wall() - d.wall0;
-    message("done: %ld steps, %.3f s wall, %.4e particle-steps/s, max |drift of sum C V| %.3e",
-            s->step, wall, wall > 0 ? (double)s->step * (double)s->p.n / wall : 0.0, d.max_drift);
+    double wall = diag_wall() - d.wall0, stepping = wall - io;
+    message("done: %ld steps, %.3f s wall, %.4e particle-steps/s, max |drift of sum C V| %.3e, %.3f s of the "
+            "wall in output and diagnostics (not in the rate)", s->step, wall,
+            stepping > 0 ? (double)s->step * (double)s->p.n / stepping : 0.0, d.max_drift, io);
     diag_close(&d);
 }
 
@@ -237,14 +218,29 @@ int main(int argc, char **argv)
     struct scene sc;
     scene_load(&sc, c.scene, c.n_over, c.over);
     const char *backend = c.backend ? c.backend : sc.run.backend;
-    if (strcmp(backend, "cpu") != 0)
-        input_error("--backend %s: this build has the cpu backend only", backend);
+    if (strcmp(backend, "cpu") != 0 && strcmp(backend, "gpu") != 0 && strcmp(backend, "auto") != 0)
+        input_error("--backend %s: expected auto, cpu or gpu", backend);
+#ifdef SPHSEG_CUDA
+    int ndev = strcmp(backend, "cpu") != 0 ? gpu_devices() : 0;
+    if (!strcmp(backend, "gpu") && ndev == 0)
+        input_error("--backend gpu: no usable CUDA device is visible (check nvidia-smi and "
+                    "CUDA_VISIBLE_DEVICES), or run with --backend cpu");
+#else
+    int ndev = 0;
+    (void)ndev;
+    if (!strcmp(backend, "gpu"))
+        input_error("--backend gpu: this build has no CUDA backend (build with nvcc on the PATH and "
+                    "GPU=1), or run with --backend cpu");
+#endif
     if (comm_size() > 1)
         input_error("%d ranks: multi-rank runs need the slab decomposition, which is not built "
                     "yet; run with one rank", comm_size());
     sim_t s = {0};
     s.sc = &sc;
     s.be = backend_cpu();
+#ifdef SPHSEG_CUDA
+    if (ndev > 0) s.be = backend_gpu(comm_local_rank());
+#endif
     setup_contexts(&s);
     setup_particles(&s); /* exits 2 if it would not fit */
     outputs o = {0, NULL, NULL, NULL, c.outdir ? c.outdir : default_outdir(c.scene)};
@@ -257,8 +253,8 @@ int main(int argc, char **argv)
                          : sc.segregation.scheme == SEG_SCHEME_CONSERVATIVE ? "conservative"
                          : sc.segregation.scheme == SEG_SCHEME_DIRECT       ? "direct" : "paper";
     message("sphseg %s: %s, %zu material + %zu dummy particles, h = %.4g m, flow %s, segregation %s, "
-            "%d rank(s), output %s", SPHSEG_VERSION, sc.path, s.n_material, s.p.n - s.n_material,
-            (double)s.seg.k.h, s.flow_on ? "computed" : "prescribed", scheme, comm_size(), o.dir);
+            "%d rank(s), backend %s, output %s", SPHSEG_VERSION, sc.path, s.n_material, s.p.n - s.n_material,
+            (double)s.seg.k.h, s.flow_on ? "computed" : "prescribed", scheme, comm_size(), s.be->name, o.dir);
     if (s.flow_on)
         message("flow: c_s = %.4g m/s, h/c_s = %.3g s, Shepard filter every %u steps, alpha_av = %g",
                 (double)s.flow.cs, (double)(s.seg.k.h / s.flow.cs), sc.flow.shepard_every, sc.flow.alpha_av);

@@ -20,18 +20,7 @@ static void nbr_bounds(nbr_grid *g, const particles_t *p, real support)
             if (p->x[d][i] < lo[d]) lo[d] = p->x[d][i];
             if (p->x[d][i] > hi[d]) hi[d] = p->x[d][i];
         }
-    g->view.dim = p->dim;
-    g->view.inv_cell = R(1.0) / support;
-    for (int d = 0; d < 3; ++d) {
-        if (d >= p->dim || p->n == 0) {
-            g->view.lo[d] = 0;
-            g->view.nc[d] = 1;
-            continue;
-        }
-        g->view.lo[d] = lo[d] - R(1e-6) * support;
-        g->view.nc[d] = (int)((hi[d] - g->view.lo[d]) / support) + 1;
-    }
-    g->ncell = (size_t)g->view.nc[0] * g->view.nc[1] * g->view.nc[2];
+    g->ncell = grid_fit(&g->view, p->dim, p->n, lo, hi, support);
 }
 
 void nbr_build(nbr_grid *g, particles_t *p, real support)

@@ -156,6 +156,11 @@ void part_permute(particles_t *p, const size_t *perm)
     if (fail) error_exit(1, "out of memory permuting %zu particles", p->n);
 }
 
+size_t part_narrays(void) { return PART_NARRAYS; }
+size_t part_array_esize(size_t k) { return part_arrays[k].size; }
+void *part_array_get(const particles_t *p, size_t k) { return part_get(p, &part_arrays[k]); }
+void part_array_set(particles_t *p, size_t k, void *ptr) { part_set(p, &part_arrays[k], ptr); }
+
 size_t part_bytes_per_particle(void)
 {
     size_t b = 0;

@@ -56,5 +56,11 @@ void part_free(particles_t *p);
 /* Apply permutation: new[k] = old[perm[k]] for every array. */
 void part_permute(particles_t *p, const size_t *perm);
 size_t part_bytes_per_particle(void);
+/* The per-particle arrays as a list (for backends that keep their own copies,
+ * e.g. on a GPU): count, element size in bytes, and the k-th pointer. */
+size_t part_narrays(void);
+size_t part_array_esize(size_t k);
+void *part_array_get(const particles_t *p, size_t k);
+void part_array_set(particles_t *p, size_t k, void *ptr);
 
 #endif

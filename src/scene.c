@@ -67,6 +67,7 @@ static const cyaml_schema_field_t run_fields[] = {
     FLT(scene_run, cfl_flow, OPT),
     FLT(scene_run, dt_max, OPT),
     FLT(scene_run, progress_s, OPT),
+    CYAML_FIELD_UINT("max_steps", OPT, struct scene_run, max_steps),
     CYAML_FIELD_STRING_PTR("backend", OPT, struct scene_run, backend, 0, CYAML_UNLIMITED),
     CYAML_FIELD_END,
 };
@@ -149,6 +150,7 @@ static const cyaml_schema_field_t walls_fields[] = {
 static const cyaml_schema_field_t output_fields[] = {
     FLT(scene_output, dt, REQ),
     FLT(scene_output, diag_dt, OPT), /* default dt/20, set after loading */
+    ENM(scene_output, snapshots, on_off),
     CYAML_FIELD_END,
 };
 
@@ -189,7 +191,9 @@ static const struct scene_default scene_defaults[] = {
     {"Run", "cfl_flow", "0.1"},
     {"Run", "dt_max", "1e30"},
     {"Run", "progress_s", "10"},
-    {"Run", "backend", "cpu"},
+    {"Run", "max_steps", "0"},
+    {"Output", "snapshots", "on"},
+    {"Run", "backend", "auto"},
     {"Geometry", "type", "shearbox"},
     {"Geometry", "dim", "2"},
     {"Geometry", "h_factor", "1.5"},
@@ -1104,8 +1108,8 @@ static int check_special(struct scene_ctx *c, const struct scene *s)
         return fail_at(c, "Walls:velocity", "a translating container needs Geometry:type column");
     if (s->geometry.dim == 2 && g[2] != 0)
         return fail_at(c, "Physics:gravity", "z entry must be 0 in 2D (the x-y plane)");
-    if (strcmp(backend, "cpu") != 0 && strcmp(backend, "gpu") != 0)
-        return fail_at(c, "Run:backend", "expected cpu or gpu, got '%.40s'", backend);
+    if (strcmp(backend, "cpu") != 0 && strcmp(backend, "gpu") != 0 && strcmp(backend, "auto") != 0)
+        return fail_at(c, "Run:backend", "expected auto, cpu or gpu, got '%.40s'", backend);
     return 0;
 }
 

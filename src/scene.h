@@ -28,7 +28,8 @@ struct scene_run {
     double cfl_flow;        /* chi_CFL of (3.19): dt <= chi min(sqrt(h/a_max), h/c_s); default 0.1 */
     double dt_max;          /* s, upper bound on dt; default 1e30 (none) */
     double progress_s;      /* wall seconds between progress lines; default 10 */
-    char *backend;          /* "cpu" (default) | "gpu" (later issue) */
+    unsigned max_steps;     /* stop after this many steps (writing a last snapshot); 0 = no limit (default) */
+    char *backend;          /* "auto" (default: gpu when built with CUDA and a device is present) | "cpu" | "gpu" */
 };
 
 struct scene_geometry {
@@ -110,6 +111,7 @@ struct scene_walls {
 struct scene_output {
     double dt;      /* s between snapshots, required */
     double diag_dt; /* s between diagnostics rows; default dt/20 */
+    int snapshots;  /* on | off: write snapshot files (off: benchmarks, diagnostics only); default on */
 };
 
 struct scene_physics {

@@ -238,4 +238,12 @@ void setup_contexts(sim_t *s)
     w->slip_base = sc->walls.slip == SLIP_FREE;
     w->slip_sides = sc->walls.side_slip == SLIP_FREE;
     for (int d = 0; d < 3; ++d) w->u[d] = (real)sc->walls.velocity[d];
+
+    step_ctx *st = &s->step_c;
+    st->h = s->seg.k.h;
+    st->gkin = kin_max_shear_rate(&s->kin);
+    st->flow_on = s->flow_on, st->seg_on = s->seg_on;
+    st->kin = s->kin;
+    st->sp = *sp;
+    st->w = *w;
 }

@@ -11,6 +11,7 @@
 #include "physics/flow.h"
 #include "physics/kin.h"
 #include "physics/seg_kern.h"
+#include "physics/step.h"
 #include "scene.h"
 
 struct sim;
@@ -41,23 +42,35 @@ struct backend {
     void (*save_start)(struct sim *s);
     /* Shepard filter of the material stress (3.12), then the dummies again. */
     void (*filter)(struct sim *s);
+    /* Local maxima over material particles of what bounds the time step
+     * (enum STEP_D..STEP_ACC, physics/step.h); STEP_ACC is the largest
+     * |acceleration| of the last rate evaluation. */
+    void (*bounds)(struct sim *s, double out[STEP_NBOUNDS]);
+    /* The lowest local index of a material particle in a blow-up state
+     * (step_guard at s->t), or -1. */
+    long (*check)(struct sim *s);
+    /* Bring the host arrays s->p up to date with the backend's copy (before
+     * output, diagnostics and error reports; a no-op on the CPU). */
+    void (*to_host)(struct sim *s);
     void (*finish)(struct sim *s);
 };
 
 typedef struct sim {
     const struct scene *sc;
     const struct backend *be;
+    void *be_data;     /* the backend's own state (device arrays), or NULL */
     particles_t p;
     nbr_grid grid;
     bound_work bw;
     seg_ctx seg;
     kin_params kin;
     flow_ctx flow;
+    step_ctx step_c;   /* time-step bounds and blow-up guard */
     int flow_on;       /* Kinematics:velocity computed: momentum and stress solved */
     int seg_on;        /* Segregation:enabled: the concentration equation solved */
     int hcsr;          /* scheme needs the boundary classification */
     double surface_y;  /* initial free-surface height, m (geostatic stress) */
-    double amax;       /* largest |acceleration| of the last rate evaluation, m/s^2 */
+    double amax;       /* largest |acceleration| of the last rate evaluation, m/s^2 (CPU) */
     double t;          /* simulated time, s */
     long step;
     double dt;         /* last time step, s */
@@ -71,10 +84,15 @@ void setup_particles(sim_t *s);
 void setup_contexts(sim_t *s);
 
 const struct backend *backend_cpu(void);
+/* The CUDA backend (gpu/backend_gpu.cu), when built with SPHSEG_CUDA:
+ * gpu_devices() is the number of usable devices (0 without a driver or GPU);
+ * backend_gpu(local_rank) selects device local_rank modulo that number. */
+int gpu_devices(void);
+const struct backend *backend_gpu(int local_rank);
 
 /* One predictor–corrector step (3.17–3.18) of length dt (src/integrate.c). */
 void integrate_step(sim_t *s, double dt);
 /* The stable time step (s): bounds by diffusion, segregation, kinematics. */
-double integrate_dt(const sim_t *s);
+double integrate_dt(sim_t *s);
 
 #endif

@@ -21,7 +21,7 @@ check "names step, time, particle, condition" \
     "grep -Eq '^sphseg: error: step [0-9]+, t = [0-9.e-]+ s: particle [0-9]+ at .* CFL condition violated' '$tmp/a.err'"
 check "diagnostics.csv closed" "[ -s '$tmp/a/diagnostics.csv' ] && [ ! -e '$tmp/a/diagnostics.csv.part' ]"
 check "no temporary snapshot left" "[ -z \"\$(ls '$tmp/a' | grep -E '\\.tmp\$')\" ]"
-check "snapshots before the blow-up readable" "/usr/bin/python3 -c \"
+check "snapshots before the blow-up readable" "${PYTHON:-/usr/bin/python3} -c \"
 import glob, h5py, sys
 p = sorted(glob.glob('$tmp/a/snapshot_*.h5'))
 assert p, 'no snapshot'

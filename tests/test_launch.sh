@@ -18,7 +18,7 @@ done
 check "no temporary files left" "[ -z \"\$(ls '$tmp/a' | grep -E '\\.(tmp|part)\$')\" ]"
 check "progress line" "grep -q 'particle-steps/s' '$tmp/a.out'"
 check "diagnostics header" "head -1 '$tmp/a/diagnostics.csv' | grep -q '^step,time,dt,n_material,small_volume,small_volume_drift,kinetic_energy,max_speed,wall_s'"
-check "snapshot time" "/usr/bin/python3 -c \"import h5py,sys; f=h5py.File('$tmp/a/snapshot_00002.h5'); sys.exit(0 if abs(f['Header'].attrs['Time']-26)<1e-9 else 1)\""
+check "snapshot time" "${PYTHON:-/usr/bin/python3} -c \"import h5py,sys; f=h5py.File('$tmp/a/snapshot_00002.h5'); sys.exit(0 if abs(f['Header'].attrs['Time']-26)<1e-9 else 1)\""
 
 $MPIRUN -np 1 "$bin" "${args[@]}" -o "$tmp/b" >"$tmp/b.out" 2>"$tmp/b.err"
 check "mpirun -np 1 exit 0" '[ $? -eq 0 ]'

@@ -114,7 +114,7 @@ static void test_shearbox(void **state)
     assert_bits(s.output.dt, T);
     assert_bits(s.output.diag_dt, 1.3);
     assert_bits(s.physics.gravity[1], -9.81);
-    assert_string_equal(s.run.backend, "cpu");
+    assert_string_equal(s.run.backend, "auto");
     assert_string_equal(s.path, GOOD);
     assert_string_equal(s.text, read_text(GOOD));
     scene_free(&s);
@@ -133,7 +133,8 @@ static void test_defaults(void **state)
     assert_bits(s.run.cfl_kinematic, 1.0);
     assert_bits(s.run.dt_max, 1e30);
     assert_bits(s.run.progress_s, 10);
-    assert_string_equal(s.run.backend, "cpu");
+    assert_int_equal(s.run.max_steps, 0);
+    assert_string_equal(s.run.backend, "auto");
     assert_int_equal(s.geometry.type, GEOM_SHEARBOX);
     assert_int_equal(s.geometry.dim, 2);
     assert_bits(s.geometry.h_factor, 1.5);
@@ -399,7 +400,7 @@ static void test_bad_overrides(void **state)
         {"Physics:gravity=[0,0,0]", "-P Physics:gravity=[0,0,0]: Physics:gravity: must not be all"},
         {"Physics:gravity=[0,-1]", "-P Physics:gravity=[0,-1]: Physics:gravity: expected 3 entries"},
         {"Physics:gravity=&a [*a, 1, 2]", "-P Physics:gravity=&a [*a, 1, 2]: value is nested"},
-        {"Run:backend=tpu", "-P Run:backend=tpu: Run:backend: expected cpu or gpu, got 'tpu'"},
+        {"Run:backend=tpu", "-P Run:backend=tpu: Run:backend: expected auto, cpu or gpu, got 'tpu'"},
         {"Segregation:scheme=best", "Segregation:scheme: expected one of paper|direct|conservative"},
         {"Geometry:dim=3", "-P Geometry:dim=3: Geometry:dim: 3D is supported for Geometry:type column only"},
         {"Geometry:dim=-2", "Geometry:dim: expected a non-negative integer, got '-2'"},

@@ -133,4 +133,78 @@ HD_INLINE void bound_normal_psi(int bclass, const bound_sums *s, const real nf[3
     sph_unit(n, R(1.0) / k->h);
 }
 
+/* Does any of the 3^d cells around (cx,cy,cz) satisfy the test? want_outer:
+ * a cell typed CELL_OUTER; otherwise: a cell with no material (cells outside
+ * the grid count as empty). */
+HD_INLINE int bound_any_neighbour(const grid_view *v, const unsigned char *type, const size_t *mat,
+                                  int cx, int cy, int cz, int want_outer)
+{
+    int zr = v->dim == 3 ? 1 : 0;
+    for (int dz = -zr; dz <= zr; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                int x = cx + dx, y = cy + dy, z = cz + dz;
+                int out = x < 0 || y < 0 || z < 0 || x >= v->nc[0] || y >= v->nc[1] || z >= v->nc[2];
+                if (want_outer) {
+                    if (!out && type[grid_cell_index(v, x, y, z)] == CELL_OUTER) return 1;
+                } else if (out || mat[grid_cell_index(v, x, y, z)] == 0) {
+                    return 1;
+                }
+            }
+    return 0;
+}
+
+/* Stage 1 of the search for cell c, two passes (each parallel over cells):
+ * pass 0 from the material counts alone (empty, outer: next to an empty
+ * cell, inner); pass 1 turns inner cells next to an outer cell into second
+ * cells (it reads only CELL_OUTER, which pass 1 never writes). */
+HD_INLINE unsigned char bound_cell_type(const grid_view *v, const unsigned char *type, const size_t *mat,
+                                        size_t c, int pass)
+{
+    int x = (int)(c % (size_t)v->nc[0]), y = (int)(c / (size_t)v->nc[0] % (size_t)v->nc[1]);
+    int z = (int)(c / ((size_t)v->nc[0] * (size_t)v->nc[1]));
+    if (pass == 0)
+        return mat[c] == 0 ? CELL_EMPTY : bound_any_neighbour(v, type, mat, x, y, z, 0) ? CELL_OUTER : CELL_INNER;
+    return type[c] == CELL_INNER && bound_any_neighbour(v, type, mat, x, y, z, 1) ? CELL_SECOND : type[c];
+}
+
+/* The stage-1 type of the cell holding particle i. */
+HD_INLINE unsigned char bound_cell_of(const grid_view *v, const unsigned char *type, const particles_t *p,
+                                      size_t i)
+{
+    int c[3];
+    grid_cell_coords(v, p->x[0], p->x[1], p->x[2], i, c);
+    return type[grid_cell_index(v, c[0], c[1], c[2])];
+}
+
+/* Stage 2, first sweep for particle i: its support sums and its class as a
+ * surface particle (dummy, interior, free or wall surface). */
+HD_INLINE int bound_class_first(size_t i, const particles_t *p, const grid_view *g, const sph_ctx *k,
+                                const unsigned char *type, bound_sums *s)
+{
+    *s = bound_gather(i, p, g, k);
+    if (p->kind[i] == KIND_DUMMY) return BC_DUMMY;
+    return bound_cell_of(g, type, p, i) == CELL_OUTER ? bound_surface_class(i, p, g, k, s) : BC_INTERIOR;
+}
+
+/* Stage 2, second sweep (after every particle has its first class): the
+ * vicinity classes (4.20–4.21), the normal and psi~ of particle i. Returns
+ * the final class (the caller stores it after the sweep, since neighbours
+ * still read bclass). */
+HD_INLINE int bound_class_second(size_t i, particles_t *p, const grid_view *g, const sph_ctx *k,
+                                 const unsigned char *type, const bound_sums *s)
+{
+    real nf[3] = {0, 0, 0};
+    int cls = p->bclass[i];
+    if (cls == BC_INTERIOR) {
+        int near = bound_cell_of(g, type, p, i) != CELL_INNER && bound_near_free(i, p, g, k, nf);
+        cls = near ? BC_FREE_VICINITY : (s->ndummy > 0 ? BC_WALL_VICINITY : BC_INTERIOR);
+    }
+    real n3[3], psi;
+    bound_normal_psi(cls, s, nf, k, n3, &psi);
+    for (int d = 0; d < 3; ++d) p->nrm[d][i] = n3[d];
+    p->psi[i] = psi;
+    return cls;
+}
+
 #endif

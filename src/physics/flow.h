@@ -119,7 +119,8 @@ HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const fl
  * the return-mapping case (stress_return_map). */
 HD_INLINE int flow_advance(size_t i, particles_t *p, real a, const flow_ctx *c)
 {
-    for (int d = 0; d < c->k.dim; ++d) {
+    for (int d = 0; d < 3; ++d) { /* a fixed trip count: unrolled, the arrays indexed statically */
+        if (d >= c->k.dim) break;
         p->x[d][i] = p->x_n[d][i] + a * p->v[d][i];
         p->v[d][i] = p->v_n[d][i] + a * p->acc[d][i];
     }

@@ -12,7 +12,33 @@ typedef struct grid_view {
     real inv_cell;  /* 1 / cell edge, 1/m */
     int nc[3];      /* cells per axis (nc[2] = 1 in 2D) */
     const size_t *start, *end;
+    /* Optional neighbour list (the GPU backend; NULL on the CPU): the
+     * particles within the support of i, in the order the cell scan meets
+     * them, entry q at nl[q * nl_stride + i]; ncnt[i] of them. A particle
+     * with more than nl_cap falls back to the cell scan. */
+    const unsigned *nl, *ncnt;
+    size_t nl_stride;
+    unsigned nl_cap;
 } grid_view;
+
+/* Fit the grid to the bounding box [lo, hi] of n particles with cells of
+ * edge `support` (2h); returns the number of cells. Shared by the CPU and
+ * GPU neighbour builds, so that both bin (and so order) particles alike. */
+HD_INLINE size_t grid_fit(grid_view *g, int dim, size_t n, const real lo[3], const real hi[3], real support)
+{
+    g->dim = dim;
+    g->inv_cell = R(1.0) / support;
+    for (int d = 0; d < 3; ++d) {
+        if (d >= dim || n == 0) {
+            g->lo[d] = 0;
+            g->nc[d] = 1;
+            continue;
+        }
+        g->lo[d] = lo[d] - R(1e-6) * support;
+        g->nc[d] = (int)((hi[d] - g->lo[d]) / support) + 1;
+    }
+    return (size_t)g->nc[0] * (size_t)g->nc[1] * (size_t)g->nc[2];
+}
 
 /* Cell coordinates of position x, clamped into the grid. */
 HD_INLINE void grid_cell_coords(const grid_view *g, const real *x0, const real *x1,
@@ -31,25 +57,37 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
 }
 
 /* Loop over every particle j in the 3^d cells around particle i (j == i
- * included; callers skip it where the formula excludes self). */
+ * included; callers skip it where the formula excludes self), cell by cell
+ * (dz, dy, dx ascending; each cell in store order); or, where the view has
+ * a neighbour list, over the list, which holds the same particles within the
+ * support in the same order, so that sums come out alike. Bodies test the
+ * distance themselves and may `continue`. */
 #define NBR_BEGIN(g, x, i, j)                                                          \
     {                                                                                  \
         int c0_[3];                                                                    \
         grid_cell_coords((g), (x)[0], (x)[1], (x)[2], (i), c0_);                       \
-        int zr_ = (g)->dim == 3 ? 1 : 0;                                               \
-        for (int dz_ = -zr_; dz_ <= zr_; ++dz_)                                        \
-            for (int dy_ = -1; dy_ <= 1; ++dy_)                                        \
-                for (int dx_ = -1; dx_ <= 1; ++dx_) {                                  \
-                    int cx_ = c0_[0] + dx_, cy_ = c0_[1] + dy_, cz_ = c0_[2] + dz_;    \
-                    if (cx_ < 0 || cy_ < 0 || cz_ < 0 || cx_ >= (g)->nc[0] ||          \
-                        cy_ >= (g)->nc[1] || cz_ >= (g)->nc[2])                        \
-                        continue;                                                      \
-                    size_t cell_ = grid_cell_index((g), cx_, cy_, cz_);                \
-                    for (size_t j = (g)->start[cell_]; j < (g)->end[cell_]; ++j) {
+        const int zr_ = (g)->dim == 3 ? 1 : 0;                                         \
+        const int lst_ = (g)->nl != NULL && (g)->ncnt[i] <= (g)->nl_cap;               \
+        const int nseg_ = lst_ ? 1 : (zr_ ? 27 : 9);                                   \
+        for (int s_ = 0; s_ < nseg_; ++s_) {                                           \
+            size_t a_ = 0, b_ = 0;                                                     \
+            if (lst_) {                                                                \
+                b_ = (g)->ncnt[i];                                                     \
+            } else {                                                                   \
+                int cx_ = c0_[0] + s_ % 3 - 1, cy_ = c0_[1] + (s_ / 3) % 3 - 1;        \
+                int cz_ = c0_[2] + (zr_ ? s_ / 9 - 1 : 0);                             \
+                if (cx_ < 0 || cy_ < 0 || cz_ < 0 || cx_ >= (g)->nc[0] ||              \
+                    cy_ >= (g)->nc[1] || cz_ >= (g)->nc[2])                            \
+                    continue;                                                          \
+                size_t cell_ = grid_cell_index((g), cx_, cy_, cz_);                    \
+                a_ = (g)->start[cell_], b_ = (g)->end[cell_];                          \
+            }                                                                          \
+            for (size_t q_ = a_; q_ < b_; ++q_) {                                      \
+                const size_t j = lst_ ? (size_t)(g)->nl[q_ * (g)->nl_stride + (i)] : q_;
 
 #define NBR_END                                                                        \
-                    }                                                                  \
-                }                                                                      \
+            }                                                                          \
+        }                                                                              \
     }
 
 /* Pair geometry: x_ij = x_i - x_j and r^2. */
@@ -59,6 +97,32 @@ HD_INLINE real grid_pair(int dim, real *const *x, size_t i, size_t j, real xij[3
     xij[1] = x[1][i] - x[1][j];
     xij[2] = dim == 3 ? x[2][i] - x[2][j] : R(0.0);
     return xij[0] * xij[0] + xij[1] * xij[1] + xij[2] * xij[2];
+}
+
+/* Neighbour list of particle i from the cell scan of g (g->nl NULL): the
+ * particles within sqrt(support2), at most cap of them stored, at
+ * nl[q * stride + i]. Returns how many there are (stored or not). */
+HD_INLINE unsigned grid_list_fill(const grid_view *g, real *const *x, size_t i, real support2, unsigned *nl,
+                                  size_t stride, unsigned cap)
+{
+    unsigned c = 0;
+    NBR_BEGIN(g, x, i, j)
+        real xij[3];
+        if (grid_pair(g->dim, x, i, j, xij) >= support2) continue;
+        if (c < cap) nl[(size_t)c * stride + i] = (unsigned)j;
+        ++c;
+    NBR_END
+    return c;
+}
+
+/* List capacity for smoothing length h = h_dr * dr: the lattice count in
+ * the support (pi (2 h_dr)^2 in 2D, 4/3 pi (2 h_dr)^3 in 3D) with 30 %
+ * room for compression, rounded up to 8 (48 in 2D, 160 in 3D at h = 1.5 dr). */
+HD_INLINE unsigned grid_list_cap(int dim, double h_dr)
+{
+    double r = 2 * h_dr, n = dim == 3 ? 4.0 / 3.0 * M_PI * r * r * r : M_PI * r * r;
+    unsigned c = (unsigned)(1.3 * n + 8);
+    return (c + 7) / 8 * 8;
 }
 
 #endif

@@ -1,0 +1,88 @@
+/* step.h — the per-particle quantities the driver reduces every step, shared
+ * by the CPU and GPU backends so that both decide the same way:
+ *   step_bounds_of  what the time-step bounds need (integrate_dt): the
+ *                   diffusivity, the segregation wave speed and the speed;
+ *   step_guard      the blow-up conditions of the driver (src/main.c). */
+#ifndef SPHSEG_STEP_H
+#define SPHSEG_STEP_H
+#include <math.h>
+#include "../particles.h"
+#include "kin.h"
+#include "seg.h"
+#include "wall.h"
+
+typedef struct step_ctx {
+    double h;    /* smoothing length, m */
+    double gkin; /* largest prescribed shear rate, 1/s (kin_max_shear_rate) */
+    int flow_on, seg_on;
+    kin_params kin;
+    seg_params sp;
+    wall_geom w;
+} step_ctx;
+
+/* The local maxima the time step is bounded by (integrate_dt). */
+enum { STEP_D = 0, STEP_WAVE = 1, STEP_SPEED = 2, STEP_ACC = 3, STEP_NBOUNDS = 4 };
+
+/* Material particle i: D, |dQ/dC| and |u| (the first three STEP_ slots;
+ * |acc| comes from the rate evaluation). */
+HD_INLINE void step_bounds_of(size_t i, const particles_t *p, const step_ctx *c, double out[3])
+{
+    double u, gmax = c->gkin;
+    if (c->flow_on) {
+        gmax = p->gdot[i];
+        u = sqrt((double)p->v[0][i] * p->v[0][i] + (double)p->v[1][i] * p->v[1][i] +
+                 (double)p->v[2][i] * p->v[2][i]);
+    } else {
+        real X0[3] = {p->X0[0][i], p->X0[1][i], p->X0[2][i]};
+        u = kin_max_speed(&c->kin, X0);
+    }
+    out[0] = out[1] = 0;
+    out[2] = u;
+    if (!c->seg_on) return;
+    real C = p->C[i];
+    out[0] = seg_D(&c->sp, C, (real)gmax);
+    out[1] = seg_wave_speed(&c->sp, C, (real)gmax);
+}
+
+/* Blow-up conditions, in the order they are tested (DESIGN.md "Errors"). */
+enum step_bad {
+    STEP_OK = 0,
+    STEP_BAD_C = 1,        /* C non-finite or far outside [0, 1] */
+    STEP_BAD_STATE = 2,    /* non-finite position, velocity or stress */
+    STEP_BAD_OUTSIDE = 3,  /* beyond a wall by more than h */
+    STEP_BAD_CFL = 4       /* moved more than h in one step */
+};
+
+/* Is material particle i outside its container (beyond a wall by > h) at
+ * time t? Boxes are tested in their own (translating) frame. */
+HD_INLINE int step_outside(size_t i, const particles_t *p, const step_ctx *c, double t)
+{
+    const wall_geom *w = &c->w;
+    double h = c->h, x = p->x[0][i], y = p->x[1][i];
+    if (w->type == WALL_DRUM) return hypot(x - w->centre[0], y - w->centre[1]) > w->radius + h;
+    double z = p->x[2][i];
+    x -= w->u[0] * t, y -= w->u[1] * t, z -= w->u[2] * t;
+    int outz = w->depth > 0 && (z < -h || z > w->depth + h);
+    return x < -h || x > w->width + h || y < -h || outz;
+}
+
+/* Which blow-up condition material particle i meets after a step ending at
+ * t (enum step_bad). */
+HD_INLINE int step_guard(size_t i, const particles_t *p, const step_ctx *c, double t)
+{
+    double C = p->C[i];
+    if (c->seg_on && !(isfinite(C) && C >= -1.0 && C <= 2.0)) return STEP_BAD_C;
+    if (!c->flow_on) return STEP_OK;
+    double sum = 0, mv = 0;
+    for (int d = 0; d < 3; ++d) {
+        sum += (double)p->x[d][i] + (double)p->v[d][i];
+        double dx = (double)p->x[d][i] - (double)p->x_n[d][i];
+        mv += dx * dx;
+    }
+    for (int q = 0; q < 6; ++q) sum += (double)p->sig[q][i];
+    if (!isfinite(sum)) return STEP_BAD_STATE;
+    if (step_outside(i, p, c, t)) return STEP_BAD_OUTSIDE;
+    return mv > c->h * c->h ? STEP_BAD_CFL : STEP_OK;
+}
+
+#endif
