@@ -498,23 +498,10 @@ static void gpu_prepare(sim_t *s, double t, int classify)
     gpu_t *g = gpu_get(s);
     particles_t p = g->d;
     prof_begin(g->st);
-    if (s->flow_on) {
-        wall_geom w = s->flow.w;
-        each(g, g->n, [=] __device__(size_t i) {
-            if (p.kind[i] != KIND_DUMMY) return;
-            real X0[3] = {p.X0[0][i], p.X0[1][i], p.X0[2][i]}, x[3], u[3];
-            wall_motion(&w, X0, t, x, u);
-            for (int d = 0; d < 3; ++d) p.x[d][i] = x[d];
-        });
-    } else {
-        kin_params kin = s->kin;
-        each(g, g->n, [=] __device__(size_t i) {
-            real X0[3] = {p.X0[0][i], p.X0[1][i], p.X0[2][i]}, x[3], u[3], gd;
-            kin_state(&kin, X0, t, x, u, &gd);
-            for (int d = 0; d < 3; ++d) p.x[d][i] = x[d], p.v[d][i] = u[d];
-            p.gdot[i] = gd;
-        });
-    }
+    const int flow = s->flow_on;
+    wall_geom w = s->flow.w;
+    kin_params kin = s->kin;
+    each(g, g->n, [=] __device__(size_t i) { step_place(i, &p, flow, &w, &kin, t); });
     prof_end(g->st, P_MOTION);
     int exact = classify == 2 || (s->hcsr && classify);
     if (!g->built || g->stale || g->every || exact) {
@@ -556,19 +543,11 @@ static void gpu_rates(sim_t *s)
     }
     if (s->seg_on) {
         seg_ctx c = s->seg;
-        const int cons = c.scheme == SEG_SCHEME_CONSERVATIVE;
         prof_begin(g->st);
         each(g, g->n, [=] __device__(size_t i) {
             if (p.kind[i] == KIND_MATERIAL) seg_coeffs(i, &p, &c);
         });
-        each(g, g->n, [=] __device__(size_t i) {
-            if (p.kind[i] != KIND_MATERIAL) {
-                p.dCdt[i] = 0;
-                return;
-            }
-            seg_rate r = cons ? seg_rate_conservative(i, &p, &v, &c) : seg_rate_hcsr(i, &p, &v, &c);
-            p.dCdt[i] = r.seg + r.diff + r.src;
-        });
+        each(g, g->n, [=] __device__(size_t i) { seg_dCdt(i, &p, &v, &c); });
         prof_end(g->st, P_SEG);
     }
 }
@@ -579,12 +558,7 @@ static void gpu_save_start(sim_t *s)
     particles_t p = g->d;
     const int flow = s->flow_on;
     prof_begin(g->st);
-    each(g, g->n, [=] __device__(size_t i) {
-        p.C_n[i] = p.C[i];
-        if (!flow) return;
-        for (int d = 0; d < 3; ++d) p.x_n[d][i] = p.x[d][i], p.v_n[d][i] = p.v[d][i];
-        for (int q = 0; q < 6; ++q) p.sig_n[q][i] = p.sig[q][i];
-    });
+    each(g, g->n, [=] __device__(size_t i) { step_save(i, &p, flow); });
     prof_end(g->st, P_SAVE_ADVANCE);
 }
 
@@ -598,9 +572,7 @@ static void gpu_advance(sim_t *s, double a)
     prof_begin(g->st);
     each(g, g->n, [=] __device__(size_t i) {
         particles_t q = p;
-        if (q.kind[i] != KIND_MATERIAL) return;
-        if (flow) flow_advance(i, &q, ar, &c);
-        if (seg) q.C[i] = q.C_n[i] + ar * q.dCdt[i];
+        step_advance(i, &q, ar, &c, flow, seg);
     });
     prof_end(g->st, P_SAVE_ADVANCE);
 }
@@ -616,10 +588,7 @@ static void gpu_filter(sim_t *s)
         particles_t q = p;
         if (q.kind[i] == KIND_MATERIAL) flow_shepard(i, &q, &v, &c);
     });
-    each(g, g->n, [=] __device__(size_t i) {
-        if (p.kind[i] == KIND_MATERIAL)
-            for (int q = 0; q < 6; ++q) p.sig[q][i] = p.dsig[q][i];
-    });
+    each(g, g->n, [=] __device__(size_t i) { flow_shepard_store(i, &p); });
     prof_end(g->st, P_FILTER);
     gpu_walls(g, &s->flow);
 }

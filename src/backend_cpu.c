@@ -18,18 +18,7 @@ static void cpu_prepare(sim_t *s, double t, int classify)
     particles_t *p = &s->p;
     const long n = (long)p->n;
 #pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) {
-        real X0[3] = {p->X0[0][i], p->X0[1][i], p->X0[2][i]}, x[3], v[3], gd;
-        if (s->flow_on) { /* material integrated; the walls move as prescribed */
-            if (p->kind[i] != KIND_DUMMY) continue;
-            wall_motion(&s->flow.w, X0, t, x, v);
-            for (int d = 0; d < 3; ++d) p->x[d][i] = x[d];
-            continue;
-        }
-        kin_state(&s->kin, X0, t, x, v, &gd);
-        for (int d = 0; d < 3; ++d) p->x[d][i] = x[d], p->v[d][i] = v[d];
-        p->gdot[i] = gd;
-    }
+    for (long i = 0; i < n; ++i) step_place((size_t)i, p, s->flow_on, &s->flow.w, &s->kin, t);
     nbr_build(&s->grid, p, R(2.0) * s->seg.k.h);
     if ((s->hcsr && classify) || classify == 2) bound_classify(&s->bw, p, &s->grid, &s->seg.k);
     if (s->seg_on && classify && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) {
@@ -58,20 +47,11 @@ static void cpu_conc_rates(sim_t *s)
 {
     particles_t *p = &s->p;
     const long n = (long)p->n;
-    const int cons = s->seg.scheme == SEG_SCHEME_CONSERVATIVE;
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i)
         if (p->kind[i] == KIND_MATERIAL) seg_coeffs((size_t)i, p, &s->seg);
 #pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) {
-        if (p->kind[i] != KIND_MATERIAL) {
-            p->dCdt[i] = 0;
-            continue;
-        }
-        seg_rate r = cons ? seg_rate_conservative((size_t)i, p, &s->grid.view, &s->seg)
-                          : seg_rate_hcsr((size_t)i, p, &s->grid.view, &s->seg);
-        p->dCdt[i] = r.seg + r.diff + r.src;
-    }
+    for (long i = 0; i < n; ++i) seg_dCdt((size_t)i, p, &s->grid.view, &s->seg);
 }
 
 /* The flow first: it sets the shear rate the segregation coefficients use. */
@@ -85,27 +65,16 @@ static void cpu_save_start(sim_t *s)
 {
     particles_t *p = &s->p;
     const long n = (long)p->n;
-    const int flow = s->flow_on;
 #pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) {
-        p->C_n[i] = p->C[i];
-        if (!flow) continue;
-        for (int d = 0; d < 3; ++d) p->x_n[d][i] = p->x[d][i], p->v_n[d][i] = p->v[d][i];
-        for (int q = 0; q < 6; ++q) p->sig_n[q][i] = p->sig[q][i];
-    }
+    for (long i = 0; i < n; ++i) step_save((size_t)i, p, s->flow_on);
 }
 
 static void cpu_advance(sim_t *s, double a)
 {
     particles_t *p = &s->p;
     const long n = (long)p->n;
-    const int flow = s->flow_on, seg = s->seg_on;
 #pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) {
-        if (p->kind[i] != KIND_MATERIAL) continue;
-        if (flow) flow_advance((size_t)i, p, (real)a, &s->flow); /* reads C before it moves */
-        if (seg) p->C[i] = p->C_n[i] + (real)a * p->dCdt[i];
-    }
+    for (long i = 0; i < n; ++i) step_advance((size_t)i, p, (real)a, &s->flow, s->flow_on, s->seg_on);
 }
 
 /* Shepard filter (3.12) of the material stress, then the dummies again. */
@@ -117,9 +86,7 @@ static void cpu_filter(sim_t *s)
     for (long i = 0; i < n; ++i)
         if (p->kind[i] == KIND_MATERIAL) flow_shepard((size_t)i, p, &s->grid.view, &s->flow);
 #pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i)
-        if (p->kind[i] == KIND_MATERIAL)
-            for (int q = 0; q < 6; ++q) p->sig[q][i] = p->dsig[q][i];
+    for (long i = 0; i < n; ++i) flow_shepard_store((size_t)i, p);
     cpu_walls(s);
 }
 

@@ -17,10 +17,7 @@ static void *bound_grow(void *ptr, size_t n, size_t size)
 static void bound_cell_types(bound_work *w, const particles_t *p, const nbr_grid *g)
 {
     const grid_view *v = &g->view;
-    for (size_t c = 0; c < g->ncell; ++c) {
-        w->cell_mat[c] = 0;
-        for (size_t i = g->start[c]; i < g->end[c]; ++i) w->cell_mat[c] += p->kind[i] == KIND_MATERIAL;
-    }
+    for (size_t c = 0; c < g->ncell; ++c) w->cell_mat[c] = bound_cell_material(v, p, c);
     for (int pass = 0; pass < 2; ++pass)
         for (size_t c = 0; c < g->ncell; ++c) w->cell_type[c] = bound_cell_type(v, w->cell_type, w->cell_mat, c, pass);
 }

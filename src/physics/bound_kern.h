@@ -168,6 +168,14 @@ HD_INLINE unsigned char bound_cell_type(const grid_view *v, const unsigned char 
     return type[c] == CELL_INNER && bound_any_neighbour(v, type, mat, x, y, z, 1) ? CELL_SECOND : type[c];
 }
 
+/* Material particles in cell c (the input of bound_cell_type). */
+HD_INLINE size_t bound_cell_material(const grid_view *v, const particles_t *p, size_t c)
+{
+    size_t m = 0;
+    for (size_t i = v->start[c]; i < v->end[c]; ++i) m += p->kind[i] == KIND_MATERIAL;
+    return m;
+}
+
 /* The stage-1 type of the cell holding particle i. */
 HD_INLINE unsigned char bound_cell_of(const grid_view *v, const unsigned char *type, const particles_t *p,
                                       size_t i)

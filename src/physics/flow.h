@@ -132,6 +132,13 @@ HD_INLINE int flow_advance(size_t i, particles_t *p, real a, const flow_ctx *c)
     return r;
 }
 
+/* After flow_shepard over all particles: the filtered stress back into sig. */
+HD_INLINE void flow_shepard_store(size_t i, const particles_t *p)
+{
+    if (p->kind[i] == KIND_MATERIAL)
+        for (int q = 0; q < 6; ++q) p->sig[q][i] = p->dsig[q][i];
+}
+
 /* Shepard filter (3.12) for material particle i, over its material
  * neighbours (self included), into dsig[] (the caller copies it back). */
 HD_INLINE void flow_shepard(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)

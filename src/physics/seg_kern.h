@@ -224,4 +224,15 @@ HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const g
     return out;
 }
 
+/* rates(): dC_i/dt into p->dCdt (0 for dummies) by the scene's scheme. */
+HD_INLINE void seg_dCdt(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c)
+{
+    if (p->kind[i] != KIND_MATERIAL) {
+        p->dCdt[i] = 0;
+        return;
+    }
+    seg_rate r = c->scheme == 2 ? seg_rate_conservative(i, p, g, c) : seg_rate_hcsr(i, p, g, c);
+    p->dCdt[i] = r.seg + r.diff + r.src;
+}
+
 #endif

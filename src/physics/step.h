@@ -2,11 +2,14 @@
  * by the CPU and GPU backends so that both decide the same way:
  *   step_bounds_of  what the time-step bounds need (integrate_dt): the
  *                   diffusivity, the segregation wave speed and the speed;
- *   step_guard      the blow-up conditions of the driver (src/main.c). */
+ *   step_guard      the blow-up conditions of the driver (src/main.c);
+ * and the per-particle bodies of the backend hooks that are not neighbour
+ * loops (step_place, step_save, step_advance). */
 #ifndef SPHSEG_STEP_H
 #define SPHSEG_STEP_H
 #include <math.h>
 #include "../particles.h"
+#include "flow.h"
 #include "kin.h"
 #include "seg.h"
 #include "wall.h"
@@ -83,6 +86,42 @@ HD_INLINE int step_guard(size_t i, const particles_t *p, const step_ctx *c, doub
     if (!isfinite(sum)) return STEP_BAD_STATE;
     if (step_outside(i, p, c, t)) return STEP_BAD_OUTSIDE;
     return mv > c->h * c->h ? STEP_BAD_CFL : STEP_OK;
+}
+
+/* prepare(): particle i at time t. Computed flow: a dummy follows its wall
+ * (the material stays where the integrator put it); prescribed velocity:
+ * every particle's position, velocity and shear rate from kin_state. */
+HD_INLINE void step_place(size_t i, const particles_t *p, int flow_on, const wall_geom *w,
+                          const kin_params *kin, double t)
+{
+    real X0[3] = {p->X0[0][i], p->X0[1][i], p->X0[2][i]}, x[3], u[3], gd;
+    if (flow_on) {
+        if (p->kind[i] != KIND_DUMMY) return;
+        wall_motion(w, X0, t, x, u);
+        for (int d = 0; d < 3; ++d) p->x[d][i] = x[d];
+        return;
+    }
+    kin_state(kin, X0, t, x, u, &gd);
+    for (int d = 0; d < 3; ++d) p->x[d][i] = x[d], p->v[d][i] = u[d];
+    p->gdot[i] = gd;
+}
+
+/* save_start(): the start-of-step copies of particle i. */
+HD_INLINE void step_save(size_t i, const particles_t *p, int flow_on)
+{
+    p->C_n[i] = p->C[i];
+    if (!flow_on) return;
+    for (int d = 0; d < 3; ++d) p->x_n[d][i] = p->x[d][i], p->v_n[d][i] = p->v[d][i];
+    for (int q = 0; q < 6; ++q) p->sig_n[q][i] = p->sig[q][i];
+}
+
+/* advance(): X = X_n + a dX/dt for material particle i (flow_advance reads
+ * C before it moves). */
+HD_INLINE void step_advance(size_t i, particles_t *p, real a, const flow_ctx *c, int flow_on, int seg_on)
+{
+    if (p->kind[i] != KIND_MATERIAL) return;
+    if (flow_on) flow_advance(i, p, a, c);
+    if (seg_on) p->C[i] = p->C_n[i] + a * p->dCdt[i];
 }
 
 #endif
