@@ -461,9 +461,7 @@ static void gpu_classify(gpu_t *g, const sph_ctx *kc)
     bound_sums *sums = g->sums;
     prof_begin(g->st);
     each(g, g->ncell, [=] __device__(size_t c) {
-        size_t m = 0;
-        for (size_t i = v.start[c]; i < v.end[c]; ++i) m += p.kind[i] == KIND_MATERIAL;
-        mat[c] = m;
+        mat[c] = bound_cell_material(&v, &p, c);
     });
     for (int pass = 0; pass < 2; ++pass)
         each(g, g->ncell, [=] __device__(size_t c) { type[c] = bound_cell_type(&v, type, mat, c, pass); });

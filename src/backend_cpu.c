@@ -3,24 +3,46 @@
 #include "error.h"
 #include "sim.h"
 
-/* Dummy velocities and stresses from the material (paper §4.1). */
+/* Copy the arrays at ptrs[0..n-1] (members of s->p) from their owners into
+ * the ghosts (multi-rank runs; nothing on one rank). */
+static void cpu_refresh(sim_t *s, void *const *ptrs, int n)
+{
+    if (!s->halo) return;
+    int arr[16];
+    for (int k = 0; k < n; ++k) arr[k] = part_array_find(&s->p, ptrs[k]);
+    halo_refresh(s->halo, &s->p, arr, n);
+}
+
+/* Dummy velocities and stresses from the material (paper §4.1), ghosts
+ * included: a ghost dummy next to the slab has its whole support here. */
 static void cpu_walls(sim_t *s)
 {
     particles_t *p = &s->p;
-    const long n = (long)p->n;
+    const long n = (long)(p->n + p->ng);
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i)
         if (p->kind[i] == KIND_DUMMY) flow_wall((size_t)i, p, &s->grid.view, &s->flow);
 }
 
+/* Place the owned particles; on several ranks migrate them and make the
+ * ghosts; sort by cell; classify, renormalise and extrapolate the walls for
+ * owned particles and ghosts alike (a ghost within a support of the slab has
+ * its whole support here: mpi/halo.h). */
 static void cpu_prepare(sim_t *s, double t, int classify)
 {
     particles_t *p = &s->p;
-    const long n = (long)p->n;
+    long n = (long)p->n;
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i) step_place((size_t)i, p, s->flow_on, &s->flow.w, &s->kin, t);
-    nbr_build(&s->grid, p, R(2.0) * s->seg.k.h);
-    if ((s->hcsr && classify) || classify == 2) bound_classify(&s->bw, p, &s->grid, &s->seg.k);
+    if (s->halo) halo_exchange(s->halo, p);
+    nbr_build(&s->grid, p, R(2.0) * s->seg.k.h, s->halo ? s->halo->origin : NULL);
+    if (s->halo) halo_sorted(s->halo, s->grid.perm, p->n + p->ng);
+    n = (long)(p->n + p->ng);
+    if ((s->hcsr && classify) || classify == 2) {
+        bound_classify(&s->bw, p, &s->grid, &s->seg.k);
+        void *cls[] = {p->bclass, p->nrm[0], p->nrm[1], p->nrm[2], p->psi};
+        cpu_refresh(s, cls, 5);
+    }
     if (s->seg_on && classify && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) {
 #pragma omp parallel for schedule(static)
         for (long i = 0; i < n; ++i)
@@ -43,12 +65,13 @@ static void cpu_flow_rates(sim_t *s)
     s->amax = amax;
 }
 
+/* V, Q, D of ghosts too (neighbours read them), dC/dt of owned particles. */
 static void cpu_conc_rates(sim_t *s)
 {
     particles_t *p = &s->p;
-    const long n = (long)p->n;
+    const long n = (long)p->n, ng = (long)(p->n + p->ng);
 #pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i)
+    for (long i = 0; i < ng; ++i)
         if (p->kind[i] == KIND_MATERIAL) seg_coeffs((size_t)i, p, &s->seg);
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i) seg_dCdt((size_t)i, p, &s->grid.view, &s->seg);
@@ -58,6 +81,10 @@ static void cpu_conc_rates(sim_t *s)
 static void cpu_rates(sim_t *s)
 {
     if (s->flow_on) cpu_flow_rates(s);
+    if (s->flow_on && s->seg_on) {
+        void *g[] = {s->p.gdot};
+        cpu_refresh(s, g, 1);
+    }
     if (s->seg_on) cpu_conc_rates(s);
 }
 
@@ -87,6 +114,8 @@ static void cpu_filter(sim_t *s)
         if (p->kind[i] == KIND_MATERIAL) flow_shepard((size_t)i, p, &s->grid.view, &s->flow);
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i) flow_shepard_store((size_t)i, p);
+    void *sig[] = {p->sig[0], p->sig[1], p->sig[2], p->sig[3], p->sig[4], p->sig[5]};
+    cpu_refresh(s, sig, 6);
     cpu_walls(s);
 }
 

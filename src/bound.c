@@ -29,10 +29,10 @@ static void bound_reserve(bound_work *w, const particles_t *p, const nbr_grid *g
         w->cell_mat = bound_grow(w->cell_mat, g->ncell, sizeof(size_t));
         w->cap_cell = g->ncell;
     }
-    if (p->n > w->cap_part) {
-        w->sums = bound_grow(w->sums, p->n, sizeof(bound_sums));
-        w->cls = bound_grow(w->cls, p->n, 1);
-        w->cap_part = p->n;
+    if (p->n + p->ng > w->cap_part) {
+        w->sums = bound_grow(w->sums, p->n + p->ng, sizeof(bound_sums));
+        w->cls = bound_grow(w->cls, p->n + p->ng, 1);
+        w->cap_part = p->n + p->ng;
     }
 }
 
@@ -40,7 +40,7 @@ void bound_classify(bound_work *w, particles_t *p, const nbr_grid *g, const sph_
 {
     bound_reserve(w, p, g);
     bound_cell_types(w, p, g);
-    const long n = (long)p->n;
+    const long n = (long)(p->n + p->ng); /* ghosts too: owned particles read their classes */
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < n; ++i)
         p->bclass[i] = (uint8_t)bound_class_first((size_t)i, p, &g->view, k, w->cell_type, &w->sums[i]);
@@ -50,7 +50,7 @@ void bound_classify(bound_work *w, particles_t *p, const nbr_grid *g, const sph_
     for (int c = 0; c < 6; ++c) w->count[c] = 0;
     for (long i = 0; i < n; ++i) {
         p->bclass[i] = w->cls[i];
-        w->count[w->cls[i]]++;
+        if (i < (long)p->n) w->count[w->cls[i]]++;
     }
 }
 

@@ -25,6 +25,7 @@ void message(const char *fmt, ...)
 
 void warning(const char *fmt, ...)
 {
+    if (error_rank() != 0) return;
     va_list ap;
     va_start(ap, fmt);
     fprintf(stderr, "sphseg: warning: ");

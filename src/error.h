@@ -7,7 +7,8 @@
 
 enum { EXIT_BAD_INPUT = 2, EXIT_NUMERICAL = 3 };
 
-/* Printed on rank 0 only (message), or by any rank (warning, error). */
+/* Printed on rank 0 only: messages, and warnings (every warning is about
+ * state all ranks share: the scene, global sums). */
 void message(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 void warning(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /* Print "sphseg: error: ..." once and end every rank with status code. */

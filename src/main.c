@@ -160,6 +160,56 @@ static void check_finite(sim_t *s, diag *d)
     }
 }
 
+/* The arrays a ghost must carry for the stages that read neighbours
+ * (src/physics/: positions, volume, kind always; velocity and stress with
+ * computed flow; C and the shear rate with segregation; classes, normals
+ * and psi~ for the HCSR schemes; L for the renormalised conservative
+ * scheme). X0 places dummies and gives a box wall's normal. */
+static int parallel_ghost_arrays(const sim_t *s, int *arr)
+{
+    const particles_t *p = &s->p;
+    const void *a[64];
+    int n = 0;
+    for (int d = 0; d < 3; ++d) a[n++] = p->x[d], a[n++] = p->X0[d];
+    a[n++] = p->vol, a[n++] = p->id, a[n++] = p->kind, a[n++] = p->bclass;
+    if (s->flow_on) {
+        for (int d = 0; d < 3; ++d) a[n++] = p->v[d];
+        for (int q = 0; q < 6; ++q) a[n++] = p->sig[q];
+    }
+    if (s->seg_on) a[n++] = p->C, a[n++] = p->gdot;
+    for (int d = 0; d < 3; ++d) a[n++] = p->nrm[d];
+    a[n++] = p->psi;
+    if (s->seg_on && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm)
+        for (int q = 0; q < 6; ++q) a[n++] = p->L[q];
+    for (int k = 0; k < n; ++k) arr[k] = part_array_find(p, a[k]);
+    return n;
+}
+
+/* Several ranks: every rank built the whole scene; each keeps an even share
+ * of it, then the slab decomposition sends every particle to its owner. */
+static void parallel_start(sim_t *s)
+{
+    if (comm_size() == 1) return;
+    particles_t *p = &s->p;
+    size_t r = (size_t)comm_rank(), P = (size_t)comm_size(), a = p->n * r / P, b = p->n * (r + 1) / P;
+    size_t *keep = malloc((b - a + 1) * sizeof *keep);
+    if (!keep) error_exit(1, "out of memory distributing %zu particles", p->n);
+    for (size_t i = a; i < b; ++i) keep[i - a] = i;
+    part_compact(p, keep, b - a);
+    free(keep);
+    int arr[HALO_MAX_ARRAYS], narr = parallel_ghost_arrays(s, arr);
+    s->halo = malloc(sizeof *s->halo);
+    if (!s->halo) error_exit(1, "out of memory");
+    int axis = s->sc->parallel.axis == AXIS_AUTO ? -1 : (int)s->sc->parallel.axis;
+    halo_init(s->halo, p->dim, R(2.0) * s->seg.k.h, axis, arr, narr);
+    halo_decompose(s->halo, p);
+    long long nmin = (long long)p->n, nmax = nmin;
+    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nmin, 1, MPI_LONG_LONG, MPI_MIN, MPI_COMM_WORLD));
+    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nmax, 1, MPI_LONG_LONG, MPI_MAX, MPI_COMM_WORLD));
+    message("slab decomposition along %c over %d ranks: %lld to %lld particles per rank, ghosts %d cells "
+            "of 2h deep", "xyz"[s->halo->axis], comm_size(), nmin, nmax, s->halo->depth);
+}
+
 /* Next event time (output, diagnostics, end), rounded onto its grid. */
 static double next_event(double t, double every, double t_end)
 {
@@ -167,11 +217,23 @@ static double next_event(double t, double every, double t_end)
     return fmin(k * every, t_end);
 }
 
+/* Every Parallel:balance_every steps: move the slab bounds if the measured
+ * compute time is out of balance (mpi/halo.h), then prepare the state at t
+ * again (the particles moved between ranks; prepare is idempotent). */
+static void parallel_balance(sim_t *s, double *cost)
+{
+    unsigned every = s->sc->parallel.balance_every;
+    if (!s->halo || every == 0 || s->step % (long)every != 0) return;
+    if (halo_balance(s->halo, &s->p, *cost, s->sc->parallel.balance_threshold)) s->be->prepare(s, s->t, 1);
+    *cost = 0;
+}
+
 static void run(sim_t *s, outputs *o)
 {
     const struct scene *sc = s->sc;
     diag d;
-    double io = 0; /* wall seconds in snapshots and diagnostics rows after the start */
+    double io = 0;   /* wall seconds in snapshots and diagnostics rows after the start */
+    double cost = 0; /* this rank's compute seconds since the last load-balance check */
     s->be->prepare(s, s->t, 1);
     s->be->to_host(s);
     diag_open(&d, o->dir, s);
@@ -182,7 +244,10 @@ static void run(sim_t *s, outputs *o)
     while (s->t < sc->run.t_end) {
         double t_next = fmin(t_out, t_diag), dt = integrate_dt(s);
         if (s->t + dt >= t_next * (1 - 1e-12)) dt = t_next - s->t;
+        double t_step = diag_wall(), comm0 = s->halo ? s->halo->wall_comm : 0;
         integrate_step(s, dt);
+        if (s->halo) cost += diag_wall() - t_step - (s->halo->wall_comm - comm0);
+        parallel_balance(s, &cost);
         if (fabs(s->t - t_next) <= 1e-9 * fmax(1.0, t_next)) s->t = t_next;
         check_finite(s, &d);
         int last = sc->run.max_steps > 0 && s->step >= (long)sc->run.max_steps;
@@ -204,10 +269,16 @@ static void run(sim_t *s, outputs *o)
         }
     }
     diag_progress(&d, s, 1);
-    double wall = diag_wall() - d.wall0, stepping = wall - io;
+    double wall = diag_wall() - d.wall0, stepping = wall - io, ntot = (double)comm_sum_ll((long long)s->p.n);
+    double halo = s->halo ? comm_max(s->halo->wall_comm) : 0;
+    if (s->halo)
+        message("slabs: %lld particle migrations between ranks, %.3f s in the halo exchange on the slowest rank, "
+                "%.4g MB and %.4g messages sent per rank per step (mean)", comm_sum_ll(s->halo->migrated), halo,
+                s->step ? 1e-6 * (double)comm_sum_ll(s->halo->bytes) / comm_size() / (double)s->step : 0.0,
+                s->step ? (double)comm_sum_ll(s->halo->messages) / comm_size() / (double)s->step : 0.0);
     message("done: %ld steps, %.3f s wall, %.4e particle-steps/s, max |drift of sum C V| %.3e, %.3f s of the "
-            "wall in output and diagnostics (not in the rate)", s->step, wall,
-            stepping > 0 ? (double)s->step * (double)s->p.n / stepping : 0.0, d.max_drift, io);
+            "wall in output and diagnostics (not in the rate), %.3f s in halo exchange", s->step, wall,
+            stepping > 0 ? (double)s->step * ntot / stepping : 0.0, d.max_drift, io, halo);
     diag_close(&d);
 }
 
@@ -232,9 +303,18 @@ int main(int argc, char **argv)
         input_error("--backend gpu: this build has no CUDA backend (build with nvcc on the PATH and "
                     "GPU=1), or run with --backend cpu");
 #endif
-    if (comm_size() > 1)
-        input_error("%d ranks: multi-rank runs need the slab decomposition, which is not built "
-                    "yet; run with one rank", comm_size());
+#ifdef SPHSEG_CUDA
+    if (comm_size() > 1 && ndev > 0) {
+        if (!strcmp(backend, "gpu"))
+            input_error("--backend gpu: multi-rank runs use the CPU backend for now (the device halo "
+                        "exchange is not built yet): run with --backend cpu, or on one rank");
+        message("%d ranks: multi-rank runs use the CPU backend for now (no device halo exchange yet)",
+                comm_size());
+        ndev = 0;
+    }
+#endif
+    if (sc.parallel.axis == AXIS_Z && sc.geometry.dim == 2)
+        input_error("Parallel:axis: z is not an axis of a 2D scene (x or y, or auto)");
     sim_t s = {0};
     s.sc = &sc;
     s.be = backend_cpu();
@@ -243,6 +323,7 @@ int main(int argc, char **argv)
 #endif
     setup_contexts(&s);
     setup_particles(&s); /* exits 2 if it would not fit */
+    parallel_start(&s);
     outputs o = {0, NULL, NULL, NULL, c.outdir ? c.outdir : default_outdir(c.scene)};
     make_dirs(o.dir);
     char used[4200];
@@ -253,13 +334,15 @@ int main(int argc, char **argv)
                          : sc.segregation.scheme == SEG_SCHEME_CONSERVATIVE ? "conservative"
                          : sc.segregation.scheme == SEG_SCHEME_DIRECT       ? "direct" : "paper";
     message("sphseg %s: %s, %zu material + %zu dummy particles, h = %.4g m, flow %s, segregation %s, "
-            "%d rank(s), backend %s, output %s", SPHSEG_VERSION, sc.path, s.n_material, s.p.n - s.n_material,
+            "%d rank(s), backend %s, output %s", SPHSEG_VERSION, sc.path, s.n_material,
+            (size_t)comm_sum_ll((long long)s.p.n) - s.n_material,
             (double)s.seg.k.h, s.flow_on ? "computed" : "prescribed", scheme, comm_size(), s.be->name, o.dir);
     if (s.flow_on)
         message("flow: c_s = %.4g m/s, h/c_s = %.3g s, Shepard filter every %u steps, alpha_av = %g",
                 (double)s.flow.cs, (double)(s.seg.k.h / s.flow.cs), sc.flow.shepard_every, sc.flow.alpha_av);
     run(&s, &o);
     s.be->finish(&s);
+    if (s.halo) halo_free(s.halo), free(s.halo);
     part_free(&s.p);
     scene_free(&sc);
     MPI_Finalize();

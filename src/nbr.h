@@ -7,15 +7,21 @@
 
 typedef struct nbr_grid {
     grid_view view;
-    size_t *start, *end; /* ncell each */
+    size_t *start, *end;   /* ncell each: owned particles of each cell */
+    size_t *gstart, *gend; /* ncell each: ghosts of each cell (p->ng > 0) */
     size_t ncell, cap_cell;
     size_t *key, *perm, *count; /* scratch: n, n, ncell+1 */
     size_t cap_part;
 } nbr_grid;
 
 /* Bin all particles of p into cells of edge `support` (2h) covering their
- * bounding box, and permute p so that each cell's particles are contiguous. */
-void nbr_build(nbr_grid *g, particles_t *p, real support);
+ * bounding box, and permute p so that each cell's particles are contiguous:
+ * the owned particles [0, n) and the ghosts [n, n + ng) each sorted by cell
+ * in their own range. origin NULL: the grid starts at the particles' lower
+ * corner (one rank); otherwise the grid is cut from the global lattice that
+ * starts at origin (grid_fit_lattice; mpi/halo.h gives it). g->perm[k] is
+ * then the old index of the particle now at k. */
+void nbr_build(nbr_grid *g, particles_t *p, real support, const real *origin);
 void nbr_free(nbr_grid *g);
 
 #endif

@@ -132,9 +132,10 @@ static void part_gather(void *dst, const void *src, const size_t *perm, size_t n
     }
 }
 
-void part_permute(particles_t *p, const size_t *perm)
+/* Gather every array through perm into its first m entries. */
+static void part_gather_all(particles_t *p, const size_t *perm, size_t m)
 {
-    if (p->n == 0) return;
+    if (m == 0) return;
     size_t emax = 1;
     for (size_t k = 0; k < PART_NARRAYS; k++)
         if (part_arrays[k].size > emax) emax = part_arrays[k].size;
@@ -142,18 +143,77 @@ void part_permute(particles_t *p, const size_t *perm)
     /* the arrays are independent: one scratch buffer per thread, reused */
 #pragma omp parallel reduction(| : fail)
     {
-        void *scratch = malloc(p->n * emax);
+        void *scratch = malloc(m * emax);
         if (!scratch) fail = 1;
 #pragma omp for schedule(dynamic, 1)
         for (size_t k = 0; k < PART_NARRAYS; k++) {
             if (!scratch) continue;
             void *a = part_get(p, &part_arrays[k]);
-            part_gather(scratch, a, perm, p->n, part_arrays[k].size);
-            memcpy(a, scratch, p->n * part_arrays[k].size);
+            part_gather(scratch, a, perm, m, part_arrays[k].size);
+            memcpy(a, scratch, m * part_arrays[k].size);
         }
         free(scratch);
     }
-    if (fail) error_exit(1, "out of memory permuting %zu particles", p->n);
+    if (fail) error_exit(1, "out of memory permuting %zu particles", m);
+}
+
+void part_permute(particles_t *p, const size_t *perm) { part_gather_all(p, perm, p->n + p->ng); }
+
+void part_compact(particles_t *p, const size_t *keep, size_t m)
+{
+    part_gather_all(p, keep, m);
+    p->n = m;
+    p->ng = 0;
+}
+
+void part_reserve(particles_t *p, size_t cap)
+{
+    if (cap <= p->cap) return;
+    for (size_t k = 0; k < PART_NARRAYS; k++) {
+        void *buf = realloc(part_get(p, &part_arrays[k]), cap * part_arrays[k].size);
+        if (!buf) error_exit(1, "out of memory growing the particle store to %zu particles", cap);
+        memset((char *)buf + p->cap * part_arrays[k].size, 0, (cap - p->cap) * part_arrays[k].size);
+        part_set(p, &part_arrays[k], buf);
+    }
+    p->cap = cap;
+}
+
+int part_array_find(const particles_t *p, const void *ptr)
+{
+    for (size_t k = 0; k < PART_NARRAYS; k++)
+        if (part_get(p, &part_arrays[k]) == ptr) return (int)k;
+    return -1;
+}
+
+size_t part_record_bytes(const int *arr, int narr)
+{
+    size_t b = 0;
+    for (int a = 0; a < narr; a++)
+        b += part_arrays[arr[a]].size;
+    return b;
+}
+
+void part_pack(const particles_t *p, const size_t *idx, size_t m, const int *arr, int narr, char *buf)
+{
+    size_t rec = part_record_bytes(arr, narr);
+    for (int a = 0, off = 0; a < narr; off += (int)part_arrays[arr[a]].size, a++) {
+        size_t es = part_arrays[arr[a]].size;
+        const char *src = part_get(p, &part_arrays[arr[a]]);
+        for (size_t k = 0; k < m; k++)
+            memcpy(buf + k * rec + (size_t)off, src + (idx ? idx[k] : k) * es, es);
+    }
+}
+
+void part_unpack(particles_t *p, const size_t *idx, size_t at, size_t m, const int *arr, int narr,
+                 const char *buf)
+{
+    size_t rec = part_record_bytes(arr, narr);
+    for (int a = 0, off = 0; a < narr; off += (int)part_arrays[arr[a]].size, a++) {
+        size_t es = part_arrays[arr[a]].size;
+        char *dst = part_get(p, &part_arrays[arr[a]]);
+        for (size_t k = 0; k < m; k++)
+            memcpy(dst + (idx ? idx[k] : at + k) * es, buf + k * rec + (size_t)off, es);
+    }
 }
 
 size_t part_narrays(void) { return PART_NARRAYS; }

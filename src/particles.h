@@ -21,8 +21,10 @@ enum part_bclass {
 
 typedef struct particles {
     int dim;
-    size_t n;   /* particles held (material + dummy) */
-    size_t cap; /* allocated */
+    size_t n;   /* particles owned by this rank (material + dummy), at [0, n) */
+    size_t ng;  /* ghost copies of other ranks' particles, at [n, n + ng) (mpi/halo.h);
+                 * 0 on one rank */
+    size_t cap; /* allocated (n + ng <= cap) */
     real *x[3];   /* position, m */
     real *X0[3];  /* reference (initial) position, m, for prescribed kinematics */
     real *v[3];   /* velocity, m/s */
@@ -53,8 +55,13 @@ typedef struct particles {
 
 void part_alloc(particles_t *p, int dim, size_t cap);
 void part_free(particles_t *p);
-/* Apply permutation: new[k] = old[perm[k]] for every array. */
+/* Grow the arrays to hold at least cap particles, keeping their contents. */
+void part_reserve(particles_t *p, size_t cap);
+/* Apply permutation: new[k] = old[perm[k]], k < n + ng, for every array. */
 void part_permute(particles_t *p, const size_t *perm);
+/* Keep particles keep[0..m-1] (increasing indices), in that order, at
+ * [0, m); p->n = m, p->ng = 0. */
+void part_compact(particles_t *p, const size_t *keep, size_t m);
 size_t part_bytes_per_particle(void);
 /* The per-particle arrays as a list (for backends that keep their own copies,
  * e.g. on a GPU): count, element size in bytes, and the k-th pointer. */
@@ -62,5 +69,15 @@ size_t part_narrays(void);
 size_t part_array_esize(size_t k);
 void *part_array_get(const particles_t *p, size_t k);
 void part_array_set(particles_t *p, size_t k, void *ptr);
+/* The index k of the array p points to with ptr (e.g. p->gdot), or -1. */
+int part_array_find(const particles_t *p, const void *ptr);
+/* Bytes of one packed record of the arrays arr[0..narr-1]. */
+size_t part_record_bytes(const int *arr, int narr);
+/* Pack particles idx[0..m-1] (idx NULL: 0..m-1) as records of the arrays
+ * arr[] (record-major: one particle's fields contiguous) into buf. */
+void part_pack(const particles_t *p, const size_t *idx, size_t m, const int *arr, int narr, char *buf);
+/* Unpack m records into particles idx[0..m-1] (idx NULL: at, at+1, ...). */
+void part_unpack(particles_t *p, const size_t *idx, size_t at, size_t m, const int *arr, int narr,
+                 const char *buf);
 
 #endif

@@ -56,6 +56,7 @@ static const cyaml_strval_t seg_models[] = {{"constant", SEG_MODEL_CONSTANT},
 static const cyaml_strval_t seg_schemes[] = {
     {"paper", SEG_SCHEME_PAPER}, {"direct", SEG_SCHEME_DIRECT}, {"conservative", SEG_SCHEME_CONSERVATIVE}};
 static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
+static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
 
 static const cyaml_schema_value_t gravity_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
 
@@ -161,6 +162,13 @@ static const cyaml_schema_field_t physics_fields[] = {
     CYAML_FIELD_END,
 };
 
+static const cyaml_schema_field_t parallel_fields[] = {
+    ENM(scene_parallel, axis, slab_axes),
+    CYAML_FIELD_UINT("balance_every", OPT, struct scene_parallel, balance_every),
+    FLT(scene_parallel, balance_threshold, OPT),
+    CYAML_FIELD_END,
+};
+
 static const cyaml_schema_field_t scene_fields[] = {
     SEC("Run", run, run_fields),
     SEC("Geometry", geometry, geometry_fields),
@@ -172,6 +180,7 @@ static const cyaml_schema_field_t scene_fields[] = {
     SEC("Material", material, material_fields),
     SEC("Flow", flow, flow_fields),
     SEC("Walls", walls, walls_fields),
+    SEC("Parallel", parallel, parallel_fields),
     CYAML_FIELD_END,
 };
 
@@ -239,6 +248,9 @@ static const struct scene_default scene_defaults[] = {
     {"Walls", "rpm", "0"},
     {"Walls", "direction", "clockwise"},
     {"Walls", "velocity", "[0, 0, 0]"},
+    {"Parallel", "axis", "auto"},
+    {"Parallel", "balance_every", "200"},
+    {"Parallel", "balance_threshold", "0.1"},
 };
 
 /* ---- ranges of the double parameters ----------------------------------------- */
@@ -304,6 +316,7 @@ static const struct scene_range scene_ranges[] = {
     RNG("Flow", flow, damping, 0, INFINITY, HI_OPEN, ALWAYS),
     RNG("Flow", flow, damping_until, 0, INFINITY, HI_OPEN, ALWAYS),
     RNG("Walls", walls, rpm, 0, INFINITY, HI_OPEN, ALWAYS),
+    POS("Parallel", parallel, balance_threshold),
 };
 
 /* ---- parse context and error messages ------------------------------------------ */

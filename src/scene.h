@@ -119,6 +119,15 @@ struct scene_physics {
     double rho;        /* bulk density, kg/m^3 (eqs. 2.3-2.4; paper Table 1); default 1500 */
 };
 
+/* Multi-rank runs (mpi/halo.h): the slab decomposition and its balance. */
+enum slab_axis { AXIS_X = 0, AXIS_Y = 1, AXIS_Z = 2, AXIS_AUTO = 3 };
+struct scene_parallel {
+    enum slab_axis axis;      /* auto (the longest extent of the particles) | x | y | z; default auto */
+    unsigned balance_every;   /* steps between load-balance checks; 0 = never; default 200 */
+    double balance_threshold; /* move the slab bounds when the slowest rank's compute time exceeds
+                               * the mean by more than this fraction; default 0.1 */
+};
+
 struct scene_keys; /* where each key was set (scene.c) */
 
 struct scene {
@@ -132,6 +141,7 @@ struct scene {
     struct scene_material material;
     struct scene_flow flow;
     struct scene_walls walls;
+    struct scene_parallel parallel;
     char *path; /* the scene file as given */
     char *text; /* the scene file's text, for snapshot headers */
     struct scene_keys *keys; /* for scene_key_line / scene_key_where */

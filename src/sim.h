@@ -6,6 +6,7 @@
 #ifndef SPHSEG_SIM_H
 #define SPHSEG_SIM_H
 #include "bound.h"
+#include "mpi/halo.h"
 #include "nbr.h"
 #include "particles.h"
 #include "physics/flow.h"
@@ -59,7 +60,8 @@ typedef struct sim {
     const struct scene *sc;
     const struct backend *be;
     void *be_data;     /* the backend's own state (device arrays), or NULL */
-    particles_t p;
+    particles_t p;     /* owned particles [0, p.n), ghosts [p.n, p.n + p.ng) */
+    halo_t *halo;      /* slab decomposition and ghosts (mpi/halo.h); NULL on one rank */
     nbr_grid grid;
     bound_work bw;
     seg_ctx seg;
@@ -74,7 +76,7 @@ typedef struct sim {
     double t;          /* simulated time, s */
     long step;
     double dt;         /* last time step, s */
-    size_t n_material; /* local material particles */
+    size_t n_material; /* material particles (set by setup; all ranks together) */
 } sim_t;
 
 /* Build the particles of the scene at t = 0 (src/setup.c). Exits with status

@@ -12,7 +12,7 @@ static const double DR = 1.0, HF = 1.5;
 static void classify(particles_t *p, nbr_grid *g, bound_work *w, sph_ctx *k)
 {
     *k = sph_make(2, (real)(HF * DR), (real)DR);
-    nbr_build(g, p, R(2.0) * k->h);
+    nbr_build(g, p, R(2.0) * k->h, NULL);
     bound_classify(w, p, g, k);
 }
 

@@ -55,7 +55,7 @@ static void test_uniform_stress(void **st)
     real s0[6] = {-3000, -5000, -2400, 700, 0, 0};
     for (size_t i = 0; i < p.n; ++i)
         for (int q = 0; q < 6; ++q) p.sig[q][i] = s0[q];
-    nbr_build(&g, &p, R(2.0) * c.k.h);
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
     size_t i = centre(&p, n);
     flow_rates(i, &p, &g.view, &c);
     double scale = 5000 / (c.rho * DR); /* one term's size */
@@ -77,7 +77,7 @@ static void test_linear_velocity(void **st)
     const double A[2][2] = {{0.3, 2.0}, {-0.5, -0.1}}; /* du_a/dx_b, 1/s */
     for (size_t k = 0; k < p.n; ++k)
         for (int a = 0; a < 2; ++a) p.v[a][k] = (real)(A[a][0] * p.x[0][k] + A[a][1] * p.x[1][k]);
-    nbr_build(&g, &p, R(2.0) * c.k.h);
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
     size_t i = centre(&p, n);
     flow_rates(i, &p, &g.view, &c);
     real eps[6] = {(real)A[0][0], (real)A[1][1], 0, (real)(0.5 * (A[0][1] + A[1][0])), 0, 0};
@@ -117,7 +117,7 @@ static void test_momentum_conservation(void **st)
         p.v[1][k] = (real)(0.05 * rnd(&seed));
         for (int q = 0; q < 6; ++q) p.sig[q][k] = (real)(-1000 + 500 * rnd(&seed));
     }
-    nbr_build(&g, &p, R(2.0) * c.k.h);
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
     double sum[2] = {0, 0}, mag = 0;
     for (size_t k = 0; k < p.n; ++k) {
         flow_rates(k, &p, &g.view, &c);
@@ -141,7 +141,7 @@ static void test_shepard_uniform(void **st)
         real s0[6] = {-100, -200, -90, 15, 0, 0};
         for (int q = 0; q < 6; ++q) p.sig[q][k] = p.kind[k] == KIND_MATERIAL ? s0[q] : 12345;
     }
-    nbr_build(&g, &p, R(2.0) * c.k.h);
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
     for (size_t k = 0; k < p.n; ++k) {
         if (p.kind[k] != KIND_MATERIAL) continue;
         flow_shepard(k, &p, &g.view, &c); /* dummies (12345) must not enter */

@@ -43,7 +43,7 @@ static void test_c1_linear(void **st)
     nbr_grid g = {0};
     bound_work w = {0};
     sph_ctx k = sph_make(2, (real)(1.5 * dr), (real)dr);
-    nbr_build(&g, &p, R(2.0) * k.h);
+    nbr_build(&g, &p, R(2.0) * k.h, NULL);
     bound_classify(&w, &p, &g, &k);
     const real ghat[3] = {R(0.6), R(-0.8), 0}; /* a tilted gravity direction */
     double exact[2] = {0.6 * 2.0 + 0.8 * 5.0, 0.6 * 7.0 - 0.8 * 3.0};

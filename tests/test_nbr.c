@@ -13,7 +13,7 @@ static void check_against_brute_force(int dim, size_t n, double L, double h)
         tu_put(&p, L * rand() / RAND_MAX, L * rand() / RAND_MAX, dim == 3 ? L * rand() / RAND_MAX : 0,
                k % 5 ? KIND_MATERIAL : KIND_DUMMY, 1.0);
     nbr_grid g = {0};
-    nbr_build(&g, &p, (real)(2 * h));
+    nbr_build(&g, &p, (real)(2 * h), NULL);
     double s2 = 4 * h * h;
     size_t total = 0;
     char *mark = calloc(n, 1);
@@ -66,7 +66,7 @@ static void test_nbr_permutes_fields(void **st)
         p.C[k] = (real)(p.x[0][k] + 2 * p.x[1][k]);
     }
     nbr_grid g = {0};
-    nbr_build(&g, &p, R(0.05));
+    nbr_build(&g, &p, R(0.05), NULL);
     for (size_t i = 0; i < p.n; ++i) assert_true(fabs(p.C[i] - (p.x[0][i] + 2 * p.x[1][i])) < 1e-12);
     nbr_free(&g);
     part_free(&p);
@@ -88,7 +88,7 @@ static void check_list(int dim, unsigned cap)
     double h = dim == 3 ? 0.05 : 0.015;
     real s2 = (real)(4 * h * h);
     nbr_grid g = {0};
-    nbr_build(&g, &p, (real)(2 * h));
+    nbr_build(&g, &p, (real)(2 * h), NULL);
     unsigned *nl = calloc(n * cap, sizeof *nl), *cnt = calloc(n, sizeof *cnt);
     for (size_t i = 0; i < n; ++i) cnt[i] = grid_list_fill(&g.view, p.x, i, s2, nl, n, cap);
     grid_view lv = g.view;

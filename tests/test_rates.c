@@ -30,7 +30,7 @@ static void setup_fixture(fixture *f, int scheme, double V, double D)
     seg_params sp = {1, 0, 0, (real)V, (real)D, 0, 0, 0.004, 0.008, {0, -1, 0}};
     f->c.sp = sp;
     f->c.scheme = scheme;
-    nbr_build(&f->g, &f->p, R(2.0) * f->c.k.h);
+    nbr_build(&f->g, &f->p, R(2.0) * f->c.k.h, NULL);
     bound_classify(&f->w, &f->p, &f->g, &f->c.k);
 }
 

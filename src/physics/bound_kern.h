@@ -173,6 +173,8 @@ HD_INLINE size_t bound_cell_material(const grid_view *v, const particles_t *p, s
 {
     size_t m = 0;
     for (size_t i = v->start[c]; i < v->end[c]; ++i) m += p->kind[i] == KIND_MATERIAL;
+    if (v->gstart)
+        for (size_t i = v->gstart[c]; i < v->gend[c]; ++i) m += p->kind[i] == KIND_MATERIAL;
     return m;
 }
 

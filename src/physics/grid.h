@@ -11,7 +11,12 @@ typedef struct grid_view {
     real lo[3];     /* lower corner of the grid, m */
     real inv_cell;  /* 1 / cell edge, 1/m */
     int nc[3];      /* cells per axis (nc[2] = 1 in 2D) */
+    int off[3];     /* lattice offset: cell k of this grid is lattice cell k + off (the
+                     * lattice of edge 1/inv_cell from lo); 0 but on a multi-rank run */
     const size_t *start, *end;
+    /* Ghost particles (mpi/halo.h) are sorted apart, after the owned ones:
+     * cell c holds [start[c], end[c]) and [gstart[c], gend[c]). NULL: none. */
+    const size_t *gstart, *gend;
     /* Optional neighbour list (the GPU backend; NULL on the CPU): the
      * particles within the support of i, in the order the cell scan meets
      * them, entry q at nl[q * nl_stride + i]; ncnt[i] of them. A particle
@@ -28,7 +33,9 @@ HD_INLINE size_t grid_fit(grid_view *g, int dim, size_t n, const real lo[3], con
 {
     g->dim = dim;
     g->inv_cell = R(1.0) / support;
+    g->gstart = g->gend = NULL;
     for (int d = 0; d < 3; ++d) {
+        g->off[d] = 0;
         if (d >= dim || n == 0) {
             g->lo[d] = 0;
             g->nc[d] = 1;
@@ -40,13 +47,34 @@ HD_INLINE size_t grid_fit(grid_view *g, int dim, size_t n, const real lo[3], con
     return (size_t)g->nc[0] * (size_t)g->nc[1] * (size_t)g->nc[2];
 }
 
+/* The grid over the box [lmin, lmax] of a rank's particles cut from the
+ * global lattice whose cells start at origin (the global grid_fit lo), so
+ * that every rank bins a position into the same lattice cell as one rank
+ * holding all particles would; returns the number of cells. */
+HD_INLINE size_t grid_fit_lattice(grid_view *g, int dim, size_t n, const real origin[3], const real lmin[3],
+                                  const real lmax[3], real support)
+{
+    g->dim = dim;
+    g->inv_cell = R(1.0) / support;
+    g->gstart = g->gend = NULL;
+    for (int d = 0; d < 3; ++d) {
+        g->lo[d] = d < dim ? origin[d] : 0;
+        g->off[d] = 0;
+        g->nc[d] = 1;
+        if (d >= dim || n == 0) continue;
+        g->off[d] = (int)((lmin[d] - g->lo[d]) * g->inv_cell);
+        g->nc[d] = (int)((lmax[d] - g->lo[d]) * g->inv_cell) - g->off[d] + 1;
+    }
+    return (size_t)g->nc[0] * (size_t)g->nc[1] * (size_t)g->nc[2];
+}
+
 /* Cell coordinates of position x, clamped into the grid. */
 HD_INLINE void grid_cell_coords(const grid_view *g, const real *x0, const real *x1,
                                 const real *x2, size_t i, int c[3])
 {
     real x[3] = {x0[i], x1[i], g->dim == 3 ? x2[i] : g->lo[2]};
     for (int d = 0; d < 3; ++d) {
-        int k = (int)((x[d] - g->lo[d]) * g->inv_cell);
+        int k = (int)((x[d] - g->lo[d]) * g->inv_cell) - g->off[d];
         c[d] = k < 0 ? 0 : (k >= g->nc[d] ? g->nc[d] - 1 : k);
     }
 }
@@ -58,29 +86,33 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
 
 /* Loop over every particle j in the 3^d cells around particle i (j == i
  * included; callers skip it where the formula excludes self), cell by cell
- * (dz, dy, dx ascending; each cell in store order); or, where the view has
- * a neighbour list, over the list, which holds the same particles within the
- * support in the same order, so that sums come out alike. Bodies test the
- * distance themselves and may `continue`. */
+ * (dz, dy, dx ascending; each cell in store order, its owned particles then
+ * its ghosts); or, where the view has a neighbour list, over the list, which
+ * holds the same particles within the support in the same order, so that
+ * sums come out alike. Bodies test the distance themselves and may
+ * `continue`. */
 #define NBR_BEGIN(g, x, i, j)                                                          \
     {                                                                                  \
         int c0_[3];                                                                    \
         grid_cell_coords((g), (x)[0], (x)[1], (x)[2], (i), c0_);                       \
         const int zr_ = (g)->dim == 3 ? 1 : 0;                                         \
         const int lst_ = (g)->nl != NULL && (g)->ncnt[i] <= (g)->nl_cap;               \
-        const int nseg_ = lst_ ? 1 : (zr_ ? 27 : 9);                                   \
+        const int nsub_ = (g)->gstart != NULL ? 2 : 1;                                 \
+        const int nseg_ = lst_ ? 1 : (zr_ ? 27 : 9) * nsub_;                           \
         for (int s_ = 0; s_ < nseg_; ++s_) {                                           \
             size_t a_ = 0, b_ = 0;                                                     \
             if (lst_) {                                                                \
                 b_ = (g)->ncnt[i];                                                     \
             } else {                                                                   \
-                int cx_ = c0_[0] + s_ % 3 - 1, cy_ = c0_[1] + (s_ / 3) % 3 - 1;        \
-                int cz_ = c0_[2] + (zr_ ? s_ / 9 - 1 : 0);                             \
+                const int k_ = s_ / nsub_;                                             \
+                int cx_ = c0_[0] + k_ % 3 - 1, cy_ = c0_[1] + (k_ / 3) % 3 - 1;        \
+                int cz_ = c0_[2] + (zr_ ? k_ / 9 - 1 : 0);                             \
                 if (cx_ < 0 || cy_ < 0 || cz_ < 0 || cx_ >= (g)->nc[0] ||              \
                     cy_ >= (g)->nc[1] || cz_ >= (g)->nc[2])                            \
                     continue;                                                          \
                 size_t cell_ = grid_cell_index((g), cx_, cy_, cz_);                    \
-                a_ = (g)->start[cell_], b_ = (g)->end[cell_];                          \
+                if (s_ % nsub_ == 0) a_ = (g)->start[cell_], b_ = (g)->end[cell_];     \
+                else a_ = (g)->gstart[cell_], b_ = (g)->gend[cell_];                   \
             }                                                                          \
             for (size_t q_ = a_; q_ < b_; ++q_) {                                      \
                 const size_t j = lst_ ? (size_t)(g)->nl[q_ * (g)->nl_stride + (i)] : q_;

@@ -1,0 +1,78 @@
+/* halo.h — the slab decomposition of a multi-rank run: which rank owns a
+ * particle, particle migration, ghost (halo) particles and their refresh,
+ * and the load balance of the slab bounds (DESIGN.md "Parallel model").
+ *
+ * Space is cut by the global cell lattice of edge 2h that one rank holding
+ * every particle would use for its cell list (its origin is the particles'
+ * lower corner, as grid_fit sets it, reduced over ranks at every exchange).
+ * Along the slab axis rank r owns the lattice columns [bound[r], bound[r+1]).
+ * Each rank holds its own particles at [0, n) of its store and ghost copies
+ * of its neighbours' particles in the `depth` columns next to its slab at
+ * [n, n + ng). depth is 2: the HCSR classification of a particle reads the
+ * cell types of the cells next to its own, which read their neighbours, so
+ * two columns of ghosts make every owned particle's class exact without an
+ * exchange between the classification stages; every other stage reads one
+ * support. Slabs are at least `depth` columns wide, so ghosts come only from
+ * the two neighbouring ranks.
+ *
+ * Per prepare: halo_exchange (migrate, then fresh ghosts carrying the arrays
+ * the scene's stages read), the cell sort, halo_sorted (follow the ghosts
+ * and the send lists through the sort); then halo_refresh of a few arrays
+ * after the stages that change what neighbours read (src/backend_cpu.c).
+ * One rank uses none of this (sim_t.halo is NULL). */
+#ifndef SPHSEG_HALO_H
+#define SPHSEG_HALO_H
+#include <stddef.h>
+#include "../src/particles.h"
+
+enum { HALO_MAX_ARRAYS = 64, HALO_DEPTH = 2 };
+
+typedef struct halo {
+    int rank, size;
+    int dim, axis;         /* slab axis (0 x, 1 y, 2 z) */
+    int depth;             /* ghost columns on each side (HALO_DEPTH) */
+    real support;          /* lattice cell edge 2h, m */
+    real origin[3];        /* lattice origin of the last exchange, m */
+    long *bound;           /* size + 1 column bounds; bound[0] and bound[size] open */
+    int arr[HALO_MAX_ARRAYS], narr; /* arrays a ghost carries (part_array index) */
+    size_t *send[2], nsend[2], cap_send[2]; /* owned particles ghosted to the lower (0), upper (1) rank */
+    size_t *recv, nrecv[2], cap_recv;       /* store index of each ghost, lower rank's first */
+    size_t *inv, cap_inv;                   /* scratch: inverse permutation */
+    char *buf[2];
+    size_t cap_buf[2];
+    double wall_comm;      /* wall seconds spent in exchanges and refreshes */
+    long long migrated;    /* particles this rank sent to a neighbour, in total */
+    long long bytes;       /* bytes this rank sent to its neighbours (migration, ghosts, refreshes) */
+    long long messages;    /* point-to-point sends of this rank, counts included */
+} halo_t;
+
+/* Set up for particles of dimension dim on a lattice of edge support;
+ * axis: 0, 1, 2, or -1 for the longest extent of the particles (chosen in
+ * halo_decompose). arr[0..narr-1]: the arrays ghosts carry. */
+void halo_init(halo_t *h, int dim, real support, int axis, const int *arr, int narr);
+/* Collective. Whatever rank holds which particles, cut the slabs so that
+ * each holds an equal share of the particles (every slab at least depth
+ * columns wide; exit 2 if the domain is too short for the rank count) and
+ * send every particle to its owner. Drops ghosts. */
+void halo_decompose(halo_t *h, particles_t *p);
+/* Collective. The lattice origin from the particles' lower corner; the
+ * particles that left the slab to the neighbour that owns them; then fresh
+ * ghosts from both neighbours at [n, n + ng). */
+void halo_exchange(halo_t *h, particles_t *p);
+/* After the cell sort permuted the store (perm[k] = old index now at k,
+ * over n + ng particles): follow the send lists and the ghosts. */
+void halo_sorted(halo_t *h, const size_t *perm, size_t n);
+/* Collective. Copy arrays arr[0..narr-1] of the owners into their ghosts. */
+void halo_refresh(halo_t *h, particles_t *p, const int *arr, int narr);
+/* Collective. cost: this rank's measured compute seconds over the last
+ * interval. If the largest cost exceeds the mean by more than threshold
+ * (a fraction), move the slab bounds so that each rank's predicted cost
+ * (particle count per column times its rank's cost per particle) is equal,
+ * send the particles to their new owners (ghosts dropped; prepare again)
+ * and return 1; else return 0. The decision is logged. */
+int halo_balance(halo_t *h, particles_t *p, double cost, double threshold);
+/* The lattice column of coordinate x along the slab axis. */
+long halo_column(const halo_t *h, real x);
+void halo_free(halo_t *h);
+
+#endif

@@ -1,0 +1,191 @@
+/* test_halo.c — the slab decomposition against brute force (mpi/halo.h).
+ * Run under mpirun with 1 to 4 ranks (tests/run.sh uses 3). Every rank
+ * builds the same random particle cloud, keeps a share, and then:
+ *  - decomposition: every ID owned exactly once, each in its slab;
+ *  - ghosts: for every owned particle, the IDs the cell list finds within
+ *    the support (owned and ghosts) equal the IDs an all-pairs search over
+ *    the whole cloud finds (brute force, SPH-EXA/SWIFT-style check);
+ *  - migration: five rounds of random moves (< h each) keep every ID
+ *    exactly once, owned by the slab its position falls in, and keep the
+ *    neighbour sets exact;
+ *  - refresh: a field set on the owners arrives in every ghost;
+ *  - balance: a rank reporting three times the cost of the others loses
+ *    particles, and no ID is lost.
+ * Failures are counted on every rank and summed, so that all ranks take
+ * part in every collective and the program ends nonzero on any failure. */
+#include <mpi.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "mpi/halo.h"
+#include "nbr.h"
+#include "particles.h"
+
+static int fails;
+#define CHECK(cond, ...)                                                                                     \
+    do {                                                                                                     \
+        if (!(cond)) {                                                                                       \
+            if (fails++ < 10) fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__), fprintf(stderr, __VA_ARGS__), \
+                fputc('\n', stderr);                                                                         \
+        }                                                                                                    \
+    } while (0)
+
+enum { N = 3000 };
+static const double H = 0.0125, L[3] = {1.0, 0.3, 0.2}; /* support 2h = 0.025: 40 columns along x */
+
+static double urand(unsigned *s)
+{
+    *s = *s * 1103515245u + 12345u;
+    return ((*s >> 8) & 0xffffff) / (double)0x1000000;
+}
+
+/* The global cloud: positions g[d][id]; every rank holds the same copy. */
+static real *g[3];
+
+static void cloud_init(particles_t *p, int dim, int rank, int size)
+{
+    unsigned s = 7;
+    for (int d = 0; d < 3; ++d) g[d] = malloc(N * sizeof(real));
+    for (int i = 0; i < N; ++i)
+        for (int d = 0; d < 3; ++d) g[d][i] = d < dim ? (real)(urand(&s) * L[d]) : 0;
+    size_t a = (size_t)N * (size_t)rank / (size_t)size, b = (size_t)N * (size_t)(rank + 1) / (size_t)size;
+    part_alloc(p, dim, b - a);
+    for (size_t i = a; i < b; ++i, ++p->n) {
+        for (int d = 0; d < 3; ++d) p->x[d][p->n] = p->X0[d][p->n] = g[d][i];
+        p->id[p->n] = (int64_t)i;
+        p->vol[p->n] = 1;
+    }
+}
+
+/* Move every particle of the cloud by a random step shorter than h (the
+ * same on all ranks: the step is a function of the ID and the round). */
+static void cloud_move(particles_t *p, int dim, int round)
+{
+    for (int i = 0; i < N; ++i) {
+        unsigned s = (unsigned)(i * 7919 + round * 104729 + 1);
+        for (int d = 0; d < dim; ++d) {
+            real x = g[d][i] + (real)((urand(&s) - 0.5) * 1.4 * H);
+            g[d][i] = x < 0 ? -x : x > L[d] ? 2 * (real)L[d] - x : x;
+        }
+    }
+    for (size_t k = 0; k < p->n; ++k)
+        for (int d = 0; d < dim; ++d) p->x[d][k] = g[d][p->id[k]];
+}
+
+static int cmp_i64(const void *a, const void *b)
+{
+    int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Every ID 0..N-1 owned by exactly one rank, inside that rank's slab. */
+static void check_owned(const halo_t *h, const particles_t *p)
+{
+    int n = (int)p->n, *cnt = malloc((size_t)h->size * sizeof(int)), *dis = malloc((size_t)h->size * sizeof(int));
+    MPI_Allgather(&n, 1, MPI_INT, cnt, 1, MPI_INT, MPI_COMM_WORLD);
+    int tot = 0;
+    for (int r = 0; r < h->size; ++r) dis[r] = tot, tot += cnt[r];
+    CHECK(tot == N, "%d particles owned, expected %d", tot, N);
+    int64_t *all = malloc((size_t)(tot > 0 ? tot : 1) * sizeof(int64_t));
+    MPI_Allgatherv(p->id, n, MPI_INT64_T, all, cnt, dis, MPI_INT64_T, MPI_COMM_WORLD);
+    qsort(all, (size_t)tot, sizeof(int64_t), cmp_i64);
+    for (int k = 0; k < tot && k < N; ++k) CHECK(all[k] == k, "ID %d missing or duplicated", k);
+    for (size_t i = 0; i < p->n; ++i) {
+        long c = halo_column(h, p->x[h->axis][i]);
+        CHECK(c >= h->bound[h->rank] && c < h->bound[h->rank + 1], "particle %lld outside its slab",
+              (long long)p->id[i]);
+    }
+    free(all), free(cnt), free(dis);
+}
+
+/* Neighbour IDs of every owned particle (cell list over owned + ghosts)
+ * against all pairs of the global cloud. */
+static void check_neighbours(const nbr_grid *gr, const particles_t *p, real support)
+{
+    int64_t *mine = malloc(N * sizeof(int64_t)), *ref = malloc(N * sizeof(int64_t));
+    real s2 = support * support;
+    for (size_t i = 0; i < p->n; ++i) {
+        size_t a = 0, b = 0;
+        NBR_BEGIN(&gr->view, p->x, i, j)
+            real xij[3];
+            if (grid_pair(p->dim, p->x, i, j, xij) < s2) mine[a++] = p->id[j];
+        NBR_END
+        int64_t id = p->id[i];
+        for (int j = 0; j < N; ++j) {
+            real r2 = 0;
+            for (int d = 0; d < p->dim; ++d) r2 += (g[d][id] - g[d][j]) * (g[d][id] - g[d][j]);
+            if (r2 < s2) ref[b++] = j;
+        }
+        qsort(mine, a, sizeof(int64_t), cmp_i64);
+        int same = a == b;
+        for (size_t k = 0; same && k < a; ++k) same = mine[k] == ref[k];
+        CHECK(same, "particle %lld: %zu neighbours found, %zu by brute force", (long long)id, a, b);
+    }
+    free(mine), free(ref);
+}
+
+static void check_refresh(halo_t *h, particles_t *p, int round)
+{
+    for (size_t i = 0; i < p->n + p->ng; ++i) p->C[i] = i < p->n ? (real)(2 * p->id[i] + round) : -1;
+    int arr[1] = {part_array_find(p, p->C)};
+    halo_refresh(h, p, arr, 1);
+    for (size_t i = p->n; i < p->n + p->ng; ++i)
+        CHECK(p->C[i] == (real)(2 * p->id[i] + round), "ghost %lld not refreshed", (long long)p->id[i]);
+}
+
+static void run_dim(int dim, int rank, int size)
+{
+    particles_t p;
+    nbr_grid gr = {0};
+    cloud_init(&p, dim, rank, size);
+    int arr[8], na = 0;
+    for (int d = 0; d < 3; ++d) arr[na++] = part_array_find(&p, p.x[d]);
+    arr[na++] = part_array_find(&p, p.id), arr[na++] = part_array_find(&p, p.vol);
+    halo_t h;
+    real support = (real)(2 * H);
+    halo_init(&h, dim, support, -1, arr, na);
+    halo_decompose(&h, &p);
+    CHECK(h.axis == 0, "slab axis %d, expected the longest (x)", h.axis);
+    check_owned(&h, &p);
+    for (int round = 0; round < 6; ++round) {
+        if (round > 0) cloud_move(&p, dim, round);
+        halo_exchange(&h, &p);
+        check_owned(&h, &p);
+        nbr_build(&gr, &p, support, size > 1 ? h.origin : NULL);
+        halo_sorted(&h, gr.perm, p.n + p.ng);
+        check_neighbours(&gr, &p, support);
+        check_refresh(&h, &p, round);
+    }
+    long long before = (long long)p.n, moved = h.migrated;
+    MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+    CHECK(size == 1 || moved > 0, "no particle migrated in five rounds");
+    int changed = halo_balance(&h, &p, rank == 0 ? 3.0 : 1.0, 0.1);
+    if (size > 1) {
+        CHECK(changed, "a 3x cost imbalance did not move the slab bounds");
+        if (rank == 0) CHECK((long long)p.n < before, "rank 0 kept %zu of %lld particles", p.n, before);
+    }
+    check_owned(&h, &p);
+    halo_exchange(&h, &p);
+    nbr_build(&gr, &p, support, size > 1 ? h.origin : NULL);
+    check_neighbours(&gr, &p, support);
+    if (rank == 0) printf("%dD: %lld migrations, balance %s\n", dim, moved, changed ? "moved bounds" : "no move");
+    halo_free(&h);
+    nbr_free(&gr);
+    part_free(&p);
+    for (int d = 0; d < 3; ++d) free(g[d]);
+}
+
+int main(int argc, char **argv)
+{
+    MPI_Init(&argc, &argv);
+    int rank, size;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    run_dim(2, rank, size);
+    run_dim(3, rank, size);
+    int total = 0;
+    MPI_Allreduce(&fails, &total, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+    if (rank == 0) printf("test_halo on %d ranks: %s (%d failed checks)\n", size, total ? "FAIL" : "ok", total);
+    MPI_Finalize();
+    return total ? 1 : 0;
+}
