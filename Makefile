@@ -9,7 +9,7 @@
 #   PRECISION            double (default) | single
 #   HDF5_DIR             prefix of a parallel HDF5 (include/, lib/); default: pkg-config hdf5-openmpi
 #   CYAML_DIR            prefix of libcyaml (include/, lib/); default: system
-#   METIS_DIR            prefix of METIS, read by the METIS partitioner (not built yet)
+#   METIS_DIR            prefix of METIS (include/, lib/) for Parallel:method metis; default: system
 #   GPU                  1 to build the CUDA backend (default when $(NVCC) is found), 0 to skip it
 #   NVCC, CUDA_ARCH      CUDA compiler and target arch for the CUDA backend (default nvcc, sm_90)
 #   CUDA_HOME            CUDA toolkit prefix (default: from the location of $(NVCC))
@@ -70,8 +70,14 @@ ifdef CYAML_DIR
 else
   CYAML_LIBS   := -lcyaml -lyaml
 endif
-CFLAGS += $(HDF5_CFLAGS) $(CYAML_CFLAGS)
-LIBS   := $(HDF5_LIBS) $(CYAML_LIBS) $(LDLIBS)
+ifdef METIS_DIR
+  METIS_CFLAGS := -I$(METIS_DIR)/include
+  METIS_LIBS   := -L$(METIS_DIR)/lib -Wl,-rpath,$(METIS_DIR)/lib -lmetis
+else
+  METIS_LIBS   := -lmetis
+endif
+CFLAGS += $(HDF5_CFLAGS) $(CYAML_CFLAGS) $(METIS_CFLAGS)
+LIBS   := $(HDF5_LIBS) $(CYAML_LIBS) $(METIS_LIBS) $(LDLIBS)
 
 CORE_SRC := src/error.c src/scene.c src/particles.c src/nbr.c src/bound.c src/setup.c \
             src/backend_cpu.c src/integrate.c src/diag.c src/io.c mpi/comm.c mpi/halo.c

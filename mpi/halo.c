@@ -1,9 +1,12 @@
-/* halo.c — slab decomposition, migration, ghosts and load balance (see
- * halo.h). Messages are records of the chosen arrays (part_pack), counted
- * in records through a contiguous MPI type so that counts stay small. */
+/* halo.c — domain decomposition (slabs or METIS), migration, ghosts and
+ * load balance (see halo.h). Messages are records of the chosen arrays
+ * (part_pack), counted in records through a contiguous MPI type so that
+ * counts stay small, exchanged with each neighbour in ascending rank order
+ * (deterministic). */
 #include "halo.h"
 #include <limits.h>
 #include <math.h>
+#include <metis.h>
 #include <mpi.h>
 #include <stdlib.h>
 #include <string.h>
@@ -21,50 +24,224 @@ static void *halo_grow(void *ptr, size_t *cap, size_t n, size_t size)
     return q;
 }
 
-void halo_init(halo_t *h, int dim, real support, int axis, const int *arr, int narr)
+static void *halo_calloc(size_t n, size_t size)
+{
+    void *q = calloc(n ? n : 1, size);
+    if (!q) error_exit(1, "out of memory in the domain decomposition (%zu bytes)", n * size);
+    return q;
+}
+
+void halo_init(halo_t *h, int dim, real support, int method, int axis, const int *arr, int narr)
 {
     memset(h, 0, sizeof *h);
     MPICHECK(MPI_Comm_rank(MPI_COMM_WORLD, &h->rank));
     MPICHECK(MPI_Comm_size(MPI_COMM_WORLD, &h->size));
     h->dim = dim;
     h->axis = axis;
+    h->method = method;
     h->depth = HALO_DEPTH;
+    h->blk = HALO_DEPTH; /* coarse cells of 4h: ghosts reach only the coarse cells around */
     h->support = support;
     if (narr > HALO_MAX_ARRAYS) error_exit(1, "halo_init: %d arrays > %d", narr, HALO_MAX_ARRAYS);
     memcpy(h->arr, arr, (size_t)narr * sizeof *arr);
     h->narr = narr;
-    h->bound = calloc((size_t)h->size + 1, sizeof(long));
-    if (!h->bound) error_exit(1, "out of memory in halo_init");
+    h->bound = halo_calloc((size_t)h->size + 1, sizeof(long));
+    h->nb_of = halo_calloc((size_t)h->size, sizeof(int));
+}
+
+static void halo_free_lists(halo_t *h)
+{
+    for (int k = 0; k < h->nnb; ++k) free(h->send[k]);
+    free(h->send), free(h->nsend), free(h->cap_send), free(h->nrecv), free(h->nb);
+    h->send = NULL, h->nsend = h->cap_send = h->nrecv = NULL, h->nb = NULL, h->nnb = 0;
 }
 
 void halo_free(halo_t *h)
 {
-    free(h->bound);
-    free(h->send[0]);
-    free(h->send[1]);
-    free(h->recv);
-    free(h->inv);
-    free(h->buf[0]);
-    free(h->buf[1]);
+    halo_free_lists(h);
+    free(h->bound), free(h->nb_of), free(h->part), free(h->recv), free(h->inv);
+    free(h->buf[0]), free(h->buf[1]);
     memset(h, 0, sizeof *h);
 }
 
-long halo_column(const halo_t *h, real x)
+/* ---- who owns what ----------------------------------------------------------- */
+
+long halo_column(const halo_t *h, int d, real x)
 {
     /* the expression grid_cell_coords uses, so both bin alike */
-    return (long)((x - h->origin[h->axis]) * (R(1.0) / h->support));
+    return (long)((x - h->origin[d]) * (R(1.0) / h->support));
 }
 
-static int halo_owner(const halo_t *h, long c)
+static void halo_cell_of(const halo_t *h, const particles_t *p, size_t i, long c[3])
 {
+    for (int d = 0; d < 3; ++d) c[d] = d < h->dim ? halo_column(h, d, p->x[d][i]) : 0;
+}
+
+static long halo_clamp(long v, long lo, long hi) { return v < lo ? lo : v > hi ? hi : v; }
+
+static size_t halo_coarse_index(const halo_t *h, const long c[3])
+{
+    size_t k = 0;
+    for (int d = h->dim - 1; d >= 0; --d)
+        k = k * (size_t)h->cg_n[d] + (size_t)halo_clamp(c[d] / h->blk, 0, h->cg_n[d] - 1);
+    return k;
+}
+
+int halo_owner(const halo_t *h, const long c[3])
+{
+    if (h->method == HALO_METIS) return h->part[halo_coarse_index(h, c)];
     int lo = 0, hi = h->size - 1; /* largest r with bound[r] <= c; bound[0] is open */
     while (lo < hi) {
         int mid = (lo + hi + 1) / 2;
-        if (h->bound[mid] <= c) lo = mid;
+        if (h->bound[mid] <= c[h->axis]) lo = mid;
         else hi = mid - 1;
     }
     return lo;
 }
+
+static int halo_add_target(const halo_t *h, int r, int *out, int n)
+{
+    if (r == h->rank) return n;
+    for (int k = 0; k < n; ++k)
+        if (out[k] == r) return n;
+    out[n] = r;
+    return n + 1;
+}
+
+/* Ranks other than this one owning a lattice cell within depth cells of c:
+ * the owners of the 2 depth + 1 columns around c (slabs), or of the coarse
+ * cells that the box c +- depth touches (at most 2^dim: blk >= depth). */
+static int halo_targets(const halo_t *h, const long c[3], int *out)
+{
+    int n = 0;
+    if (h->method != HALO_METIS) {
+        long q[3] = {c[0], c[1], c[2]};
+        for (long k = c[h->axis] - h->depth; k <= c[h->axis] + h->depth; ++k) {
+            q[h->axis] = k;
+            n = halo_add_target(h, halo_owner(h, q), out, n);
+        }
+        return n;
+    }
+    long lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (int d = 0; d < h->dim; ++d) {
+        lo[d] = halo_clamp((c[d] - h->depth) / h->blk, 0, h->cg_n[d] - 1);
+        hi[d] = halo_clamp((c[d] + h->depth) / h->blk, 0, h->cg_n[d] - 1);
+    }
+    for (long z = lo[2]; z <= hi[2]; ++z)
+        for (long y = lo[1]; y <= hi[1]; ++y)
+            for (long x = lo[0]; x <= hi[0]; ++x)
+                n = halo_add_target(h, h->part[((size_t)z * (size_t)h->cg_n[1] + (size_t)y) * (size_t)h->cg_n[0] + (size_t)x],
+                                    out, n);
+    return n;
+}
+
+/* ---- neighbours ----------------------------------------------------------------- */
+
+static void halo_set_neighbours(halo_t *h, const int *is_nb)
+{
+    halo_free_lists(h);
+    for (int r = 0; r < h->size; ++r) h->nb_of[r] = -1;
+    h->nb = halo_calloc((size_t)h->size, sizeof(int));
+    for (int r = 0; r < h->size; ++r)
+        if (is_nb[r] && r != h->rank) h->nb_of[r] = h->nnb, h->nb[h->nnb++] = r;
+    size_t m = (size_t)(h->nnb ? h->nnb : 1);
+    h->send = halo_calloc(m, sizeof(size_t *));
+    h->nsend = halo_calloc(m, sizeof(size_t));
+    h->cap_send = halo_calloc(m, sizeof(size_t));
+    h->nrecv = halo_calloc(m, sizeof(size_t));
+}
+
+/* Slabs: the ranks whose columns overlap [lo - depth, hi + depth). */
+static void halo_slab_neighbours(halo_t *h)
+{
+    int *is = halo_calloc((size_t)h->size, sizeof(int));
+    long lo = h->bound[h->rank], hi = h->bound[h->rank + 1];
+    for (int r = 0; r < h->size; ++r) {
+        long a = h->bound[r], b = h->bound[r + 1];
+        int below = lo != LONG_MIN && b != LONG_MAX && b <= lo - h->depth;
+        int above = hi != LONG_MAX && a != LONG_MIN && a >= hi + h->depth;
+        is[r] = !below && !above;
+    }
+    halo_set_neighbours(h, is);
+    free(is);
+}
+
+/* METIS: the owners of the coarse cells around this rank's coarse cells (the
+ * coarse edge blk >= depth, so ghosts reach no farther). Symmetric. */
+static void halo_metis_neighbours(halo_t *h)
+{
+    int *is = halo_calloc((size_t)h->size, sizeof(int)), n[3] = {h->cg_n[0], h->cg_n[1], h->dim == 3 ? h->cg_n[2] : 1};
+    for (int z = 0; z < n[2]; ++z)
+        for (int y = 0; y < n[1]; ++y)
+            for (int x = 0; x < n[0]; ++x) {
+                if (h->part[((size_t)z * n[1] + y) * n[0] + x] != h->rank) continue;
+                for (int dz = -(h->dim == 3); dz <= (h->dim == 3); ++dz)
+                    for (int dy = -1; dy <= 1; ++dy)
+                        for (int dx = -1; dx <= 1; ++dx) {
+                            int X = x + dx, Y = y + dy, Z = z + dz;
+                            if (X < 0 || Y < 0 || Z < 0 || X >= n[0] || Y >= n[1] || Z >= n[2]) continue;
+                            is[h->part[((size_t)Z * n[1] + Y) * n[0] + X]] = 1;
+                        }
+            }
+    halo_set_neighbours(h, is);
+    free(is);
+}
+
+/* ---- point-to-point exchange ------------------------------------------------------ */
+
+static MPI_Datatype halo_record_type(size_t bytes)
+{
+    MPI_Datatype t;
+    MPICHECK(MPI_Type_contiguous((int)bytes, MPI_BYTE, &t));
+    MPICHECK(MPI_Type_commit(&t));
+    return t;
+}
+
+/* Send the records list[k][0..n[k]) of arrays arr to neighbour k, for every
+ * k, and receive every neighbour's into h->buf[1] in neighbour order;
+ * got[k] records from neighbour k. Returns the total received. */
+static size_t halo_swap(halo_t *h, const particles_t *p, size_t *const *list, const size_t *n, const int *arr,
+                        int narr, size_t *got)
+{
+    size_t rec = part_record_bytes(arr, narr), ns = 0, nr = 0;
+    int m = h->nnb;
+    MPI_Request *rq = halo_calloc((size_t)(2 * m + 1), sizeof(MPI_Request));
+    long long *cs = halo_calloc((size_t)(2 * m + 1), sizeof(long long)), *cr = cs + m;
+    for (int k = 0; k < m; ++k) {
+        cs[k] = (long long)n[k], ns += n[k];
+        MPICHECK(MPI_Irecv(&cr[k], 1, MPI_LONG_LONG, h->nb[k], 21, MPI_COMM_WORLD, &rq[k]));
+        MPICHECK(MPI_Isend(&cs[k], 1, MPI_LONG_LONG, h->nb[k], 21, MPI_COMM_WORLD, &rq[m + k]));
+    }
+    MPICHECK(MPI_Waitall(2 * m, rq, MPI_STATUSES_IGNORE));
+    for (int k = 0; k < m; ++k) got[k] = (size_t)cr[k], nr += got[k];
+    h->buf[0] = halo_grow(h->buf[0], &h->cap_buf[0], ns * rec + 1, 1);
+    h->buf[1] = halo_grow(h->buf[1], &h->cap_buf[1], nr * rec + 1, 1);
+    MPI_Datatype t = halo_record_type(rec);
+    size_t os = 0, orr = 0;
+    for (int k = 0; k < m; ++k) {
+        part_pack(p, list[k], n[k], arr, narr, h->buf[0] + os * rec);
+        MPICHECK(MPI_Irecv(h->buf[1] + orr * rec, (int)got[k], t, h->nb[k], 22, MPI_COMM_WORLD, &rq[k]));
+        MPICHECK(MPI_Isend(h->buf[0] + os * rec, (int)n[k], t, h->nb[k], 22, MPI_COMM_WORLD, &rq[m + k]));
+        os += n[k], orr += got[k];
+        h->bytes += (long long)(n[k] * rec + sizeof(long long)), h->messages += 2;
+    }
+    MPICHECK(MPI_Waitall(2 * m, rq, MPI_STATUSES_IGNORE));
+    MPICHECK(MPI_Type_free(&t));
+    free(rq), free(cs);
+    return nr;
+}
+
+static void halo_list_add(halo_t *h, int r, size_t i, const char *what)
+{
+    int k = h->nb_of[r];
+    if (k < 0)
+        error_exit(EXIT_NUMERICAL, "%s: rank %d is not a neighbour of rank %d (a particle crossed more than "
+                   "one domain in a step: the flow is unstable)", what, r, h->rank);
+    h->send[k] = halo_grow(h->send[k], &h->cap_send[k], h->nsend[k] + 1, sizeof(size_t));
+    h->send[k][h->nsend[k]++] = i;
+}
+
+/* ---- migration and ghosts -------------------------------------------------------- */
 
 /* Lattice origin: the particles' lower corner over all ranks, less 1e-6 of
  * a cell, exactly as grid_fit computes it on one rank; also the upper
@@ -82,119 +259,56 @@ static void halo_corner(halo_t *h, const particles_t *p, real *hi)
     for (int d = 0; d < 3; ++d) h->origin[d] = d < h->dim ? lo[d] - R(1e-6) * h->support : 0;
 }
 
-static MPI_Datatype halo_record_type(size_t bytes)
-{
-    MPI_Datatype t;
-    MPICHECK(MPI_Type_contiguous((int)bytes, MPI_BYTE, &t));
-    MPICHECK(MPI_Type_commit(&t));
-    return t;
-}
-
-/* Send m records from sbuf to rank `to` while receiving from rank `from`
- * (either may be MPI_PROC_NULL) into h->buf[1]; returns the count received. */
-static size_t halo_shift(halo_t *h, const char *sbuf, size_t m, int to, int from, size_t rec)
-{
-    long long ms = (long long)m, mr = 0;
-    MPICHECK(MPI_Sendrecv(&ms, 1, MPI_LONG_LONG, to, 11, &mr, 1, MPI_LONG_LONG, from, 11, MPI_COMM_WORLD,
-                          MPI_STATUS_IGNORE));
-    h->buf[1] = halo_grow(h->buf[1], &h->cap_buf[1], (size_t)mr * rec, 1);
-    MPI_Datatype t = halo_record_type(rec);
-    MPICHECK(MPI_Sendrecv(sbuf, (int)m, t, to, 12, h->buf[1], (int)mr, t, from, 12, MPI_COMM_WORLD,
-                          MPI_STATUS_IGNORE));
-    MPICHECK(MPI_Type_free(&t));
-    if (to != MPI_PROC_NULL) h->bytes += (long long)(m * rec + sizeof ms), h->messages += 2;
-    return (size_t)mr;
-}
-
-static int halo_neighbour(const halo_t *h, int side)
-{
-    int r = h->rank + (side ? 1 : -1);
-    return r < 0 || r >= h->size ? MPI_PROC_NULL : r;
-}
-
-/* ---- migration ------------------------------------------------------------- */
-
 static void halo_all_arrays(int *arr, int *narr)
 {
     *narr = (int)part_narrays();
     for (int k = 0; k < *narr; ++k) arr[k] = k;
 }
 
-/* Particles outside [bound[rank], bound[rank+1]) go to the neighbour on
- * that side, whole (every array); arrivals are appended. A particle that
- * would need to cross more than one slab is an error: particles move less
- * than h per step and slabs are at least two cells of 2h wide. */
+/* Particles whose cell another rank owns go to it, whole (every array);
+ * arrivals are appended. */
 static void halo_migrate(halo_t *h, particles_t *p)
 {
     int all[HALO_MAX_ARRAYS + 8], nall;
     halo_all_arrays(all, &nall);
-    size_t rec = part_record_bytes(all, nall), nkeep = 0;
+    size_t nkeep = 0, rec = part_record_bytes(all, nall);
     h->inv = halo_grow(h->inv, &h->cap_inv, p->n, sizeof(size_t)); /* keep list */
-    for (int s = 0; s < 2; ++s) h->nsend[s] = 0;
+    for (int k = 0; k < h->nnb; ++k) h->nsend[k] = 0;
     for (size_t i = 0; i < p->n; ++i) {
-        long c = halo_column(h, p->x[h->axis][i]);
-        int side = c < h->bound[h->rank] ? 0 : c >= h->bound[h->rank + 1] ? 1 : -1;
-        if (side < 0) {
-            h->inv[nkeep++] = i;
-            continue;
-        }
-        h->send[side] = halo_grow(h->send[side], &h->cap_send[side], h->nsend[side] + 1, sizeof(size_t));
-        h->send[side][h->nsend[side]++] = i;
+        long c[3];
+        halo_cell_of(h, p, i, c);
+        int r = halo_owner(h, c);
+        if (r == h->rank) h->inv[nkeep++] = i;
+        else halo_list_add(h, r, i, "migration"), h->migrated++;
     }
-    size_t got[2];
-    char *in[2] = {NULL, NULL};
-    for (int s = 0; s < 2; ++s) { /* s = 0: to the lower rank, from the upper */
-        h->buf[0] = halo_grow(h->buf[0], &h->cap_buf[0], h->nsend[s] * rec, 1);
-        part_pack(p, h->send[s], h->nsend[s], all, nall, h->buf[0]);
-        h->migrated += (long long)h->nsend[s];
-        got[s] = halo_shift(h, h->buf[0], h->nsend[s], halo_neighbour(h, s), halo_neighbour(h, !s), rec);
-        in[s] = malloc(got[s] * rec + 1);
-        if (!in[s]) error_exit(1, "out of memory migrating %zu particles", got[s]);
-        memcpy(in[s], h->buf[1], got[s] * rec);
-    }
+    size_t *got = halo_calloc((size_t)h->nnb + 1, sizeof(size_t));
+    size_t nin = halo_swap(h, p, h->send, h->nsend, all, nall, got);
     part_compact(p, h->inv, nkeep);
-    part_reserve(p, nkeep + got[0] + got[1]);
-    for (int s = 0; s < 2; ++s) {
-        part_unpack(p, NULL, p->n, got[s], all, nall, in[s]);
-        p->n += got[s];
-        free(in[s]);
-    }
-    for (size_t i = nkeep; i < p->n; ++i) {
-        long c = halo_column(h, p->x[h->axis][i]);
-        if (c < h->bound[h->rank] || c >= h->bound[h->rank + 1])
-            error_exit(EXIT_NUMERICAL, "particle %lld crossed more than one slab in a step (column %ld, slab "
-                       "[%ld, %ld)): the flow is unstable", (long long)p->id[i], c, h->bound[h->rank],
-                       h->bound[h->rank + 1]);
-    }
+    part_reserve(p, nkeep + nin);
+    part_unpack(p, NULL, p->n, nin, all, nall, h->buf[1]);
+    p->n += nin;
+    (void)rec;
+    free(got);
 }
 
-/* ---- ghosts ---------------------------------------------------------------- */
-
+/* Ghosts: every owned particle within depth cells of another rank's cell
+ * is sent to that rank, carrying h->arr; arrivals at [n, n + ng). */
 static void halo_make_ghosts(halo_t *h, particles_t *p)
 {
-    size_t rec = part_record_bytes(h->arr, h->narr);
-    long lo = h->bound[h->rank], hi = h->bound[h->rank + 1];
-    for (int s = 0; s < 2; ++s) h->nsend[s] = 0;
+    int tg[64];
+    for (int k = 0; k < h->nnb; ++k) h->nsend[k] = 0;
     for (size_t i = 0; i < p->n; ++i) {
-        long c = halo_column(h, p->x[h->axis][i]);
-        for (int s = 0; s < 2; ++s)
-            if (halo_neighbour(h, s) != MPI_PROC_NULL && (s == 0 ? c < lo + h->depth : c >= hi - h->depth)) {
-                h->send[s] = halo_grow(h->send[s], &h->cap_send[s], h->nsend[s] + 1, sizeof(size_t));
-                h->send[s][h->nsend[s]++] = i;
-            }
+        long c[3];
+        halo_cell_of(h, p, i, c);
+        int nt = halo_targets(h, c, tg);
+        for (int t = 0; t < nt; ++t) halo_list_add(h, tg[t], i, "ghosts");
     }
-    p->ng = 0;
-    for (int s = 1; s >= 0; --s) { /* first from the lower rank (to the upper), then from the upper */
-        h->buf[0] = halo_grow(h->buf[0], &h->cap_buf[0], h->nsend[s] * rec, 1);
-        part_pack(p, h->send[s], h->nsend[s], h->arr, h->narr, h->buf[0]);
-        size_t got = halo_shift(h, h->buf[0], h->nsend[s], halo_neighbour(h, s), halo_neighbour(h, !s), rec);
-        part_reserve(p, p->n + p->ng + got);
-        part_unpack(p, NULL, p->n + p->ng, got, h->arr, h->narr, h->buf[1]);
-        h->nrecv[1 - s] = got;
-        p->ng += got;
-    }
-    h->recv = halo_grow(h->recv, &h->cap_recv, p->ng, sizeof(size_t));
-    for (size_t k = 0; k < p->ng; ++k) h->recv[k] = p->n + k;
+    size_t ng = halo_swap(h, p, h->send, h->nsend, h->arr, h->narr, h->nrecv);
+    part_reserve(p, p->n + ng);
+    part_unpack(p, NULL, p->n, ng, h->arr, h->narr, h->buf[1]);
+    p->ng = ng;
+    h->recv = halo_grow(h->recv, &h->cap_recv, ng, sizeof(size_t));
+    for (size_t k = 0; k < ng; ++k) h->recv[k] = p->n + k;
 }
 
 void halo_exchange(halo_t *h, particles_t *p)
@@ -211,32 +325,34 @@ void halo_sorted(halo_t *h, const size_t *perm, size_t n)
 {
     h->inv = halo_grow(h->inv, &h->cap_inv, n, sizeof(size_t));
     for (size_t k = 0; k < n; ++k) h->inv[perm[k]] = k;
-    for (int s = 0; s < 2; ++s)
-        for (size_t k = 0; k < h->nsend[s]; ++k) h->send[s][k] = h->inv[h->send[s][k]];
-    for (size_t k = 0; k < h->nrecv[0] + h->nrecv[1]; ++k) h->recv[k] = h->inv[h->recv[k]];
+    size_t nr = 0;
+    for (int k = 0; k < h->nnb; ++k) {
+        for (size_t q = 0; q < h->nsend[k]; ++q) h->send[k][q] = h->inv[h->send[k][q]];
+        nr += h->nrecv[k];
+    }
+    for (size_t k = 0; k < nr; ++k) h->recv[k] = h->inv[h->recv[k]];
 }
 
 void halo_refresh(halo_t *h, particles_t *p, const int *arr, int narr)
 {
     double t0 = MPI_Wtime();
-    size_t rec = part_record_bytes(arr, narr);
-    for (int s = 1; s >= 0; --s) { /* the order of halo_make_ghosts */
-        h->buf[0] = halo_grow(h->buf[0], &h->cap_buf[0], h->nsend[s] * rec, 1);
-        part_pack(p, h->send[s], h->nsend[s], arr, narr, h->buf[0]);
-        size_t got = halo_shift(h, h->buf[0], h->nsend[s], halo_neighbour(h, s), halo_neighbour(h, !s), rec);
-        if (got != h->nrecv[1 - s])
-            error_exit(1, "halo_refresh: %zu records from rank %d, expected %zu", got, halo_neighbour(h, !s),
-                       h->nrecv[1 - s]);
-        part_unpack(p, h->recv + (s == 1 ? 0 : h->nrecv[0]), 0, got, arr, narr, h->buf[1]);
+    size_t *got = halo_calloc((size_t)h->nnb + 1, sizeof(size_t)), total = 0;
+    halo_swap(h, p, h->send, h->nsend, arr, narr, got);
+    for (int k = 0; k < h->nnb; ++k) {
+        if (got[k] != h->nrecv[k])
+            error_exit(1, "halo_refresh: %zu records from rank %d, expected %zu", got[k], h->nb[k], h->nrecv[k]);
+        total += got[k];
     }
+    part_unpack(p, h->recv, 0, total, arr, narr, h->buf[1]);
+    free(got);
     h->wall_comm += MPI_Wtime() - t0;
 }
 
-/* ---- decomposition and balance --------------------------------------------- */
+/* ---- decomposition and balance ----------------------------------------------------- */
 
-/* Bounds that split the columns' weights w[0..ncol-1] into equal shares,
- * every slab at least depth columns wide. */
-static void halo_cut(halo_t *h, const double *w, long ncol)
+/* Slabs: bounds that split the columns' weights w[0..ncol-1] into equal
+ * shares, every slab at least depth columns wide. */
+static void halo_cut_slabs(halo_t *h, const double *w, long ncol)
 {
     if (ncol < (long)h->size * h->depth)
         input_error("Parallel: %d ranks need at least %d cells of 2h = %.4g m along the slab axis (%c); the "
@@ -256,27 +372,70 @@ static void halo_cut(halo_t *h, const double *w, long ncol)
         for (; c > b; --c) cum -= w[c - 1];
         h->bound[r] = b;
     }
+    halo_slab_neighbours(h);
 }
 
-/* Send every particle (whole) to the rank owning its column: all-to-all. */
+/* METIS: k-way partition of the coarse-cell graph (vertex weights w, in
+ * units of the smallest positive weight, at least 1 so that empty cells
+ * get an owner too), on rank 0, broadcast. */
+static void halo_cut_metis(halo_t *h, const double *w, size_t nv)
+{
+    h->part = realloc(h->part, nv * sizeof(int));
+    if (!h->part) error_exit(1, "out of memory: %zu coarse cells", nv);
+    if (h->rank == 0) {
+        idx_t n = (idx_t)nv, ncon = 1, np = (idx_t)h->size, cut = 0, opt[METIS_NOPTIONS];
+        idx_t *xadj = halo_calloc(nv + 1, sizeof(idx_t)), *adj = halo_calloc(nv * 26, sizeof(idx_t));
+        idx_t *vw = halo_calloc(nv, sizeof(idx_t)), *part = halo_calloc(nv, sizeof(idx_t));
+        double wmin = 0;
+        for (size_t v = 0; v < nv; ++v)
+            if (w[v] > 0 && (wmin == 0 || w[v] < wmin)) wmin = w[v];
+        int N[3] = {h->cg_n[0], h->cg_n[1], h->dim == 3 ? h->cg_n[2] : 1}, zr = h->dim == 3;
+        for (size_t v = 0; v < nv; ++v) {
+            int x = (int)(v % (size_t)N[0]), y = (int)(v / (size_t)N[0] % (size_t)N[1]), z = (int)(v / ((size_t)N[0] * N[1]));
+            vw[v] = 1 + (idx_t)(wmin > 0 ? w[v] / wmin * 10 : 0);
+            xadj[v + 1] = xadj[v];
+            for (int dz = -zr; dz <= zr; ++dz)
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        int X = x + dx, Y = y + dy, Z = z + dz;
+                        if ((!dx && !dy && !dz) || X < 0 || Y < 0 || Z < 0 || X >= N[0] || Y >= N[1] || Z >= N[2])
+                            continue;
+                        adj[xadj[v + 1]++] = (idx_t)(((size_t)Z * N[1] + Y) * N[0] + X);
+                    }
+        }
+        METIS_SetDefaultOptions(opt);
+        opt[METIS_OPTION_SEED] = 1;
+        opt[METIS_OPTION_CONTIG] = 1;
+        int rc = METIS_PartGraphKway(&n, &ncon, xadj, adj, vw, NULL, NULL, &np, NULL, NULL, opt, &cut, part);
+        if (rc != METIS_OK) error_exit(1, "METIS_PartGraphKway failed (%d) on %zu coarse cells", rc, nv);
+        for (size_t v = 0; v < nv; ++v) h->part[v] = (int)part[v];
+        free(xadj), free(adj), free(vw), free(part);
+    }
+    MPICHECK(MPI_Bcast(h->part, (int)nv, MPI_INT, 0, MPI_COMM_WORLD));
+    halo_metis_neighbours(h);
+}
+
+/* Send every particle (whole) to the rank owning its cell: all-to-all. */
 static void halo_route(halo_t *h, particles_t *p)
 {
     int all[HALO_MAX_ARRAYS + 8], nall, P = h->size;
     halo_all_arrays(all, &nall);
     size_t rec = part_record_bytes(all, nall);
-    int *cnt = calloc((size_t)4 * P, sizeof(int)), *rcnt = cnt + P, *sdis = cnt + 2 * P, *rdis = cnt + 3 * P;
-    size_t *order = malloc((p->n + 1) * sizeof(size_t));
-    int *dest = malloc((p->n + 1) * sizeof(int));
-    if (!cnt || !order || !dest) error_exit(1, "out of memory routing %zu particles", p->n);
-    for (size_t i = 0; i < p->n; ++i) cnt[dest[i] = halo_owner(h, halo_column(h, p->x[h->axis][i]))]++;
+    int *cnt = halo_calloc((size_t)4 * P, sizeof(int)), *rcnt = cnt + P, *sdis = cnt + 2 * P, *rdis = cnt + 3 * P;
+    size_t *order = halo_calloc(p->n + 1, sizeof(size_t));
+    int *dest = halo_calloc(p->n + 1, sizeof(int));
+    for (size_t i = 0; i < p->n; ++i) {
+        long c[3];
+        halo_cell_of(h, p, i, c);
+        cnt[dest[i] = halo_owner(h, c)]++;
+    }
     for (int r = 1; r < P; ++r) sdis[r] = sdis[r - 1] + cnt[r - 1];
     for (size_t i = 0; i < p->n; ++i) order[sdis[dest[i]]++] = i; /* stable by destination */
     for (int r = 0; r < P; ++r) sdis[r] -= cnt[r];
     MPICHECK(MPI_Alltoall(cnt, 1, MPI_INT, rcnt, 1, MPI_INT, MPI_COMM_WORLD));
     size_t nin = 0;
     for (int r = 0; r < P; ++r) rdis[r] = (int)nin, nin += (size_t)rcnt[r];
-    char *sb = malloc(p->n * rec + 1), *rb = malloc(nin * rec + 1);
-    if (!sb || !rb) error_exit(1, "out of memory routing %zu particles", p->n);
+    char *sb = halo_calloc(p->n * rec + 1, 1), *rb = halo_calloc(nin * rec + 1, 1);
     part_pack(p, order, p->n, all, nall, sb);
     MPI_Datatype t = halo_record_type(rec);
     MPICHECK(MPI_Alltoallv(sb, cnt, sdis, t, rb, rcnt, rdis, t, MPI_COMM_WORLD));
@@ -288,42 +447,73 @@ static void halo_route(halo_t *h, particles_t *p)
     free(sb), free(rb), free(order), free(dest), free(cnt);
 }
 
-/* Weight of each lattice column along the axis, summed over ranks: each
- * local particle counts `each`. */
-static double *halo_column_weights(halo_t *h, const particles_t *p, long ncol, double each)
-{
-    double *w = calloc((size_t)ncol, sizeof(double));
-    if (!w) error_exit(1, "out of memory: %ld lattice columns", ncol);
-    for (size_t i = 0; i < p->n; ++i) {
-        long c = halo_column(h, p->x[h->axis][i]);
-        w[c < 0 ? 0 : c >= ncol ? ncol - 1 : c] += each;
-    }
-    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, w, (int)ncol, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD));
-    return w;
-}
-
-static long halo_ncol(halo_t *h, const particles_t *p)
+/* The lattice extent (cells per axis) of all particles; picks the slab axis
+ * if it is to be the longest; sizes the METIS coarse grid. Returns the
+ * number of weight bins: columns along the axis, or coarse cells. */
+static size_t halo_grid(halo_t *h, const particles_t *p)
 {
     real hi[3];
     halo_corner(h, p, hi);
+    long n[3] = {1, 1, 1};
+    for (int d = 0; d < h->dim; ++d) n[d] = halo_column(h, d, hi[d]) + 1;
     if (h->axis < 0) { /* the longest extent */
         h->axis = 0;
         for (int d = 1; d < h->dim; ++d)
-            if (hi[d] - h->origin[d] > hi[h->axis] - h->origin[h->axis]) h->axis = d;
+            if (n[d] > n[h->axis]) h->axis = d;
     }
-    return halo_column(h, hi[h->axis]) + 1;
+    if (h->method != HALO_METIS) return (size_t)n[h->axis];
+    size_t nv = 1;
+    for (int d = 0; d < 3; ++d) h->cg_n[d] = d < h->dim ? (int)((n[d] + h->blk - 1) / h->blk) : 1, nv *= (size_t)h->cg_n[d];
+    if (nv < (size_t)h->size)
+        input_error("Parallel: %d ranks need at least as many coarse cells (4h) as ranks; the domain has %zu",
+                    h->size, nv);
+    return nv;
+}
+
+/* Weight per bin (column or coarse cell), summed over ranks: each local
+ * particle counts `each`. */
+static double *halo_weights(halo_t *h, const particles_t *p, size_t nbin, double each)
+{
+    double *w = halo_calloc(nbin, sizeof(double));
+    for (size_t i = 0; i < p->n; ++i) {
+        long c[3];
+        halo_cell_of(h, p, i, c);
+        size_t b = h->method == HALO_METIS ? halo_coarse_index(h, c)
+                                           : (size_t)halo_clamp(c[h->axis], 0, (long)nbin - 1);
+        w[b] += each;
+    }
+    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, w, (int)nbin, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD));
+    return w;
+}
+
+static void halo_cut(halo_t *h, const double *w, size_t nbin)
+{
+    if (h->method == HALO_METIS) halo_cut_metis(h, w, nbin);
+    else halo_cut_slabs(h, w, (long)nbin);
 }
 
 void halo_decompose(halo_t *h, particles_t *p)
 {
     double t0 = MPI_Wtime();
     p->ng = 0;
-    long ncol = halo_ncol(h, p);
-    double *w = halo_column_weights(h, p, ncol, 1.0);
-    halo_cut(h, w, ncol);
+    size_t nbin = halo_grid(h, p);
+    double *w = halo_weights(h, p, nbin, 1.0);
+    halo_cut(h, w, nbin);
     free(w);
     halo_route(h, p);
     h->wall_comm += MPI_Wtime() - t0;
+}
+
+/* Particles each rank would own under the present cut (for the log). */
+static long long halo_owned_after(halo_t *h, const particles_t *p)
+{
+    long long m = 0;
+    for (size_t i = 0; i < p->n; ++i) {
+        long c[3];
+        halo_cell_of(h, p, i, c);
+        m += halo_owner(h, c) == h->rank;
+    }
+    return m;
 }
 
 int halo_balance(halo_t *h, particles_t *p, double cost, double threshold)
@@ -334,19 +524,17 @@ int halo_balance(halo_t *h, particles_t *p, double cost, double threshold)
     double mean = sum / h->size, imb = mean > 0 ? max / mean - 1 : 0;
     if (imb <= threshold) return 0;
     double t0 = MPI_Wtime();
-    long ncol = halo_ncol(h, p);
-    double *w = halo_column_weights(h, p, ncol, p->n ? cost / (double)p->n : 0);
-    long *old = malloc(((size_t)h->size + 1) * sizeof(long));
-    if (!old) error_exit(1, "out of memory in halo_balance");
-    memcpy(old, h->bound, ((size_t)h->size + 1) * sizeof(long));
-    halo_cut(h, w, ncol);
-    int moved = memcmp(old, h->bound, ((size_t)h->size + 1) * sizeof(long)) != 0;
-    if (moved)
-        message("load balance: the slowest rank took %.0f %% more than the mean (threshold %.0f %%): slab "
-                "bounds moved", 100 * imb, 100 * threshold);
-    free(old);
+    size_t nbin = halo_grid(h, p);
+    double *w = halo_weights(h, p, nbin, p->n ? cost / (double)p->n : 0);
+    halo_cut(h, w, nbin);
     free(w);
-    if (moved) halo_route(h, p);
+    int moved = halo_owned_after(h, p) != (long long)p->n, any = 0;
+    MPICHECK(MPI_Allreduce(&moved, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD));
+    if (any) {
+        message("load balance: the slowest rank took %.0f %% more than the mean (threshold %.0f %%): domains "
+                "re-cut", 100 * imb, 100 * threshold);
+        halo_route(h, p);
+    }
     h->wall_comm += MPI_Wtime() - t0;
-    return moved;
+    return any;
 }

@@ -5,15 +5,18 @@
  * Space is cut by the global cell lattice of edge 2h that one rank holding
  * every particle would use for its cell list (its origin is the particles'
  * lower corner, as grid_fit sets it, reduced over ranks at every exchange).
- * Along the slab axis rank r owns the lattice columns [bound[r], bound[r+1]).
+ * Along the slab axis rank r owns the lattice columns [bound[r], bound[r+1]);
+ * or (Parallel:method metis) METIS assigns coarse cells of the lattice to
+ * ranks. Either way a rank's domain is a union of lattice cells.
  * Each rank holds its own particles at [0, n) of its store and ghost copies
  * of its neighbours' particles in the `depth` columns next to its slab at
  * [n, n + ng). depth is 2: the HCSR classification of a particle reads the
  * cell types of the cells next to its own, which read their neighbours, so
  * two columns of ghosts make every owned particle's class exact without an
  * exchange between the classification stages; every other stage reads one
- * support. Slabs are at least `depth` columns wide, so ghosts come only from
- * the two neighbouring ranks.
+ * support. A rank exchanges with its neighbours: the ranks owning a lattice
+ * cell within depth cells of one of its own (slabs at least depth columns
+ * wide: the two next slabs).
  *
  * Per prepare: halo_exchange (migrate, then fresh ghosts carrying the arrays
  * the scene's stages read), the cell sort, halo_sorted (follow the ghosts
@@ -26,18 +29,25 @@
 #include "../src/particles.h"
 
 enum { HALO_MAX_ARRAYS = 64, HALO_DEPTH = 2 };
+enum halo_method { HALO_SLABS = 0, HALO_METIS = 1 };
 
 typedef struct halo {
     int rank, size;
     int dim, axis;         /* slab axis (0 x, 1 y, 2 z) */
-    int depth;             /* ghost columns on each side (HALO_DEPTH) */
+    int method;            /* enum halo_method */
+    int depth;             /* ghost lattice cells on each side (HALO_DEPTH) */
     real support;          /* lattice cell edge 2h, m */
     real origin[3];        /* lattice origin of the last exchange, m */
-    long *bound;           /* size + 1 column bounds; bound[0] and bound[size] open */
+    long *bound;           /* slabs: size + 1 column bounds; bound[0] and bound[size] open */
+    /* METIS: the coarse grid of blk^dim lattice cells per vertex, its owners */
+    int blk, cg_n[3];
+    int *part;             /* rank owning each coarse cell */
+    int nnb, *nb, *nb_of;  /* neighbour ranks (ascending); nb_of[rank]: index in nb or -1 */
     int arr[HALO_MAX_ARRAYS], narr; /* arrays a ghost carries (part_array index) */
-    size_t *send[2], nsend[2], cap_send[2]; /* owned particles ghosted to the lower (0), upper (1) rank */
-    size_t *recv, nrecv[2], cap_recv;       /* store index of each ghost, lower rank's first */
-    size_t *inv, cap_inv;                   /* scratch: inverse permutation */
+    size_t **send, *nsend, *cap_send; /* per neighbour: owned particles ghosted to it */
+    size_t *nrecv;                    /* per neighbour: ghosts from it */
+    size_t *recv, cap_recv;           /* store index of each ghost, in neighbour order */
+    size_t *inv, cap_inv;             /* scratch: inverse permutation, keep list */
     char *buf[2];
     size_t cap_buf[2];
     double wall_comm;      /* wall seconds spent in exchanges and refreshes */
@@ -47,13 +57,16 @@ typedef struct halo {
 } halo_t;
 
 /* Set up for particles of dimension dim on a lattice of edge support;
- * axis: 0, 1, 2, or -1 for the longest extent of the particles (chosen in
- * halo_decompose). arr[0..narr-1]: the arrays ghosts carry. */
-void halo_init(halo_t *h, int dim, real support, int axis, const int *arr, int narr);
-/* Collective. Whatever rank holds which particles, cut the slabs so that
- * each holds an equal share of the particles (every slab at least depth
- * columns wide; exit 2 if the domain is too short for the rank count) and
- * send every particle to its owner. Drops ghosts. */
+ * method: HALO_SLABS or HALO_METIS; axis (slabs): 0, 1, 2, or -1 for the
+ * longest extent of the particles (chosen in halo_decompose).
+ * arr[0..narr-1]: the arrays ghosts carry. */
+void halo_init(halo_t *h, int dim, real support, int method, int axis, const int *arr, int narr);
+/* Collective. Whatever rank holds which particles, cut the domain so that
+ * each rank holds an equal share of the particles — slabs (every slab at
+ * least depth columns wide; exit 2 if the domain is too short for the rank
+ * count), or METIS parts of the graph of coarse cells (blk^dim lattice
+ * cells, vertex weight its particle count, edges to the 3^dim - 1 cells
+ * around) — and send every particle to its owner. Drops ghosts. */
 void halo_decompose(halo_t *h, particles_t *p);
 /* Collective. The lattice origin from the particles' lower corner; the
  * particles that left the slab to the neighbour that owns them; then fresh
@@ -71,8 +84,10 @@ void halo_refresh(halo_t *h, particles_t *p, const int *arr, int narr);
  * send the particles to their new owners (ghosts dropped; prepare again)
  * and return 1; else return 0. The decision is logged. */
 int halo_balance(halo_t *h, particles_t *p, double cost, double threshold);
-/* The lattice column of coordinate x along the slab axis. */
-long halo_column(const halo_t *h, real x);
+/* The lattice column of coordinate x along axis d. */
+long halo_column(const halo_t *h, int d, real x);
+/* The rank owning lattice cell c (coordinates from the current origin). */
+int halo_owner(const halo_t *h, const long c[3]);
 void halo_free(halo_t *h);
 
 #endif

@@ -201,13 +201,21 @@ static void parallel_start(sim_t *s)
     s->halo = malloc(sizeof *s->halo);
     if (!s->halo) error_exit(1, "out of memory");
     int axis = s->sc->parallel.axis == AXIS_AUTO ? -1 : (int)s->sc->parallel.axis;
-    halo_init(s->halo, p->dim, R(2.0) * s->seg.k.h, axis, arr, narr);
+    int method = s->sc->parallel.method == PART_METIS ? HALO_METIS : HALO_SLABS;
+    halo_init(s->halo, p->dim, R(2.0) * s->seg.k.h, method, axis, arr, narr);
     halo_decompose(s->halo, p);
     long long nmin = (long long)p->n, nmax = nmin;
     MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nmin, 1, MPI_LONG_LONG, MPI_MIN, MPI_COMM_WORLD));
     MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nmax, 1, MPI_LONG_LONG, MPI_MAX, MPI_COMM_WORLD));
-    message("slab decomposition along %c over %d ranks: %lld to %lld particles per rank, ghosts %d cells "
-            "of 2h deep", "xyz"[s->halo->axis], comm_size(), nmin, nmax, s->halo->depth);
+    int nbmax = s->halo->nnb;
+    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nbmax, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD));
+    if (method == HALO_METIS)
+        message("METIS decomposition over %d ranks (coarse cells of %d x 2h): %lld to %lld particles per rank, up "
+                "to %d neighbours, ghosts %d cells of 2h deep", comm_size(), s->halo->blk, nmin, nmax, nbmax,
+                s->halo->depth);
+    else
+        message("slab decomposition along %c over %d ranks: %lld to %lld particles per rank, ghosts %d cells "
+                "of 2h deep", "xyz"[s->halo->axis], comm_size(), nmin, nmax, s->halo->depth);
 }
 
 /* Next event time (output, diagnostics, end), rounded onto its grid. */

@@ -56,6 +56,7 @@ static const cyaml_strval_t seg_models[] = {{"constant", SEG_MODEL_CONSTANT},
 static const cyaml_strval_t seg_schemes[] = {
     {"paper", SEG_SCHEME_PAPER}, {"direct", SEG_SCHEME_DIRECT}, {"conservative", SEG_SCHEME_CONSERVATIVE}};
 static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
+static const cyaml_strval_t part_methods[] = {{"slabs", PART_SLABS}, {"metis", PART_METIS}};
 static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
 
 static const cyaml_schema_value_t gravity_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
@@ -163,6 +164,7 @@ static const cyaml_schema_field_t physics_fields[] = {
 };
 
 static const cyaml_schema_field_t parallel_fields[] = {
+    ENM(scene_parallel, method, part_methods),
     ENM(scene_parallel, axis, slab_axes),
     CYAML_FIELD_UINT("balance_every", OPT, struct scene_parallel, balance_every),
     FLT(scene_parallel, balance_threshold, OPT),
@@ -248,6 +250,7 @@ static const struct scene_default scene_defaults[] = {
     {"Walls", "rpm", "0"},
     {"Walls", "direction", "clockwise"},
     {"Walls", "velocity", "[0, 0, 0]"},
+    {"Parallel", "method", "slabs"},
     {"Parallel", "axis", "auto"},
     {"Parallel", "balance_every", "200"},
     {"Parallel", "balance_threshold", "0.1"},

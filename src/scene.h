@@ -121,7 +121,9 @@ struct scene_physics {
 
 /* Multi-rank runs (mpi/halo.h): the slab decomposition and its balance. */
 enum slab_axis { AXIS_X = 0, AXIS_Y = 1, AXIS_Z = 2, AXIS_AUTO = 3 };
+enum part_method { PART_SLABS = 0, PART_METIS = 1 };
 struct scene_parallel {
+    enum part_method method;  /* slabs (default) | metis: METIS k-way parts of the coarse-cell graph */
     enum slab_axis axis;      /* auto (the longest extent of the particles) | x | y | z; default auto */
     unsigned balance_every;   /* steps between load-balance checks; 0 = never; default 200 */
     double balance_threshold; /* move the slab bounds when the slowest rank's compute time exceeds

@@ -13,8 +13,10 @@ are compared particle by particle (matched by ParticleIDs):
   differences of order one. The boundary classes must agree exactly.
   The paper scheme (HCSR, C1 gradients) gets TOL_C1 = 1e-4, as in
   validate_gpu.py (its boundary solves amplify round-off);
-  the drum case must migrate particles across slabs, and the one with a forced
-  load balance must move the slab bounds, so that both paths are exercised;
+  the drum cases must migrate particles across domains, and the one with a
+  forced load balance must move the slab bounds, so that both paths are
+  exercised; the METIS partition (Parallel:method metis) passes the same
+  comparison;
   the run on 3 ranks repeated is bit-identical (determinism).
 """
 import argparse
@@ -46,6 +48,10 @@ CASES = [
     ("drum_balance", "drum_2d_EV.yml", 400, DRUM + ["Geometry:dr=0.0015", "Parallel:axis=y",
                                                     "Parallel:balance_every=50",
                                                     "Parallel:balance_threshold=1e-6"], "balance"),
+    ("drum_EV_metis", "drum_2d_EV.yml", 800, DRUM + ["Parallel:method=metis"], "migrate"),
+    ("column_3d_metis", "column_2d.yml", 30, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.05",
+                                              "Geometry:depth=0.05", "Geometry:height=0.1",
+                                              "Parallel:method=metis"], None),
 ]
 
 
@@ -102,11 +108,11 @@ def main():
         if must == "migrate":
             m = re.search(r"slabs: (\d+) particle migrations", logs[3])
             good = m is not None and int(m.group(1)) > 0
-            print("%s %-14s particles migrated across slabs on 3 ranks: %s" % (
+            print("%s %-14s particles migrated across domains on 3 ranks: %s" % (
                 "ok  " if good else "FAIL", name, m.group(1) if m else "none"))
             ok &= good
         if must == "balance":
-            good = "slab bounds moved" in logs[3]
+            good = "domains re-cut" in logs[3]
             print("%s %-14s load balance moved the slab bounds on 3 ranks" % ("ok  " if good else "FAIL", name))
             ok &= good
     out = os.path.join(a.work, "shearbox_3_again")
