@@ -2,6 +2,7 @@
 #include "io.h"
 #include "error.h"
 #include <errno.h>
+#include <limits.h>
 #include <hdf5.h>
 #include <mpi.h>
 #include <stdlib.h>
@@ -114,33 +115,163 @@ static void io_attr_scalar(hid_t loc, const char *name, hid_t ftype, hid_t mtype
     H5CHECK(H5Sclose(space));
 }
 
-/* ---- snapshot ------------------------------------------------------------- */
+/* ---- snapshot: rows in global particle-ID order ---------------------------- */
+
+/* The file holds the N particles in increasing ParticleIDs order whatever the
+ * rank count and however particles are spread over ranks (IDs need not be
+ * dense, only unique). Rank r writes file rows [r N/P, (r+1) N/P): the
+ * particles whose ID has that global rank among all IDs. The boundaries are
+ * ID values found by bisection over the ID range (one MPI_Allreduce of P-1
+ * counts per halving, at most 64), rows move by MPI_Alltoallv one field at a
+ * time and are merged by a local sort. Memory per rank: O(local rows + P). */
 
 struct io_key {
-    int64_t id;
+    uint64_t key;
     size_t i;
 };
 
 static int io_key_cmp(const void *a, const void *b)
 {
     const struct io_key *ka = a, *kb = b;
-    return (ka->id > kb->id) - (ka->id < kb->id);
+    return (ka->key > kb->key) - (ka->key < kb->key);
 }
 
-/* Indices of p's particles in increasing ID order (malloc'd, >= 1 element). */
-static size_t *io_order_by_id(const particles_t *p)
+/* Order-preserving map of int64 IDs onto uint64 (so bisection cannot overflow). */
+static uint64_t io_ukey(int64_t id) { return (uint64_t)id ^ (UINT64_C(1) << 63); }
+
+/* Sorts key[0..n) by key; returns the original indices in that order
+ * (malloc'd, >= 1 element) and leaves the sorted keys in ukey (n elements). */
+static size_t *io_sort_keys(struct io_key *key, size_t n, uint64_t *ukey)
 {
-    size_t n = p->n;
-    struct io_key *key = malloc((n > 0 ? n : 1) * sizeof *key);
     size_t *order = malloc((n > 0 ? n : 1) * sizeof *order);
-    if (!key || !order) error_exit(1, "out of memory sorting %zu particles for output", n);
-    for (size_t k = 0; k < n; k++)
-        key[k] = (struct io_key){p->id[k], k};
+    if (!order) error_exit(1, "out of memory sorting %zu particles for output", n);
     qsort(key, n, sizeof *key, io_key_cmp);
-    for (size_t k = 0; k < n; k++)
+    for (size_t k = 0; k < n; k++) {
         order[k] = key[k].i;
-    free(key);
+        if (ukey) ukey[k] = key[k].key;
+    }
     return order;
+}
+
+/* How many of the sorted keys key[0..n) are <= v. */
+static size_t io_count_le(const uint64_t *key, size_t n, uint64_t v)
+{
+    size_t lo = 0, hi = n;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (key[mid] <= v)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* The first file row of rank r: floor(r N / P), without overflow. */
+static long long io_first_row(int r, long long ntot, int size)
+{
+    return r * (ntot / size) + r * (ntot % size) / size;
+}
+
+/* cnt[d] = how many of this rank's ID-sorted rows (sorted keys key[0..n))
+ * go to rank d: those whose global rank lies in [d N/P, (d+1) N/P).
+ * Collective. */
+static void io_plan(const uint64_t *key, size_t n, long long ntot, int size, int *cnt)
+{
+    int ns = size - 1;
+    uint64_t umin = n > 0 ? key[0] : UINT64_MAX, umax = n > 0 ? key[n - 1] : 0, gmin, gmax;
+    MPICHECK(MPI_Allreduce(&umin, &gmin, 1, MPI_UINT64_T, MPI_MIN, MPI_COMM_WORLD));
+    MPICHECK(MPI_Allreduce(&umax, &gmax, 1, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD));
+    uint64_t *lo = malloc((ns + 1) * sizeof *lo), *hi = malloc((ns + 1) * sizeof *hi);
+    long long *c = malloc((ns + 1) * sizeof *c), *cg = malloc((ns + 1) * sizeof *cg);
+    if (!lo || !hi || !c || !cg) error_exit(1, "out of memory planning output over %d ranks", size);
+    for (int k = 0; k < ns; k++)
+        lo[k] = gmin, hi[k] = gmax;
+    /* Splitter k: the smallest ID value v with #{IDs <= v} >= (k+1) N/P.
+     * lo and hi are the same on every rank, so all ranks loop alike. */
+    for (int busy = ntot > 0 && ns > 0; busy;) {
+        for (int k = 0; k < ns; k++)
+            c[k] = (long long)io_count_le(key, n, lo[k] + (hi[k] - lo[k]) / 2);
+        MPICHECK(MPI_Allreduce(c, cg, ns, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD));
+        busy = 0;
+        for (int k = 0; k < ns; k++) {
+            uint64_t mid = lo[k] + (hi[k] - lo[k]) / 2;
+            if (cg[k] >= io_first_row(k + 1, ntot, size))
+                hi[k] = mid;
+            else
+                lo[k] = mid + 1;
+            busy |= lo[k] < hi[k];
+        }
+    }
+    size_t prev = 0;
+    for (int d = 0; d < size; d++) {
+        size_t upto = d == ns ? n : io_first_row(d + 1, ntot, size) == 0 ? 0 : io_count_le(key, n, lo[d]);
+        cnt[d] = (int)(upto - prev);
+        prev = upto;
+    }
+    free(lo);
+    free(hi);
+    free(c);
+    free(cg);
+}
+
+/* The exchange of one snapshot: this rank's n rows leave in ID order
+ * (send_order), m rows arrive and are written in ID order (recv_order). */
+struct io_xchg {
+    int size;
+    size_t n, m;
+    size_t *send_order, *recv_order;
+    int *scnt, *sdsp, *rcnt, *rdsp; /* in rows */
+};
+
+/* Plans the exchange of p's rows (collective); fails on a duplicate ID. */
+static void io_xchg_plan(struct io_xchg *x, const particles_t *p, long long ntot)
+{
+    MPICHECK(MPI_Comm_size(MPI_COMM_WORLD, &x->size));
+    size_t n = p->n, sz = (size_t)x->size;
+    x->n = n;
+    struct io_key *key = malloc((n > 0 ? n : 1) * sizeof *key);
+    uint64_t *ukey = malloc((n > 0 ? n : 1) * sizeof *ukey);
+    x->scnt = malloc(4 * sz * sizeof(int));
+    if (!key || !ukey || !x->scnt) error_exit(1, "out of memory sorting %zu particles for output", n);
+    if (n > INT_MAX)
+        error_exit(1, "%zu particles on one rank: snapshot output handles at most %d", n, INT_MAX);
+    x->sdsp = x->scnt + sz, x->rcnt = x->sdsp + sz, x->rdsp = x->rcnt + sz;
+    for (size_t k = 0; k < n; k++)
+        key[k] = (struct io_key){io_ukey(p->id[k]), k};
+    x->send_order = io_sort_keys(key, n, ukey);
+    io_plan(ukey, n, ntot, x->size, x->scnt);
+    MPICHECK(MPI_Alltoall(x->scnt, 1, MPI_INT, x->rcnt, 1, MPI_INT, MPI_COMM_WORLD));
+    long long m = 0, s = 0;
+    for (int d = 0; d < x->size; d++) {
+        x->sdsp[d] = (int)s, s += x->scnt[d];
+        x->rdsp[d] = (int)(m < INT_MAX ? m : INT_MAX), m += x->rcnt[d];
+    }
+    if (m > INT_MAX)
+        error_exit(1, "%lld particles for one rank: snapshot output handles at most %d", m, INT_MAX);
+    x->m = (size_t)m;
+    uint64_t *rkey = malloc((x->m > 0 ? x->m : 1) * sizeof *rkey);
+    struct io_key *rk = x->m > n ? realloc(key, x->m * sizeof *key) : key;
+    if (!rkey || !rk) error_exit(1, "out of memory receiving %zu particles for output", x->m);
+    MPICHECK(MPI_Alltoallv(ukey, x->scnt, x->sdsp, MPI_UINT64_T, rkey, x->rcnt, x->rdsp, MPI_UINT64_T,
+                           MPI_COMM_WORLD));
+    for (size_t k = 0; k < x->m; k++)
+        rk[k] = (struct io_key){rkey[k], k};
+    x->recv_order = io_sort_keys(rk, x->m, rkey);
+    for (size_t k = 1; k < x->m; k++) /* equal IDs always meet on one rank */
+        if (rkey[k] == rkey[k - 1])
+            error_exit(1, "snapshot output: particle ID %lld is held twice",
+                       (long long)io_ukey((int64_t)rkey[k]));
+    free(rk);
+    free(rkey);
+    free(ukey);
+}
+
+static void io_xchg_free(struct io_xchg *x)
+{
+    free(x->send_order);
+    free(x->recv_order);
+    free(x->scnt);
 }
 
 /* buf[k*ncomp + c] = component c of particle order[k], in the stored type. */
@@ -166,6 +297,26 @@ static void io_gather(const struct io_field *f, const particles_t *p, const size
                 d[k * nc] = s[order[k]];
         }
     }
+}
+
+static size_t io_type_size(enum io_type t) { return t == IO_REAL ? 8 : t == IO_UINT8 ? 1 : 8; }
+
+/* Field f of this rank's file rows, in ID order, into out (x->m rows); tmp
+ * holds max(n, m) rows of the widest field. Collective. */
+static void io_xchg_field(const struct io_xchg *x, const struct io_field *f, const particles_t *p, void *tmp,
+                          void *out)
+{
+    size_t row = io_type_size(f->type) * (size_t)f->ncomp;
+    MPI_Datatype t;
+    MPI_Datatype base = f->type == IO_REAL ? MPI_DOUBLE : f->type == IO_UINT8 ? MPI_UINT8_T : MPI_INT64_T;
+    MPICHECK(MPI_Type_contiguous(f->ncomp, base, &t));
+    MPICHECK(MPI_Type_commit(&t));
+    io_gather(f, p, x->send_order, tmp);
+    MPICHECK(MPI_Alltoallv(tmp, x->scnt, x->sdsp, t, out, x->rcnt, x->rdsp, t, MPI_COMM_WORLD));
+    MPICHECK(MPI_Type_free(&t));
+    for (size_t k = 0; k < x->m; k++) /* received runs, merged into ID order */
+        memcpy((char *)tmp + k * row, (const char *)out + x->recv_order[k] * row, row);
+    if (x->m > 0) memcpy(out, tmp, x->m * row);
 }
 
 /* Create /Particles/<f->name> (ntot rows) and write this rank's n rows at
@@ -196,30 +347,37 @@ static void io_write_field(hid_t grp, hid_t dxpl, const struct io_field *f, cons
     H5CHECK(H5Sclose(fspace));
 }
 
-/* /Particles: every field of the table, this rank's block in ID order.
- * With one rank this is global particle-ID order (the DESIGN.md contract).
- * With several ranks each rank's block is sorted but blocks follow rank order;
- * making the whole file globally ID-ordered is the domain decomposition's job
- * (mpi/), which must hand io contiguous ID ranges per rank. */
-static void io_write_particles(hid_t file, const particles_t *p, long long ntot, long long offset)
+/* /Particles: every field of the table, all N rows in global particle-ID
+ * order (the DESIGN.md contract) whatever the rank count: this rank writes
+ * its x->m rows, the IDs of global rank [offset, offset + m), as one
+ * hyperslab. */
+static void io_write_particles(hid_t file, const particles_t *p, long long ntot)
 {
-    size_t *order = io_order_by_id(p);
+    struct io_xchg x;
+    io_xchg_plan(&x, p, ntot);
+    long long m = (long long)x.m, offset = 0;
+    MPICHECK(MPI_Exscan(&m, &offset, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD));
+    if (io_rank() == 0) offset = 0; /* MPI_Exscan leaves rank 0's result undefined */
     int ncmax = 1;
-    for (int k = 0; k < io_nfields; ++k) ncmax = io_fields[k].ncomp > ncmax ? io_fields[k].ncomp : ncmax;
-    void *buf = malloc((p->n > 0 ? p->n : 1) * (size_t)ncmax * sizeof(double)); /* largest row */
-    if (!buf) error_exit(1, "out of memory gathering %zu particles for output", p->n);
+    for (int k = 0; k < io_nfields; ++k)
+        ncmax = io_fields[k].ncomp > ncmax ? io_fields[k].ncomp : ncmax;
+    size_t rows = x.m > x.n ? x.m : x.n;
+    void *tmp = malloc((rows > 0 ? rows : 1) * (size_t)ncmax * sizeof(double)); /* largest row */
+    void *buf = malloc((x.m > 0 ? x.m : 1) * (size_t)ncmax * sizeof(double));
+    if (!tmp || !buf) error_exit(1, "out of memory gathering %zu particles for output", rows);
     hid_t grp, dxpl;
     H5CHECK(grp = H5Gcreate2(file, "Particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
     H5CHECK(dxpl = H5Pcreate(H5P_DATASET_XFER));
     H5CHECK(H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE));
     for (int i = 0; i < io_nfields; i++) {
-        io_gather(&io_fields[i], p, order, buf);
-        io_write_field(grp, dxpl, &io_fields[i], buf, p->n, ntot, offset);
+        io_xchg_field(&x, &io_fields[i], p, tmp, buf);
+        io_write_field(grp, dxpl, &io_fields[i], buf, x.m, ntot, offset);
     }
     H5CHECK(H5Pclose(dxpl));
     H5CHECK(H5Gclose(grp));
+    free(tmp);
     free(buf);
-    free(order);
+    io_xchg_free(&x);
 }
 
 static void io_write_header(hid_t file, int dim, double time, long step, long long ntot,
@@ -260,14 +418,12 @@ int io_write_snapshot(const char *outdir, int index, const particles_t *p, doubl
     io_join(path, outdir, name, "");
     io_join(tmp, outdir, name, ".tmp");
 
-    long long n = (long long)p->n, ntot = 0, offset = 0;
+    long long n = (long long)p->n, ntot = 0;
     MPICHECK(MPI_Allreduce(&n, &ntot, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD));
-    MPICHECK(MPI_Exscan(&n, &offset, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD));
-    if (io_rank() == 0) offset = 0; /* MPI_Exscan leaves rank 0's result undefined */
 
     hid_t file = io_create_file(tmp);
     io_write_header(file, p->dim, time, step, ntot, scene_text, code_version);
-    io_write_particles(file, p, ntot, offset);
+    io_write_particles(file, p, ntot);
     H5CHECK(H5Fclose(file));
     io_commit(tmp, path, 1);
     return 0;

@@ -38,9 +38,11 @@ extern const struct io_field io_fields[];
 extern const int io_nfields;
 
 /* Collective over MPI_COMM_WORLD: write OUTDIR/snapshot_<index %05d>.h5.
- * Each rank contributes its p->n particles (ranks may hold none); N is their
- * sum. Within each rank's block particles appear in increasing ParticleIDs
- * order; p itself is not modified. scene_text and code_version must be the
+ * Each rank contributes its p->n particles (ranks may hold none, any subset
+ * of IDs); N is their sum. The file lists all N in increasing ParticleIDs
+ * order whatever the rank count (rows are redistributed by ID rank, io.c);
+ * IDs must be unique (a duplicate stops the run, status 1); p itself is not
+ * modified. scene_text and code_version must be the
  * same on every rank (scene_text may be NULL: stored as ""). */
 int io_write_snapshot(const char *outdir, int index, const particles_t *p, double time, long step,
                       const char *scene_text, const char *code_version);

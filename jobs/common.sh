@@ -1,0 +1,116 @@
+# jobs/common.sh — shared by the GPU, multi-rank, scaling and restart job
+# scripts (sourced from the repository root, not run): OpenMP threads, the
+# launcher (srun under SLURM, "mpirun --oversubscribe -np NP" without it),
+# and the parser of a run's "done:" line.
+
+# OMP_NUM_THREADS: --cpus-per-task under SLURM; otherwise as set, or 1 per
+# rank when several ranks share this machine (nproc for one rank).
+sphseg_omp_user=${OMP_NUM_THREADS:-} # as the user set it, before any sweep
+sphseg_threads() { # ranks on this machine
+    if [ -n "${SLURM_CPUS_PER_TASK:-}" ]; then
+        export OMP_NUM_THREADS=$SLURM_CPUS_PER_TASK
+    elif [ -n "$sphseg_omp_user" ]; then
+        export OMP_NUM_THREADS=$sphseg_omp_user
+    else
+        local n=$(($(nproc) / ${1:-1}))
+        export OMP_NUM_THREADS=$((n > 0 ? n : 1))
+    fi
+}
+
+# launch=(...): the command prefix that starts NRANKS ranks, one GPU each.
+# Under SLURM: srun with one GPU per task and CPU/GPU binding (SRUN_FLAGS
+# adds to it). Without: $MPIRUN (default "mpirun --oversubscribe", plus
+# --allow-run-as-root for root) -np NRANKS.
+sphseg_launcher() { # nranks
+    local np=$1
+    if [ -n "${SLURM_JOB_ID:-}" ]; then
+        launch=(srun --ntasks="$np" --cpus-per-task="${SLURM_CPUS_PER_TASK:-1}")
+        if [ "${GPUS:-1}" = 1 ]; then
+            launch+=(--gpus-per-task=1 --gpu-bind="${GPU_BIND:-closest}")
+        fi
+        launch+=(--cpu-bind="${CPU_BIND:-cores}")
+        [ -n "${SRUN_FLAGS:-}" ] && read -r -a extra <<<"$SRUN_FLAGS" && launch+=("${extra[@]}")
+    else
+        local mpirun=${MPIRUN:-mpirun --oversubscribe}
+        [ "$(id -u)" = 0 ] && [ -z "${MPIRUN:-}" ] && mpirun="$mpirun --allow-run-as-root"
+        read -r -a launch <<<"$mpirun"
+        launch+=(-np "$np")
+    fi
+}
+
+sphseg_check_binary() {
+    if [ ! -x "$SPHSEG" ]; then
+        echo "$(basename "$0"): $PWD/$SPHSEG not found; run make in $PWD first" >&2
+        exit 1
+    fi
+}
+
+# Fields of a run's log, one line "particles,steps,wall_s,rate,halo_s,io_s":
+# particles from the start line ("N material + M dummy particles"), the rest
+# from the final "done:" line; halo_s is empty when the line has no
+# "s in halo exchange" part. Exit 1 if the log has no done: line.
+sphseg_parse_log() { # logfile
+    "${PYTHON:-/usr/bin/python3}" - "$1" <<'EOF'
+import re, sys
+text = open(sys.argv[1], errors="replace").read()
+num = r"([-+0-9.eE]+|nan|inf)"
+done = re.findall(r"^done: (\d+) steps, " + num + r" s wall, " + num + r" particle-steps/s(.*)$", text, re.M)
+if not done:
+    sys.exit(1)
+steps, wall, rate, rest = done[-1]
+io = re.search(num + r" s of the wall in output", rest)
+halo = re.search(num + r" s in halo exchange", rest)
+m = re.search(r"(\d+) material \+ (\d+) dummy particles", text)
+parts = str(int(m.group(1)) + int(m.group(2))) if m else ""
+print(",".join([parts, steps, wall, rate, halo.group(1) if halo else "", io.group(1) if io else ""]))
+EOF
+}
+
+# The rank counts of a sweep: $RANKS if set, else 1 2 4 ... up to the
+# allocation ($SLURM_NTASKS, or NP without SLURM), the allocation included.
+sphseg_rank_list() {
+    if [ -n "${RANKS:-}" ]; then echo "$RANKS"; return; fi
+    local max=${SLURM_NTASKS:-${NP:-1}} p=1 out=""
+    while [ "$p" -lt "$max" ]; do out="$out $p"; p=$((p * 2)); done
+    echo "$out $max"
+}
+
+SCALING_COLUMNS=mode,ranks,particles,steps,wall_s,particle_steps_per_s,halo_s,io_s,scene,dr,scaled_key,scaled_value,max_steps,job
+
+# One sweep: for each P of sphseg_rank_list, run SCENE on P ranks with
+# Output:snapshots=off and Run:max_steps=$MAX_STEPS (weak: SCALE_KEY set to
+# SCALE_BASE * P^SCALE_POWER), parse its done: line and append a row to $CSV.
+# Extra arguments go to sphseg. Returns 1 if any run failed (the rest still run).
+sphseg_scaling_sweep() { # mode (weak|strong), sphseg args...
+    local mode=$1; shift
+    local failed=0 P value key
+    mkdir -p "$(dirname "$CSV")" "$OUTROOT"
+    [ -s "$CSV" ] || echo "$SCALING_COLUMNS" >"$CSV"
+    for P in $(sphseg_rank_list); do
+        local args=(-P Output:snapshots=off -P "Run:max_steps=$MAX_STEPS")
+        key="" value=""
+        if [ "$mode" = weak ]; then
+            key=$SCALE_KEY
+            value=$("${PYTHON:-/usr/bin/python3}" -c "import sys; print(repr(float(sys.argv[1]) * int(sys.argv[2]) ** float(sys.argv[3])))" "$SCALE_BASE" "$P" "$SCALE_POWER")
+            args+=(-P "$key=$value")
+        fi
+        local out=$OUTROOT/${mode}_P$P
+        sphseg_threads "$P"
+        sphseg_launcher "$P"
+        echo "$mode scaling: $P rank(s), $OMP_NUM_THREADS thread(s)/rank${key:+, $key=$value} -> $out"
+        local rc=0
+        "${launch[@]}" "$SPHSEG" "$SCENE" -o "$out" "$@" "${args[@]}" >"$out.log" 2>&1 || rc=$?
+        if [ $rc -ne 0 ]; then
+            echo "  run failed (exit status $rc): $out.log" >&2; grep -m1 'error' "$out.log" >&2; failed=1; continue
+        fi
+        local f dr
+        if ! f=$(sphseg_parse_log "$out.log"); then
+            echo "  no done: line in $out.log" >&2; failed=1; continue
+        fi
+        IFS=, read -r parts steps wall rate halo io <<<"$f"
+        dr=$("${PYTHON:-/usr/bin/python3}" -c "import sys, yaml; print(yaml.safe_load(open(sys.argv[1]))['Geometry']['dr'])" "$out/used_params.yml" 2>/dev/null || true)
+        echo "$mode,$P,$parts,$steps,$wall,$rate,$halo,$io,$SCENE,$dr,$key,$value,$MAX_STEPS,${SLURM_JOB_ID:-local}" >>"$CSV"
+        echo "  $parts particles, $steps steps, $wall s, $rate particle-steps/s${halo:+, halo $halo s}"
+    done
+    return $failed
+}

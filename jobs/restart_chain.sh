@@ -1,0 +1,101 @@
+#!/usr/bin/env bash
+# ---- edit these for your cluster -------------------------------------------
+# The #SBATCH lines apply to every job of the chain (each job runs this same
+# script with --step). TIME must equal --time (it sets Run:max_wall_time).
+#SBATCH --job-name=sphseg_chain
+#SBATCH --nodes=1
+#SBATCH --ntasks=1
+#SBATCH --gpus-per-task=1
+#SBATCH --cpus-per-task=8
+#SBATCH --mem=16G
+#SBATCH --time=24:00:00
+#SBATCH --output=%x-%j.out
+##SBATCH --partition=CHANGE_ME
+##SBATCH --account=CHANGE_ME
+# -----------------------------------------------------------------------------
+#
+# restart_chain.sh — a long run as K jobs in a row. Each job runs
+#   sphseg SCENE -o OUTDIR [--restart OUTDIR/checkpoint.h5] -P Run:max_wall_time=W ARGS...
+# with --restart only if OUTDIR/checkpoint.h5 exists (else a fresh start), and
+# W = the job's time limit minus MARGIN seconds, so that sphseg writes its
+# checkpoint and exits 0 before SLURM kills the job. Job k+1 starts only if
+# job k succeeded (sbatch --dependency=afterok:<job k>).
+#
+#   bash jobs/restart_chain.sh [SPHSEG_ARGS...]     (login node: submits K jobs)
+#   bash jobs/restart_chain.sh [SPHSEG_ARGS...]     (no sbatch: K steps in a loop here)
+#
+# Jobs left once the run has reached Run:t_end restart from the final
+# checkpoint and end at once; scancel them or choose K with some margin.
+#
+# ---- the chain: edit here or set in the environment -------------------------
+SCENE=${SCENE:-inputs/drum_2d_EV.yml}
+K=${K:-4}                   # jobs (or local steps) in the chain
+TIME=${TIME:-24:00:00}      # each job's time limit ([D-]HH:MM:SS, = --time above)
+MARGIN=${MARGIN:-600}       # seconds kept free for the checkpoint and exit
+OUTDIR=${OUTDIR:-}          # default out/<scene>_chain_<date-time>; the same for all jobs
+# NP (ranks; default 1; SLURM: the job's tasks), MAX_WALL (seconds; overrides
+# TIME - MARGIN), SBATCH_FLAGS (extra sbatch flags), DRYRUN=1 (print the
+# commands instead of running or submitting), SPHSEG, MPIRUN, SRUN_FLAGS,
+# OMP_NUM_THREADS as in jobs/README.md.
+# -----------------------------------------------------------------------------
+set -euo pipefail
+
+if [ -n "${SLURM_JOB_ID:-}" ]; then
+    root=${SLURM_SUBMIT_DIR:-$PWD} # sbatch runs a copy of this script
+    [ -f "$root/jobs/common.sh" ] || root=$root/..
+else
+    root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+fi
+cd "$root"
+source jobs/common.sh
+SPHSEG=${SPHSEG:-build/sphseg}
+OUTDIR=${OUTDIR:-out/$(basename "$SCENE" .yml)_chain_$(date +%Y%m%d-%H%M%S)}
+
+# [D-]HH:MM:SS, HH:MM:SS, MM:SS or MM -> seconds
+to_seconds() {
+    local t=$1 d=0 h=0 m=0 s=0
+    [[ $t == *-* ]] && d=${t%%-*} && t=${t#*-}
+    IFS=: read -r -a f <<<"$t"
+    case ${#f[@]} in
+    3) h=${f[0]} m=${f[1]} s=${f[2]} ;;
+    2) m=${f[0]} s=${f[1]} ;;
+    1) m=${f[0]} ;;
+    esac
+    echo $((10#$d * 86400 + 10#$h * 3600 + 10#$m * 60 + 10#$s))
+}
+
+run() { if [ "${DRYRUN:-0}" = 1 ]; then echo "+ $*"; else "$@"; fi; }
+
+# One link of the chain: fresh start or restart, stopping W seconds in.
+chain_step() { # sphseg args...
+    local wall=${MAX_WALL:-$(($(to_seconds "$TIME") - MARGIN))} np=${SLURM_NTASKS:-${NP:-1}}
+    [ "$wall" -gt 0 ] || { echo "restart_chain: TIME $TIME leaves no time after MARGIN $MARGIN s" >&2; exit 2; }
+    local restart=()
+    [ -f "$OUTDIR/checkpoint.h5" ] && restart=(--restart "$OUTDIR/checkpoint.h5")
+    sphseg_threads "$np"
+    sphseg_launcher "$np"
+    echo "restart_chain: ${restart[*]:-fresh start}, Run:max_wall_time=$wall s, $np rank(s) -> $OUTDIR"
+    run "${launch[@]}" "$SPHSEG" "$SCENE" -o "$OUTDIR" ${restart[@]+"${restart[@]}"} -P "Run:max_wall_time=$wall" "$@"
+}
+
+sphseg_check_binary
+if [ "${1:-}" = --step ]; then # a job of the chain
+    shift
+    chain_step "$@"
+elif command -v sbatch >/dev/null && [ -z "${NO_SLURM:-}" ]; then # submit the chain
+    OUTDIR=$(mkdir -p "$(dirname "$OUTDIR")" && cd "$(dirname "$OUTDIR")" && pwd)/$(basename "$OUTDIR")
+    read -r -a flags <<<"${SBATCH_FLAGS:-}"
+    dep=()
+    for k in $(seq 1 "$K"); do
+        cmd=(sbatch --parsable --time="$TIME" --export="ALL,SCENE=$SCENE,OUTDIR=$OUTDIR,TIME=$TIME,MARGIN=$MARGIN"
+            ${dep[@]+"${dep[@]}"} ${flags[@]+"${flags[@]}"} "$0" --step "$@")
+        if [ "${DRYRUN:-0}" = 1 ]; then echo "+ ${cmd[*]}"; jid=DRYRUN$k; else jid=$("${cmd[@]}"); jid=${jid%%;*}; fi
+        echo "restart_chain: job $k/$K: $jid${dep[*]:+ (${dep[*]})}"
+        dep=(--dependency="afterok:$jid")
+    done
+else # no SLURM: the same steps in a loop here
+    for k in $(seq 1 "$K"); do
+        echo "restart_chain: step $k/$K"
+        chain_step "$@"
+    done
+fi
