@@ -83,6 +83,7 @@ static const cyaml_schema_field_t geometry_fields[] = {
     FLT(scene_geometry, width, OPT),
     FLT(scene_geometry, depth, OPT),
     FLT(scene_geometry, radius, OPT),
+    FLT(scene_geometry, length, OPT),
     FLT(scene_geometry, fill, OPT),
     CYAML_FIELD_END,
 };
@@ -212,6 +213,7 @@ static const struct scene_default scene_defaults[] = {
     {"Geometry", "width", "0.037"},
     {"Geometry", "depth", "0.037"},
     {"Geometry", "radius", "0.035"},
+    {"Geometry", "length", "0.02"},
     {"Geometry", "fill", "0.42"},
     {"Kinematics", "velocity", "oscillatory_shear"},
     {"Kinematics", "gamma0", "0.5773502691896257"}, /* tan 30 deg */
@@ -290,6 +292,7 @@ static const struct scene_range scene_ranges[] = {
     POS("Geometry", geometry, width),
     POS("Geometry", geometry, depth),
     POS("Geometry", geometry, radius),
+    POS("Geometry", geometry, length),
     RNG("Geometry", geometry, fill, 0, 1, LO_OPEN | HI_OPEN, ALWAYS),
     RNG("Kinematics", kinematics, gamma0, 0, INFINITY, HI_OPEN, ALWAYS),
     POS("Kinematics", kinematics, period),
@@ -1073,10 +1076,15 @@ static int check_ranges(struct scene_ctx *c, const struct scene *s)
 static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g)
 {
     char a[32], b[32];
-    if (g->dim == 3 && g->type != GEOM_COLUMN)
-        return fail_at(c, "Geometry:dim", "3D is supported for Geometry:type column only (use 2)");
+    if (g->dim == 3 && g->type == GEOM_SHEARBOX)
+        return fail_at(c, "Geometry:dim", "3D is supported for Geometry:type column or drum only (use 2)");
     if (g->dim != 2 && g->dim != 3) return fail_at(c, "Geometry:dim", "must be 2 or 3, got %u", g->dim);
-    if (g->dim == 3 && g->depth < 4 * g->dr) {
+    if (g->dim == 3 && g->type == GEOM_DRUM && g->length < 4 * g->dr) {
+        fmt_double(a, sizeof a, 4 * g->dr);
+        fmt_double(b, sizeof b, g->length);
+        return fail_at(c, "Geometry:length", "must be >= 4*dr = %s, got %s", a, b);
+    }
+    if (g->dim == 3 && g->type == GEOM_COLUMN && g->depth < 4 * g->dr) {
         fmt_double(a, sizeof a, 4 * g->dr);
         fmt_double(b, sizeof b, g->depth);
         return fail_at(c, "Geometry:depth", "must be >= 4*dr = %s, got %s", a, b);

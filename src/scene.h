@@ -34,13 +34,14 @@ struct scene_run {
 
 struct scene_geometry {
     enum geom_type type; /* shearbox | column | drum */
-    unsigned dim;        /* 2, or 3 for the column; default 2 */
+    unsigned dim;        /* 2, or 3 for the column and the drum; default 2 */
     double dr;           /* initial particle spacing, m, required */
     double h_factor;     /* h = h_factor * dr; default 1.5 (lattice moments within 0.5 %, tests/test_kernel.c) */
     double height;       /* material height H, m; default 0.087 */
     double width;        /* box width, m; default 0.037 */
     double depth;        /* 3D column: extent along z, m; default 0.037 */
     double radius;       /* drum: inner radius R, m; default 0.035 */
+    double length;       /* 3D drum: length along the axis (z) between the end walls, m; default 0.02 */
     double fill;         /* drum: filling level R_f = (H + R)/2R (paper §6), in (0,1); default 0.42 */
 };
 

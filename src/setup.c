@@ -2,7 +2,8 @@
  * Shear box (paper §5) and granular column: material on a square lattice of spacing dr filling
  * [0, W] x [0, H]; ceil(2h/dr) layers of dummy particles below the base and
  * outside both side walls (the walls reach the same number of layers above
- * the material); no dummies at the top, which is a free surface. */
+ * the material); no dummies at the top, which is a free surface.
+ * Drum (2D and 3D) and 3D column below. */
 #include <math.h>
 #include <stdlib.h>
 #include <unistd.h>
@@ -80,46 +81,106 @@ static void setup_box(sim_t *s)
         warning("Geometry:height %.6g m is not a multiple of dr; the box is %.6g m high", sc->geometry.height, H);
 }
 
-/* Drum (paper §6, figure 15), centre at the origin: material on the square
- * lattice (i + 1/2) dr, (j + 1/2) dr inside r <= R - dr/2 and below the flat
- * free surface y = H = (2 R_f - 1) R; ceil(2h/dr) rings of dummies at radii
- * R + (l + 1/2) dr, each with round(2 pi r / dr) equally spaced particles of
- * volume dr^2. Concentration C_below below split * (H + R) - R, else C_above. */
+/* Drum (paper §6, figure 15), axis along z through the origin. One plane:
+ * material on the square lattice (i + 1/2) dr, (j + 1/2) dr inside
+ * r <= R - dr/2 and below the flat free surface y = H = (2 R_f - 1) R;
+ * nl = ceil(2h/dr) rings of dummies at radii R + (l + 1/2) dr, each with
+ * round(2 pi r / dr) equally spaced particles. Concentration C_below below
+ * split * (H + R) - R, else C_above. 2D: that plane at z = 0, volume dr^2.
+ * 3D: nz = round(length / dr) material planes at z = (q + 1/2) dr between
+ * the end walls z = 0 and z = nz dr, each with its nl rings; each end wall
+ * nl planes of dummies beyond it, every one a full disc out to the outer
+ * ring radius made of the same rings continued inward to the axis (radii
+ * R + (l + 1/2) dr > 0, l < 0): a polar lattice of spacing dr with no gap
+ * at r = R, where a square-lattice disc would leave holes that let
+ * material leak through the corner; volume dr^3. */
+typedef struct drum_layout {
+    double dr, vol, R, H, split; /* spacing, particle volume, radius, surface, C split height (m) */
+    long nh, nl, nz, nend;       /* lattice half-width, rings, material planes, end-wall planes */
+    int dim;
+    const struct scene_initial *ini;
+} drum_layout;
+
+static drum_layout drum_layout_of(const struct scene *sc)
+{
+    const struct scene_geometry *g = &sc->geometry;
+    drum_layout d;
+    d.dim = (int)g->dim;
+    d.dr = g->dr, d.R = g->radius, d.vol = d.dim == 3 ? d.dr * d.dr * d.dr : d.dr * d.dr;
+    d.H = (2 * g->fill - 1) * d.R, d.split = -d.R + sc->initial.split * (d.H + d.R);
+    d.nh = (long)ceil(d.R / d.dr) + 1, d.nl = (long)ceil(2.0 * g->h_factor - 1e-9);
+    d.nz = d.dim == 3 ? lround(g->length / d.dr) : 1;
+    d.nend = d.dim == 3 ? d.nl : 0;
+    d.ini = &sc->initial;
+    return d;
+}
+
+/* z of plane q (q < 0 and q >= nz: beyond the end walls); 0 in 2D. */
+static double drum_z(const drum_layout *d, long q) { return d->dim == 3 ? (q + 0.5) * d->dr : 0.0; }
+
+static void drum_put(particles_t *p, size_t k, double x, double y, double z, int kind, const drum_layout *d)
+{
+    setup_put(p, k, x, y, kind, d->vol);
+    p->X0[2][k] = p->x[2][k] = (real)z;
+    if (kind == KIND_MATERIAL) p->C[k] = (real)(y <= d->split ? d->ini->C_below : d->ini->C_above);
+}
+
+/* The material of plane z: lattice points inside r <= R - dr/2 below the
+ * fill line. p NULL: count only. Returns k advanced past them. */
+static size_t drum_disc(particles_t *p, size_t k, const drum_layout *d, double z)
+{
+    for (long j = -d->nh; j < d->nh; ++j)
+        for (long i = -d->nh; i < d->nh; ++i) {
+            double x = (i + 0.5) * d->dr, y = (j + 0.5) * d->dr;
+            if (!(sqrt(x * x + y * y) <= d->R - 0.5 * d->dr && y <= d->H)) continue;
+            if (p) drum_put(p, k, x, y, z, KIND_MATERIAL, d);
+            k++;
+        }
+    return k;
+}
+
+/* The rings of dummies l0 <= l < nl of plane z, radii R + (l + 1/2) dr
+ * (l0 = 0: the cylinder; l0 < 0: inward too, an end wall). p NULL: count
+ * only. */
+static size_t drum_rings(particles_t *p, size_t k, const drum_layout *d, double z, long l0)
+{
+    for (long l = l0; l < d->nl; ++l) {
+        double r = d->R + (l + 0.5) * d->dr;
+        long m = lround(2 * M_PI * r / d->dr);
+        for (long q = 0; q < m; ++q, ++k)
+            if (p) drum_put(p, k, r * cos(2 * M_PI * q / m), r * sin(2 * M_PI * q / m), z, KIND_DUMMY, d);
+    }
+    return k;
+}
+
+/* All particles of the drum, material first (p NULL: count only); returns
+ * their number. Planes q < 0 and q >= nz are the end walls. */
+static size_t drum_place(particles_t *p, const drum_layout *d)
+{
+    size_t k = 0;
+    long l_axis = (long)floor(-d->R / d->dr - 0.5) + 1; /* innermost ring with radius > 0 */
+    for (long q = 0; q < d->nz; ++q) k = drum_disc(p, k, d, drum_z(d, q));
+    for (long q = -d->nend; q < d->nz + d->nend; ++q)
+        k = drum_rings(p, k, d, drum_z(d, q), q < 0 || q >= d->nz ? l_axis : 0);
+    return k;
+}
+
 static void setup_drum(sim_t *s)
 {
     const struct scene *sc = s->sc;
-    double dr = sc->geometry.dr, vol = dr * dr, Rd = sc->geometry.radius;
-    double H = (2 * sc->geometry.fill - 1) * Rd, split = -Rd + sc->initial.split * (H + Rd);
-    long nh = (long)ceil(Rd / dr) + 1, nl = (long)ceil(2.0 * sc->geometry.h_factor - 1e-9);
-    size_t n_mat = 0, n_dum = 0;
-    for (long j = -nh; j < nh; ++j)
-        for (long i = -nh; i < nh; ++i) {
-            double x = (i + 0.5) * dr, y = (j + 0.5) * dr;
-            n_mat += (sqrt(x * x + y * y) <= Rd - 0.5 * dr && y <= H);
-        }
-    for (long l = 0; l < nl; ++l) n_dum += (size_t)lround(2 * M_PI * (Rd + (l + 0.5) * dr) / dr);
-    setup_check_memory(sc, n_mat + n_dum);
-    part_alloc(&s->p, 2, n_mat + n_dum);
+    drum_layout d = drum_layout_of(sc);
+    size_t n_mat = (size_t)d.nz * drum_disc(NULL, 0, &d, 0), n = drum_place(NULL, &d);
+    setup_check_memory(sc, n);
+    part_alloc(&s->p, d.dim, n);
     particles_t *p = &s->p;
-    size_t k = 0;
-    for (long j = -nh; j < nh; ++j)
-        for (long i = -nh; i < nh; ++i) {
-            double x = (i + 0.5) * dr, y = (j + 0.5) * dr;
-            if (!(sqrt(x * x + y * y) <= Rd - 0.5 * dr && y <= H)) continue;
-            setup_put(p, k, x, y, KIND_MATERIAL, vol);
-            p->C[k++] = (real)(y <= split ? sc->initial.C_below : sc->initial.C_above);
-        }
-    for (long l = 0; l < nl; ++l) {
-        double r = Rd + (l + 0.5) * dr;
-        long m = lround(2 * M_PI * r / dr);
-        for (long q = 0; q < m; ++q, ++k)
-            setup_put(p, k, r * cos(2 * M_PI * q / m), r * sin(2 * M_PI * q / m), KIND_DUMMY, vol);
-    }
-    p->n = k;
+    p->n = drum_place(p, &d);
     s->n_material = n_mat;
     /* the topmost material row: the geostatic depth is measured from there */
     s->surface_y = -INFINITY;
-    for (size_t i = 0; i < n_mat; ++i) s->surface_y = fmax(s->surface_y, (double)p->x[1][i] + 0.5 * dr);
+    for (size_t i = 0; i < n_mat; ++i) s->surface_y = fmax(s->surface_y, (double)p->x[1][i] + 0.5 * d.dr);
+    double L = d.nz * d.dr;
+    if (d.dim == 3 && fabs(L - sc->geometry.length) > 1e-6 * sc->geometry.length)
+        warning("Geometry:length %.6g m is not a multiple of dr; the drum is %.6g m long", sc->geometry.length, L);
 }
 
 /* Geostatic initial stress of a material at rest under a flat surface at
@@ -231,7 +292,8 @@ void setup_contexts(sim_t *s)
     wall_geom *w = &f->w;
     w->type = sc->geometry.type == GEOM_DRUM ? WALL_DRUM : WALL_BOX;
     w->width = (real)(lround(sc->geometry.width / sc->geometry.dr) * sc->geometry.dr);
-    w->depth = sc->geometry.dim == 3 ? (real)(lround(sc->geometry.depth / sc->geometry.dr) * sc->geometry.dr) : 0;
+    double zlen = sc->geometry.type == GEOM_DRUM ? sc->geometry.length : sc->geometry.depth; /* as setup_*: whole dr */
+    w->depth = sc->geometry.dim == 3 ? (real)(lround(zlen / sc->geometry.dr) * sc->geometry.dr) : 0;
     w->centre[0] = w->centre[1] = w->centre[2] = 0;
     w->radius = (real)sc->geometry.radius;
     w->omega = sc->walls.rpm * 2.0 * M_PI / 60.0 * (sc->walls.direction == ROT_CLOCKWISE ? -1.0 : 1.0);

@@ -85,8 +85,14 @@ check flow_direction "-P Walls:direction=up: Walls:direction: expected one of cl
     "$good" -P Walls:direction=up
 check drum_small "-P Geometry:radius=0.01: Geometry:radius: must be >= 8*dr" \
     "$good" -P Geometry:type=drum -P Kinematics:velocity=computed -P Geometry:radius=0.01
-check drum_3d "-P Geometry:dim=3: Geometry:dim: 3D is supported for Geometry:type column only" \
+check shearbox_3d "-P Geometry:dim=3: Geometry:dim: 3D is supported for Geometry:type column or drum only" \
     "$good" -P Geometry:dim=3
+# the 3D drum's length (inputs/drum_3d.yml documents it)
+drum3d=$(dirname "$here")/inputs/drum_3d.yml
+check drum3d_length_negative "-P Geometry:length=-0.01: Geometry:length: must be > 0, got -0.01" \
+    "$drum3d" -P Geometry:length=-0.01
+check drum3d_length_small "-P Geometry:length=0.001: Geometry:length: must be >= 4*dr" \
+    "$drum3d" -P Geometry:length=0.001
 check nothing_to_solve "-P Segregation:enabled=off: Segregation:enabled: off with prescribed velocity leaves nothing to solve" \
     "$good" -P Segregation:enabled=off
 

@@ -14,8 +14,13 @@
  *  - advance: a trial stress outside the cone ends on it (f = 0), a tensile
  *    one at the apex (0); x and u advance with the rate-state velocity;
  *  - wall motion: a drum dummy keeps its radius, turns by omega t and moves
- *    at omega e_z x r; a translating box moves its dummies by u t. */
+ *    at omega e_z x r; a translating box moves its dummies by u t;
+ *  - 3D drum: a dummy keeps its z as it turns; normals radial on the
+ *    cylinder, +z / -z on the end walls, the furthest-beyond wall at a
+ *    corner; step_outside flags a particle more than h beyond the cylinder
+ *    or either end wall, and no other. */
 #include "physics/flow.h"
+#include "physics/step.h"
 #include <string.h>
 #include "testutil.h"
 
@@ -222,13 +227,50 @@ static void test_box_translation(void **st)
     assert_true(n[0] == 1 && n[1] == 0);
 }
 
+static void test_drum3d_walls(void **st)
+{
+    (void)st;
+    const double Rd = 0.035, L = 0.02, h = 1.5 * DR;
+    wall_geom w;
+    memset(&w, 0, sizeof w);
+    w.type = WALL_DRUM, w.radius = (real)Rd, w.depth = (real)L, w.omega = -5 * 2 * M_PI / 60;
+    real X0[3] = {(real)(Rd + 0.5 * DR), 0, (real)(-0.5 * DR)}, x[3], u[3], n[3];
+    wall_motion(&w, X0, 2.0, x, u);
+    assert_true(x[2] == X0[2] && u[2] == 0); /* turns about z, keeps z */
+    struct { double x, y, z, n[3]; } c[] = {
+        {Rd + 0.5 * DR, 0, 0.5 * L, {-1, 0, 0}},     /* cylinder */
+        {0, 0.01, -0.5 * DR, {0, 0, 1}},             /* end wall z = 0 */
+        {0.01, 0, L + 2.5 * DR, {0, 0, -1}},         /* end wall z = L */
+        {0, Rd + 2.5 * DR, -0.5 * DR, {0, -1, 0}},   /* corner, further beyond the cylinder */
+        {Rd + 0.5 * DR, 0, L + 1.5 * DR, {0, 0, -1}}, /* corner, further beyond the end wall */
+    };
+    for (size_t k = 0; k < sizeof c / sizeof c[0]; ++k) {
+        real xk[3] = {(real)c[k].x, (real)c[k].y, (real)c[k].z};
+        wall_normal(&w, xk, n);
+        for (int a = 0; a < 3; ++a) assert_true(fabs(n[a] - c[k].n[a]) < RT(1e-12));
+    }
+    particles_t p;
+    part_alloc(&p, 3, 8);
+    step_ctx sc;
+    memset(&sc, 0, sizeof sc);
+    sc.h = h, sc.w = w;
+    double pos[6][3] = {{0, 0, 0.5 * L}, {0, 0, -0.9 * h}, {0, 0, -1.1 * h},
+                        {0, 0, L + 1.1 * h}, {Rd + 1.1 * h, 0, 0.5 * L}, {0, -Rd - 0.9 * h, L}};
+    int want[6] = {0, 0, 1, 1, 1, 0};
+    for (int i = 0; i < 6; ++i) {
+        for (int a = 0; a < 3; ++a) p.x[a][i] = (real)pos[i][a];
+        assert_int_equal(step_outside((size_t)i, &p, &sc, 1.0), want[i]);
+    }
+    part_free(&p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_uniform_stress),        cmocka_unit_test(test_linear_velocity),
         cmocka_unit_test(test_momentum_conservation), cmocka_unit_test(test_shepard_uniform),
         cmocka_unit_test(test_advance),               cmocka_unit_test(test_drum_wall_motion),
-        cmocka_unit_test(test_box_translation),
+        cmocka_unit_test(test_box_translation),       cmocka_unit_test(test_drum3d_walls),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

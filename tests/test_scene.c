@@ -332,7 +332,7 @@ static const char *const bad_files[] = {
     "gravity_short.yml",   "inf.yml",         "kappa_one.yml",     "missing_V.yml",   "missing_run.yml",
     "missing_t_end.yml",   "nan.yml",         "negative_dr.yml",   "not_yaml.yml",    "overflow.yml",
     "section_scalar.yml",  "top_list.yml",    "two_documents.yml", "unit_suffix.yml", "unknown_key.yml",
-    "unknown_section.yml", "width_small.yml", "wrong_type.yml"};
+    "unknown_section.yml", "width_small.yml", "wrong_type.yml",    "drum3d_length.yml"};
 
 static void test_bad_files(void **state)
 {
@@ -402,7 +402,7 @@ static void test_bad_overrides(void **state)
         {"Physics:gravity=&a [*a, 1, 2]", "-P Physics:gravity=&a [*a, 1, 2]: value is nested"},
         {"Run:backend=tpu", "-P Run:backend=tpu: Run:backend: expected auto, cpu or gpu, got 'tpu'"},
         {"Segregation:scheme=best", "Segregation:scheme: expected one of paper|direct|conservative"},
-        {"Geometry:dim=3", "-P Geometry:dim=3: Geometry:dim: 3D is supported for Geometry:type column only"},
+        {"Geometry:dim=3", "-P Geometry:dim=3: Geometry:dim: 3D is supported for Geometry:type column or drum"},
         {"Geometry:dim=-2", "Geometry:dim: expected a non-negative integer, got '-2'"},
         {"Initial:split=1.5", "-P Initial:split=1.5: Initial:split: must be in [0, 1], got 1.5"},
     };

@@ -1,9 +1,9 @@
 """CPU against GPU backend, and the GPU run to run (issue "GPU backend").
 
 Every scene in inputs/ (and variants that reach the paths the scenes leave
-out: the HCSR classification of the paper scheme, the 3D column, the Shepard
-filter) runs N steps with --backend cpu and twice with --backend gpu, double
-precision, and the last snapshots are compared:
+out: the HCSR classification of the paper scheme, the 3D column, the CI-sized
+3D drum, the Shepard filter) runs N steps with --backend cpu and twice with
+--backend gpu, double precision, and the last snapshots are compared:
 
   equivalence:  every field of the GPU run equals the CPU run's to round-off:
                 max |gpu - cpu| <= TOL * max |cpu| per field (TOL = 1e-8;
@@ -48,6 +48,8 @@ CASES = [
     ("drum_EV", "drum_2d_EV.yml", 60, ["Flow:shepard_every=20"]),
     ("drum_EN", "drum_2d_EN.yml", 60, []),
     ("drum_EV_paper", "drum_2d_EV.yml", 40, ["Segregation:scheme=paper", "Geometry:dr=0.001"]),
+    ("drum_3d", "drum_3d.yml", 40, ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025",
+                                    "Material:E=1e5", "Walls:rpm=15", "Flow:shepard_every=20"]),
 ]
 
 

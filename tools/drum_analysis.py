@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
-"""Analysis of a rotating-drum run (inputs/drum_2d_EV.yml, drum_2d_EN.yml),
-after paper §6:
+"""Analysis of a rotating-drum run (inputs/drum_2d_EV.yml, drum_2d_EN.yml,
+drum_3d.yml), after paper §6:
 
-  tools/drum_analysis.py OUTDIR [--times 20 30 40] [--png PREFIX]
+  tools/drum_analysis.py OUTDIR [--times 20 30 40] [--png PREFIX] [--slab W]
 
 prints, per snapshot time asked (nearest snapshot): the dynamic angle of the
 free surface and how flat it is (rolling regime), the largest speed on the
@@ -13,6 +13,14 @@ mid-chord (the surface speed), the segregation index (below), and writes
                        C2 = -V F' grad_g C, C3 = div(D grad C)
   PREFIX_maps.png      C, speed and shear rate over the bed (figs 17, 18, 24, 25)
   PREFIX_global.png    mean C and the drift of sum C_i V_i against time (fig 27)
+
+3D drums (snapshot Dimension 3): the material is projected onto the x-y
+plane (the drum's cross-section) and analysed as a 2D drum: all of it, or,
+with --slab W (m), only the mid-length slab |z - L/2| < W/2 (L = the drum
+length), away from the end walls (W = 1.5 dr keeps the middle plane, or the
+middle two when the drum is an even number of dr long).
+Volumes are divided by the slab width (W, or L), so Shepard weights and the
+rate terms see a cross-section's area per particle.
 
 Definitions.
 Free surface: the highest material particle in vertical bins of width 2 dr;
@@ -52,17 +60,24 @@ def used_params(outdir):
 class Drum:
     """One snapshot of a drum run with the derived quantities."""
 
-    def __init__(self, path, par):
+    def __init__(self, path, par, slab=None):
         s = snap.read_snapshot(path)
+        g = par["Geometry"]
         self.t = float(s["Time"])
         m = np.asarray(s["Kind"]) == snap.MATERIAL
+        width = 1.0
+        if int(s.get("Dimension", 2)) == 3:  # the cross-section: a mid-length slab or all, projected
+            L = round(g["length"] / g["dr"]) * g["dr"]
+            width = slab if slab else L
+            if slab:
+                m &= np.abs(np.asarray(s["Coordinates"])[:, 2] - 0.5 * L) < 0.5 * slab
         self.x = np.asarray(s["Coordinates"])[m, :2]
         self.v = np.asarray(s["Velocities"])[m, :2]
         self.C = np.asarray(s["Concentration"])[m]
         self.gdot = np.asarray(s["ShearRate"])[m]
-        self.vol = np.asarray(s["Volume"])[m]
+        self.vol = np.asarray(s["Volume"])[m] / width
         self.speed = np.hypot(self.v[:, 0], self.v[:, 1])
-        g = par["Geometry"]
+        self.width = width  # the volume divisor: 1 in 2D
         self.dr, self.R = g["dr"], g["radius"]
         self.h = g["h_factor"] * self.dr
         self.par = par
@@ -247,7 +262,7 @@ def plot_global(outdir, png):
     import matplotlib.pyplot as plt
     dg = snap.read_diagnostics(outdir)
     d0 = Drum(snap.list_snapshots(outdir)[0], used_params(outdir))
-    total = d0.vol.sum()
+    total = d0.vol.sum() * d0.width  # all the material, m^2 per unit depth in 2D, m^3 in 3D
     fig, ax = plt.subplots(1, 2, figsize=(9, 3.4))
     ax[0].plot(dg["time"], dg["small_volume"] / total)
     ax[0].set_xlabel("t (s)")
@@ -263,16 +278,18 @@ def plot_global(outdir, png):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("outdir")
     ap.add_argument("--times", type=float, nargs="+", help="snapshot times (default: all)")
     ap.add_argument("--png", help="plot file prefix")
+    ap.add_argument("--slab", type=float, help="3D drum: analyse only |z - L/2| < SLAB/2 (m); default: "
+                    "the whole length projected onto x-y")
     a = ap.parse_args()
     par = used_params(a.outdir)
     paths = snap.list_snapshots(a.outdir)
     if a.times:
         paths = pick(paths, a.times)
-    drums = [Drum(p, par) for p in paths]
+    drums = [Drum(p, par, a.slab) for p in paths]
     print("%8s %9s %10s %12s %12s %10s" % ("t (s)", "angle", "flatness", "max |u| mc", "seg index", "C range"))
     for d in drums:
         dm, pts = d.midchord()

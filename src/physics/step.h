@@ -57,15 +57,15 @@ enum step_bad {
 };
 
 /* Is material particle i outside its container (beyond a wall by > h) at
- * time t? Boxes are tested in their own (translating) frame. */
+ * time t? Boxes are tested in their own (translating) frame; the drum's
+ * cylinder radially, its end walls (3D, depth > 0) along z. */
 HD_INLINE int step_outside(size_t i, const particles_t *p, const step_ctx *c, double t)
 {
     const wall_geom *w = &c->w;
-    double h = c->h, x = p->x[0][i], y = p->x[1][i];
-    if (w->type == WALL_DRUM) return hypot(x - w->centre[0], y - w->centre[1]) > w->radius + h;
-    double z = p->x[2][i];
-    x -= w->u[0] * t, y -= w->u[1] * t, z -= w->u[2] * t;
-    int outz = w->depth > 0 && (z < -h || z > w->depth + h);
+    double h = c->h, x = p->x[0][i], y = p->x[1][i], z = p->x[2][i];
+    if (w->type != WALL_DRUM) x -= w->u[0] * t, y -= w->u[1] * t, z -= w->u[2] * t;
+    int outz = w->depth > 0 && (z < -h || z > w->depth + h); /* 3D: box sides, drum end walls */
+    if (w->type == WALL_DRUM) return outz || hypot(x - w->centre[0], y - w->centre[1]) > w->radius + h;
     return x < -h || x > w->width + h || y < -h || outz;
 }
 

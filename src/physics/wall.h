@@ -12,24 +12,26 @@
  * y = 0 and side walls at x = 0 and x = width (in 3D also z = 0 and
  * z = depth), at rest. Drum: a circle of
  * radius R about centre, turning at omega (rad/s, counter-clockwise
- * positive) about the z axis. */
+ * positive) about the z axis; in 3D a cylinder of length depth along z,
+ * closed by flat end walls at z = 0 and z = depth that turn with it. */
 enum wall_type { WALL_BOX = 0, WALL_DRUM = 1 };
 
 typedef struct wall_geom {
     int type;        /* enum wall_type */
     real width;      /* box: inner width (x), m */
-    real depth;      /* 3D box: inner depth (z), m; 0 in 2D */
+    real depth;      /* 3D box: inner depth (z); 3D drum: length between the end walls (z); m; 0 in 2D */
     real centre[3];  /* drum: axis position, m */
     real radius;     /* drum: inner radius R, m */
     double omega;    /* drum: angular velocity, rad/s, counter-clockwise > 0 */
-    int slip_base;   /* box base and drum wall: 1 free slip (4.2), 0 no slip (4.1) */
+    int slip_base;   /* box base and drum walls (cylinder, end walls): 1 free slip (4.2), 0 no slip (4.1) */
     int slip_sides;  /* box side walls: 1 free slip, 0 no slip */
     real u[3];       /* box: translation velocity of the whole container, m/s */
 } wall_geom;
 
 /* Position and velocity at time t of the wall point (dummy) whose reference
- * position is X0: the drum turns rigidly by omega t; the box translates by
- * u t (at rest when u = 0). */
+ * position is X0: the drum (cylinder and end walls) turns rigidly by omega t
+ * about the z axis through centre (z kept); the box translates by u t (at
+ * rest when u = 0). */
 HD_INLINE void wall_motion(const wall_geom *w, const real X0[3], double t, real x[3], real u[3])
 {
     if (w->type != WALL_DRUM) {
@@ -47,19 +49,32 @@ HD_INLINE void wall_motion(const wall_geom *w, const real X0[3], double t, real 
     u[1] = (real)(w->omega * qx);
 }
 
+/* Drum normal at x (n zeroed by the caller): towards the axis on the
+ * cylinder; +z / -z on the end walls of a 3D drum (depth > 0). Which wall a
+ * dummy belongs to depends only on its radius r and its z, which the
+ * rotation about z keeps, so the current position decides as the reference
+ * position would. Corner dummies (beyond both, z < 0 or z > depth and
+ * r > R): the wall they lie furthest beyond, the cylinder on a tie - the
+ * rule of the box's side walls. Cylinder and end walls share slip_base. */
+HD_INLINE int wall_normal_drum(const wall_geom *w, const real x[3], real n[3])
+{
+    real dx = w->centre[0] - x[0], dy = w->centre[1] - x[1];
+    real r = (real)sqrt((double)(dx * dx + dy * dy));
+    real oz = w->depth > 0 ? (x[2] < 0 ? -x[2] : x[2] - w->depth) : (real)-1e30;
+    if (oz > 0 && oz > r - w->radius) n[2] = x[2] < 0 ? R(1.0) : R(-1.0);
+    else if (r > 0) n[0] = dx / r, n[1] = dy / r;
+    return w->slip_base;
+}
+
 /* Unit wall normal at dummy position x, pointing into the material, and
  * whether that wall is free-slip. Box: below the base (y < 0, corners
  * included) the base, else the nearer side wall. x is in the box's own frame
- * (a translating box: the caller subtracts u t, wall_frame). */
+ * (a translating box: the caller subtracts u t, wall_frame). Drum:
+ * wall_normal_drum. */
 HD_INLINE int wall_normal(const wall_geom *w, const real x[3], real n[3])
 {
     n[0] = n[1] = n[2] = 0;
-    if (w->type == WALL_DRUM) {
-        real dx = w->centre[0] - x[0], dy = w->centre[1] - x[1];
-        real r = (real)sqrt((double)(dx * dx + dy * dy));
-        if (r > 0) n[0] = dx / r, n[1] = dy / r;
-        return w->slip_base;
-    }
+    if (w->type == WALL_DRUM) return wall_normal_drum(w, x, n);
     if (x[1] < 0) {
         n[1] = 1;
         return w->slip_base;
