@@ -48,6 +48,7 @@ CASES = [
     ("drum_balance", "drum_2d_EV.yml", 400, DRUM + ["Geometry:dr=0.0015", "Parallel:axis=y",
                                                     "Parallel:balance_every=50",
                                                     "Parallel:balance_threshold=1e-6"], "balance"),
+    ("drum_3d", "drum_3d.yml", 60, ["Geometry:dr=0.0025", "Geometry:length=0.025", "Material:E=1e5"], None),
     ("drum_EV_metis", "drum_2d_EV.yml", 800, DRUM + ["Parallel:method=metis"], "migrate"),
     ("column_3d_metis", "column_2d.yml", 30, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.05",
                                               "Geometry:depth=0.05", "Geometry:height=0.1",
