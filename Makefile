@@ -74,7 +74,7 @@ CFLAGS += $(HDF5_CFLAGS) $(CYAML_CFLAGS)
 LIBS   := $(HDF5_LIBS) $(CYAML_LIBS) $(LDLIBS)
 
 CORE_SRC := src/error.c src/scene.c src/particles.c src/nbr.c src/bound.c src/setup.c \
-            src/backend_cpu.c src/integrate.c src/diag.c src/io.c mpi/comm.c
+            src/backend_cpu.c src/integrate.c src/diag.c src/io.c src/checkpoint.c mpi/comm.c
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
 HEADERS  := $(wildcard src/*.h src/physics/*.h mpi/*.h)
 
