@@ -19,8 +19,11 @@ sphseg_threads() { # ranks on this machine
 
 # launch=(...): the command prefix that starts NRANKS ranks, one GPU each.
 # Under SLURM: srun with one GPU per task and CPU/GPU binding (SRUN_FLAGS
-# adds to it). Without: $MPIRUN (default "mpirun --oversubscribe", plus
-# --allow-run-as-root for root) -np NRANKS.
+# adds to it). Without: $MPIRUN (default "mpirun --oversubscribe --bind-to
+# none", plus --allow-run-as-root for root) -np NRANKS. --bind-to none: Open
+# MPI binds each of one or two ranks to a single core by default, which puts
+# all of a rank's OpenMP threads on that core (measured: a 16-thread rank ran
+# at one core's speed on the 16-core GPU machine).
 sphseg_launcher() { # nranks
     local np=$1
     if [ -n "${SLURM_JOB_ID:-}" ]; then
@@ -31,7 +34,7 @@ sphseg_launcher() { # nranks
         launch+=(--cpu-bind="${CPU_BIND:-cores}")
         [ -n "${SRUN_FLAGS:-}" ] && read -r -a extra <<<"$SRUN_FLAGS" && launch+=("${extra[@]}")
     else
-        local mpirun=${MPIRUN:-mpirun --oversubscribe}
+        local mpirun=${MPIRUN:-mpirun --oversubscribe --bind-to none}
         [ "$(id -u)" = 0 ] && [ -z "${MPIRUN:-}" ] && mpirun="$mpirun --allow-run-as-root"
         read -r -a launch <<<"$mpirun"
         launch+=(-np "$np")

@@ -504,6 +504,23 @@ void halo_decompose(halo_t *h, particles_t *p)
     h->wall_comm += MPI_Wtime() - t0;
 }
 
+void halo_restore(halo_t *h, int method, int axis, const long *bound, const int cg[3], const int *part)
+{
+    h->method = method;
+    h->axis = axis;
+    memcpy(h->bound, bound, ((size_t)h->size + 1) * sizeof(long));
+    if (method != HALO_METIS) {
+        halo_slab_neighbours(h);
+        return;
+    }
+    size_t nv = (size_t)cg[0] * (size_t)cg[1] * (size_t)cg[2];
+    for (int d = 0; d < 3; ++d) h->cg_n[d] = cg[d];
+    h->part = realloc(h->part, (nv ? nv : 1) * sizeof(int));
+    if (!h->part) error_exit(1, "out of memory: %zu coarse cells", nv);
+    memcpy(h->part, part, nv * sizeof(int));
+    halo_metis_neighbours(h);
+}
+
 /* Particles each rank would own under the present cut (for the log). */
 static long long halo_owned_after(halo_t *h, const particles_t *p)
 {

@@ -68,6 +68,10 @@ void halo_init(halo_t *h, int dim, real support, int method, int axis, const int
  * cells, vertex weight its particle count, edges to the 3^dim - 1 cells
  * around) — and send every particle to its owner. Drops ghosts. */
 void halo_decompose(halo_t *h, particles_t *p);
+/* Take over a decomposition saved by a run on the same rank count (a
+ * checkpoint): slab bounds (size + 1), or METIS coarse-grid size cg and
+ * owners part; each rank must hold its own particles already. */
+void halo_restore(halo_t *h, int method, int axis, const long *bound, const int cg[3], const int *part);
 /* Collective. The lattice origin from the particles' lower corner; the
  * particles that left the slab to the neighbour that owns them; then fresh
  * ghosts from both neighbours at [n, n + ng). */

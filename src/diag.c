@@ -2,6 +2,8 @@
 #include "diag.h"
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 #include <time.h>
 #include "error.h"
 #include "mpi/comm.h"
@@ -47,6 +49,8 @@ void diag_open(diag *d, const char *outdir, const sim_t *s)
     d->max_drift = 0;
     d->warned = 0;
     d->wall0 = d->wall_last_progress = diag_wall();
+    d->t0 = s->t;
+    d->step0 = s->step;
     d->f = NULL;
     snprintf(d->path, sizeof d->path, "%s/diagnostics.csv", outdir);
     if (comm_rank() != 0) return;
@@ -56,6 +60,59 @@ void diag_open(diag *d, const char *outdir, const sim_t *s)
     if (!d->f) error_exit(1, "cannot write %s", part);
     fprintf(d->f, "step,time,dt,n_material,small_volume,small_volume_drift,kinetic_energy,"
                   "max_speed,wall_s,C_min,C_max\n");
+}
+
+/* The earlier run's rows file, whole (malloc'd), or NULL if there is none. */
+static char *diag_slurp(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    size_t cap = 1 << 16, n = 0, got;
+    char *b = malloc(cap + 1);
+    while (b && (got = fread(b + n, 1, cap - n, f)) > 0)
+        if ((n += got) == cap) b = realloc(b, (cap *= 2) + 1);
+    fclose(f);
+    if (!b) error_exit(1, "out of memory reading %s", path);
+    b[n] = 0;
+    return b;
+}
+
+/* Copy the header line and the rows with step <= last from text to f. */
+static void diag_keep_rows(FILE *f, const char *text, long last)
+{
+    for (int first = 1; *text; first = 0) {
+        size_t len = strcspn(text, "\n");
+        char *end;
+        long step = strtol(text, &end, 10);
+        if (first || (end != text && *end == ',' && step <= last)) fprintf(f, "%.*s\n", (int)len, text);
+        text += len + (text[len] != 0);
+    }
+}
+
+void diag_reopen(diag *d, const char *outdir, const sim_t *s, double small0, double max_drift, int warned)
+{
+    d->small0 = small0;
+    d->max_drift = max_drift;
+    d->warned = warned;
+    d->wall0 = d->wall_last_progress = diag_wall();
+    d->t0 = s->t;
+    d->step0 = s->step;
+    d->f = NULL;
+    snprintf(d->path, sizeof d->path, "%s/diagnostics.csv", outdir);
+    if (comm_rank() != 0) return;
+    char part[4200];
+    snprintf(part, sizeof part, "%s.part", d->path);
+    char *old = diag_slurp(part);
+    if (!old) old = diag_slurp(d->path);
+    if (!old) warning("restart: no %s or %s to continue: rows start afresh", d->path, part);
+    d->f = fopen(part, "w");
+    if (!d->f) error_exit(1, "cannot write %s", part);
+    if (old) diag_keep_rows(d->f, old, s->step);
+    else
+        fprintf(d->f, "step,time,dt,n_material,small_volume,small_volume_drift,kinetic_energy,"
+                      "max_speed,wall_s,C_min,C_max\n");
+    fflush(d->f);
+    free(old);
 }
 
 void diag_row(diag *d, const sim_t *s)
@@ -87,10 +144,10 @@ void diag_progress(diag *d, const sim_t *s, int force)
     double now = diag_wall();
     if (!force && now - d->wall_last_progress < s->sc->run.progress_s) return;
     d->wall_last_progress = now;
-    double el = now - d->wall0, frac = s->t / s->sc->run.t_end;
-    double rate = el > 0 ? (double)s->step * (double)s->p.n / el : 0;
+    double el = now - d->wall0, frac = s->t / s->sc->run.t_end, done = s->t - d->t0;
+    double rate = el > 0 ? (double)(s->step - d->step0) * (double)s->p.n / el : 0;
     char eta[32];
-    diag_hms(frac > 0 ? el * (1 - frac) / frac : 0, eta, sizeof eta);
+    diag_hms(done > 0 ? el * (s->sc->run.t_end - s->t) / done : 0, eta, sizeof eta);
     message("step %8ld  t = %10.4f s (%5.1f%%)  dt = %.3e s  %.3e particle-steps/s  ETA %s",
             s->step, s->t, 100 * frac, s->dt, rate, eta);
 }

@@ -12,6 +12,8 @@ typedef struct diag {
     double max_drift; /* largest |relative drift| seen */
     int warned;
     double wall0, wall_last_progress;
+    double t0;        /* simulated time at the start of this session (restarts) */
+    long step0;       /* step at the start of this session */
 } diag;
 
 typedef struct diag_values {
@@ -23,6 +25,11 @@ double diag_wall(void);
 /* Global reductions of the diagnostics (collective). */
 diag_values diag_measure(const sim_t *s);
 void diag_open(diag *d, const char *outdir, const sim_t *s);
+/* A restart's diag_open: rows continue in the file of the earlier run
+ * (diagnostics.csv.part if a killed run left one, else diagnostics.csv),
+ * keeping its header and its rows up to step s->step, no new header; the
+ * t = 0 reference small0, max_drift and warned come from the checkpoint. */
+void diag_reopen(diag *d, const char *outdir, const sim_t *s, double small0, double max_drift, int warned);
 /* Append one row (collective: reduces over ranks), warn on drift. */
 void diag_row(diag *d, const sim_t *s);
 /* Progress line on rank 0 if progress_s wall seconds have passed (or force). */

@@ -17,7 +17,11 @@ void error_exit(int code, const char *fmt, ...) __attribute__((format(printf, 2,
  * rank 0 prints, all ranks exit with EXIT_BAD_INPUT. */
 void input_error(const char *fmt, ...) __attribute__((format(printf, 1, 2), noreturn));
 
-/* Check an HDF5 call (negative = failure). */
+/* Check an HDF5 call (negative = failure). hdf5.h defines an H5CHECK of
+ * its own (a version check inside the H5F_ACC_* flags) and #undefs any
+ * earlier one: a file using both includes <hdf5.h> first, reads the flags it
+ * needs before this header (see src/io.c), and this definition wins. */
+#undef H5CHECK
 #define H5CHECK(call)                                                              \
     do {                                                                           \
         if ((call) < 0) error_exit(1, "HDF5 call failed at %s:%d: %s", __FILE__, __LINE__, #call); \

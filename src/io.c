@@ -1,10 +1,14 @@
 /* io.c — parallel HDF5 snapshots and their XDMF index (see io.h). */
 #include "io.h"
-#include "error.h"
 #include <errno.h>
 #include <limits.h>
 #include <hdf5.h>
 #include <mpi.h>
+/* hdf5.h's H5F_ACC_* flags expand to its own H5CHECK macro, whose name
+ * error.h takes over: read the flag here, before error.h comes in (with
+ * error.h first, hdf5.h's H5CHECK replaced ours and no call was checked). */
+static unsigned io_acc_trunc(void) { return H5F_ACC_TRUNC; }
+#include "error.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -90,7 +94,7 @@ static void io_commit(const char *tmp, const char *path, int collective)
 }
 
 /* Variable-length UTF-8 string attribute (any length; h5py reads a str). */
-static void io_attr_string(hid_t loc, const char *name, const char *value)
+void io_attr_string(hid_t loc, const char *name, const char *value)
 {
     hid_t type, space, attr;
     const char *v = value ? value : "";
@@ -105,7 +109,7 @@ static void io_attr_string(hid_t loc, const char *name, const char *value)
     H5CHECK(H5Tclose(type));
 }
 
-static void io_attr_scalar(hid_t loc, const char *name, hid_t ftype, hid_t mtype, const void *val)
+void io_attr_scalar(hid_t loc, const char *name, hid_t ftype, hid_t mtype, const void *val)
 {
     hid_t space, attr;
     H5CHECK(space = H5Screate(H5S_SCALAR));
@@ -397,14 +401,14 @@ static void io_write_header(hid_t file, int dim, double time, long step, long lo
     H5CHECK(H5Gclose(g));
 }
 
-static hid_t io_create_file(const char *path)
+hid_t io_create_file(const char *path)
 {
     hid_t fapl, file;
     H5CHECK(fapl = H5Pcreate(H5P_FILE_ACCESS));
     H5CHECK(H5Pset_fapl_mpio(fapl, MPI_COMM_WORLD, MPI_INFO_NULL));
     H5CHECK(H5Pset_coll_metadata_write(fapl, 1));
     H5CHECK(H5Pset_all_coll_metadata_ops(fapl, 1));
-    file = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+    file = H5Fcreate(path, io_acc_trunc(), H5P_DEFAULT, fapl);
     if (file < 0) error_exit(1, "cannot create %s (does the output directory exist?)", path);
     H5CHECK(H5Pclose(fapl));
     return file;

@@ -52,4 +52,14 @@ int io_write_snapshot(const char *outdir, int index, const particles_t *p, doubl
  * other ranks return at once, so it may be called by all ranks or rank 0. */
 int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long long *npart, int dim);
 
+/* HDF5 helpers shared with the checkpoint writer (src/checkpoint.c); every
+ * call is checked (H5CHECK). Variable-length UTF-8 string attribute (value
+ * NULL is stored as ""); scalar attribute of file type ftype from a value of
+ * memory type mtype; collective create (truncate) of path with the MPI-IO
+ * driver and collective metadata, exit status 1 if it cannot be created.
+ * hid_t is int64_t (HDF5 >= 1.10), so hdf5.h is not needed here. */
+void io_attr_string(int64_t loc, const char *name, const char *value);
+void io_attr_scalar(int64_t loc, const char *name, int64_t ftype, int64_t mtype, const void *val);
+int64_t io_create_file(const char *path);
+
 #endif

@@ -1,8 +1,10 @@
 /* main.c — the sphseg driver:
- *   mpirun -np N build/sphseg SCENE.yml [-o OUTDIR] [-P Section:key=value ...]
+ *   mpirun -np N build/sphseg SCENE.yml [-o OUTDIR] [-P Section:key=value ...] [--restart FILE]
  * Loads and validates the scene (exit 2 on bad input, before anything is
- * written), builds the particles, then steps to Run:t_end writing snapshots
- * every Output:dt and a diagnostics row every Output:diag_dt. */
+ * written), builds the particles (or loads them and the run state from a
+ * checkpoint, src/checkpoint.h), then steps to Run:t_end writing snapshots
+ * every Output:dt, a diagnostics row every Output:diag_dt and a checkpoint
+ * every Output:checkpoint_dt. */
 #include <errno.h>
 #include <math.h>
 #include <mpi.h>
@@ -10,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include "checkpoint.h"
 #include "diag.h"
 #include "error.h"
 #include "io.h"
@@ -21,21 +24,27 @@ typedef struct cli {
     const char *scene, *outdir, *backend;
     int n_over;
     char **over;
+    const char *restart; /* --restart FILE, or NULL */
+    double wall0;        /* wall clock at start-up, for Run:max_wall_time */
 } cli;
 
 static void usage(void)
 {
     message("usage: sphseg SCENE.yml [-o OUTDIR] [-P Section:key=value ...] [--backend auto|cpu|gpu]\n"
+            "              [--restart FILE]\n"
             "  -o OUTDIR   output folder (default out/<scene name>)\n"
             "  -P ...      override one scene parameter, e.g. -P Geometry:dr=0.00087\n"
             "  --backend   auto (default: gpu when built with CUDA and a device is present), cpu or gpu;\n"
             "              overrides Run:backend\n"
+            "  --restart FILE  continue the run saved in the checkpoint FILE (e.g. OUTDIR/checkpoint.h5):\n"
+            "              the particles and run state come from FILE, the parameters from SCENE.yml and -P\n"
+            "              (a longer Run:t_end extends a run); snapshots and diagnostics.csv continue in OUTDIR\n"
             "  --version   print the version");
 }
 
 static cli parse_cli(int argc, char **argv)
 {
-    cli c = {NULL, NULL, NULL, 0, calloc((size_t)argc, sizeof(char *))};
+    cli c = {NULL, NULL, NULL, 0, calloc((size_t)argc, sizeof(char *)), NULL, diag_wall()};
     for (int a = 1; a < argc; ++a) {
         if (!strcmp(argv[a], "-h") || !strcmp(argv[a], "--help")) {
             usage();
@@ -45,6 +54,9 @@ static cli parse_cli(int argc, char **argv)
             message("sphseg %s", SPHSEG_VERSION);
             MPI_Finalize();
             exit(0);
+        } else if (!strcmp(argv[a], "--restart")) {
+            if (a + 1 >= argc) input_error("command line: --restart needs a FILE (see sphseg --help)");
+            c.restart = argv[++a];
         } else if ((!strcmp(argv[a], "-o") || !strcmp(argv[a], "-P") || !strcmp(argv[a], "--backend")) &&
                    a + 1 < argc) {
             const char *v = argv[++a];
@@ -91,6 +103,9 @@ typedef struct outputs {
     long long *npart;
     char *text;
     const char *dir;
+    double wall0;          /* wall clock at start-up (Run:max_wall_time) */
+    const char *restart;   /* the checkpoint this run continues, or NULL */
+    const char *scene;     /* the scene file, for the how-to-continue message */
 } outputs;
 
 static void write_snapshot(outputs *o, sim_t *s)
@@ -185,37 +200,50 @@ static int parallel_ghost_arrays(const sim_t *s, int *arr)
     return n;
 }
 
-/* Several ranks: every rank built the whole scene; each keeps an even share
- * of it, then the slab decomposition sends every particle to its owner. */
-static void parallel_start(sim_t *s)
+/* Several ranks. A fresh run: every rank built the whole scene and keeps an
+ * even share of it; a restart: every rank read its block (same rank count)
+ * or an even share (another). Then the decomposition (Parallel:method)
+ * sends every particle to its owner — or, restarting on the same rank
+ * count, takes over the checkpoint's cut, so that the run continues
+ * bit-identically. */
+static void parallel_report(const halo_t *h, const particles_t *p)
+{
+    long long nmin = (long long)p->n, nmax = nmin;
+    int nbmax = h->nnb;
+    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nmin, 1, MPI_LONG_LONG, MPI_MIN, MPI_COMM_WORLD));
+    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nmax, 1, MPI_LONG_LONG, MPI_MAX, MPI_COMM_WORLD));
+    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nbmax, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD));
+    if (h->method == HALO_METIS)
+        message("METIS decomposition over %d ranks (coarse cells of %d x 2h): %lld to %lld particles per rank, up "
+                "to %d neighbours, ghosts %d cells of 2h deep", h->size, h->blk, nmin, nmax, nbmax, h->depth);
+    else
+        message("slab decomposition along %c over %d ranks: %lld to %lld particles per rank, ghosts %d cells "
+                "of 2h deep", "xyz"[h->axis], h->size, nmin, nmax, h->depth);
+}
+
+static void parallel_start(sim_t *s, const ckpt_run *rs)
 {
     if (comm_size() == 1) return;
     particles_t *p = &s->p;
-    size_t r = (size_t)comm_rank(), P = (size_t)comm_size(), a = p->n * r / P, b = p->n * (r + 1) / P;
-    size_t *keep = malloc((b - a + 1) * sizeof *keep);
-    if (!keep) error_exit(1, "out of memory distributing %zu particles", p->n);
-    for (size_t i = a; i < b; ++i) keep[i - a] = i;
-    part_compact(p, keep, b - a);
-    free(keep);
+    if (!rs) {
+        size_t r = (size_t)comm_rank(), P = (size_t)comm_size(), a = p->n * r / P, b = p->n * (r + 1) / P;
+        size_t *keep = malloc((b - a + 1) * sizeof *keep);
+        if (!keep) error_exit(1, "out of memory distributing %zu particles", p->n);
+        for (size_t i = a; i < b; ++i) keep[i - a] = i;
+        part_compact(p, keep, b - a);
+        free(keep);
+    }
     int arr[HALO_MAX_ARRAYS], narr = parallel_ghost_arrays(s, arr);
     s->halo = malloc(sizeof *s->halo);
     if (!s->halo) error_exit(1, "out of memory");
     int axis = s->sc->parallel.axis == AXIS_AUTO ? -1 : (int)s->sc->parallel.axis;
     int method = s->sc->parallel.method == PART_METIS ? HALO_METIS : HALO_SLABS;
     halo_init(s->halo, p->dim, R(2.0) * s->seg.k.h, method, axis, arr, narr);
-    halo_decompose(s->halo, p);
-    long long nmin = (long long)p->n, nmax = nmin;
-    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nmin, 1, MPI_LONG_LONG, MPI_MIN, MPI_COMM_WORLD));
-    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nmax, 1, MPI_LONG_LONG, MPI_MAX, MPI_COMM_WORLD));
-    int nbmax = s->halo->nnb;
-    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nbmax, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD));
-    if (method == HALO_METIS)
-        message("METIS decomposition over %d ranks (coarse cells of %d x 2h): %lld to %lld particles per rank, up "
-                "to %d neighbours, ghosts %d cells of 2h deep", comm_size(), s->halo->blk, nmin, nmax, nbmax,
-                s->halo->depth);
+    if (rs && rs->dec_present && rs->dec_method == method)
+        halo_restore(s->halo, method, rs->dec_axis, rs->dec_bound, rs->dec_cg, rs->dec_part);
     else
-        message("slab decomposition along %c over %d ranks: %lld to %lld particles per rank, ghosts %d cells "
-                "of 2h deep", "xyz"[s->halo->axis], comm_size(), nmin, nmax, s->halo->depth);
+        halo_decompose(s->halo, p);
+    parallel_report(s->halo, p);
 }
 
 /* Next event time (output, diagnostics, end), rounded onto its grid. */
@@ -236,21 +264,68 @@ static void parallel_balance(sim_t *s, double *cost)
     *cost = 0;
 }
 
-static void run(sim_t *s, outputs *o)
+/* A checkpoint of the state after the step (src/checkpoint.h); its write
+ * time is the margin Run:max_wall_time keeps. */
+static void write_checkpoint(outputs *o, sim_t *s, const diag *d, ckpt_clock *ck)
 {
-    const struct scene *sc = s->sc;
-    diag d;
-    double io = 0;   /* wall seconds in snapshots and diagnostics rows after the start */
-    double cost = 0; /* this rank's compute seconds since the last load-balance check */
+    s->be->to_host(s);
+    ckpt_run r = {.small0 = d->small0, .max_drift = d->max_drift, .warned = d->warned, .nsnap = o->n,
+                  .times = o->times, .npart = o->npart};
+    ck->write_s = ckpt_write(o->dir, s, &r, o->text);
+}
+
+/* A fresh run writes the diagnostics row and snapshot of t = 0. A restart
+ * (rs) has both from the earlier run: it takes the diagnostics state and the
+ * snapshot list from the checkpoint, so rows, snapshot numbers and the XDMF
+ * index continue. Either way the state is prepared at t (after a step it
+ * already is; prepare is idempotent, so a restart continues bit-identically). */
+static void run_start(sim_t *s, outputs *o, diag *d, ckpt_run *rs)
+{
     s->be->prepare(s, s->t, 1);
     if (s->halo) /* the halo figures of the done: line cover the steps only */
         s->halo->wall_comm = 0, s->halo->bytes = s->halo->messages = s->halo->migrated = 0;
     s->be->to_host(s);
-    diag_open(&d, o->dir, s);
-    diag_row(&d, s);
-    write_snapshot(o, s);
-    double t_out = next_event(0, sc->output.dt, sc->run.t_end);
-    double t_diag = next_event(0, sc->output.diag_dt, sc->run.t_end);
+    if (!rs) {
+        diag_open(d, o->dir, s);
+        diag_row(d, s);
+        write_snapshot(o, s);
+        return;
+    }
+    diag_reopen(d, o->dir, s, rs->small0, rs->max_drift, rs->warned);
+    o->n = rs->nsnap, o->times = rs->times, o->npart = rs->npart; /* o takes them over */
+    rs->times = NULL, rs->npart = NULL;
+    message("restart from %s: step %ld, t = %.9g s, %d snapshot(s) so far", o->restart, s->step, s->t, o->n);
+    if (s->t >= s->sc->run.t_end)
+        message("nothing to do: t = %.9g s >= Run:t_end = %.9g s (raise Run:t_end to go on)", s->t,
+                s->sc->run.t_end);
+}
+
+/* Stopped early by Run:max_wall_time or OUTDIR/STOP, the checkpoint written. */
+static void run_stopped(const outputs *o, const sim_t *s, const ckpt_clock *ck, enum ckpt_stop why)
+{
+    if (why == CKPT_STOPFILE) ckpt_clear_stop(ck);
+    message("stopping at step %ld, t = %.9g s: %s; wrote %s/checkpoint.h5. Continue with\n"
+            "  sphseg %s -o %s --restart %s/checkpoint.h5\n"
+            "(and the same -P options; a different Run:t_end is allowed)", s->step, s->t,
+            why == CKPT_WALL ? "the next step would pass Run:max_wall_time" : "found the STOP file", o->dir,
+            o->scene, o->dir, o->dir);
+}
+
+static void run(sim_t *s, outputs *o, ckpt_run *rs)
+{
+    const struct scene *sc = s->sc;
+    diag d;
+    double io = 0;   /* wall seconds in snapshots, diagnostics rows and checkpoints after the start */
+    double cost = 0; /* this rank's compute seconds since the last load-balance check */
+    run_start(s, o, &d, rs);
+    double t_out = next_event(s->t, sc->output.dt, sc->run.t_end);
+    double t_diag = next_event(s->t, sc->output.diag_dt, sc->run.t_end);
+    /* checkpoints never shorten a step: a run with them is the run without */
+    double ck_every = sc->output.checkpoint_dt;
+    double t_ck = ck_every > 0 ? next_event(s->t, ck_every, INFINITY) : INFINITY;
+    int ck_end = ck_every > 0 || sc->run.max_wall_time > 0;
+    ckpt_clock ck;
+    ckpt_clock_start(&ck, o->wall0, sc->run.max_wall_time, o->dir);
     while (s->t < sc->run.t_end) {
         double t_next = fmin(t_out, t_diag), dt = integrate_dt(s);
         if (s->t + dt >= t_next * (1 - 1e-12)) dt = t_next - s->t;
@@ -271,8 +346,17 @@ static void run(sim_t *s, outputs *o)
             write_snapshot(o, s);
             t_out = next_event(s->t, sc->output.dt, sc->run.t_end);
         }
+        enum ckpt_stop stop = ckpt_poll(&ck, s->step - d.step0);
+        if (stop || s->t >= t_ck || (ck_end && (last || s->t >= sc->run.t_end))) {
+            write_checkpoint(o, s, &d, &ck);
+            t_ck = ck_every > 0 ? next_event(s->t, ck_every, INFINITY) : INFINITY;
+        }
         io += diag_wall() - t_io;
         diag_progress(&d, s, 0);
+        if (stop) {
+            run_stopped(o, s, &ck, stop);
+            break;
+        }
         if (last) {
             message("stopping after Run:max_steps = %u steps at t = %.9g s", sc->run.max_steps, s->t);
             break;
@@ -282,13 +366,13 @@ static void run(sim_t *s, outputs *o)
     double wall = diag_wall() - d.wall0, stepping = wall - io, ntot = (double)comm_sum_ll((long long)s->p.n);
     double halo = s->halo ? comm_max(s->halo->wall_comm) : 0;
     if (s->halo)
-        message("slabs: %lld particle migrations between ranks, %.3f s in the halo exchange on the slowest rank, "
+        message("domains: %lld particle migrations between ranks, %.3f s in the halo exchange on the slowest rank, "
                 "%.4g MB and %.4g messages sent per rank per step (mean)", comm_sum_ll(s->halo->migrated), halo,
-                s->step ? 1e-6 * (double)comm_sum_ll(s->halo->bytes) / comm_size() / (double)s->step : 0.0,
-                s->step ? (double)comm_sum_ll(s->halo->messages) / comm_size() / (double)s->step : 0.0);
+                s->step > d.step0 ? 1e-6 * (double)comm_sum_ll(s->halo->bytes) / comm_size() / (double)(s->step - d.step0) : 0.0,
+                s->step > d.step0 ? (double)comm_sum_ll(s->halo->messages) / comm_size() / (double)(s->step - d.step0) : 0.0);
     message("done: %ld steps, %.3f s wall, %.4e particle-steps/s, max |drift of sum C V| %.3e, %.3f s of the "
             "wall in output and diagnostics (not in the rate), %.3f s in halo exchange", s->step, wall,
-            stepping > 0 ? (double)s->step * ntot / stepping : 0.0, d.max_drift, io, halo);
+            stepping > 0 ? (double)(s->step - d.step0) * ntot / stepping : 0.0, d.max_drift, io, halo);
     diag_close(&d);
 }
 
@@ -332,9 +416,13 @@ int main(int argc, char **argv)
     if (ndev > 0) s.be = backend_gpu(comm_local_rank());
 #endif
     setup_contexts(&s);
-    setup_particles(&s); /* exits 2 if it would not fit */
-    parallel_start(&s);
-    outputs o = {0, NULL, NULL, NULL, c.outdir ? c.outdir : default_outdir(c.scene)};
+    ckpt_run rs = {0};
+    if (c.restart)
+        ckpt_read(c.restart, &s, &rs); /* exits 2 on a bad checkpoint */
+    else
+        setup_particles(&s); /* exits 2 if it would not fit */
+    parallel_start(&s, c.restart ? &rs : NULL);
+    outputs o = {0, NULL, NULL, NULL, c.outdir ? c.outdir : default_outdir(c.scene), c.wall0, c.restart, c.scene};
     make_dirs(o.dir);
     char used[4200];
     snprintf(used, sizeof used, "%s/used_params.yml", o.dir);
@@ -350,7 +438,8 @@ int main(int argc, char **argv)
     if (s.flow_on)
         message("flow: c_s = %.4g m/s, h/c_s = %.3g s, Shepard filter every %u steps, alpha_av = %g",
                 (double)s.flow.cs, (double)(s.seg.k.h / s.flow.cs), sc.flow.shepard_every, sc.flow.alpha_av);
-    run(&s, &o);
+    run(&s, &o, c.restart ? &rs : NULL);
+    ckpt_run_free(&rs);
     s.be->finish(&s);
     if (s.halo) halo_free(s.halo), free(s.halo);
     part_free(&s.p);

@@ -70,6 +70,7 @@ static const cyaml_schema_field_t run_fields[] = {
     FLT(scene_run, dt_max, OPT),
     FLT(scene_run, progress_s, OPT),
     CYAML_FIELD_UINT("max_steps", OPT, struct scene_run, max_steps),
+    FLT(scene_run, max_wall_time, OPT),
     CYAML_FIELD_STRING_PTR("backend", OPT, struct scene_run, backend, 0, CYAML_UNLIMITED),
     CYAML_FIELD_END,
 };
@@ -154,6 +155,7 @@ static const cyaml_schema_field_t output_fields[] = {
     FLT(scene_output, dt, REQ),
     FLT(scene_output, diag_dt, OPT), /* default dt/20, set after loading */
     ENM(scene_output, snapshots, on_off),
+    FLT(scene_output, checkpoint_dt, OPT),
     CYAML_FIELD_END,
 };
 
@@ -204,7 +206,9 @@ static const struct scene_default scene_defaults[] = {
     {"Run", "dt_max", "1e30"},
     {"Run", "progress_s", "10"},
     {"Run", "max_steps", "0"},
+    {"Run", "max_wall_time", "0"},
     {"Output", "snapshots", "on"},
+    {"Output", "checkpoint_dt", "0"},
     {"Run", "backend", "auto"},
     {"Geometry", "type", "shearbox"},
     {"Geometry", "dim", "2"},
@@ -286,6 +290,7 @@ static const struct scene_range scene_ranges[] = {
     RNG("Run", run, cfl_flow, 0, 10, LO_OPEN, ALWAYS), /* above 1 only to find the stability limit */
     POS("Run", run, dt_max),
     POS("Run", run, progress_s),
+    RNG("Run", run, max_wall_time, 0, INFINITY, HI_OPEN, ALWAYS),
     POS("Geometry", geometry, dr),
     RNG("Geometry", geometry, h_factor, 1, 3, CLOSED, ALWAYS),
     POS("Geometry", geometry, height),
@@ -310,6 +315,7 @@ static const struct scene_range scene_ranges[] = {
     UNIT("Initial", initial, split),
     POS("Output", output, dt),
     POS("Output", output, diag_dt),
+    RNG("Output", output, checkpoint_dt, 0, INFINITY, HI_OPEN, ALWAYS),
     POS("Physics", physics, rho),
     POS("Material", material, E),
     RNG("Material", material, nu, 0, 0.5, HI_OPEN, ALWAYS),

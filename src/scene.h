@@ -29,6 +29,8 @@ struct scene_run {
     double dt_max;          /* s, upper bound on dt; default 1e30 (none) */
     double progress_s;      /* wall seconds between progress lines; default 10 */
     unsigned max_steps;     /* stop after this many steps (writing a last snapshot); 0 = no limit (default) */
+    double max_wall_time;   /* wall s: write a checkpoint and stop (exit 0) before the next step would pass
+                             * it (src/checkpoint.h); default 0 = no limit */
     char *backend;          /* "auto" (default: gpu when built with CUDA and a device is present) | "cpu" | "gpu" */
 };
 
@@ -113,6 +115,7 @@ struct scene_output {
     double dt;      /* s between snapshots, required */
     double diag_dt; /* s between diagnostics rows; default dt/20 */
     int snapshots;  /* on | off: write snapshot files (off: benchmarks, diagnostics only); default on */
+    double checkpoint_dt; /* s of simulated time between checkpoints (OUTDIR/checkpoint.h5); default 0 = none */
 };
 
 struct scene_physics {

@@ -95,6 +95,15 @@ check drum3d_length_small "-P Geometry:length=0.001: Geometry:length: must be >=
     "$drum3d" -P Geometry:length=0.001
 check nothing_to_solve "-P Segregation:enabled=off: Segregation:enabled: off with prescribed velocity leaves nothing to solve" \
     "$good" -P Segregation:enabled=off
+# checkpoint keys and bad restart files (src/checkpoint.c; the restart cases
+# that need a checkpoint written first are in tests/validate_restart.py)
+check ckpt_dt_range "-P Output:checkpoint_dt=-1: Output:checkpoint_dt: must be >= 0, got -1" \
+    "$good" -P Output:checkpoint_dt=-1
+check wall_time_type "-P Run:max_wall_time=1h: Run:max_wall_time: expected a number" \
+    "$good" -P Run:max_wall_time=1h
+check restart_missing "--restart $tmp/none.h5: cannot read it" "$good" --restart "$tmp/none.h5"
+check restart_not_hdf5 "--restart $good: not an HDF5 file" "$good" --restart "$good"
+check restart_no_file "command line: --restart needs a FILE" "$good" --restart
 
 echo "test_badinput: $n_pass passed, $n_fail failed"
 [ "$n_fail" -eq 0 ]

@@ -134,6 +134,8 @@ static void test_defaults(void **state)
     assert_bits(s.run.dt_max, 1e30);
     assert_bits(s.run.progress_s, 10);
     assert_int_equal(s.run.max_steps, 0);
+    assert_bits(s.run.max_wall_time, 0);
+    assert_bits(s.output.checkpoint_dt, 0);
     assert_string_equal(s.run.backend, "auto");
     assert_int_equal(s.geometry.type, GEOM_SHEARBOX);
     assert_int_equal(s.geometry.dim, 2);
@@ -246,7 +248,7 @@ static void assert_scene_equal(const struct scene *a, const struct scene *b)
 {
 #define EQ(f) assert_memory_equal(&a->f, &b->f, sizeof a->f)
     EQ(run.t_end), EQ(run.cfl_diffusion), EQ(run.cfl_segregation), EQ(run.cfl_kinematic);
-    EQ(run.dt_max), EQ(run.progress_s);
+    EQ(run.dt_max), EQ(run.progress_s), EQ(run.max_wall_time), EQ(output.checkpoint_dt);
     assert_string_equal(a->run.backend, b->run.backend);
     EQ(geometry.type), EQ(geometry.dim), EQ(geometry.dr), EQ(geometry.h_factor);
     EQ(geometry.height), EQ(geometry.width);

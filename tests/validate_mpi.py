@@ -107,7 +107,7 @@ def main():
                   "%d class differences" % ("ok  " if good else "FAIL", name, np_, steps, worst, tol, cls))
             ok &= good
         if must == "migrate":
-            m = re.search(r"slabs: (\d+) particle migrations", logs[3])
+            m = re.search(r"domains: (\d+) particle migrations", logs[3])
             good = m is not None and int(m.group(1)) > 0
             print("%s %-14s particles migrated across domains on 3 ranks: %s" % (
                 "ok  " if good else "FAIL", name, m.group(1) if m else "none"))

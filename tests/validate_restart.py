@@ -1,0 +1,239 @@
+"""Checkpoints and restarts (src/checkpoint.c, README "Checkpoints and
+restarts"): a run stopped midway and restarted from its checkpoint must end
+bit-identical to the same run done straight through (DESIGN.md: checkpoints
+"restart bit-for-bit on the same rank count").
+
+  shearbox:  the CI shear box (inputs/shearbox_2d.yml at dr/H = 0.04, one
+             period, prescribed kinematics, conservative scheme). Run A
+             straight to t_end; run B with checkpoints every 2 s and
+             Run:max_steps = half of A's steps, then --restart to t_end. Every
+             field of every snapshot after the restart equals A's
+             (np.array_equal), every diagnostics row after the restart equals
+             A's (all columns but wall_s), the rows before it are A's rows
+             (plus the row max_steps forces), one header, the XDMF index
+             lists every snapshot, checkpoint_prev.h5 is the checkpoint
+             before; a run with checkpoints equals one without.
+  drum:      a CI drum (inputs/drum_2d_EV.yml at dr = 2.5 mm, E = 0.1 MPa as
+             tests/validate_drum.py, computed flow with the Shepard filter):
+             A to 160 steps; B to 73 steps with a checkpoint, restarted to
+             160 (Shepard filter at 90, 120, 150); the final snapshot and
+             the rows after step 73 are equal.
+  stopfile:  OUTDIR/STOP present: the run writes a checkpoint after its
+             first step, removes STOP, exits 0 saying how to continue; the
+             restart ends equal to A.
+  walltime:  Run:max_wall_time = 1 s on a run that needs far longer: exit 0
+             (within 10 s: the machine may be loaded), a checkpoint at t < t_end;
+             the restart to the next output time ends equal to a straight run.
+  badfile:   --restart with a snapshot, a truncated file, a checkpoint of the
+             other precision and one of another dimension: exit 2, one line
+             naming the file and the problem.
+"""
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+import h5py
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "tools"))
+import snap  # noqa: E402
+
+BOX = os.path.join(HERE, "..", "inputs", "shearbox_2d.yml")
+DRUM = os.path.join(HERE, "..", "inputs", "drum_2d_EV.yml")
+BOX_P = ["Geometry:dr=0.00348", "Run:t_end=13", "Output:dt=3.25", "Run:progress_s=1e9"]
+DRUM_P = ["Geometry:dr=0.0025", "Material:E=1e5", "Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.001",
+          "Run:progress_s=1e9"]
+OK = True
+
+
+def check(name, good, detail=""):
+    global OK
+    OK &= bool(good)
+    print("%s %s%s" % ("ok  " if good else "FAIL", name, ": " + detail if detail else ""))
+    return bool(good)
+
+
+def sphseg(args, scene, out, over, extra=(), want=0):
+    cmd = [args.sphseg, scene, "-o", out] + sum([["-P", o] for o in over], []) + list(extra)
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != want:
+        print(r.stdout[-2000:], r.stderr[-2000:])
+        sys.exit("FAIL: %s exited with %d, want %d" % (" ".join(cmd), r.returncode, want))
+    return r
+
+
+def rows(out):
+    """diagnostics.csv as {step: row without wall_s}, and the header count."""
+    with open(os.path.join(out, "diagnostics.csv")) as f:
+        lines = f.read().splitlines()
+    head = lines[0].split(",")
+    w = head.index("wall_s")
+    body = {}
+    for ln in lines[1:]:
+        c = ln.split(",")
+        body[int(c[0])] = c[:w] + c[w + 1:]
+    return body, sum(ln.startswith("step,") for ln in lines)
+
+
+def same_snapshot(a, b):
+    """Names of the fields (and Time, Step) where two snapshots differ."""
+    sa, sb = snap.read_snapshot(a), snap.read_snapshot(b)
+    keys = [k for k in sa if k not in ("path", "Scene")]
+    return [k for k in keys if k not in sb or not np.array_equal(np.asarray(sa[k]), np.asarray(sb[k]))]
+
+
+def by_time(out):
+    return {snap.snapshot_time(p): p for p in snap.list_snapshots(out)}
+
+
+def ckpt_header(path):
+    with h5py.File(path, "r") as f:
+        return {k: snap._attr(v) for k, v in f["Header"].attrs.items()}
+
+
+def compare_runs(name, a, b, t_restart, step_restart):
+    """B (restarted at t_restart, step_restart) against the straight run A."""
+    ta, tb = by_time(a), by_time(b)
+    after = [t for t in ta if t > t_restart]
+    check("%s snapshots after restart" % name, after and all(t in tb for t in after),
+          "A %s, B %s" % (sorted(ta), sorted(tb)))
+    for t in after:
+        if t in tb:
+            d = same_snapshot(ta[t], tb[t])
+            check("%s snapshot t=%g bit-identical" % (name, t), not d, "differs in %s" % d if d else
+                  "%s vs %s" % (os.path.basename(ta[t]), os.path.basename(tb[t])))
+    ra, ha = rows(a)
+    rb, hb = rows(b)
+    check("%s one header" % name, ha == 1 and hb == 1, "%d and %d header lines" % (ha, hb))
+    post = [s for s in ra if s > step_restart]
+    check("%s rows after restart identical" % name,
+          post and all(rb.get(s) == ra[s] for s in post) and [s for s in rb if s > step_restart] == post,
+          "%d rows after step %d" % (len(post), step_restart))
+    pre = [s for s in ra if s <= step_restart]
+    check("%s rows before restart kept" % name, all(rb.get(s) == ra[s] for s in pre) and
+          set(s for s in rb if s <= step_restart) - set(pre) <= {step_restart}, "%d rows" % len(pre))
+    with open(os.path.join(b, "snapshots.xmf")) as f:
+        xmf = f.read()
+    n = len(snap.list_snapshots(b))
+    check("%s XDMF lists every snapshot" % name, xmf.count("<Grid Name=\"snapshot_") == n and
+          "snapshot_%05d.h5" % (n - 1) in xmf, "%d snapshots" % n)
+
+
+def test_shearbox(args):
+    a, b, c = (os.path.join(args.work, "box_" + x) for x in "abc")
+    ra = sphseg(args, BOX, a, BOX_P)
+    nsteps = int(ra.stdout.split("done: ")[1].split()[0])
+    sphseg(args, BOX, c, BOX_P + ["Output:checkpoint_dt=2"])
+    d = same_snapshot(snap.list_snapshots(a)[-1], snap.list_snapshots(c)[-1])
+    check("shearbox checkpoints change nothing", not d, "differs in %s" % d if d else "")
+    half = nsteps // 2
+    sphseg(args, BOX, b, BOX_P + ["Output:checkpoint_dt=2", "Run:max_steps=%d" % half])
+    ck, prev = os.path.join(b, "checkpoint.h5"), os.path.join(b, "checkpoint_prev.h5")
+    h, hp = ckpt_header(ck), ckpt_header(prev)
+    check("shearbox checkpoint at stop", h["Step"] == half and hp["Step"] < half and hp["Time"] >= 2,
+          "checkpoint step %d t=%.4g, previous step %d t=%.4g" % (h["Step"], h["Time"], hp["Step"], hp["Time"]))
+    r = sphseg(args, BOX, b, BOX_P, ["--restart", ck])
+    check("shearbox restart warns of the changed scene", "Run:max_steps" in r.stderr or "max_steps" in r.stderr,
+          r.stderr.strip()[:200])
+    compare_runs("shearbox", a, b, h["Time"], h["Step"])
+    return a
+
+
+def test_drum(args):
+    a, b = (os.path.join(args.work, "drum_" + x) for x in "ab")
+    sphseg(args, DRUM, a, DRUM_P + ["Run:max_steps=160"])
+    sphseg(args, DRUM, b, DRUM_P + ["Run:max_steps=73", "Run:max_wall_time=1e6"])
+    h = ckpt_header(os.path.join(b, "checkpoint.h5"))
+    check("drum checkpoint at stop", h["Step"] == 73, "step %d" % h["Step"])
+    sphseg(args, DRUM, b, DRUM_P + ["Run:max_steps=160"], ["--restart", os.path.join(b, "checkpoint.h5")])
+    d = same_snapshot(snap.list_snapshots(a)[-1], snap.list_snapshots(b)[-1])
+    check("drum final snapshot bit-identical (step 160)", not d, "differs in %s" % d if d else "")
+    ra, _ = rows(a)
+    rb, _ = rows(b)
+    post = [s for s in ra if s > 73]
+    check("drum rows after restart identical", post and all(rb.get(s) == ra[s] for s in post),
+          "%d rows" % len(post))
+
+
+def test_stopfile(args, box_a):
+    b = os.path.join(args.work, "box_stop")
+    os.makedirs(b)
+    open(os.path.join(b, "STOP"), "w").close()
+    r = sphseg(args, BOX, b, BOX_P)
+    h = ckpt_header(os.path.join(b, "checkpoint.h5"))
+    check("stopfile: stops with a checkpoint", h["Step"] == 1 and not os.path.exists(os.path.join(b, "STOP"))
+          and "--restart" in r.stdout, "checkpoint step %d; STOP removed; how-to line printed" % h["Step"])
+    sphseg(args, BOX, b, BOX_P, ["--restart", os.path.join(b, "checkpoint.h5")])
+    d = same_snapshot(snap.list_snapshots(box_a)[-1], snap.list_snapshots(b)[-1])
+    check("stopfile: restart ends bit-identical", not d, "differs in %s" % d if d else "")
+
+
+def test_walltime(args):
+    a, b = (os.path.join(args.work, "wall_" + x) for x in "ab")
+    over = [o for o in BOX_P if not o.startswith("Run:t_end")]
+    t0 = time.monotonic()
+    r = sphseg(args, BOX, b, over + ["Run:t_end=1e5", "Run:max_wall_time=1"])
+    el = time.monotonic() - t0
+    h = ckpt_header(os.path.join(b, "checkpoint.h5"))
+    check("walltime: stops in time with a checkpoint", "max_wall_time" in r.stdout and h["Time"] < 1e5 and el < 10,
+          "%.2f s, checkpoint at step %d, t = %.4g s" % (el, h["Step"], h["Time"]))
+    t_end = (np.floor(h["Time"] / 3.25) + 1) * 3.25
+    sphseg(args, BOX, a, over + ["Run:t_end=%r" % t_end])
+    sphseg(args, BOX, b, over + ["Run:t_end=%r" % t_end], ["--restart", os.path.join(b, "checkpoint.h5")])
+    d = same_snapshot(snap.list_snapshots(a)[-1], snap.list_snapshots(b)[-1])
+    check("walltime: restart to t = %g ends bit-identical" % t_end, not d, "differs in %s" % d if d else "")
+
+
+def bad(args, name, path, want):
+    out = os.path.join(args.work, "bad_out")
+    cmd = [args.sphseg, BOX, "-o", out, "--restart", path] + sum([["-P", o] for o in BOX_P], [])
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    lines = r.stderr.strip().splitlines()
+    check("badfile %s" % name, r.returncode == 2 and len(lines) == 1 and path in lines[0] and want in lines[0]
+          and not os.path.exists(out), "exit %d: %s" % (r.returncode, r.stderr.strip()))
+
+
+def test_badfile(args, box_a):
+    ck = os.path.join(box_a + "_bad", "checkpoint.h5")
+    os.makedirs(os.path.dirname(ck))
+    sphseg(args, BOX, os.path.dirname(ck), BOX_P + ["Run:max_steps=2", "Run:max_wall_time=1e6"])
+    bad(args, "snapshot", snap.list_snapshots(box_a)[0], "not a sphseg checkpoint")
+    trunc = ck + ".trunc"
+    with open(ck, "rb") as f, open(trunc, "wb") as g:
+        g.write(f.read(3000))
+    bad(args, "truncated", trunc, "not an HDF5 file")
+    for name, attr, value, want in [("precision", "Precision", None, "precision"),
+                                    ("dimension", "Dimension", 3, "3D run")]:
+        p = ck + "." + name
+        shutil.copy(ck, p)
+        with h5py.File(p, "r+") as f:
+            if value is None:
+                value = "single" if f["Header"].attrs["Precision"] == "double" else "double"
+                del f["Header"].attrs["Precision"]
+                f["Header"].attrs.create("Precision", value, dtype=h5py.string_dtype("utf-8"))
+            else:
+                f["Header"].attrs.modify(attr, np.int64(value))
+        bad(args, name, p, want)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sphseg", required=True)
+    ap.add_argument("--work", required=True)
+    args = ap.parse_args()
+    os.makedirs(args.work, exist_ok=True)
+    box_a = test_shearbox(args)
+    test_stopfile(args, box_a)
+    test_walltime(args)
+    test_badfile(args, box_a)
+    test_drum(args)
+    print("validate_restart:", "PASS" if OK else "FAIL")
+    sys.exit(0 if OK else 1)
+
+
+if __name__ == "__main__":
+    main()
