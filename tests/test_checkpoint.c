@@ -74,7 +74,8 @@ static void test_round_trip(void **state)
     a.t = 1.2345678901234567, a.step = 4242, a.dt = 3.3e-5, a.amax = 98.765;
     double times[3] = {0, 0.5, 1.0};
     long long npart[3] = {100, 101, 102};
-    ckpt_run ra = {1.5e-3, 2.5e-15, 1, 3, times, npart}, rb = {0};
+    ckpt_run ra = {.small0 = 1.5e-3, .max_drift = 2.5e-15, .warned = 1, .nsnap = 3, .times = times, .npart = npart};
+    ckpt_run rb = {0};
     char *text = scene_used_text(&sc);
     ckpt_write(g_dir, &a, &ra, text);
     a.step = 4243;

@@ -24,6 +24,12 @@ bit-identical to the same run done straight through (DESIGN.md: checkpoints
   walltime:  Run:max_wall_time = 1 s on a run that needs far longer: exit 0
              (within 10 s: the machine may be loaded), a checkpoint at t < t_end;
              the restart to the next output time ends equal to a straight run.
+  ranks:     the drum on 3 ranks (slabs, and METIS parts), stopped at step 73
+             and restarted on 3 ranks, ends bit-identical to the straight
+             3-rank run (the checkpoint carries the decomposition); restarted
+             on 2 ranks from the same checkpoint it ends equal to the straight
+             run to round-off (every field within 1e-8 of its scale, classes
+             equal: tests/validate_mpi.py's tolerance).
   badfile:   --restart with a snapshot, a truncated file, a checkpoint of the
              other precision and one of another dimension: exit 2, one line
              naming the file and the problem.
@@ -159,6 +165,47 @@ def test_drum(args):
           "%d rows" % len(post))
 
 
+def mpi(np_):
+    return ["mpirun", "--oversubscribe", "--allow-run-as-root", "-np", str(np_)]
+
+
+def sphseg_np(args, np_, scene, out, over, extra=()):
+    cmd = mpi(np_) + [args.sphseg, scene, "-o", out, "--backend", "cpu"] + sum([["-P", o] for o in over], [])
+    r = subprocess.run(cmd + list(extra), capture_output=True, text=True, env=dict(os.environ, OMP_NUM_THREADS="1"))
+    if r.returncode != 0:
+        print(r.stdout[-2000:], r.stderr[-2000:])
+        sys.exit("FAIL: %s exited with %d" % (" ".join(cmd), r.returncode))
+    return r
+
+
+def roundoff(a, b, tol=1e-8):
+    sa, sb = snap.read_snapshot(a), snap.read_snapshot(b)
+    worst = 0.0
+    for f in ("Coordinates", "Velocities", "Stress", "Concentration", "ShearRate", "Normal", "Psi"):
+        scale = max(float(np.max(np.abs(sa[f]))), 1e-300)
+        worst = max(worst, float(np.max(np.abs(np.asarray(sa[f]) - np.asarray(sb[f])))) / scale)
+    same = np.array_equal(sa["ParticleIDs"], sb["ParticleIDs"]) and np.array_equal(sa["BoundaryClass"],
+                                                                                      sb["BoundaryClass"])
+    return same and worst <= tol, worst
+
+
+def test_drum_ranks(args):
+    for method in ("slabs", "metis"):
+        over = DRUM_P + ["Parallel:method=" + method]
+        a, b, c = (os.path.join(args.work, "drum3r_%s_%s" % (method, x)) for x in "abc")
+        sphseg_np(args, 3, DRUM, a, over + ["Run:max_steps=160"])
+        sphseg_np(args, 3, DRUM, b, over + ["Run:max_steps=73", "Run:max_wall_time=1e6"])
+        shutil.copytree(b, c)
+        sphseg_np(args, 3, DRUM, b, over + ["Run:max_steps=160"], ["--restart", os.path.join(b, "checkpoint.h5")])
+        d = same_snapshot(snap.list_snapshots(a)[-1], snap.list_snapshots(b)[-1])
+        check("drum on 3 ranks (%s), restarted on 3: bit-identical at step 160" % method, not d,
+              "differs in %s" % d if d else "")
+        sphseg_np(args, 2, DRUM, c, over + ["Run:max_steps=160"], ["--restart", os.path.join(c, "checkpoint.h5")])
+        good, worst = roundoff(snap.list_snapshots(a)[-1], snap.list_snapshots(c)[-1])
+        check("drum on 3 ranks (%s), restarted on 2: equal to round-off at step 160" % method, good,
+              "max field difference %.2e of its scale" % worst)
+
+
 def test_stopfile(args, box_a):
     b = os.path.join(args.work, "box_stop")
     os.makedirs(b)
@@ -231,6 +278,7 @@ def main():
     test_walltime(args)
     test_badfile(args, box_a)
     test_drum(args)
+    test_drum_ranks(args)
     print("validate_restart:", "PASS" if OK else "FAIL")
     sys.exit(0 if OK else 1)
 
