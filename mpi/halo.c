@@ -212,7 +212,9 @@ static size_t halo_swap(halo_t *h, const particles_t *p, size_t *const *list, co
         MPICHECK(MPI_Irecv(&cr[k], 1, MPI_LONG_LONG, h->nb[k], 21, MPI_COMM_WORLD, &rq[k]));
         MPICHECK(MPI_Isend(&cs[k], 1, MPI_LONG_LONG, h->nb[k], 21, MPI_COMM_WORLD, &rq[m + k]));
     }
+    double t0 = MPI_Wtime();
     MPICHECK(MPI_Waitall(2 * m, rq, MPI_STATUSES_IGNORE));
+    h->wall_wait += MPI_Wtime() - t0;
     for (int k = 0; k < m; ++k) got[k] = (size_t)cr[k], nr += got[k];
     h->buf[0] = halo_grow(h->buf[0], &h->cap_buf[0], ns * rec + 1, 1);
     h->buf[1] = halo_grow(h->buf[1], &h->cap_buf[1], nr * rec + 1, 1);
@@ -225,7 +227,9 @@ static size_t halo_swap(halo_t *h, const particles_t *p, size_t *const *list, co
         os += n[k], orr += got[k];
         h->bytes += (long long)(n[k] * rec + sizeof(long long)), h->messages += 2;
     }
+    t0 = MPI_Wtime();
     MPICHECK(MPI_Waitall(2 * m, rq, MPI_STATUSES_IGNORE));
+    h->wall_wait += MPI_Wtime() - t0;
     MPICHECK(MPI_Type_free(&t));
     free(rq), free(cs);
     return nr;
@@ -254,8 +258,10 @@ static void halo_corner(halo_t *h, const particles_t *p, real *hi)
             if (p->x[d][i] < lo[d]) lo[d] = p->x[d][i];
             if (p->x[d][i] > up[d]) up[d] = p->x[d][i];
         }
+    double t0 = MPI_Wtime();
     MPICHECK(MPI_Allreduce(MPI_IN_PLACE, lo, 3, HALO_MPI_REAL, MPI_MIN, MPI_COMM_WORLD));
     if (hi) MPICHECK(MPI_Allreduce(up, hi, 3, HALO_MPI_REAL, MPI_MAX, MPI_COMM_WORLD));
+    h->wall_wait += MPI_Wtime() - t0;
     for (int d = 0; d < 3; ++d) h->origin[d] = d < h->dim ? lo[d] - R(1e-6) * h->support : 0;
 }
 
@@ -283,7 +289,7 @@ static void halo_migrate(halo_t *h, particles_t *p)
     }
     size_t *got = halo_calloc((size_t)h->nnb + 1, sizeof(size_t));
     size_t nin = halo_swap(h, p, h->send, h->nsend, all, nall, got);
-    part_compact(p, h->inv, nkeep);
+    if (nkeep < p->n) part_compact(p, h->inv, nkeep); /* most prepares: nobody left */
     part_reserve(p, nkeep + nin);
     part_unpack(p, NULL, p->n, nin, all, nall, h->buf[1]);
     p->n += nin;

@@ -51,6 +51,7 @@ typedef struct halo {
     char *buf[2];
     size_t cap_buf[2];
     double wall_comm;      /* wall seconds spent in exchanges and refreshes */
+    double wall_wait;      /* of which in MPI waits (transfer, and waiting for slower ranks) */
     long long migrated;    /* particles this rank sent to a neighbour, in total */
     long long bytes;       /* bytes this rank sent to its neighbours (migration, ghosts, refreshes) */
     long long messages;    /* point-to-point sends of this rank, counts included */

@@ -283,7 +283,7 @@ static void run_start(sim_t *s, outputs *o, diag *d, ckpt_run *rs)
 {
     s->be->prepare(s, s->t, 1);
     if (s->halo) /* the halo figures of the done: line cover the steps only */
-        s->halo->wall_comm = 0, s->halo->bytes = s->halo->messages = s->halo->migrated = 0;
+        s->halo->wall_comm = s->halo->wall_wait = 0, s->halo->bytes = s->halo->messages = s->halo->migrated = 0;
     s->be->to_host(s);
     if (!rs) {
         diag_open(d, o->dir, s);
@@ -366,8 +366,9 @@ static void run(sim_t *s, outputs *o, ckpt_run *rs)
     double wall = diag_wall() - d.wall0, stepping = wall - io, ntot = (double)comm_sum_ll((long long)s->p.n);
     double halo = s->halo ? comm_max(s->halo->wall_comm) : 0;
     if (s->halo)
-        message("domains: %lld particle migrations between ranks, %.3f s in the halo exchange on the slowest rank, "
-                "%.4g MB and %.4g messages sent per rank per step (mean)", comm_sum_ll(s->halo->migrated), halo,
+        message("domains: %lld particle migrations between ranks, %.3f s in the halo exchange on the slowest rank "
+                "(%.3f s of it in MPI waits), %.4g MB and %.4g messages sent per rank per step (mean)",
+                comm_sum_ll(s->halo->migrated), halo, comm_max(s->halo->wall_wait),
                 s->step > d.step0 ? 1e-6 * (double)comm_sum_ll(s->halo->bytes) / comm_size() / (double)(s->step - d.step0) : 0.0,
                 s->step > d.step0 ? (double)comm_sum_ll(s->halo->messages) / comm_size() / (double)(s->step - d.step0) : 0.0);
     message("done: %ld steps, %.3f s wall, %.4e particle-steps/s, max |drift of sum C V| %.3e, %.3f s of the "
