@@ -388,7 +388,9 @@ static void halo_cut_metis(halo_t *h, const double *w, size_t nv)
 {
     h->part = realloc(h->part, nv * sizeof(int));
     if (!h->part) error_exit(1, "out of memory: %zu coarse cells", nv);
-    if (h->rank == 0) {
+    if (h->size == 1) { /* METIS_PartGraphKway divides by zero for one part */
+        memset(h->part, 0, nv * sizeof(int));
+    } else if (h->rank == 0) {
         idx_t n = (idx_t)nv, ncon = 1, np = (idx_t)h->size, cut = 0, opt[METIS_NOPTIONS];
         idx_t *xadj = halo_calloc(nv + 1, sizeof(idx_t)), *adj = halo_calloc(nv * 26, sizeof(idx_t));
         idx_t *vw = halo_calloc(nv, sizeof(idx_t)), *part = halo_calloc(nv, sizeof(idx_t));

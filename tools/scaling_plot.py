@@ -11,6 +11,9 @@ count (repeats, several CSV files) are averaged.
   strong efficiency  E_s(P) = T(1) / (P T(P))   (T = particles * steps / r: the
                                                  stepping time, output left out)
   halo share         halo_s / wall_s
+  --strong-same-cores: the strong sweep ran every P on the same cores (P ranks
+                     of C/P threads each, as on one node): E_s(P) = r(P) / r(1),
+                     the rate gained or lost by trading threads for ranks
 
 The reference is the 1-rank row of the mode, or its smallest rank count when
 there is none (said in the table). Writes one PNG (three panels against ranks)
@@ -69,11 +72,13 @@ def summarise(rows):
     return out
 
 
-def efficiencies(mode, pts):
+def efficiencies(mode, pts, same_cores=False):
     """Adds eff (and ref, the reference rank count) to each point."""
     ref = pts[0]  # sorted by ranks: the 1-rank row when there is one
     for q in pts:
-        if mode == "strong":  # T = stepping time = particles * steps / rate
+        if mode == "strong" and same_cores:
+            q["eff"] = q["rate"] / ref["rate"]
+        elif mode == "strong":  # T = stepping time = particles * steps / rate
             t, t1 = (x["particles"] * x["steps"] / x["rate"] for x in (q, ref))
             q["eff"] = (ref["ranks"] * t1) / (q["ranks"] * t)
         else:
@@ -99,13 +104,14 @@ def table(summary):
     return "\n".join(lines)
 
 
-def plot(summary, png):
+def plot(summary, png, same_cores=False):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 3, figsize=(13, 4))
     style = {"weak": ("o-", "C0", "weak $E_w = r(P)/P\\,/\\,r(1)$"),
-             "strong": ("s-", "C1", "strong $E_s = T(1)/(P\\,T(P))$")}
+             "strong": ("s-", "C1", "strong, same cores $r(P)/r(1)$" if same_cores else
+                        "strong $E_s = T(1)/(P\\,T(P))$")}
     allp = sorted({q["ranks"] for pts in summary.values() for q in pts}) or [1]
     for mode, pts in summary.items():
         mk, col, label = style.get(mode, ("^-", "C2", mode))
@@ -142,13 +148,15 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("csv", nargs="+", help="CSV file(s) written by jobs/scaling_*.sbatch")
     ap.add_argument("--png", default="scaling.png", help="chart to write (default scaling.png)")
+    ap.add_argument("--strong-same-cores", action="store_true",
+                    help="strong runs used the same cores at every P: E_s = r(P)/r(1)")
     a = ap.parse_args(argv)
     rows = read_rows(a.csv)
     if not rows:
         sys.exit("scaling_plot: no rows in " + " ".join(a.csv))
-    summary = {mode: efficiencies(mode, pts) for mode, pts in summarise(rows).items()}
+    summary = {mode: efficiencies(mode, pts, a.strong_same_cores) for mode, pts in summarise(rows).items()}
     print(table(summary))
-    plot(summary, a.png)
+    plot(summary, a.png, a.strong_same_cores)
     print(f"\nwrote {a.png}")
 
 
