@@ -268,6 +268,7 @@ static void halo_corner(halo_t *h, const particles_t *p, real *hi)
 static void halo_all_arrays(int *arr, int *narr)
 {
     *narr = (int)part_narrays();
+    if (*narr > HALO_MAX_ARRAYS + 8) error_exit(1, "halo: %d particle arrays, room for %d", *narr, HALO_MAX_ARRAYS + 8);
     for (int k = 0; k < *narr; ++k) arr[k] = k;
 }
 
@@ -277,7 +278,7 @@ static void halo_migrate(halo_t *h, particles_t *p)
 {
     int all[HALO_MAX_ARRAYS + 8], nall;
     halo_all_arrays(all, &nall);
-    size_t nkeep = 0, rec = part_record_bytes(all, nall);
+    size_t nkeep = 0;
     h->inv = halo_grow(h->inv, &h->cap_inv, p->n, sizeof(size_t)); /* keep list */
     for (int k = 0; k < h->nnb; ++k) h->nsend[k] = 0;
     for (size_t i = 0; i < p->n; ++i) {
@@ -293,7 +294,6 @@ static void halo_migrate(halo_t *h, particles_t *p)
     part_reserve(p, nkeep + nin);
     part_unpack(p, NULL, p->n, nin, all, nall, h->buf[1]);
     p->n += nin;
-    (void)rec;
     free(got);
 }
 

@@ -46,6 +46,22 @@ static void ckpt_attr_int64(hid_t loc, const char *name, long long v)
     io_attr_scalar(loc, name, H5T_STD_I64LE, H5T_NATIVE_INT64, &w);
 }
 
+/* Rows [start, start + count) of fspace (none when count is 0, mspace too:
+ * the rank still takes part); returns a collective transfer list. */
+static hid_t ckpt_select_rows(hid_t fspace, hid_t mspace, hsize_t start, hsize_t count)
+{
+    hid_t dxpl;
+    H5CHECK(dxpl = H5Pcreate(H5P_DATASET_XFER));
+    H5CHECK(H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE));
+    if (count > 0) {
+        H5CHECK(H5Sselect_hyperslab(fspace, H5S_SELECT_SET, &start, NULL, &count, NULL));
+    } else {
+        H5CHECK(H5Sselect_none(fspace));
+        H5CHECK(H5Sselect_none(mspace));
+    }
+    return dxpl;
+}
+
 /* ---- writing ---------------------------------------------------------------- */
 
 /* A 1D dataset of ntot rows of mtype (file type ftype); this rank writes its n
@@ -58,14 +74,7 @@ static hid_t ckpt_write_rows(hid_t loc, const char *name, hid_t ftype, hid_t mty
     H5CHECK(fspace = H5Screate_simple(1, &dims, NULL));
     H5CHECK(mspace = H5Screate_simple(1, &mdims, NULL));
     H5CHECK(dset = H5Dcreate2(loc, name, ftype, fspace, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
-    H5CHECK(dxpl = H5Pcreate(H5P_DATASET_XFER));
-    H5CHECK(H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE));
-    if (n > 0) {
-        H5CHECK(H5Sselect_hyperslab(fspace, H5S_SELECT_SET, &start, NULL, &count, NULL));
-    } else {
-        H5CHECK(H5Sselect_none(fspace));
-        H5CHECK(H5Sselect_none(mspace));
-    }
+    dxpl = ckpt_select_rows(fspace, mspace, start, count);
     if (ntot > 0) H5CHECK(H5Dwrite(dset, mtype, mspace, fspace, dxpl, buf));
     H5CHECK(H5Pclose(dxpl));
     H5CHECK(H5Sclose(mspace));
@@ -337,14 +346,7 @@ static long long ckpt_read_rows(const char *file, hid_t loc, const char *name, h
     H5CHECK(H5Sget_simple_extent_dims(fspace, &len, NULL));
     if (offset + n > (long long)len) ckpt_bad(file, "dataset %s is too short", name);
     H5CHECK(mspace = H5Screate_simple(1, &mdims, NULL));
-    H5CHECK(dxpl = H5Pcreate(H5P_DATASET_XFER));
-    H5CHECK(H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE));
-    if (n > 0) {
-        H5CHECK(H5Sselect_hyperslab(fspace, H5S_SELECT_SET, &start, NULL, &count, NULL));
-    } else {
-        H5CHECK(H5Sselect_none(fspace));
-        H5CHECK(H5Sselect_none(mspace));
-    }
+    dxpl = ckpt_select_rows(fspace, mspace, start, count);
     if (len > 0) H5CHECK(H5Dread(dset, mtype, mspace, fspace, dxpl, buf));
     H5CHECK(H5Pclose(dxpl));
     H5CHECK(H5Sclose(mspace));
