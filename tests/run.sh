@@ -33,6 +33,7 @@ done
 run_one badinput bash tests/test_badinput.sh "$BUILD/sphseg"
 run_one mpi_launch bash tests/test_launch.sh "$BUILD/sphseg"
 run_one mpi_halo_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUILD/tests/test_halo"
+run_one checkpoint_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUILD/tests/test_checkpoint"
 run_one io_ranks bash tests/test_io_ranks.sh "$BUILD/tests/test_io_ranks" "$BUILD/tests/test_io"
 run_one jobs bash tests/test_jobs.sh "$BUILD/sphseg"
 run_one blowup bash tests/test_blowup.sh "$BUILD/sphseg"
