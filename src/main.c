@@ -200,9 +200,9 @@ static int parallel_ghost_arrays(const sim_t *s, int *arr)
     return n;
 }
 
-/* Several ranks. A fresh run: every rank built the whole scene and keeps an
- * even share of it; a restart: every rank read its block (same rank count)
- * or an even share (another). Then the decomposition (Parallel:method)
+/* Several ranks. Every rank holds an even share of the particles (built by
+ * setup, or read from a checkpoint), or its own block (a restart on the
+ * checkpoint's rank count). Then the decomposition (Parallel:method)
  * sends every particle to its owner — or, restarting on the same rank
  * count, takes over the checkpoint's cut, so that the run continues
  * bit-identically. */
@@ -225,14 +225,6 @@ static void parallel_start(sim_t *s, const ckpt_run *rs)
 {
     if (comm_size() == 1) return;
     particles_t *p = &s->p;
-    if (!rs) {
-        size_t r = (size_t)comm_rank(), P = (size_t)comm_size(), a = p->n * r / P, b = p->n * (r + 1) / P;
-        size_t *keep = malloc((b - a + 1) * sizeof *keep);
-        if (!keep) error_exit(1, "out of memory distributing %zu particles", p->n);
-        for (size_t i = a; i < b; ++i) keep[i - a] = i;
-        part_compact(p, keep, b - a);
-        free(keep);
-    }
     int arr[HALO_MAX_ARRAYS], narr = parallel_ghost_arrays(s, arr);
     s->halo = malloc(sizeof *s->halo);
     if (!s->halo) error_exit(1, "out of memory");

@@ -28,26 +28,51 @@ static box_layout setup_layout(const struct scene *sc)
     return b;
 }
 
-/* Exit with status 2 if the particles would not fit in this machine. */
-static void setup_check_memory(const struct scene *sc, size_t n)
+/* The scene's particles k (global index = ID) in [lo, hi) are this rank's
+ * share: an even part of all n, built here; the decomposition then sends
+ * each particle to the rank owning its position (mpi/halo.h). One rank
+ * builds them all. */
+static struct {
+    size_t lo, hi;
+} setup_win;
+
+/* Allocate this rank's share of n particles; exit with status 2 if it
+ * would not fit in this machine. */
+static void setup_alloc(const struct scene *sc, particles_t *p, int dim, size_t n)
 {
-    double need = (double)n * (double)(part_bytes_per_particle() + 64); /* + grid, scratch */
+    size_t r = (size_t)comm_rank(), P = (size_t)comm_size();
+    setup_win.lo = n * r / P, setup_win.hi = n * (r + 1) / P;
+    size_t share = setup_win.hi - setup_win.lo;
+    double need = (double)share * (double)(part_bytes_per_particle() + 64); /* + grid, scratch */
     double have = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
     char where[512];
     if (need > 0.8 * have)
-        input_error("%s: Geometry:dr: %.3g m gives %zu particles needing %.1f GiB; this machine has %.1f GiB",
-                    scene_key_where(sc, "Geometry", "dr", where, sizeof where), sc->geometry.dr, n,
-                    need / 1073741824.0, have / 1073741824.0);
+        input_error("%s: Geometry:dr: %.3g m gives %zu particles, %zu on each of %zu rank(s), needing %.1f GiB "
+                    "per rank; this machine has %.1f GiB", scene_key_where(sc, "Geometry", "dr", where, sizeof where),
+                    sc->geometry.dr, n, share, P, need / 1073741824.0, have / 1073741824.0);
+    part_alloc(p, dim, share);
 }
 
-static void setup_put(particles_t *p, size_t k, double x, double y, int kind, double vol)
+/* Particle k of the scene at (x, y, z), stored if it is in this rank's
+ * share; C is set for material only. */
+static void setup_put(particles_t *p, size_t k, double x, double y, double z, int kind, double vol, double C)
 {
-    p->X0[0][k] = p->x[0][k] = (real)x;
-    p->X0[1][k] = p->x[1][k] = (real)y;
-    p->kind[k] = (uint8_t)kind;
-    p->vol[k] = (real)vol;
-    p->id[k] = (int64_t)k;
-    p->psi[k] = 1;
+    if (k < setup_win.lo || k >= setup_win.hi) return;
+    size_t i = k - setup_win.lo;
+    p->X0[0][i] = p->x[0][i] = (real)x;
+    p->X0[1][i] = p->x[1][i] = (real)y;
+    p->X0[2][i] = p->x[2][i] = (real)z;
+    p->kind[i] = (uint8_t)kind;
+    p->vol[i] = (real)vol;
+    p->id[i] = (int64_t)k;
+    p->psi[i] = 1;
+    if (kind == KIND_MATERIAL) p->C[i] = (real)C;
+}
+
+/* This rank's particles once the scene's first k are placed. */
+static size_t setup_count(size_t k)
+{
+    return k <= setup_win.lo ? 0 : (k < setup_win.hi ? k : setup_win.hi) - setup_win.lo;
 }
 
 static void setup_box(sim_t *s)
@@ -55,26 +80,24 @@ static void setup_box(sim_t *s)
     const struct scene *sc = s->sc;
     double dr = sc->geometry.dr, vol = dr * dr;
     box_layout b = setup_layout(sc);
-    setup_check_memory(sc, b.n_mat + b.n_dum);
-    part_alloc(&s->p, 2, b.n_mat + b.n_dum);
+    setup_alloc(sc, &s->p, 2, b.n_mat + b.n_dum);
     particles_t *p = &s->p;
     size_t k = 0;
     double H = b.ny * dr, split = sc->initial.split * H;
     for (long j = 0; j < b.ny; ++j)
         for (long i = 0; i < b.nx; ++i, ++k) {
             double y = (j + 0.5) * dr;
-            setup_put(p, k, (i + 0.5) * dr, y, KIND_MATERIAL, vol);
-            p->C[k] = (real)(y <= split ? sc->initial.C_below : sc->initial.C_above);
+            setup_put(p, k, (i + 0.5) * dr, y, 0, KIND_MATERIAL, vol, y <= split ? sc->initial.C_below : sc->initial.C_above);
         }
     for (long l = 0; l < b.nl; ++l) /* base */
         for (long i = -b.nl; i < b.nx + b.nl; ++i, ++k)
-            setup_put(p, k, (i + 0.5) * dr, -(l + 0.5) * dr, KIND_DUMMY, vol);
+            setup_put(p, k, (i + 0.5) * dr, -(l + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
     for (long j = 0; j < b.ny + b.nl; ++j) /* side walls */
         for (long l = 0; l < b.nl; ++l) {
-            setup_put(p, k++, -(l + 0.5) * dr, (j + 0.5) * dr, KIND_DUMMY, vol);
-            setup_put(p, k++, (b.nx + l + 0.5) * dr, (j + 0.5) * dr, KIND_DUMMY, vol);
+            setup_put(p, k++, -(l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
+            setup_put(p, k++, (b.nx + l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
         }
-    p->n = k;
+    p->n = setup_count(k);
     s->n_material = b.n_mat;
     s->surface_y = H;
     if (fabs(H - sc->geometry.height) > 1e-6 * sc->geometry.height)
@@ -120,9 +143,7 @@ static double drum_z(const drum_layout *d, long q) { return d->dim == 3 ? (q + 0
 
 static void drum_put(particles_t *p, size_t k, double x, double y, double z, int kind, const drum_layout *d)
 {
-    setup_put(p, k, x, y, kind, d->vol);
-    p->X0[2][k] = p->x[2][k] = (real)z;
-    if (kind == KIND_MATERIAL) p->C[k] = (real)(y <= d->split ? d->ini->C_below : d->ini->C_above);
+    setup_put(p, k, x, y, z, kind, d->vol, y <= d->split ? d->ini->C_below : d->ini->C_above);
 }
 
 /* The material of plane z: lattice points inside r <= R - dr/2 below the
@@ -170,14 +191,14 @@ static void setup_drum(sim_t *s)
     const struct scene *sc = s->sc;
     drum_layout d = drum_layout_of(sc);
     size_t n_mat = (size_t)d.nz * drum_disc(NULL, 0, &d, 0), n = drum_place(NULL, &d);
-    setup_check_memory(sc, n);
-    part_alloc(&s->p, d.dim, n);
+    setup_alloc(sc, &s->p, d.dim, n);
     particles_t *p = &s->p;
-    p->n = drum_place(p, &d);
+    p->n = setup_count(drum_place(p, &d));
     s->n_material = n_mat;
     /* the topmost material row: the geostatic depth is measured from there */
-    s->surface_y = -INFINITY;
-    for (size_t i = 0; i < n_mat; ++i) s->surface_y = fmax(s->surface_y, (double)p->x[1][i] + 0.5 * d.dr);
+    double top = -INFINITY;
+    for (size_t i = 0; i < setup_count(n_mat); ++i) top = fmax(top, (double)p->x[1][i] + 0.5 * d.dr);
+    s->surface_y = comm_max(top);
     double L = d.nz * d.dr;
     if (d.dim == 3 && fabs(L - sc->geometry.length) > 1e-6 * sc->geometry.length)
         warning("Geometry:length %.6g m is not a multiple of dr; the drum is %.6g m long", sc->geometry.length, L);
@@ -219,8 +240,7 @@ static void setup_box3d(sim_t *s)
     long nx = lround(g->width / dr), ny = lround(g->height / dr), nz = lround(g->depth / dr);
     long nl = (long)ceil(2.0 * g->h_factor - 1e-9);
     size_t cap = (size_t)((nx + 2 * nl) * (ny + 2 * nl) * (nz + 2 * nl));
-    setup_check_memory(sc, cap);
-    part_alloc(&s->p, 3, cap);
+    setup_alloc(sc, &s->p, 3, cap);
     particles_t *p = &s->p;
     size_t k = 0;
     double H = ny * dr, split = sc->initial.split * H;
@@ -233,12 +253,10 @@ static void setup_box3d(sim_t *s)
                     int mat = inside && j >= 0;
                     if (mat != (pass == 0)) continue;
                     double y = (j + 0.5) * dr;
-                    setup_put(p, k, (i + 0.5) * dr, y, mat ? KIND_MATERIAL : KIND_DUMMY, vol);
-                    p->X0[2][k] = p->x[2][k] = (real)((q + 0.5) * dr);
-                    if (mat) p->C[k] = (real)(y <= split ? sc->initial.C_below : sc->initial.C_above);
-                    k++;
+                    setup_put(p, k++, (i + 0.5) * dr, y, (q + 0.5) * dr, mat ? KIND_MATERIAL : KIND_DUMMY, vol,
+                              y <= split ? sc->initial.C_below : sc->initial.C_above);
                 }
-    p->n = k;
+    p->n = setup_count(k);
     s->n_material = (size_t)(nx * ny * nz);
     s->surface_y = H;
 }
