@@ -90,6 +90,7 @@ static size_t halo_coarse_index(const halo_t *h, const long c[3])
 int halo_owner(const halo_t *h, const long c[3])
 {
     if (h->method == HALO_METIS) return h->part[halo_coarse_index(h, c)];
+    if (c[h->axis] >= h->bound[h->rank] && c[h->axis] < h->bound[h->rank + 1]) return h->rank; /* most */
     int lo = 0, hi = h->size - 1; /* largest r with bound[r] <= c; bound[0] is open */
     while (lo < hi) {
         int mid = (lo + hi + 1) / 2;
@@ -115,6 +116,8 @@ static int halo_targets(const halo_t *h, const long c[3], int *out)
 {
     int n = 0;
     if (h->method != HALO_METIS) {
+        long a = c[h->axis];
+        if (a - h->depth >= h->bound[h->rank] && a + h->depth < h->bound[h->rank + 1]) return 0; /* inner */
         long q[3] = {c[0], c[1], c[2]};
         for (long k = c[h->axis] - h->depth; k <= c[h->axis] + h->depth; ++k) {
             q[h->axis] = k;

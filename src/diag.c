@@ -42,26 +42,6 @@ diag_values diag_measure(const sim_t *s)
     return v;
 }
 
-void diag_open(diag *d, const char *outdir, const sim_t *s)
-{
-    diag_values v = diag_measure(s);
-    d->small0 = v.small_volume;
-    d->max_drift = 0;
-    d->warned = 0;
-    d->wall0 = d->wall_last_progress = diag_wall();
-    d->t0 = s->t;
-    d->step0 = s->step;
-    d->f = NULL;
-    snprintf(d->path, sizeof d->path, "%s/diagnostics.csv", outdir);
-    if (comm_rank() != 0) return;
-    char part[4200];
-    snprintf(part, sizeof part, "%s.part", d->path);
-    d->f = fopen(part, "w");
-    if (!d->f) error_exit(1, "cannot write %s", part);
-    fprintf(d->f, "step,time,dt,n_material,small_volume,small_volume_drift,kinetic_energy,"
-                  "max_speed,wall_s,C_min,C_max\n");
-}
-
 /* The earlier run's rows file, whole (malloc'd), or NULL if there is none. */
 static char *diag_slurp(const char *path)
 {
@@ -89,7 +69,11 @@ static void diag_keep_rows(FILE *f, const char *text, long last)
     }
 }
 
-void diag_reopen(diag *d, const char *outdir, const sim_t *s, double small0, double max_drift, int warned)
+/* The state of a run's diagnostics from (small0, max_drift, warned), and on
+ * rank 0 OUTDIR/diagnostics.csv.part opened: the header and the earlier
+ * run's rows up to this step when keep_old (a restart), else the header. */
+static void diag_start(diag *d, const char *outdir, const sim_t *s, double small0, double max_drift, int warned,
+                       int keep_old)
 {
     d->small0 = small0;
     d->max_drift = max_drift;
@@ -102,9 +86,12 @@ void diag_reopen(diag *d, const char *outdir, const sim_t *s, double small0, dou
     if (comm_rank() != 0) return;
     char part[4200];
     snprintf(part, sizeof part, "%s.part", d->path);
-    char *old = diag_slurp(part);
-    if (!old) old = diag_slurp(d->path);
-    if (!old) warning("restart: no %s or %s to continue: rows start afresh", d->path, part);
+    char *old = NULL;
+    if (keep_old) {
+        old = diag_slurp(part);
+        if (!old) old = diag_slurp(d->path);
+        if (!old) warning("restart: no %s or %s to continue: rows start afresh", d->path, part);
+    }
     d->f = fopen(part, "w");
     if (!d->f) error_exit(1, "cannot write %s", part);
     if (old) diag_keep_rows(d->f, old, s->step);
@@ -113,6 +100,16 @@ void diag_reopen(diag *d, const char *outdir, const sim_t *s, double small0, dou
                       "max_speed,wall_s,C_min,C_max\n");
     fflush(d->f);
     free(old);
+}
+
+void diag_open(diag *d, const char *outdir, const sim_t *s)
+{
+    diag_start(d, outdir, s, diag_measure(s).small_volume, 0, 0, 0);
+}
+
+void diag_reopen(diag *d, const char *outdir, const sim_t *s, double small0, double max_drift, int warned)
+{
+    diag_start(d, outdir, s, small0, max_drift, warned, 1);
 }
 
 void diag_row(diag *d, const sim_t *s)
