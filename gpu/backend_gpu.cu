@@ -26,13 +26,36 @@
  * snapshots) uses no skin and cells of edge 2h, as the CPU does, so that the
  * classes are the CPU's; the next stage rebuilds. Between builds the order
  * of the store differs from the CPU's (which sorts every stage), so sums are
- * taken in another order: CPU and GPU agree to round-off, not bitwise. */
+ * taken in another order: CPU and GPU agree to round-off, not bitwise.
+ *
+ * Several ranks (mpi/halo.h; one GPU per rank, or several ranks sharing
+ * one): the device store holds the owned particles at [0, n) and ghosts at
+ * [n, n + ng), each range sorted by cell (the sort key carries a ghost bit;
+ * the view's gstart/gend are the ghost half of start/end), as on the CPU.
+ * Ghosts are HALO 3 lattice cells deep (ghost_depth), so that a set made at
+ * a list build still covers the 2h + 2 skin that a Verlet list needs while
+ * particles move. At a build (rare in a flowing scene: the list is kept)
+ * the owned arrays come to the host, mpi/halo.c migrates particles and
+ * makes fresh ghosts, and everything goes back; the send and receive lists
+ * follow the device sort (halo_sorted). Between builds a stage's refresh
+ * packs only the fields it needs for the send lists on the device, stages
+ * them through pinned host memory (or hands device buffers to a CUDA-aware
+ * MPI), and unpacks them into the ghost slots on the device. The exchange
+ * overlaps interior work: each particle gets a level at the build (0 ghost,
+ * 1 a ghost in its list, 2 a level-1 particle in its list, 3 else), and
+ * while positions, velocities, stresses and C are in flight the GPU runs
+ * the dummy walls and L of levels >= 2 and the flow rates of level 3 (their
+ * lists read no ghost and nothing computed from one), then the rest after
+ * the ghosts arrive; likewise the shear-rate refresh overlaps the
+ * concentration rates of levels >= 2. Each particle is computed by the same
+ * body whatever the pass, so results do not depend on the overlap. */
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <cuda_runtime.h>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_reduce.cuh>
@@ -40,6 +63,7 @@
 #include <thrust/iterator/transform_iterator.h>
 extern "C" {
 #include "error.h"
+#include "mpi/comm.h"
 #include "sim.h"
 }
 
@@ -65,11 +89,51 @@ struct box {
     real lo[3], hi[3];
 };
 
+/* Fields of a ghost refresh: device array and element size. */
+enum { FT_MAX = 16 };
+struct ftab {
+    int n;
+    unsigned char es[FT_MAX];
+    void *p[FT_MAX];
+};
+
+/* Which particles a kernel pass runs on: all (lvl NULL), or those whose
+ * halo level (0 ghost, 1..3 owned, see the top) lies in [lo, hi]. */
+struct sel {
+    const uint8_t *lvl;
+    uint8_t lo, hi;
+};
+__device__ __forceinline__ bool sel_on(const sel &s, size_t i)
+{
+    return !s.lvl || (s.lvl[i] >= s.lo && s.lvl[i] <= s.hi);
+}
+
+/* Halo state of a multi-rank run on the device. */
+struct dhalo {
+    unsigned *sidx, *ridx;       /* send lists (neighbour order), ghost slots of the received */
+    size_t cap_s, cap_r;
+    size_t *soff, *roff;         /* entry offsets per neighbour (host, nnb + 1) */
+    size_t *sb, *rb;             /* byte offsets of the current refresh (host, nnb + 1) */
+    int cap_nb;
+    char *dsend, *drecv, *hsend, *hrecv; /* device and pinned host buffers */
+    size_t cap_dsend, cap_drecv, cap_hsend, cap_hrecv;
+    int cuda_aware;
+    int pending;                 /* a refresh is in flight (gpu_settle completes it) */
+    int pend_walls, pend_renorm; /* boundary passes to run when it lands */
+    ftab pend;
+    cudaEvent_t ev[16];          /* pairs (start, end) of GPU time spent on the halo */
+    int nev;
+    long full, refresh;          /* exchanges at builds; refreshes */
+    double full_s;               /* host seconds in the exchanges at builds */
+};
+
 typedef struct gpu {
     int dev;
     cudaStream_t st;
     particles_t d, alt; /* device arrays: current and the permutation's spare set */
-    size_t n;
+    size_t n, ng, cap;  /* owned particles, ghosts (at [n, n + ng)), allocated */
+    uint8_t *lvl;       /* halo level of each particle (several ranks), else NULL */
+    struct dhalo *hx;   /* several ranks, else NULL */
     grid_view view;     /* start/end point to device memory */
     size_t *start, *end, ncell, cap_cell;
     unsigned *key, *key2, *idx, *idx2;
@@ -278,6 +342,68 @@ extern "C" int gpu_devices(void)
     return n;
 }
 
+/* Per-particle device arrays for at least need particles (contents are not
+ * kept: callers upload after). */
+static void gpu_reserve(gpu_t *g, size_t need)
+{
+    if (need <= g->cap && g->key) return;
+    size_t cap = g->key ? need + need / 8 + 1024 : need; /* one rank: exactly n, as before */
+    if (cap >= 0xffffffffu) error_exit(1, "backend_gpu: %zu particles on one rank: more than 2^32 - 1", cap);
+    size_t na = part_narrays();
+    if (g->key) {
+        for (size_t k = 0; k < na; ++k) {
+            CK(cudaFree(part_array_get(&g->d, k)));
+            CK(cudaFree(part_array_get(&g->alt, k)));
+        }
+        void *bufs[] = {g->key, g->key2, g->idx, g->idx2, g->cls, g->sums, g->nl, g->ncnt, g->amag,
+                        g->xb[0], g->xb[1], g->xb[2], g->lvl};
+        for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k)
+            if (bufs[k]) CK(cudaFree(bufs[k]));
+    }
+    for (size_t k = 0; k < na; ++k) {
+        size_t bytes = cap * part_array_esize(k);
+        part_array_set(&g->d, k, dev_alloc(bytes));
+        part_array_set(&g->alt, k, dev_alloc(bytes));
+    }
+    g->key = (unsigned *)dev_alloc(cap * sizeof(unsigned));
+    g->key2 = (unsigned *)dev_alloc(cap * sizeof(unsigned));
+    g->idx = (unsigned *)dev_alloc(cap * sizeof(unsigned));
+    g->idx2 = (unsigned *)dev_alloc(cap * sizeof(unsigned));
+    g->cls = (unsigned char *)dev_alloc(cap);
+    g->sums = (bound_sums *)dev_alloc(cap * sizeof(bound_sums));
+    for (int d = 0; d < 3; ++d) {
+        g->xb[d] = (real *)dev_alloc(cap * sizeof(real));
+        CK(cudaMemset(g->xb[d], 0, cap * sizeof(real)));
+    }
+    g->nl = (unsigned *)dev_alloc(cap * g->nl_cap * sizeof(unsigned));
+    g->ncnt = (unsigned *)dev_alloc(cap * sizeof(unsigned));
+    g->amag = (real *)dev_alloc(cap * sizeof(real));
+    CK(cudaMemset(g->amag, 0, cap * sizeof(real)));
+    g->lvl = g->hx ? (uint8_t *)dev_alloc(cap) : NULL;
+    g->cap = cap;
+    g->built = 0;
+}
+
+/* Host arrays [a, b) of every particle array to the device. */
+static void gpu_upload(gpu_t *g, const particles_t *h, size_t a, size_t b)
+{
+    for (size_t k = 0; k < part_narrays(); ++k) {
+        size_t es = part_array_esize(k);
+        CK(cudaMemcpyAsync((char *)part_array_get(&g->d, k) + a * es, (const char *)part_array_get(h, k) + a * es,
+                           (b - a) * es, cudaMemcpyHostToDevice, g->st));
+    }
+    CK(cudaStreamSynchronize(g->st));
+}
+
+/* The counts in the device structs (kernels read p.n, p.ng). */
+static void gpu_counts(gpu_t *g, size_t n, size_t ng)
+{
+    g->n = n, g->ng = ng;
+    g->d.n = g->alt.n = n;
+    g->d.ng = g->alt.ng = ng;
+    g->d.cap = g->alt.cap = g->cap;
+}
+
 static gpu_t *gpu_get(sim_t *s)
 {
     if (s->be_data) return (gpu_t *)s->be_data;
@@ -298,36 +424,26 @@ static gpu_t *gpu_get(sim_t *s)
     const particles_t *h = &s->p;
     size_t n = h->n, na = part_narrays();
     if (na > PERM_MAX) error_exit(1, "backend_gpu: %zu particle arrays > PERM_MAX", na);
-    unsigned cap = grid_list_cap(h->dim, (1 + 0.5 * GPU_SKIN) * (double)(s->seg.k.h / s->seg.k.dr));
+    g->nl_cap = grid_list_cap(h->dim, (1 + 0.5 * GPU_SKIN) * (double)(s->seg.k.h / s->seg.k.dr));
+    if (s->halo) {
+        g->hx = (dhalo *)calloc(1, sizeof *g->hx);
+        if (!g->hx) error_exit(1, "out of memory");
+        g->hx->cuda_aware = halo_cuda_aware();
+        s->halo->exposed_measured = 1;
+        for (int k = 0; k < 16; ++k) CK(cudaEventCreate(&g->hx->ev[k]));
+    }
     message("gpu: device %d of %d, %s, %.1f GiB; %zu MiB of particle arrays (two sets), %zu MiB of neighbour "
-            "list (%u per particle)", g->dev, ndev, prop.name, (double)prop.totalGlobalMem / (1u << 30),
-            2 * n * part_bytes_per_particle() >> 20, (n * cap * sizeof(unsigned)) >> 20, cap);
-    g->n = n;
+            "list (%u per particle)%s", g->dev, ndev, prop.name, (double)prop.totalGlobalMem / (1u << 30),
+            2 * n * part_bytes_per_particle() >> 20, (n * g->nl_cap * sizeof(unsigned)) >> 20, g->nl_cap,
+            !g->hx ? "" : g->hx->cuda_aware ? "; halo: CUDA-aware MPI on device buffers"
+                                            : "; halo: packed on the device, staged through pinned host memory");
     g->d = *h;
     g->alt = *h;
-    for (size_t k = 0; k < na; ++k) {
-        size_t bytes = n * part_array_esize(k);
-        void *a = dev_alloc(bytes), *b = dev_alloc(bytes);
-        CK(cudaMemcpy(a, part_array_get(h, k), bytes, cudaMemcpyHostToDevice));
-        part_array_set(&g->d, k, a);
-        part_array_set(&g->alt, k, b);
-    }
-    g->key = (unsigned *)dev_alloc(n * sizeof(unsigned));
-    g->key2 = (unsigned *)dev_alloc(n * sizeof(unsigned));
-    g->idx = (unsigned *)dev_alloc(n * sizeof(unsigned));
-    g->idx2 = (unsigned *)dev_alloc(n * sizeof(unsigned));
-    g->cls = (unsigned char *)dev_alloc(n);
-    g->sums = (bound_sums *)dev_alloc(n * sizeof(bound_sums));
+    gpu_reserve(g, n);
+    gpu_counts(g, n, 0);
+    gpu_upload(g, h, 0, n);
     g->skin = (real)(GPU_SKIN * s->seg.k.h);
-    g->nl_cap = grid_list_cap(h->dim, (1 + 0.5 * GPU_SKIN) * (double)(s->seg.k.h / s->seg.k.dr));
-    for (int d = 0; d < 3; ++d) {
-        g->xb[d] = (real *)dev_alloc(n * sizeof(real));
-        CK(cudaMemset(g->xb[d], 0, n * sizeof(real)));
-    }
-    g->nl = (unsigned *)dev_alloc(n * g->nl_cap * sizeof(unsigned));
-    g->ncnt = (unsigned *)dev_alloc(n * sizeof(unsigned));
-    g->amag = (real *)dev_alloc(n * sizeof(real));
-    CK(cudaMemset(g->amag, 0, n * sizeof(real)));
+    g->every = !s->flow_on; /* prescribed motion moves up to h a stage: from the first step on */
     g->dbox = (box *)dev_alloc(sizeof(box));
     g->dres = (double *)dev_alloc(STEP_NBOUNDS * sizeof(double));
     CK(cudaMemset(g->dres, 0, STEP_NBOUNDS * sizeof(double)));
@@ -337,7 +453,6 @@ static gpu_t *gpu_get(sim_t *s)
     CK(cudaMallocHost((void **)&g->hbox, sizeof(box)));
     CK(cudaMallocHost((void **)&g->hres, STEP_NBOUNDS * sizeof(double)));
     CK(cudaMallocHost((void **)&g->hfirst, sizeof(long long)));
-    if (n >= 0xffffffffu) error_exit(1, "backend_gpu: %zu particles on one rank: more than 2^32 - 1", n);
     s->be_data = g;
     return g;
 }
@@ -348,11 +463,15 @@ struct max_uint {
     __device__ unsigned operator()(unsigned a, unsigned b) const { return b > a ? b : a; }
 };
 
-/* Cells of edge `support`, the list of the particles within sqrt(list2). */
-static void gpu_build(gpu_t *g, int dim, real support, real list2)
+/* Cells of edge `support` over owned particles and ghosts, each range
+ * sorted apart (a ghost bit above the cell index), on the global lattice
+ * when origin is given (multi-rank exact builds: HCSR cell types as on one
+ * rank); the list of the particles within sqrt(list2). With ghosts, the
+ * permutation goes back to the halo lists (halo_sorted). */
+static void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, const real *origin)
 {
     g->builds++;
-    const size_t n = g->n;
+    const size_t n = g->n + g->ng, nown = g->n;
     particles_t p = g->d;
     box init;
     for (int d = 0; d < 3; ++d) init.lo[d] = R(INFINITY), init.hi[d] = -R(INFINITY);
@@ -362,9 +481,10 @@ static void gpu_build(gpu_t *g, int dim, real support, real list2)
     CK(cudaMemcpyAsync(g->hbox, g->dbox, sizeof(box), cudaMemcpyDeviceToHost, g->st));
     CK(cudaStreamSynchronize(g->st));
     prof_end(g->st, P_BBOX);
-    g->ncell = grid_fit(&g->view, dim, n, g->hbox->lo, g->hbox->hi, support);
-    if (g->ncell >= 0xffffffffu)
-        error_exit(EXIT_NUMERICAL, "the particles spread over %zu cells of edge 2h (more than 2^32): a particle "
+    g->ncell = origin ? grid_fit_lattice(&g->view, dim, n, origin, g->hbox->lo, g->hbox->hi, support)
+                      : grid_fit(&g->view, dim, n, g->hbox->lo, g->hbox->hi, support);
+    if (2 * g->ncell >= 0xffffffffu)
+        error_exit(EXIT_NUMERICAL, "the particles spread over %zu cells of edge 2h (more than 2^31): a particle "
                    "flew far from the rest", g->ncell);
     if (g->ncell > g->cap_cell) {
         if (g->start) {
@@ -374,36 +494,48 @@ static void gpu_build(gpu_t *g, int dim, real support, real list2)
             CK(cudaFree(g->cell_type));
         }
         g->cap_cell = g->ncell + g->ncell / 4;
-        g->start = (size_t *)dev_alloc(g->cap_cell * sizeof(size_t));
-        g->end = (size_t *)dev_alloc(g->cap_cell * sizeof(size_t));
+        g->start = (size_t *)dev_alloc(2 * g->cap_cell * sizeof(size_t)); /* owned, then ghost cells */
+        g->end = (size_t *)dev_alloc(2 * g->cap_cell * sizeof(size_t));
         g->cell_mat = (size_t *)dev_alloc(g->cap_cell * sizeof(size_t));
         g->cell_type = (unsigned char *)dev_alloc(g->cap_cell);
     }
     grid_view v = g->view;
     unsigned *key = g->key, *idx = g->idx;
+    const unsigned gbit = (unsigned)g->ncell;
     prof_begin(g->st);
     each(g, n, [=] __device__(size_t i) {
         int c[3];
         grid_cell_coords(&v, p.x[0], p.x[1], p.x[2], i, c);
-        key[i] = (unsigned)grid_cell_index(&v, c[0], c[1], c[2]);
+        key[i] = (unsigned)grid_cell_index(&v, c[0], c[1], c[2]) + (i >= nown ? gbit : 0u);
         idx[i] = (unsigned)i;
     });
+    const size_t nkey = g->ng ? 2 * g->ncell : g->ncell;
     int bits = 1;
-    while (bits < 32 && ((size_t)1 << bits) < g->ncell) ++bits;
+    while (bits < 32 && ((size_t)1 << bits) < nkey) ++bits;
     cub::DoubleBuffer<unsigned> kb(g->key, g->key2), vb(g->idx, g->idx2);
     size_t bytes = 0;
     CK(cub::DeviceRadixSort::SortPairs(NULL, bytes, kb, vb, (int64_t)n, 0, bits, g->st));
     CK(cub::DeviceRadixSort::SortPairs(scratch(g, bytes), bytes, kb, vb, (int64_t)n, 0, bits, g->st));
     const unsigned *sk = kb.Current(), *perm = vb.Current();
     size_t *start = g->start, *end = g->end;
-    CK(cudaMemsetAsync(start, 0, g->ncell * sizeof(size_t), g->st));
-    CK(cudaMemsetAsync(end, 0, g->ncell * sizeof(size_t), g->st));
+    CK(cudaMemsetAsync(start, 0, nkey * sizeof(size_t), g->st));
+    CK(cudaMemsetAsync(end, 0, nkey * sizeof(size_t), g->st));
     each(g, n, [=] __device__(size_t k) {
         unsigned c = sk[k];
         if (k == 0 || sk[k - 1] != c) start[c] = k;
         if (k == n - 1 || sk[k + 1] != c) end[c] = k + 1;
     });
     prof_end(g->st, P_SORT);
+    if (hl) { /* the halo lists follow the particles through the sort */
+        unsigned *hp = (unsigned *)malloc((n ? n : 1) * sizeof(unsigned));
+        size_t *pz = (size_t *)malloc((n ? n : 1) * sizeof(size_t));
+        if (!hp || !pz) error_exit(1, "out of memory (%zu particles)", n);
+        CK(cudaMemcpyAsync(hp, perm, n * sizeof(unsigned), cudaMemcpyDeviceToHost, g->st));
+        CK(cudaStreamSynchronize(g->st));
+        for (size_t k = 0; k < n; ++k) pz[k] = hp[k];
+        halo_sorted(hl, pz, n);
+        free(hp), free(pz);
+    }
     prof_begin(g->st);
     perm_tab t;
     t.n = (int)part_narrays();
@@ -421,6 +553,8 @@ static void gpu_build(gpu_t *g, int dim, real support, real list2)
     g->alt = tmp;
     g->view.start = g->start;
     g->view.end = g->end;
+    g->view.gstart = g->ng ? g->start + g->ncell : NULL;
+    g->view.gend = g->ng ? g->end + g->ncell : NULL;
     /* the neighbour list, from the cell scan in its order (grid_list_fill) */
     grid_view vc = g->view;
     vc.nl = vc.ncnt = NULL;
@@ -438,7 +572,7 @@ static void gpu_build(gpu_t *g, int dim, real support, real list2)
         if (most <= cap) break;
         CK(cudaFree(g->nl));
         g->nl_cap = (most + most / 4 + 7) / 8 * 8;
-        g->nl = (unsigned *)dev_alloc(n * g->nl_cap * sizeof(unsigned));
+        g->nl = (unsigned *)dev_alloc(g->cap * g->nl_cap * sizeof(unsigned));
     }
     for (int d = 0; d < dim; ++d)
         CK(cudaMemcpyAsync(g->xb[d], q.x[d], n * sizeof(real), cudaMemcpyDeviceToDevice, g->st));
@@ -448,15 +582,36 @@ static void gpu_build(gpu_t *g, int dim, real support, real list2)
     g->view.ncnt = cnt;
     g->view.nl_stride = n;
     g->view.nl_cap = cap;
+    if (g->lvl) { /* halo levels (see the top) from the new list */
+        uint8_t *lvl = g->lvl;
+        grid_view vl = g->view;
+        each(g, n, [=] __device__(size_t i) { lvl[i] = i >= nown ? 0 : 3; });
+        each(g, nown, [=] __device__(size_t i) {
+            int ghost = 0;
+            NBR_BEGIN(&vl, q.x, i, j)
+                ghost |= j >= nown;
+            NBR_END
+            if (ghost) lvl[i] = 1;
+        });
+        each(g, nown, [=] __device__(size_t i) {
+            if (lvl[i] != 3) return;
+            int near = 0;
+            NBR_BEGIN(&vl, q.x, i, j)
+                near |= lvl[j] == 1;
+            NBR_END
+            if (near) lvl[i] = 2;
+        });
+    }
 }
 
-/* HCSR classification (bound.c on the CPU): cell types, then the two sweeps. */
+/* HCSR classification (bound.c on the CPU): cell types, then the two sweeps,
+ * over owned particles and ghosts. */
 static void gpu_classify(gpu_t *g, const sph_ctx *kc)
 {
     particles_t p = g->d;
     grid_view v = g->view;
     sph_ctx k = *kc;
-    size_t *mat = g->cell_mat;
+    size_t *mat = g->cell_mat, n = g->n + g->ng;
     unsigned char *type = g->cell_type, *cls = g->cls;
     bound_sums *sums = g->sums;
     prof_begin(g->st);
@@ -465,28 +620,292 @@ static void gpu_classify(gpu_t *g, const sph_ctx *kc)
     });
     for (int pass = 0; pass < 2; ++pass)
         each(g, g->ncell, [=] __device__(size_t c) { type[c] = bound_cell_type(&v, type, mat, c, pass); });
-    each(g, g->n, [=] __device__(size_t i) {
+    each(g, n, [=] __device__(size_t i) {
         p.bclass[i] = (uint8_t)bound_class_first(i, &p, &v, &k, type, &sums[i]);
     });
-    each(g, g->n, [=] __device__(size_t i) {
+    each(g, n, [=] __device__(size_t i) {
         particles_t q = p;
         cls[i] = (unsigned char)bound_class_second(i, &q, &v, &k, type, &sums[i]);
     });
-    CK(cudaMemcpyAsync(p.bclass, cls, g->n, cudaMemcpyDeviceToDevice, g->st));
+    CK(cudaMemcpyAsync(p.bclass, cls, n, cudaMemcpyDeviceToDevice, g->st));
     prof_end(g->st, P_CLASSIFY);
 }
 
-static void gpu_walls(gpu_t *g, const flow_ctx *fc)
+/* Pass selections: everything (one rank, or right after a build), the
+ * particles whose support reads no ghost data (level >= lo), the rest. */
+static sel sel_all(void) { return sel{NULL, 0, 0}; }
+static sel sel_in(const gpu_t *g, int lo) { return g->lvl ? sel{g->lvl, (uint8_t)lo, 3} : sel_all(); }
+static sel sel_bd(const gpu_t *g, int lo) { return sel{g->lvl, 0, (uint8_t)(lo - 1)}; }
+
+/* Dummy walls (paper §4.1) over owned particles and ghosts. */
+static void gpu_walls(gpu_t *g, const flow_ctx *fc, sel sl)
 {
     particles_t p = g->d;
     grid_view v = g->view;
     flow_ctx c = *fc;
     prof_begin(g->st);
-    each(g, g->n, [=] __device__(size_t i) {
+    each(g, g->n + g->ng, [=] __device__(size_t i) {
         particles_t q = p;
-        if (q.kind[i] == KIND_DUMMY) flow_wall(i, &q, &v, &c);
+        if (q.kind[i] == KIND_DUMMY && sel_on(sl, i)) flow_wall(i, &q, &v, &c);
     });
     prof_end(g->st, P_WALLS);
+}
+
+static void gpu_renorm(gpu_t *g, const seg_ctx *sc, sel sl)
+{
+    particles_t q = g->d;
+    grid_view v = g->view;
+    seg_ctx c = *sc;
+    prof_begin(g->st);
+    each(g, g->n + g->ng, [=] __device__(size_t i) {
+        if (q.kind[i] == KIND_MATERIAL && sel_on(sl, i)) seg_renorm(i, &q, &v, &c);
+    });
+    prof_end(g->st, P_RENORM);
+}
+
+/* ---- ghost refreshes (several ranks) ------------------------------------------ */
+
+static size_t r8(size_t b) { return (b + 7) / 8 * 8; }
+
+/* Bytes of cnt records of t: field-major, each field's block 8-aligned. */
+static size_t ft_bytes(const ftab &t, size_t cnt)
+{
+    size_t b = 0;
+    for (int f = 0; f < t.n; ++f) b += r8(cnt * t.es[f]);
+    return b;
+}
+
+template <int UNPACK> __global__ void k_pack(ftab t, const unsigned *idx, size_t cnt, char *buf)
+{
+    size_t e = (size_t)blockIdx.x * blockDim.x + threadIdx.x;
+    if (e >= cnt) return;
+    size_t i = idx[e], off = 0;
+    for (int f = 0; f < t.n; ++f) {
+        char *b = buf + off;
+        switch (t.es[f]) {
+        case 8:
+            if (UNPACK) ((uint64_t *)t.p[f])[i] = ((const uint64_t *)b)[e];
+            else ((uint64_t *)b)[e] = ((const uint64_t *)t.p[f])[i];
+            break;
+        case 4:
+            if (UNPACK) ((uint32_t *)t.p[f])[i] = ((const uint32_t *)b)[e];
+            else ((uint32_t *)b)[e] = ((const uint32_t *)t.p[f])[i];
+            break;
+        default:
+            if (UNPACK) ((uint8_t *)t.p[f])[i] = ((const uint8_t *)b)[e];
+            else ((uint8_t *)b)[e] = ((const uint8_t *)t.p[f])[i];
+        }
+        off += (cnt * t.es[f] + 7) / 8 * 8;
+    }
+}
+
+static void ft_add(ftab *t, void *p, size_t es)
+{
+    if (t->n >= FT_MAX) error_exit(1, "backend_gpu: more than %d refresh fields", FT_MAX);
+    t->p[t->n] = p, t->es[t->n] = (unsigned char)es, t->n++;
+}
+
+static void *grow_dev(void *p, size_t *cap, size_t need)
+{
+    if (need <= *cap && p) return p;
+    if (p) CK(cudaFree(p));
+    *cap = need + need / 4 + 64;
+    return dev_alloc(*cap);
+}
+
+static void *grow_pinned(void *p, size_t *cap, size_t need)
+{
+    if (need <= *cap && p) return p;
+    if (p) CK(cudaFreeHost(p));
+    *cap = need + need / 4 + 64;
+    void *q = NULL;
+    CK(cudaMallocHost(&q, *cap));
+    return q;
+}
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* GPU time spent on the halo: an event pair around it on the stream,
+ * summed into halo_t.wall_exposed once both have completed. */
+static void hx_mark(gpu_t *g, int end)
+{
+    dhalo *x = g->hx;
+    if (x->nev >= 16) return;
+    CK(cudaEventRecord(x->ev[x->nev++], g->st));
+    (void)end;
+}
+static void hx_resolve(gpu_t *g, halo_t *h)
+{
+    dhalo *x = g->hx;
+    if (!x) return;
+    for (int k = 0; k + 1 < x->nev; k += 2) {
+        float ms = 0;
+        CK(cudaEventSynchronize(x->ev[k + 1]));
+        CK(cudaEventElapsedTime(&ms, x->ev[k], x->ev[k + 1]));
+        h->wall_exposed += 1e-3 * ms;
+    }
+    x->nev = 0;
+}
+
+/* Start a refresh of fields t of the ghosts: pack the send lists on the
+ * device, stage (or hand the device buffer to a CUDA-aware MPI), post. */
+static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
+{
+    halo_t *h = s->halo;
+    dhalo *x = g->hx;
+    int m = h->nnb;
+    if (x->pending) error_exit(1, "backend_gpu: a refresh is already in flight");
+    double t0 = now();
+    x->sb[0] = x->rb[0] = 0;
+    for (int k = 0; k < m; ++k) {
+        x->sb[k + 1] = x->sb[k] + ft_bytes(t, x->soff[k + 1] - x->soff[k]);
+        x->rb[k + 1] = x->rb[k] + ft_bytes(t, x->roff[k + 1] - x->roff[k]);
+    }
+    x->dsend = (char *)grow_dev(x->dsend, &x->cap_dsend, x->sb[m]);
+    x->drecv = (char *)grow_dev(x->drecv, &x->cap_drecv, x->rb[m]);
+    hx_mark(g, 0);
+    for (int k = 0; k < m; ++k) {
+        size_t cnt = x->soff[k + 1] - x->soff[k];
+        if (cnt)
+            k_pack<0><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(t, x->sidx + x->soff[k], cnt,
+                                                                                   x->dsend + x->sb[k]);
+    }
+    CK(cudaGetLastError());
+    char *sbuf = x->dsend, *rbuf = x->drecv;
+    if (!x->cuda_aware) {
+        x->hsend = (char *)grow_pinned(x->hsend, &x->cap_hsend, x->sb[m]);
+        x->hrecv = (char *)grow_pinned(x->hrecv, &x->cap_hrecv, x->rb[m]);
+        CK(cudaMemcpyAsync(x->hsend, x->dsend, x->sb[m], cudaMemcpyDeviceToHost, g->st));
+        sbuf = x->hsend, rbuf = x->hrecv;
+    }
+    hx_mark(g, 1);
+    CK(cudaStreamSynchronize(g->st));
+    h->wall_comm += now() - t0;
+    halo_post_bytes(h, sbuf, x->sb, rbuf, x->rb);
+    x->pend = t;
+    x->pending = 1;
+    x->refresh++;
+}
+
+/* Complete the refresh in flight: wait for the messages, unpack into the
+ * ghost slots. The GPU's wait for them (idle) plus the copy and unpack
+ * count as exposed halo time. */
+static void gpu_refresh_finish(sim_t *s, gpu_t *g)
+{
+    halo_t *h = s->halo;
+    dhalo *x = g->hx;
+    if (!x || !x->pending) return;
+    int m = h->nnb;
+    hx_mark(g, 0);
+    halo_wait_bytes(h);
+    double t0 = now();
+    if (!x->cuda_aware) CK(cudaMemcpyAsync(x->drecv, x->hrecv, x->rb[m], cudaMemcpyHostToDevice, g->st));
+    for (int k = 0; k < m; ++k) {
+        size_t cnt = x->roff[k + 1] - x->roff[k];
+        if (cnt)
+            k_pack<1><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(x->pend, x->ridx + x->roff[k], cnt,
+                                                                                   x->drecv + x->rb[k]);
+    }
+    CK(cudaGetLastError());
+    hx_mark(g, 1);
+    x->pending = 0;
+    h->wall_comm += now() - t0;
+}
+
+/* Refresh fields t of the ghosts now (no overlap). */
+static void gpu_refresh(sim_t *s, gpu_t *g, const ftab &t)
+{
+    gpu_refresh_start(s, g, t);
+    gpu_refresh_finish(s, g);
+}
+
+/* The refresh in flight lands; then the boundary passes it held back. */
+static void gpu_settle(sim_t *s, gpu_t *g)
+{
+    dhalo *x = g->hx;
+    if (!x || !x->pending) return;
+    gpu_refresh_finish(s, g);
+    if (x->pend_renorm) gpu_renorm(g, &s->seg, sel_bd(g, 2));
+    if (x->pend_walls) gpu_walls(g, &s->flow, sel_bd(g, 2));
+    x->pend_renorm = x->pend_walls = 0;
+}
+
+/* At a list build on several ranks: the owned particles to the host, where
+ * mpi/halo.c migrates them and makes fresh ghosts; everything back. */
+static void gpu_full_exchange(sim_t *s, gpu_t *g)
+{
+    double t0 = now();
+    particles_t *hp = &s->p;
+    CK(cudaStreamSynchronize(g->st));
+    for (size_t k = 0; k < part_narrays(); ++k)
+        CK(cudaMemcpy(part_array_get(hp, k), part_array_get(&g->d, k), g->n * part_array_esize(k),
+                      cudaMemcpyDeviceToHost));
+    hp->n = g->n, hp->ng = 0;
+    halo_exchange(s->halo, hp);
+    gpu_reserve(g, hp->n + hp->ng);
+    gpu_counts(g, hp->n, hp->ng);
+    gpu_upload(g, hp, 0, hp->n + hp->ng);
+    double dt = now() - t0;
+    g->hx->full++, g->hx->full_s += dt;
+    s->halo->wall_exposed += dt;
+}
+
+/* After the build's sort: the send lists and ghost slots to the device. */
+static void gpu_halo_lists(sim_t *s, gpu_t *g)
+{
+    halo_t *h = s->halo;
+    dhalo *x = g->hx;
+    int m = h->nnb;
+    if (m + 1 > x->cap_nb) {
+        free(x->soff), free(x->roff), free(x->sb), free(x->rb);
+        x->cap_nb = m + 1;
+        x->soff = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+        x->roff = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+        x->sb = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+        x->rb = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+        if (!x->soff || !x->roff || !x->sb || !x->rb) error_exit(1, "out of memory");
+    }
+    x->soff[0] = x->roff[0] = 0;
+    for (int k = 0; k < m; ++k) {
+        x->soff[k + 1] = x->soff[k] + h->nsend[k];
+        x->roff[k + 1] = x->roff[k] + h->nrecv[k];
+    }
+    size_t ns = x->soff[m], nr = x->roff[m];
+    unsigned *hs = (unsigned *)malloc((ns + nr + 1) * sizeof(unsigned));
+    if (!hs) error_exit(1, "out of memory");
+    for (int k = 0; k < m; ++k)
+        for (size_t q = 0; q < h->nsend[k]; ++q) hs[x->soff[k] + q] = (unsigned)h->send[k][q];
+    for (size_t q = 0; q < nr; ++q) hs[ns + q] = (unsigned)h->recv[q];
+    x->sidx = (unsigned *)grow_dev(x->sidx, &x->cap_s, ns * sizeof(unsigned));
+    x->ridx = (unsigned *)grow_dev(x->ridx, &x->cap_r, nr * sizeof(unsigned));
+    CK(cudaMemcpyAsync(x->sidx, hs, ns * sizeof(unsigned), cudaMemcpyHostToDevice, g->st));
+    CK(cudaMemcpyAsync(x->ridx, hs + ns, nr * sizeof(unsigned), cudaMemcpyHostToDevice, g->st));
+    CK(cudaStreamSynchronize(g->st)); /* hs is pageable and freed next */
+    free(hs);
+}
+
+/* What neighbours read of a ghost that moves between builds: positions,
+ * and with computed flow velocity and stress (prescribed motion: velocity
+ * and shear rate; it rebuilds every stage, so this is a fallback), and C. */
+static ftab moving_fields(const sim_t *s, const gpu_t *g)
+{
+    ftab t;
+    t.n = 0;
+    const particles_t &p = g->d;
+    int dim = s->p.dim;
+    for (int d = 0; d < dim; ++d) ft_add(&t, p.x[d], sizeof(real));
+    for (int d = 0; d < dim; ++d) ft_add(&t, p.v[d], sizeof(real));
+    if (s->flow_on)
+        for (int q = 0; q < (dim == 3 ? 6 : 4); ++q) ft_add(&t, p.sig[q], sizeof(real));
+    else
+        ft_add(&t, p.gdot, sizeof(real));
+    if (s->seg_on) ft_add(&t, p.C, sizeof(real));
+    return t;
 }
 
 /* ---- the hooks ----------------------------------------------------------- */
@@ -494,6 +913,7 @@ static void gpu_walls(gpu_t *g, const flow_ctx *fc)
 static void gpu_prepare(sim_t *s, double t, int classify)
 {
     gpu_t *g = gpu_get(s);
+    gpu_settle(s, g);
     particles_t p = g->d;
     prof_begin(g->st);
     const int flow = s->flow_on;
@@ -502,50 +922,112 @@ static void gpu_prepare(sim_t *s, double t, int classify)
     each(g, g->n, [=] __device__(size_t i) { step_place(i, &p, flow, &w, &kin, t); });
     prof_end(g->st, P_MOTION);
     int exact = classify == 2 || (s->hcsr && classify);
-    if (!g->built || g->stale || g->every || exact) {
+    int renorm = s->seg_on && classify && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm;
+    int build = !g->built || g->stale || g->every || exact;
+    if (s->halo) build = comm_max((double)build) > 0; /* a build exchanges: every rank or none */
+    if (build) {
+        if (s->halo) gpu_full_exchange(s, g);
         real skin = exact ? R(0.0) : g->skin, sup = R(2.0) * s->seg.k.h + skin;
-        gpu_build(g, s->p.dim, sup, exact ? s->seg.k.support2 : sup * sup);
+        gpu_build(g, s->halo, s->p.dim, sup, exact ? s->seg.k.support2 : sup * sup,
+                  s->halo && exact ? s->halo->origin : NULL);
+        if (s->halo) gpu_halo_lists(s, g);
         g->built = 1;
         g->stale = exact; /* a list without skin is stale as soon as anything moves */
+        if (exact) {
+            gpu_classify(g, &s->seg.k);
+            if (s->halo) { /* deep ghosts lack part of their support: the owners' classes */
+                ftab c;
+                c.n = 0;
+                ft_add(&c, g->d.bclass, 1);
+                for (int d = 0; d < 3; ++d) ft_add(&c, g->d.nrm[d], sizeof(real));
+                ft_add(&c, g->d.psi, sizeof(real));
+                gpu_refresh(s, g, c);
+            }
+        }
+        if (renorm) gpu_renorm(g, &s->seg, sel_all());
+        if (s->flow_on) gpu_walls(g, &s->flow, sel_all());
+        return;
     }
-    if ((s->hcsr && classify) || classify == 2) gpu_classify(g, &s->seg.k);
-    if (s->seg_on && classify && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) {
-        particles_t q = g->d;
-        grid_view v = g->view;
-        seg_ctx c = s->seg;
-        prof_begin(g->st);
-        each(g, g->n, [=] __device__(size_t i) {
-            if (q.kind[i] == KIND_MATERIAL) seg_renorm(i, &q, &v, &c);
-        });
-        prof_end(g->st, P_RENORM);
+    if (s->halo) { /* ghosts moved: refresh them while the interior goes on */
+        gpu_refresh_start(s, g, moving_fields(s, g));
+        g->hx->pend_renorm = renorm;
+        g->hx->pend_walls = s->flow_on;
+        if (renorm) gpu_renorm(g, &s->seg, sel_in(g, 2));
+        if (s->flow_on) gpu_walls(g, &s->flow, sel_in(g, 2));
+        return;
     }
-    if (s->flow_on) gpu_walls(g, &s->flow);
+    if (renorm) gpu_renorm(g, &s->seg, sel_all());
+    if (s->flow_on) gpu_walls(g, &s->flow, sel_all());
+}
+
+static void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl)
+{
+    particles_t p = g->d;
+    grid_view v = g->view;
+    flow_ctx c = s->flow;
+    real *amag = g->amag;
+    prof_begin(g->st);
+    each(g, g->n, [=] __device__(size_t i) {
+        if (!sel_on(sl, i)) return;
+        particles_t q = p;
+        amag[i] = q.kind[i] == KIND_MATERIAL ? flow_rates(i, &q, &v, &c) : R(0.0);
+    });
+    prof_end(g->st, P_FLOW);
+}
+
+static void gpu_seg_coeffs(sim_t *s, gpu_t *g, size_t a, size_t b)
+{
+    particles_t p = g->d;
+    seg_ctx c = s->seg;
+    each(g, b - a, [=] __device__(size_t k) {
+        size_t i = a + k;
+        if (p.kind[i] == KIND_MATERIAL) seg_coeffs(i, &p, &c);
+    });
+}
+
+static void gpu_dcdt(sim_t *s, gpu_t *g, sel sl)
+{
+    particles_t p = g->d;
+    grid_view v = g->view;
+    seg_ctx c = s->seg;
+    each(g, g->n, [=] __device__(size_t i) {
+        if (sel_on(sl, i)) seg_dCdt(i, &p, &v, &c);
+    });
 }
 
 static void gpu_rates(sim_t *s)
 {
     gpu_t *g = gpu_get(s);
-    particles_t p = g->d;
-    grid_view v = g->view;
+    const int overlap = g->hx && g->hx->pending;
     if (s->flow_on) {
-        flow_ctx c = s->flow;
-        real *amag = g->amag;
-        prof_begin(g->st);
-        each(g, g->n, [=] __device__(size_t i) {
-            particles_t q = p;
-            amag[i] = q.kind[i] == KIND_MATERIAL ? flow_rates(i, &q, &v, &c) : R(0.0);
-        });
+        if (overlap) { /* level 3 reads nothing the refresh in flight brings */
+            gpu_flow_rates(s, g, sel_in(g, 3));
+            gpu_settle(s, g);
+            gpu_flow_rates(s, g, sel_bd(g, 3));
+        } else {
+            gpu_settle(s, g);
+            gpu_flow_rates(s, g, sel_all());
+        }
         /* the largest |acc| goes to dres[STEP_ACC] as a real, widened on read */
         reduce(g, g->amag, (real *)(g->dres + STEP_ACC), g->n, max_real(), R(0.0));
-        prof_end(g->st, P_FLOW);
     }
+    gpu_settle(s, g);
     if (s->seg_on) {
-        seg_ctx c = s->seg;
         prof_begin(g->st);
-        each(g, g->n, [=] __device__(size_t i) {
-            if (p.kind[i] == KIND_MATERIAL) seg_coeffs(i, &p, &c);
-        });
-        each(g, g->n, [=] __device__(size_t i) { seg_dCdt(i, &p, &v, &c); });
+        if (s->halo && s->flow_on) { /* the ghosts' shear rate, while the interior goes on */
+            ftab t;
+            t.n = 0;
+            ft_add(&t, g->d.gdot, sizeof(real));
+            gpu_refresh_start(s, g, t);
+            gpu_seg_coeffs(s, g, 0, g->n);
+            gpu_dcdt(s, g, sel_in(g, 2));
+            gpu_refresh_finish(s, g);
+            gpu_seg_coeffs(s, g, g->n, g->n + g->ng);
+            gpu_dcdt(s, g, sel_bd(g, 2));
+        } else {
+            gpu_seg_coeffs(s, g, 0, g->n + g->ng);
+            gpu_dcdt(s, g, sel_all());
+        }
         prof_end(g->st, P_SEG);
     }
 }
@@ -553,6 +1035,7 @@ static void gpu_rates(sim_t *s)
 static void gpu_save_start(sim_t *s)
 {
     gpu_t *g = gpu_get(s);
+    gpu_settle(s, g);
     particles_t p = g->d;
     const int flow = s->flow_on;
     prof_begin(g->st);
@@ -563,6 +1046,7 @@ static void gpu_save_start(sim_t *s)
 static void gpu_advance(sim_t *s, double a)
 {
     gpu_t *g = gpu_get(s);
+    gpu_settle(s, g);
     particles_t p = g->d;
     flow_ctx c = s->flow;
     const int flow = s->flow_on, seg = s->seg_on;
@@ -578,6 +1062,7 @@ static void gpu_advance(sim_t *s, double a)
 static void gpu_filter(sim_t *s)
 {
     gpu_t *g = gpu_get(s);
+    gpu_settle(s, g);
     particles_t p = g->d;
     grid_view v = g->view;
     flow_ctx c = s->flow;
@@ -588,9 +1073,16 @@ static void gpu_filter(sim_t *s)
     });
     each(g, g->n, [=] __device__(size_t i) { flow_shepard_store(i, &p); });
     prof_end(g->st, P_FILTER);
-    gpu_walls(g, &s->flow);
+    if (s->halo) {
+        ftab t;
+        t.n = 0;
+        for (int q = 0; q < (s->p.dim == 3 ? 6 : 4); ++q) ft_add(&t, g->d.sig[q], sizeof(real));
+        gpu_refresh(s, g, t);
+    }
+    gpu_walls(g, &s->flow, sel_all());
 }
 
+/* Owned particles only: no refresh needs to land first. */
 static void gpu_bounds(sim_t *s, double out[STEP_NBOUNDS])
 {
     gpu_t *g = gpu_get(s);
@@ -618,6 +1110,7 @@ static long gpu_check(sim_t *s)
     CK(cudaMemcpyAsync(g->hchk, g->dchk, sizeof(chk), cudaMemcpyDeviceToHost, g->st));
     CK(cudaStreamSynchronize(g->st));
     prof_end(g->st, P_BOUNDS_CHECK);
+    if (s->halo && !g->hx->pending) hx_resolve(g, s->halo);
     double D = sqrt((double)g->hchk->build2), d = sqrt((double)g->hchk->step2), skin = g->skin;
     g->stale |= D + 2 * d > 0.5 * skin;
     g->every = !s->flow_on || d > 0.25 * skin; /* prescribed motion: x_n is not kept */
@@ -627,17 +1120,34 @@ static long gpu_check(sim_t *s)
 static void gpu_to_host(sim_t *s)
 {
     gpu_t *g = gpu_get(s);
+    gpu_settle(s, g);
     CK(cudaStreamSynchronize(g->st));
     for (size_t k = 0; k < part_narrays(); ++k)
         CK(cudaMemcpy(part_array_get(&s->p, k), part_array_get(&g->d, k), g->n * part_array_esize(k),
                       cudaMemcpyDeviceToHost));
+    s->p.n = g->n, s->p.ng = 0; /* host ghosts are not kept */
+    if (s->halo) hx_resolve(g, s->halo);
+}
+
+/* A load balance moved particles between ranks on the host: take them. */
+static void gpu_from_host(sim_t *s)
+{
+    gpu_t *g = gpu_get(s);
+    gpu_settle(s, g);
+    CK(cudaStreamSynchronize(g->st));
+    gpu_reserve(g, s->p.n);
+    gpu_counts(g, s->p.n, 0);
+    gpu_upload(g, &s->p, 0, s->p.n);
+    g->built = 0;
 }
 
 static void gpu_finish(sim_t *s)
 {
     gpu_t *g = (gpu_t *)s->be_data;
     if (!g) return;
+    gpu_settle(s, g);
     CK(cudaStreamSynchronize(g->st));
+    if (s->halo) hx_resolve(g, s->halo);
     if (prof.on) {
         double tot = 0;
         for (int k = 0; k < P_NPROF; ++k) tot += prof.ms[k];
@@ -648,13 +1158,26 @@ static void gpu_finish(sim_t *s)
                         tot > 0 ? 100 * prof.ms[k] / tot : 0.0, s->step ? prof.ms[k] / (double)s->step : 0.0);
         message("  %-34s %10.2f ms; %ld neighbour-list builds", "total", tot, g->builds);
     }
+    if (g->hx) {
+        dhalo *x = g->hx;
+        message("gpu halo (rank %d): %ld exchanges at list builds (%.3f s, host), %ld refreshes, %zu ghosts, "
+                "%.3f s of halo on the device timeline (exposed)", s->halo->rank, x->full, x->full_s, x->refresh,
+                g->ng, s->halo->wall_exposed);
+        void *db[] = {x->sidx, x->ridx, x->dsend, x->drecv};
+        for (size_t k = 0; k < 4; ++k)
+            if (db[k]) CK(cudaFree(db[k]));
+        if (x->hsend) CK(cudaFreeHost(x->hsend));
+        if (x->hrecv) CK(cudaFreeHost(x->hrecv));
+        for (int k = 0; k < 16; ++k) CK(cudaEventDestroy(x->ev[k]));
+        free(x->soff), free(x->roff), free(x->sb), free(x->rb), free(x);
+    }
     for (size_t k = 0; k < part_narrays(); ++k) {
         CK(cudaFree(part_array_get(&g->d, k)));
         CK(cudaFree(part_array_get(&g->alt, k)));
     }
     void *bufs[] = {g->start, g->end, g->cell_mat, g->cell_type, g->key, g->key2, g->idx, g->idx2,
                     g->cls, g->sums, g->nl, g->ncnt, g->amag, g->tmp, g->dbox, g->dres, g->dfirst,
-                    g->dchk, g->xb[0], g->xb[1], g->xb[2]};
+                    g->dchk, g->xb[0], g->xb[1], g->xb[2], g->lvl};
     for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k)
         if (bufs[k]) CK(cudaFree(bufs[k]));
     CK(cudaFreeHost(g->hbox));
@@ -669,7 +1192,8 @@ static void gpu_finish(sim_t *s)
 extern "C" const struct backend *backend_gpu(int local_rank)
 {
     static const struct backend b = {"gpu",      gpu_prepare, gpu_rates, gpu_advance, gpu_save_start,
-                                      gpu_filter, gpu_bounds,  gpu_check, gpu_to_host, gpu_finish};
+                                      gpu_filter, gpu_bounds,  gpu_check, gpu_to_host, gpu_finish,
+                                      gpu_from_host, 3};
     g_local_rank = local_rank;
     return &b;
 }

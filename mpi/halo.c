@@ -8,6 +8,9 @@
 #include <math.h>
 #include <metis.h>
 #include <mpi.h>
+#if defined(OPEN_MPI) && OPEN_MPI
+#include <mpi-ext.h>
+#endif
 #include <stdlib.h>
 #include <string.h>
 #include "../src/error.h"
@@ -49,6 +52,13 @@ void halo_init(halo_t *h, int dim, real support, int method, int axis, const int
     h->nb_of = halo_calloc((size_t)h->size, sizeof(int));
 }
 
+void halo_set_depth(halo_t *h, int depth)
+{
+    if (depth < 1) error_exit(1, "halo_set_depth: depth %d < 1", depth);
+    h->depth = depth;
+    h->blk = depth;
+}
+
 static void halo_free_lists(halo_t *h)
 {
     for (int k = 0; k < h->nnb; ++k) free(h->send[k]);
@@ -60,7 +70,7 @@ void halo_free(halo_t *h)
 {
     halo_free_lists(h);
     free(h->bound), free(h->nb_of), free(h->part), free(h->recv), free(h->inv);
-    free(h->buf[0]), free(h->buf[1]);
+    free(h->buf[0]), free(h->buf[1]), free(h->req);
     memset(h, 0, sizeof *h);
 }
 
@@ -544,12 +554,22 @@ static long long halo_owned_after(halo_t *h, const particles_t *p)
     return m;
 }
 
-int halo_balance(halo_t *h, particles_t *p, double cost, double threshold)
+double halo_imbalance(halo_t *h, double cost)
 {
     double sum = 0, max = 0;
     MPICHECK(MPI_Allreduce(&cost, &sum, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD));
     MPICHECK(MPI_Allreduce(&cost, &max, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD));
-    double mean = sum / h->size, imb = mean > 0 ? max / mean - 1 : 0;
+    double mean = sum / h->size;
+    return mean > 0 ? max / mean - 1 : 0;
+}
+
+int halo_balance(halo_t *h, particles_t *p, double cost, double threshold)
+{
+    return halo_recut(h, p, cost, halo_imbalance(h, cost), threshold);
+}
+
+int halo_recut(halo_t *h, particles_t *p, double cost, double imb, double threshold)
+{
     if (imb <= threshold) return 0;
     double t0 = MPI_Wtime();
     size_t nbin = halo_grid(h, p);
@@ -565,4 +585,49 @@ int halo_balance(halo_t *h, particles_t *p, double cost, double threshold)
     }
     h->wall_comm += MPI_Wtime() - t0;
     return any;
+}
+
+/* ---- byte segments (device refreshes) -------------------------------------------- */
+
+void halo_post_bytes(halo_t *h, const char *send, const size_t *soff, char *recv, const size_t *roff)
+{
+    double t0 = MPI_Wtime();
+    int m = h->nnb;
+    if (h->nreq) error_exit(1, "halo_post_bytes: an exchange is already posted");
+    if (!h->req) h->req = halo_calloc((size_t)(2 * h->size + 2), sizeof(MPI_Request));
+    MPI_Request *rq = h->req;
+    MPI_Datatype t8; /* 8-byte words: segments up to 16 GiB in an int count */
+    MPICHECK(MPI_Type_contiguous(8, MPI_BYTE, &t8));
+    MPICHECK(MPI_Type_commit(&t8));
+    for (int k = 0; k < m; ++k) {
+        size_t ns = soff[k + 1] - soff[k], nr = roff[k + 1] - roff[k];
+        if (ns % 8 || nr % 8 || ns / 8 > INT_MAX || nr / 8 > INT_MAX)
+            error_exit(1, "halo_post_bytes: segment of %zu / %zu bytes (multiples of 8 up to 16 GiB)", ns, nr);
+        MPICHECK(MPI_Irecv(recv + roff[k], (int)(nr / 8), t8, h->nb[k], 23, MPI_COMM_WORLD, &rq[k]));
+        MPICHECK(MPI_Isend(send + soff[k], (int)(ns / 8), t8, h->nb[k], 23, MPI_COMM_WORLD, &rq[m + k]));
+        h->bytes += (long long)ns, h->messages += 1;
+    }
+    MPICHECK(MPI_Type_free(&t8));
+    h->nreq = 2 * m;
+    h->wall_comm += MPI_Wtime() - t0;
+}
+
+void halo_wait_bytes(halo_t *h)
+{
+    double t0 = MPI_Wtime();
+    MPICHECK(MPI_Waitall(h->nreq, (MPI_Request *)h->req, MPI_STATUSES_IGNORE));
+    h->nreq = 0;
+    double dt = MPI_Wtime() - t0;
+    h->wall_wait += dt, h->wall_comm += dt;
+}
+
+int halo_cuda_aware(void)
+{
+    const char *e = getenv("SPHSEG_CUDA_AWARE");
+    if (e && !strcmp(e, "0")) return 0;
+#if defined(MPIX_CUDA_AWARE_SUPPORT) && MPIX_CUDA_AWARE_SUPPORT
+    return MPIX_Query_cuda_support() ? 1 : 0;
+#else
+    return 0;
+#endif
 }

@@ -52,9 +52,15 @@ typedef struct halo {
     size_t cap_buf[2];
     double wall_comm;      /* wall seconds spent in exchanges and refreshes */
     double wall_wait;      /* of which in MPI waits (transfer, and waiting for slower ranks) */
+    double wall_exposed;   /* seconds the computation stood still for the halo: set by a backend
+                            * that overlaps (the GPU: measured on the device timeline), with
+                            * exposed_measured = 1; otherwise all of wall_comm */
+    int exposed_measured;
     long long migrated;    /* particles this rank sent to a neighbour, in total */
     long long bytes;       /* bytes this rank sent to its neighbours (migration, ghosts, refreshes) */
     long long messages;    /* point-to-point sends of this rank, counts included */
+    void *req;             /* MPI requests of a posted byte exchange (halo_post_bytes) */
+    int nreq;
 } halo_t;
 
 /* Set up for particles of dimension dim on a lattice of edge support;
@@ -62,6 +68,10 @@ typedef struct halo {
  * longest extent of the particles (chosen in halo_decompose).
  * arr[0..narr-1]: the arrays ghosts carry. */
 void halo_init(halo_t *h, int dim, real support, int method, int axis, const int *arr, int narr);
+/* Ghosts `depth` lattice cells deep (default HALO_DEPTH = 2; the GPU
+ * backend, whose neighbour lists reach 2h + skin and are kept for many
+ * steps, needs 3); METIS coarse cells as wide. Before halo_decompose. */
+void halo_set_depth(halo_t *h, int depth);
 /* Collective. Whatever rank holds which particles, cut the domain so that
  * each rank holds an equal share of the particles — slabs (every slab at
  * least depth columns wide; exit 2 if the domain is too short for the rank
@@ -89,6 +99,25 @@ void halo_refresh(halo_t *h, particles_t *p, const int *arr, int narr);
  * send the particles to their new owners (ghosts dropped; prepare again)
  * and return 1; else return 0. The decision is logged. */
 int halo_balance(halo_t *h, particles_t *p, double cost, double threshold);
+/* halo_balance in two halves, for a backend whose host copy of the
+ * particles must be brought up to date first, and only when it is needed:
+ * halo_imbalance (collective) returns max/mean - 1 of the ranks' costs;
+ * halo_recut (collective, same arguments) re-cuts and moves particles as
+ * halo_balance does when imb > threshold, and returns whether any moved. */
+double halo_imbalance(halo_t *h, double cost);
+int halo_recut(halo_t *h, particles_t *p, double cost, double imb, double threshold);
+/* Collective among neighbours. Post the exchange of one byte segment per
+ * neighbour: send + soff[k] .. send + soff[k + 1] to neighbour k, and
+ * receive neighbour k's into recv + roff[k] .. recv + roff[k + 1] (both
+ * sides know the sizes: a refresh of the ghost lists; every offset a
+ * multiple of 8). The buffers may be device memory where
+ * halo_cuda_aware(). halo_wait_bytes completes it; nothing else may be
+ * posted in between. */
+void halo_post_bytes(halo_t *h, const char *send, const size_t *soff, char *recv, const size_t *roff);
+void halo_wait_bytes(halo_t *h);
+/* 1 if the MPI library reports CUDA-aware point-to-point transfers
+ * (Open MPI's MPIX_Query_cuda_support) and SPHSEG_CUDA_AWARE is not 0. */
+int halo_cuda_aware(void);
 /* The lattice column of coordinate x along axis d. */
 long halo_column(const halo_t *h, int d, real x);
 /* The rank owning lattice cell c (coordinates from the current origin). */

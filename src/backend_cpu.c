@@ -150,6 +150,8 @@ static long cpu_check(sim_t *s)
 
 static void cpu_to_host(sim_t *s) { (void)s; }
 
+static void cpu_from_host(sim_t *s) { (void)s; }
+
 static void cpu_finish(sim_t *s)
 {
     nbr_free(&s->grid);
@@ -158,7 +160,7 @@ static void cpu_finish(sim_t *s)
 
 const struct backend *backend_cpu(void)
 {
-    static const struct backend b = {"cpu",      cpu_prepare, cpu_rates,   cpu_advance, cpu_save_start,
-                                      cpu_filter, cpu_bounds,  cpu_check,   cpu_to_host, cpu_finish};
+    static const struct backend b = {"cpu",      cpu_prepare, cpu_rates, cpu_advance, cpu_save_start, cpu_filter,
+                                      cpu_bounds, cpu_check,   cpu_to_host, cpu_finish, cpu_from_host, HALO_DEPTH};
     return &b;
 }

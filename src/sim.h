@@ -54,6 +54,14 @@ struct backend {
      * output, diagnostics and error reports; a no-op on the CPU). */
     void (*to_host)(struct sim *s);
     void (*finish)(struct sim *s);
+    /* The host arrays s->p were changed (a load balance moved particles
+     * between ranks): take them over; prepare follows. A no-op on the CPU. */
+    void (*from_host)(struct sim *s);
+    /* Ghost depth in lattice cells of 2h that the backend needs on several
+     * ranks (mpi/halo.h): 2 on the CPU (exchanges every prepare); 3 on the
+     * GPU, whose neighbour lists and ghosts are kept between builds while
+     * particles move up to a skin. */
+    int ghost_depth;
 };
 
 typedef struct sim {

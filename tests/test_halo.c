@@ -9,6 +9,13 @@
  *    exactly once, owned by the slab its position falls in, and keep the
  *    neighbour sets exact;
  *  - refresh: a field set on the owners arrives in every ghost;
+ *  - depth: ghosts d cells of 2h deep hold every particle within 2h d
+ *    (less a hair) of an owned one (d = 2, the CPU; d = 3, the GPU, whose
+ *    Verlet lists reach 2h + skin and whose ghosts must hold their own
+ *    support too: 4h + 2 skin < 6h);
+ *  - byte segments (halo_post_bytes / halo_wait_bytes, the GPU refresh):
+ *    the IDs of every send list, packed field-major with an 8-aligned
+ *    1-byte field, arrive in the ghost slots of the receiving rank;
  *  - balance: when a rank reports three times the cost of the others, the
  *    re-cut equalises the predicted cost (each particle weighs its rank's
  *    cost per particle) to within 25 % of the mean, and no ID is lost;
@@ -135,7 +142,65 @@ static void check_refresh(halo_t *h, particles_t *p, int round)
         CHECK(p->C[i] == (real)(2 * p->id[i] + round), "ghost %lld not refreshed", (long long)p->id[i]);
 }
 
-static void run_dim(int dim, int method, int rank, int size)
+static int cmp_ll(const void *a, const void *b)
+{
+    long long x = *(const long long *)a, y = *(const long long *)b;
+    return (x > y) - (x < y);
+}
+
+/* Every particle of the cloud within radius of an owned one is held here
+ * (owned or ghost): brute force over the global cloud. */
+static void check_present(const particles_t *p, int dim, double radius)
+{
+    size_t m = p->n + p->ng;
+    long long *ids = malloc((m + 1) * sizeof(long long));
+    for (size_t k = 0; k < m; ++k) ids[k] = p->id[k];
+    qsort(ids, m, sizeof *ids, cmp_ll);
+    int missing = 0;
+    for (size_t i = 0; i < p->n; ++i)
+        for (long long j = 0; j < N; ++j) {
+            double r2 = 0;
+            for (int d = 0; d < dim; ++d) r2 += ((double)p->x[d][i] - (double)g[d][j]) * ((double)p->x[d][i] - (double)g[d][j]);
+            if (r2 < radius * radius && !bsearch(&j, ids, m, sizeof *ids, cmp_ll)) missing++;
+        }
+    CHECK(missing == 0, "%d particles within %.4g of an owned particle are not held (depth too thin)", missing, radius);
+    free(ids);
+}
+
+/* The GPU refresh's message layout, on the host: for each neighbour, the
+ * IDs (8 bytes) then a 1-byte field, each block 8-aligned. */
+static void check_bytes(halo_t *h, const particles_t *p)
+{
+    int m = h->nnb;
+    size_t *sb = calloc((size_t)m + 1, sizeof(size_t)), *rb = calloc((size_t)m + 1, sizeof(size_t));
+    for (int k = 0; k < m; ++k) {
+        sb[k + 1] = sb[k] + 8 * h->nsend[k] + (h->nsend[k] + 7) / 8 * 8;
+        rb[k + 1] = rb[k] + 8 * h->nrecv[k] + (h->nrecv[k] + 7) / 8 * 8;
+    }
+    char *sbuf = calloc(sb[m] + 8, 1), *rbuf = calloc(rb[m] + 8, 1);
+    for (int k = 0; k < m; ++k)
+        for (size_t q = 0; q < h->nsend[k]; ++q) {
+            int64_t id = p->id[h->send[k][q]];
+            memcpy(sbuf + sb[k] + 8 * q, &id, 8);
+            sbuf[sb[k] + 8 * h->nsend[k] + q] = (char)(id % 97);
+        }
+    halo_post_bytes(h, sbuf, sb, rbuf, rb);
+    halo_wait_bytes(h);
+    size_t r = 0;
+    int bad = 0;
+    for (int k = 0; k < m; ++k)
+        for (size_t q = 0; q < h->nrecv[k]; ++q, ++r) {
+            int64_t id;
+            memcpy(&id, rbuf + rb[k] + 8 * q, 8);
+            size_t slot = h->recv[r];
+            bad += slot < p->n || slot >= p->n + p->ng || id != p->id[slot] ||
+                   rbuf[rb[k] + 8 * h->nrecv[k] + q] != (char)(id % 97);
+        }
+    CHECK(bad == 0, "%d ghost records arrived wrong through halo_post_bytes", bad);
+    free(sb), free(rb), free(sbuf), free(rbuf);
+}
+
+static void run_dim(int dim, int method, int rank, int size, int depth)
 {
     particles_t p;
     nbr_grid gr = {0};
@@ -146,6 +211,7 @@ static void run_dim(int dim, int method, int rank, int size)
     halo_t h;
     real support = (real)(2 * H);
     halo_init(&h, dim, support, method, -1, arr, na);
+    halo_set_depth(&h, depth);
     halo_decompose(&h, &p);
     CHECK(method == HALO_METIS || h.axis == 0, "slab axis %d, expected the longest (x)", h.axis);
     check_owned(&h, &p);
@@ -157,6 +223,8 @@ static void run_dim(int dim, int method, int rank, int size)
         halo_sorted(&h, gr.perm, p.n + p.ng);
         check_neighbours(&gr, &p, support);
         check_refresh(&h, &p, round);
+        check_present(&p, dim, 0.999 * support * depth);
+        check_bytes(&h, &p);
     }
     long long moved = h.migrated;
     MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
@@ -183,8 +251,8 @@ static void run_dim(int dim, int method, int rank, int size)
     int nbmax = h.nnb;
     MPI_Allreduce(MPI_IN_PLACE, &nbmax, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     if (rank == 0)
-        printf("%dD %s: %lld migrations, up to %d neighbours, balance %s\n", dim, method == HALO_METIS ? "metis" : "slabs",
-               moved, nbmax, changed ? "moved bounds" : "no move");
+        printf("%dD %s, depth %d: %lld migrations, up to %d neighbours, balance %s\n", dim,
+               method == HALO_METIS ? "metis" : "slabs", depth, moved, nbmax, changed ? "moved bounds" : "no move");
     halo_free(&h);
     nbr_free(&gr);
     part_free(&p);
@@ -197,10 +265,11 @@ int main(int argc, char **argv)
     int rank, size;
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     MPI_Comm_size(MPI_COMM_WORLD, &size);
-    for (int m = HALO_SLABS; m <= HALO_METIS; ++m) {
-        run_dim(2, m, rank, size);
-        run_dim(3, m, rank, size);
-    }
+    for (int depth = HALO_DEPTH; depth <= 3; ++depth)
+        for (int m = HALO_SLABS; m <= HALO_METIS; ++m) {
+            run_dim(2, m, rank, size, depth);
+            run_dim(3, m, rank, size, depth);
+        }
     int total = 0;
     MPI_Allreduce(&fails, &total, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
     if (rank == 0) printf("test_halo on %d ranks: %s (%d failed checks)\n", size, total ? "FAIL" : "ok", total);
