@@ -109,6 +109,7 @@ __device__ __forceinline__ bool sel_on(const sel &s, size_t i)
 }
 
 /* Halo state of a multi-rank run on the device. */
+enum { HX_EV = 64 };
 struct dhalo {
     unsigned *sidx, *ridx;       /* send lists (neighbour order), ghost slots of the received */
     size_t cap_s, cap_r;
@@ -118,10 +119,11 @@ struct dhalo {
     char *dsend, *drecv, *hsend, *hrecv; /* device and pinned host buffers */
     size_t cap_dsend, cap_drecv, cap_hsend, cap_hrecv;
     int cuda_aware;
+    int overlap;                 /* SPHSEG_GPU_OVERLAP=0 turns the overlap off (for measuring it) */
     int pending;                 /* a refresh is in flight (gpu_settle completes it) */
     int pend_walls, pend_renorm; /* boundary passes to run when it lands */
     ftab pend;
-    cudaEvent_t ev[16];          /* pairs (start, end) of GPU time spent on the halo */
+    cudaEvent_t ev[HX_EV];       /* pairs (start, end) of GPU time spent on the halo */
     int nev;
     long full, refresh;          /* exchanges at builds; refreshes */
     double full_s;               /* host seconds in the exchanges at builds */
@@ -429,8 +431,10 @@ static gpu_t *gpu_get(sim_t *s)
         g->hx = (dhalo *)calloc(1, sizeof *g->hx);
         if (!g->hx) error_exit(1, "out of memory");
         g->hx->cuda_aware = halo_cuda_aware();
+        const char *ov = getenv("SPHSEG_GPU_OVERLAP");
+        g->hx->overlap = !(ov && !strcmp(ov, "0"));
         s->halo->exposed_measured = 1;
-        for (int k = 0; k < 16; ++k) CK(cudaEventCreate(&g->hx->ev[k]));
+        for (int k = 0; k < HX_EV; ++k) CK(cudaEventCreate(&g->hx->ev[k]));
     }
     message("gpu: device %d of %d, %s, %.1f GiB; %zu MiB of particle arrays (two sets), %zu MiB of neighbour "
             "list (%u per particle)%s", g->dev, ndev, prop.name, (double)prop.totalGlobalMem / (1u << 30),
@@ -730,15 +734,10 @@ static double now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* GPU time spent on the halo: an event pair around it on the stream,
- * summed into halo_t.wall_exposed once both have completed. */
-static void hx_mark(gpu_t *g, int end)
-{
-    dhalo *x = g->hx;
-    if (x->nev >= 16) return;
-    CK(cudaEventRecord(x->ev[x->nev++], g->st));
-    (void)end;
-}
+/* GPU time spent on the halo: an event pair around each piece of halo work
+ * on the stream (pack and copy out; wait, copy in and unpack), summed into
+ * halo_t.wall_exposed once both have completed (at the next check, or when
+ * the ring is full). */
 static void hx_resolve(gpu_t *g, halo_t *h)
 {
     dhalo *x = g->hx;
@@ -750,6 +749,12 @@ static void hx_resolve(gpu_t *g, halo_t *h)
         h->wall_exposed += 1e-3 * ms;
     }
     x->nev = 0;
+}
+static void hx_mark(gpu_t *g, halo_t *h, int end)
+{
+    dhalo *x = g->hx;
+    if (!end && x->nev + 2 > HX_EV) hx_resolve(g, h); /* pairs are recorded whole */
+    CK(cudaEventRecord(x->ev[x->nev++], g->st));
 }
 
 /* Start a refresh of fields t of the ghosts: pack the send lists on the
@@ -768,7 +773,7 @@ static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
     }
     x->dsend = (char *)grow_dev(x->dsend, &x->cap_dsend, x->sb[m]);
     x->drecv = (char *)grow_dev(x->drecv, &x->cap_drecv, x->rb[m]);
-    hx_mark(g, 0);
+    hx_mark(g, h, 0);
     for (int k = 0; k < m; ++k) {
         size_t cnt = x->soff[k + 1] - x->soff[k];
         if (cnt)
@@ -783,7 +788,7 @@ static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
         CK(cudaMemcpyAsync(x->hsend, x->dsend, x->sb[m], cudaMemcpyDeviceToHost, g->st));
         sbuf = x->hsend, rbuf = x->hrecv;
     }
-    hx_mark(g, 1);
+    hx_mark(g, h, 1);
     CK(cudaStreamSynchronize(g->st));
     h->wall_comm += now() - t0;
     halo_post_bytes(h, sbuf, x->sb, rbuf, x->rb);
@@ -801,7 +806,7 @@ static void gpu_refresh_finish(sim_t *s, gpu_t *g)
     dhalo *x = g->hx;
     if (!x || !x->pending) return;
     int m = h->nnb;
-    hx_mark(g, 0);
+    hx_mark(g, h, 0);
     halo_wait_bytes(h);
     double t0 = now();
     if (!x->cuda_aware) CK(cudaMemcpyAsync(x->drecv, x->hrecv, x->rb[m], cudaMemcpyHostToDevice, g->st));
@@ -812,7 +817,7 @@ static void gpu_refresh_finish(sim_t *s, gpu_t *g)
                                                                                    x->drecv + x->rb[k]);
     }
     CK(cudaGetLastError());
-    hx_mark(g, 1);
+    hx_mark(g, h, 1);
     x->pending = 0;
     h->wall_comm += now() - t0;
 }
@@ -948,7 +953,8 @@ static void gpu_prepare(sim_t *s, double t, int classify)
         if (s->flow_on) gpu_walls(g, &s->flow, sel_all());
         return;
     }
-    if (s->halo) { /* ghosts moved: refresh them while the interior goes on */
+    if (s->halo && !g->hx->overlap) gpu_refresh(s, g, moving_fields(s, g));
+    if (s->halo && g->hx->overlap) { /* ghosts moved: refresh them while the interior goes on */
         gpu_refresh_start(s, g, moving_fields(s, g));
         g->hx->pend_renorm = renorm;
         g->hx->pend_walls = s->flow_on;
@@ -1014,7 +1020,14 @@ static void gpu_rates(sim_t *s)
     gpu_settle(s, g);
     if (s->seg_on) {
         prof_begin(g->st);
-        if (s->halo && s->flow_on) { /* the ghosts' shear rate, while the interior goes on */
+        if (s->halo && s->flow_on && !g->hx->overlap) {
+            ftab t;
+            t.n = 0;
+            ft_add(&t, g->d.gdot, sizeof(real));
+            gpu_refresh(s, g, t);
+            gpu_seg_coeffs(s, g, 0, g->n + g->ng);
+            gpu_dcdt(s, g, sel_all());
+        } else if (s->halo && s->flow_on) { /* the ghosts' shear rate, while the interior goes on */
             ftab t;
             t.n = 0;
             ft_add(&t, g->d.gdot, sizeof(real));
@@ -1110,7 +1123,7 @@ static long gpu_check(sim_t *s)
     CK(cudaMemcpyAsync(g->hchk, g->dchk, sizeof(chk), cudaMemcpyDeviceToHost, g->st));
     CK(cudaStreamSynchronize(g->st));
     prof_end(g->st, P_BOUNDS_CHECK);
-    if (s->halo && !g->hx->pending) hx_resolve(g, s->halo);
+    if (s->halo) hx_resolve(g, s->halo); /* whole pairs only: one may be in flight */
     double D = sqrt((double)g->hchk->build2), d = sqrt((double)g->hchk->step2), skin = g->skin;
     g->stale |= D + 2 * d > 0.5 * skin;
     g->every = !s->flow_on || d > 0.25 * skin; /* prescribed motion: x_n is not kept */
@@ -1168,7 +1181,7 @@ static void gpu_finish(sim_t *s)
             if (db[k]) CK(cudaFree(db[k]));
         if (x->hsend) CK(cudaFreeHost(x->hsend));
         if (x->hrecv) CK(cudaFreeHost(x->hrecv));
-        for (int k = 0; k < 16; ++k) CK(cudaEventDestroy(x->ev[k]));
+        for (int k = 0; k < HX_EV; ++k) CK(cudaEventDestroy(x->ev[k]));
         free(x->soff), free(x->roff), free(x->sb), free(x->rb), free(x);
     }
     for (size_t k = 0; k < part_narrays(); ++k) {

@@ -77,12 +77,12 @@ CASES = [
 ]
 
 
-def run(sphseg, np_, scene, out, steps, over, backend="cpu"):
+def run(sphseg, np_, scene, out, steps, over, backend="cpu", env_extra=None):
     cmd = ["mpirun", "--oversubscribe", "--allow-run-as-root", "-np", str(np_), sphseg,
            os.path.join(INPUTS, scene), "-o", out, "--backend", backend,
            "-P", "Run:max_steps=%d" % steps, "-P", "Run:progress_s=1e9", "-P", "Output:dt=1e3"]
     cmd += sum([["-P", o] for o in over], [])
-    env = dict(os.environ, OMP_NUM_THREADS="1")
+    env = dict(os.environ, OMP_NUM_THREADS="1", **(env_extra or {}))
     r = subprocess.run(cmd, capture_output=True, text=True, env=env)
     if r.returncode != 0:
         print(r.stdout[-2000:], r.stderr[-2000:])
@@ -209,6 +209,21 @@ def main():
     print("%s 3 ranks run to run: %s" % ("ok  " if not differ else "FAIL",
                                         "bit-identical" if not differ else "differ in " + ", ".join(differ)))
     ok &= not differ
+    if gpu:  # the overlapped refreshes change nothing: bit-identical to synchronous ones, and run to run
+        steps = scaled(300, a.steps_scale)
+        runs = {}
+        for tag, env in (("overlap", None), ("overlap_again", None), ("no_overlap", {"SPHSEG_GPU_OVERLAP": "0"})):
+            out = os.path.join(a.work, "drum_EV_3_" + tag)
+            run(a.sphseg, 3, "drum_2d_EV.yml", out, steps, DRUM, a.backend, env)
+            runs[tag] = last(out)
+        for tag in ("overlap_again", "no_overlap"):
+            differ = [k for k in runs["overlap"] if isinstance(runs["overlap"][k], np.ndarray)
+                      and not np.array_equal(runs["overlap"][k], runs[tag][k])]
+            print("%s drum_EV 3 ranks, %d steps, GPU refreshes overlapped vs %s: %s" % (
+                "ok  " if not differ else "FAIL", steps,
+                "the same again" if tag == "overlap_again" else "synchronous (SPHSEG_GPU_OVERLAP=0)",
+                "bit-identical" if not differ else "differ in " + ", ".join(differ)))
+            ok &= not differ
     if own_work:
         if ok:
             shutil.rmtree(a.work, ignore_errors=True)
