@@ -572,12 +572,32 @@ int halo_recut(halo_t *h, particles_t *p, double cost, double imb, double thresh
 {
     if (imb <= threshold) return 0;
     double t0 = MPI_Wtime();
+    /* the cut in force, kept when the new one would move no particle: the
+     * decision rests on timings, and a cut that changed only ghost sets
+     * would make the run differ from a repeat for nothing */
+    size_t nold = h->method == HALO_METIS ? (size_t)h->cg_n[0] * (size_t)h->cg_n[1] * (size_t)h->cg_n[2] : 0;
+    long *ob = halo_calloc((size_t)h->size + 1, sizeof(long));
+    int *op = halo_calloc(nold + 1, sizeof(int)), ocg[3] = {h->cg_n[0], h->cg_n[1], h->cg_n[2]};
+    memcpy(ob, h->bound, ((size_t)h->size + 1) * sizeof(long));
+    if (nold) memcpy(op, h->part, nold * sizeof(int));
     size_t nbin = halo_grid(h, p);
     double *w = halo_weights(h, p, nbin, p->n ? cost / (double)p->n : 0);
     halo_cut(h, w, nbin);
     free(w);
     int moved = halo_owned_after(h, p) != (long long)p->n, any = 0;
     MPICHECK(MPI_Allreduce(&moved, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD));
+    if (!any) {
+        memcpy(h->bound, ob, ((size_t)h->size + 1) * sizeof(long));
+        if (h->method == HALO_METIS) {
+            memcpy(h->cg_n, ocg, sizeof ocg);
+            free(h->part);
+            h->part = op, op = NULL;
+            halo_metis_neighbours(h);
+        } else {
+            halo_slab_neighbours(h);
+        }
+    }
+    free(ob), free(op);
     if (any) {
         message("load balance: the slowest rank took %.0f %% more than the mean (threshold %.0f %%): domains "
                 "re-cut", 100 * imb, 100 * threshold);
