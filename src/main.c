@@ -378,9 +378,10 @@ static void run(sim_t *s, outputs *o, ckpt_run *rs)
                 "builds, packing, copies and waits not hidden behind interior work)", halo);
     }
     if (s->halo)
-        message("domains: %lld particle migrations between ranks, %.3f s in the halo exchange on the slowest rank "
-                "(%.3f s of it in MPI waits), %.4g MB and %.4g messages sent per rank per step (mean)",
+        message("domains: %lld particle migrations between ranks, %.3f s of host time in halo calls on the slowest "
+                "rank (%.3f s of it in MPI waits%s), %.4g MB and %.4g messages sent per rank per step (mean)",
                 comm_sum_ll(s->halo->migrated), comm, comm_max(s->halo->wall_wait),
+                s->halo->exposed_measured ? "; with the GPU, also waits for the device before a pack" : "",
                 s->step > d.step0 ? 1e-6 * (double)comm_sum_ll(s->halo->bytes) / comm_size() / (double)(s->step - d.step0) : 0.0,
                 s->step > d.step0 ? (double)comm_sum_ll(s->halo->messages) / comm_size() / (double)(s->step - d.step0) : 0.0);
     message("done: %ld steps, %.3f s wall, %.4e particle-steps/s, max |drift of sum C V| %.3e, %.3f s of the "

@@ -1,7 +1,6 @@
 #!/usr/bin/env bash
 # The job scripts in their no-SLURM mode: jobs/scaling_weak.sbatch on a tiny
-# shear box with RANKS=1 (multi-rank runs are refused until the slab
-# decomposition lands) writes a CSV with the documented columns and a
+# shear box with RANKS=1 writes a CSV with the documented columns and a
 # positive rate; tools/scaling_plot.py reads it (1-rank rows only) and writes
 # its PNG and table; the done: parser reads halo_s when present and leaves it
 # empty when not; restart_chain.sh submits K jobs chained by afterok (a stub

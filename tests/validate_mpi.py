@@ -20,7 +20,8 @@ are compared particle by particle (matched by ParticleIDs):
   the run on 3 ranks repeated is bit-identical (determinism).
 
 --backend gpu (default cpu) runs every case, 1, 2 and 3 ranks and the
-repeated run, with sphseg --backend gpu (the ranks share one GPU) and checks
+repeated run, with sphseg --backend gpu (ranks take devices by local rank;
+on a one-GPU machine they share it) and checks
 the same things: the same TOL = 1e-8 and TOL_C1 = 1e-4 bounds. The GPU backend
 keeps a Verlet list with a skin and rebuilds it when a particle has moved far
 enough; on different rank counts the rebuilds fall on different steps, so the
@@ -30,7 +31,10 @@ classes must still agree exactly (a failure names how many particles differ).
 The migration and load-balance expectations are checked from the log as on
 the CPU. Each case's one-rank GPU run is also compared with a one-rank
 --backend cpu run against the same tolerance (and exact classes), so that the
-multi-rank GPU path is tied to the CPU reference. Without a visible GPU
+multi-rank GPU path is tied to the CPU reference. Last, the GPU's overlapped
+ghost refreshes must change nothing: the 3-rank drum is run twice with them
+and once with SPHSEG_GPU_OVERLAP=0 (synchronous), load balance off (its
+decisions rest on timings), and all three are bit-identical. Without a visible GPU
 (nvidia-smi -L) it prints "SKIP: no GPU visible" and exits 77.
 
 --cases NAME,NAME runs only those cases; --steps-scale F multiplies every

@@ -104,7 +104,7 @@ def table(summary):
     return "\n".join(lines)
 
 
-def plot(summary, png, same_cores=False):
+def plot(summary, png, same_cores=False, title="sphseg scaling"):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -139,7 +139,7 @@ def plot(summary, png, same_cores=False):
         if a.lines:
             a.legend(fontsize=8)
     ax[2].set_ylim(bottom=0)
-    fig.suptitle("sphseg scaling")
+    fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(png, dpi=120)
 
@@ -150,13 +150,14 @@ def main(argv=None):
     ap.add_argument("--png", default="scaling.png", help="chart to write (default scaling.png)")
     ap.add_argument("--strong-same-cores", action="store_true",
                     help="strong runs used the same cores at every P: E_s = r(P)/r(1)")
+    ap.add_argument("--title", default="sphseg scaling", help="chart title (e.g. the machine and scene)")
     a = ap.parse_args(argv)
     rows = read_rows(a.csv)
     if not rows:
         sys.exit("scaling_plot: no rows in " + " ".join(a.csv))
     summary = {mode: efficiencies(mode, pts, a.strong_same_cores) for mode, pts in summarise(rows).items()}
     print(table(summary))
-    plot(summary, a.png, a.strong_same_cores)
+    plot(summary, a.png, a.strong_same_cores, a.title)
     print(f"\nwrote {a.png}")
 
 
