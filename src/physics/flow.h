@@ -84,23 +84,37 @@ HD_INLINE void flow_wall(size_t d, particles_t *p, const grid_view *g, const flo
 /* Material particle i: acc (3.9 + g), dsig (C1) and gdot from the current
  * positions, velocities and stresses of i and its neighbours (material and
  * dummy). Returns |acc|. */
+/* What flow_rates reads of neighbour j besides its position. */
+HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6], real *volj)
+{
+    for (int d = 0; d < 3; ++d) uj[d] = p->v[d][j];
+    for (int q = 0; q < 6; ++q) sj[q] = p->sig[q][j];
+    *volj = p->vol[j];
+}
+
 HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)
 {
     const sph_ctx *k = &c->k;
     real L[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, a[3] = {0, 0, 0};
     real si[6] = {p->sig[0][i], p->sig[1][i], p->sig[2][i], p->sig[3][i], p->sig[4][i], p->sig[5][i]};
+    /* i's own values read once (the compiler cannot hoist them out of the
+     * loop through the particles_t pointers); j's before or after the
+     * distance test by SPH_EARLY_LOADS (hd.h) */
+    const real xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]}, ui[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
     NBR_BEGIN(g, p->x, i, j)
         if (j == i) continue;
-        real xij[3];
-        real r2 = grid_pair(k->dim, p->x, i, j, xij);
+        real uj[3], sj[6], volj = 0;
+        if (SPH_EARLY_LOADS) flow_load_j(p, j, uj, sj, &volj);
+        real xij[3] = {xi[0] - p->x[0][j], xi[1] - p->x[1][j], k->dim == 3 ? xi[2] - p->x[2][j] : R(0.0)};
+        real r2 = xij[0] * xij[0] + xij[1] * xij[1] + xij[2] * xij[2]; /* as grid_pair */
         if (r2 >= k->support2) continue;
+        if (!SPH_EARLY_LOADS) flow_load_j(p, j, uj, sj, &volj);
         real f = kernel_f((real)sqrt((double)r2), k->h, k->alpha);
         real gradW[3] = {f * xij[0], f * xij[1], f * xij[2]};
-        real uij[3] = {p->v[0][i] - p->v[0][j], p->v[1][i] - p->v[1][j], p->v[2][i] - p->v[2][j]};
-        mom_velgrad_add(L, p->vol[j], uij, gradW);
+        real uij[3] = {ui[0] - uj[0], ui[1] - uj[1], ui[2] - uj[2]};
+        mom_velgrad_add(L, volj, uij, gradW);
         real Pi = c->alpha_av > 0 ? mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij) : R(0.0);
-        real sj[6] = {p->sig[0][j], p->sig[1][j], p->sig[2][j], p->sig[3][j], p->sig[4][j], p->sig[5][j]};
-        mom_accel_add(a, c->rho * p->vol[j], si, c->rho, sj, c->rho, Pi, gradW);
+        mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
     NBR_END
     real eps[6], w[3], ds[6];
     mom_strain_spin(L, eps, w);

@@ -177,14 +177,21 @@ HD_INLINE void seg_renorm(size_t i, const particles_t *p, const grid_view *g, co
     for (int q = 0; q < 6; ++q) p->L[q][i] = l[q];
 }
 
-/* (L_i + L_j)/2 applied to v. */
-HD_INLINE void seg_Lbar(const particles_t *p, size_t i, size_t j, const real v[3], real out[3])
+/* (L_i + L_j)/2 applied to v (L_i, L_j as xx, yy, zz, xy, xz, yz). */
+HD_INLINE void seg_Lbar(const real Li[6], const real Lj[6], const real v[3], real out[3])
 {
     real l[6];
-    for (int m = 0; m < 6; ++m) l[m] = R(0.5) * (p->L[m][i] + p->L[m][j]);
+    for (int m = 0; m < 6; ++m) l[m] = R(0.5) * (Li[m] + Lj[m]);
     out[0] = l[0] * v[0] + l[3] * v[1] + l[4] * v[2];
     out[1] = l[3] * v[0] + l[1] * v[1] + l[5] * v[2];
     out[2] = l[4] * v[0] + l[5] * v[1] + l[2] * v[2];
+}
+
+/* What seg_rate_conservative reads of neighbour j besides its position. */
+HD_INLINE void seg_load_j(const particles_t *p, size_t j, real Lj[6], real cqdv[4])
+{
+    for (int m = 0; m < 6; ++m) Lj[m] = p->L[m][j];
+    cqdv[0] = p->C[j], cqdv[1] = p->segQ[j], cqdv[2] = p->segD[j], cqdv[3] = p->vol[j];
 }
 
 /* dC_i/dt in conservative form: the divergence of J = Q ghat - D grad C by
@@ -206,19 +213,28 @@ HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const g
     const seg_params *sp = &c->sp;
     real Ci = p->C[i], Qi = p->segQ[i], Di = p->segD[i];
     real seg = 0, diff = 0;
+    /* i's own values read once; j's before or after the distance test by
+     * SPH_EARLY_LOADS (hd.h) */
+    const real xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
+    real Li[6];
+    for (int m = 0; m < 6; ++m) Li[m] = p->L[m][i];
     NBR_BEGIN(g, p->x, i, j)
         if (j == i || p->kind[j] != KIND_MATERIAL) continue;
-        real xij[3];
-        real r2 = grid_pair(k->dim, p->x, i, j, xij);
+        real Lj[6], cqdv[4]; /* C, Q, D, V of j */
+        if (SPH_EARLY_LOADS) seg_load_j(p, j, Lj, cqdv);
+        real xij[3] = {xi[0] - p->x[0][j], xi[1] - p->x[1][j], k->dim == 3 ? xi[2] - p->x[2][j] : R(0.0)};
+        real r2 = xij[0] * xij[0] + xij[1] * xij[1] + xij[2] * xij[2]; /* as grid_pair */
         if (r2 >= k->support2) continue;
+        if (!SPH_EARLY_LOADS) seg_load_j(p, j, Lj, cqdv);
+        real Cj = cqdv[0], Qj = cqdv[1], Dj = cqdv[2], volj = cqdv[3];
         real r = (real)sqrt((double)r2);
-        real w = kernel_f(r, k->h, k->alpha) * p->vol[j];
+        real w = kernel_f(r, k->h, k->alpha) * volj;
         real lx[3] = {xij[0], xij[1], xij[2]};
-        if (c->renorm) seg_Lbar(p, i, j, xij, lx);
+        if (c->renorm) seg_Lbar(Li, Lj, xij, lx);
         real gx = sp->ghat[0] * lx[0] + sp->ghat[1] * lx[1] + sp->ghat[2] * lx[2];
         real xlx = (xij[0] * lx[0] + xij[1] * lx[1] + xij[2] * lx[2]) / r2;
-        seg -= w * (Qi + p->segQ[j]) * gx;
-        diff += w * (Di + p->segD[j]) * (Ci - p->C[j]) * xlx;
+        seg -= w * (Qi + Qj) * gx;
+        diff += w * (Di + Dj) * (Ci - Cj) * xlx;
     NBR_END
     seg_rate out = {seg, diff, 0};
     return out;
