@@ -10,18 +10,22 @@
  * ranks. Either way a rank's domain is a union of lattice cells.
  * Each rank holds its own particles at [0, n) of its store and ghost copies
  * of its neighbours' particles in the `depth` columns next to its slab at
- * [n, n + ng). depth is 2: the HCSR classification of a particle reads the
- * cell types of the cells next to its own, which read their neighbours, so
- * two columns of ghosts make every owned particle's class exact without an
- * exchange between the classification stages; every other stage reads one
- * support. A rank exchanges with its neighbours: the ranks owning a lattice
- * cell within depth cells of one of its own (slabs at least depth columns
- * wide: the two next slabs).
+ * [n, n + ng). depth is 2 on the CPU: the HCSR classification of a particle
+ * reads the cell types of the cells next to its own, which read their
+ * neighbours, so two columns of ghosts make every owned particle's class
+ * exact without an exchange between the classification stages; every other
+ * stage reads one support. The GPU backend keeps ghosts between neighbour
+ * list builds and asks for 3 (halo_set_depth; struct backend.ghost_depth).
+ * A rank exchanges with its neighbours: the ranks owning a lattice cell
+ * within depth cells of one of its own (slabs at least depth columns wide:
+ * the two next slabs).
  *
- * Per prepare: halo_exchange (migrate, then fresh ghosts carrying the arrays
- * the scene's stages read), the cell sort, halo_sorted (follow the ghosts
- * and the send lists through the sort); then halo_refresh of a few arrays
- * after the stages that change what neighbours read (src/backend_cpu.c).
+ * Per prepare (CPU): halo_exchange (migrate, then fresh ghosts carrying the
+ * arrays the scene's stages read), the cell sort, halo_sorted (follow the
+ * ghosts and the send lists through the sort); then halo_refresh of a few
+ * arrays after the stages that change what neighbours read
+ * (src/backend_cpu.c). The GPU backend exchanges only at its list builds and
+ * refreshes with device-packed byte segments (halo_post_bytes) in between.
  * One rank uses none of this (sim_t.halo is NULL). */
 #ifndef SPHSEG_HALO_H
 #define SPHSEG_HALO_H

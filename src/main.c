@@ -411,8 +411,6 @@ int main(int argc, char **argv)
         input_error("--backend gpu: this build has no CUDA backend (build with nvcc on the PATH and "
                     "GPU=1), or run with --backend cpu");
 #endif
-#ifdef SPHSEG_CUDA
-#endif
     if (sc.parallel.axis == AXIS_Z && sc.geometry.dim == 2)
         input_error("Parallel:axis: z is not an axis of a 2D scene (x or y, or auto)");
     sim_t s = {0};
