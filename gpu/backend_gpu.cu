@@ -840,17 +840,24 @@ static void gpu_settle(sim_t *s, gpu_t *g)
     x->pend_renorm = x->pend_walls = 0;
 }
 
+/* Every array of the owned particles into the host copy s->p (its ghosts
+ * are not kept there). */
+static void gpu_download(sim_t *s, gpu_t *g)
+{
+    CK(cudaStreamSynchronize(g->st));
+    for (size_t k = 0; k < part_narrays(); ++k)
+        CK(cudaMemcpy(part_array_get(&s->p, k), part_array_get(&g->d, k), g->n * part_array_esize(k),
+                      cudaMemcpyDeviceToHost));
+    s->p.n = g->n, s->p.ng = 0;
+}
+
 /* At a list build on several ranks: the owned particles to the host, where
  * mpi/halo.c migrates them and makes fresh ghosts; everything back. */
 static void gpu_full_exchange(sim_t *s, gpu_t *g)
 {
     double t0 = now();
     particles_t *hp = &s->p;
-    CK(cudaStreamSynchronize(g->st));
-    for (size_t k = 0; k < part_narrays(); ++k)
-        CK(cudaMemcpy(part_array_get(hp, k), part_array_get(&g->d, k), g->n * part_array_esize(k),
-                      cudaMemcpyDeviceToHost));
-    hp->n = g->n, hp->ng = 0;
+    gpu_download(s, g);
     halo_exchange(s->halo, hp);
     gpu_reserve(g, hp->n + hp->ng);
     gpu_counts(g, hp->n, hp->ng);
@@ -1134,11 +1141,7 @@ static void gpu_to_host(sim_t *s)
 {
     gpu_t *g = gpu_get(s);
     gpu_settle(s, g);
-    CK(cudaStreamSynchronize(g->st));
-    for (size_t k = 0; k < part_narrays(); ++k)
-        CK(cudaMemcpy(part_array_get(&s->p, k), part_array_get(&g->d, k), g->n * part_array_esize(k),
-                      cudaMemcpyDeviceToHost));
-    s->p.n = g->n, s->p.ng = 0; /* host ghosts are not kept */
+    gpu_download(s, g);
     if (s->halo) hx_resolve(g, s->halo);
 }
 

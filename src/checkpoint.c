@@ -230,25 +230,27 @@ static void ckpt_need(const char *file, hid_t g, const char *name)
     if (!e) ckpt_bad(file, "not a sphseg checkpoint (no attribute %s; a snapshot?)", name);
 }
 
-static double ckpt_get_double(const char *file, hid_t g, const char *name)
+/* A scalar attribute read as type (H5T_NATIVE_DOUBLE or H5T_NATIVE_INT64) into out. */
+static void ckpt_get_attr(const char *file, hid_t g, const char *name, hid_t type, void *out)
 {
-    double v;
     hid_t a;
     ckpt_need(file, g, name);
     H5CHECK(a = H5Aopen(g, name, H5P_DEFAULT));
-    H5CHECK(H5Aread(a, H5T_NATIVE_DOUBLE, &v));
+    H5CHECK(H5Aread(a, type, out));
     H5CHECK(H5Aclose(a));
+}
+
+static double ckpt_get_double(const char *file, hid_t g, const char *name)
+{
+    double v;
+    ckpt_get_attr(file, g, name, H5T_NATIVE_DOUBLE, &v);
     return v;
 }
 
 static long long ckpt_get_int(const char *file, hid_t g, const char *name)
 {
     int64_t v;
-    hid_t a;
-    ckpt_need(file, g, name);
-    H5CHECK(a = H5Aopen(g, name, H5P_DEFAULT));
-    H5CHECK(H5Aread(a, H5T_NATIVE_INT64, &v));
-    H5CHECK(H5Aclose(a));
+    ckpt_get_attr(file, g, name, H5T_NATIVE_INT64, &v);
     return v;
 }
 

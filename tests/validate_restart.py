@@ -180,10 +180,7 @@ def sphseg_np(args, np_, scene, out, over, extra=()):
 
 def roundoff(a, b, tol=1e-8):
     sa, sb = snap.read_snapshot(a), snap.read_snapshot(b)
-    worst = 0.0
-    for f in ("Coordinates", "Velocities", "Stress", "Concentration", "ShearRate", "Normal", "Psi"):
-        scale = max(float(np.max(np.abs(sa[f]))), 1e-300)
-        worst = max(worst, float(np.max(np.abs(np.asarray(sa[f]) - np.asarray(sb[f])))) / scale)
+    worst = snap.max_field_difference(sa, sb)
     same = np.array_equal(sa["ParticleIDs"], sb["ParticleIDs"]) and np.array_equal(sa["BoundaryClass"],
                                                                                       sb["BoundaryClass"])
     return same and worst <= tol, worst

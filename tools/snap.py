@@ -67,6 +67,24 @@ def row_profile(snap, dr):
     return (rows + j0 + 0.5) * dr, total[rows] / count[rows]
 
 
+# The per-particle fields two runs of one scene are compared on (tests).
+COMPARE_FIELDS = ("Coordinates", "Velocities", "Stress", "Concentration", "ShearRate", "Normal", "Psi", "Volume")
+
+
+def max_field_difference(ref, other, fields=COMPARE_FIELDS):
+    """max over fields of max|other - ref| / max|ref|, for two snapshots (dicts
+    of read_snapshot) holding the same particles in the same order; fields
+    missing from ref are skipped."""
+    worst = 0.0
+    for f in fields:
+        if f not in ref:
+            continue
+        a = np.asarray(ref[f])
+        scale = max(float(np.max(np.abs(a))), 1e-300)
+        worst = max(worst, float(np.max(np.abs(np.asarray(other[f]) - a))) / scale)
+    return worst
+
+
 def read_diagnostics(outdir):
     """diagnostics.csv as a dict of 1D numpy arrays keyed by column name
     (diagnostics.csv.part while the run is still going)."""
