@@ -2,12 +2,16 @@
  *
  * The particle arrays live on the device for the whole run; the host copy
  * s->p is refreshed only by to_host (snapshots, diagnostics, error reports).
- * Every kernel runs one thread per particle (or per cell) and calls the same
- * HD_INLINE bodies of src/physics/ as the CPU backend, gather style: a thread
- * sums over its particle's neighbours and writes only its own entries, so
- * results do not depend on thread scheduling and runs are bit-identical run
- * to run. Reductions (bounding box, time-step bounds, blow-up guard) are max
- * and min with CUB, exact in any order.
+ * Every kernel calls the same HD_INLINE bodies of src/physics/ as the CPU
+ * backend, gather style: a particle's thread sums over its neighbours and
+ * writes only its own entries, so results do not depend on thread
+ * scheduling and runs are bit-identical run to run. The neighbour loops of
+ * small stores run a team of 2-16 threads per particle (k_team; each lane
+ * takes every T-th neighbour and team_sum adds the lanes in a fixed order).
+ * Reductions (bounding box, time-step bounds, blow-up guard) are max and min
+ * with CUB, exact in any order; the check takes them all in one pass, the
+ * step's one host synchronisation. save_start and advance are held back and
+ * run in the next prepare's motion kernel (gpu_step_kernel).
  *
  * The neighbour build mirrors src/nbr.c: the same grid (grid_fit on the same
  * bounding box), cell keys sorted by a stable CUB radix sort (the order of a
@@ -77,6 +81,9 @@ extern "C" {
 
 enum { PERM_MAX = 64, BLOCK = 128 };
 #define GPU_SKIN 0.1 /* Verlet skin, in units of h */
+#define GPU_TEAM_MAX_2D 4 /* threads per particle in the neighbour loops (gpu_team_size) */
+#define GPU_TEAM_MAX_3D 8
+#define GPU_TEAM_THREADS 2097152.0
 
 /* Source and destination of every per-particle array (the permutation). */
 struct perm_tab {
@@ -148,12 +155,18 @@ typedef struct gpu {
     int built, stale, every; /* the list: exists; must be rebuilt; rebuild every stage */
     long builds;
     real *amag;         /* |acc| of the last flow rate evaluation */
+    int acc_pending;    /* amag not yet reduced into dres[STEP_ACC] (gpu_acc_reduce, gpu_check) */
+    int pend_save, pend_adv; /* save_start and advance held back for the next kernel (gpu_step_kernel) */
+    real pend_a;
+    flow_ctx pend_fc;
+    int team;           /* threads per particle in the neighbour loops: 1, 2, 4, 8 or 16 */
     void *tmp;          /* CUB scratch */
     size_t tmp_bytes;
     struct box *dbox;   /* device results */
     double *dres;       /* [STEP_NBOUNDS]: D, wave, speed, acc */
     long long *dfirst;  /* also the list-length maximum */
-    struct chk *dchk, *hchk;
+    struct chkb *dchk, *hchk;
+    int bnd_fresh;      /* hres[0..2] hold the bounds of the current store (gpu_check) */
     struct box *hbox;   /* pinned host copies */
     double *hres;
     long long *hfirst;
@@ -164,12 +177,12 @@ static int g_local_rank;
 /* Stage timing (SPHSEG_GPU_PROFILE=1 in the environment): events around each
  * stage with a synchronisation after it, so the stages do not overlap and
  * the total runs slower than without; a table at the end of the run. */
-enum { P_MOTION, P_BBOX, P_SORT, P_PERMUTE, P_LIST, P_CLASSIFY, P_RENORM, P_WALLS, P_FLOW, P_SEG,
-       P_SAVE_ADVANCE, P_FILTER, P_BOUNDS_CHECK, P_NPROF };
-static const char *prof_name[P_NPROF] = {"wall/kinematic motion", "bounding box (+sync)", "cell keys, radix sort, start/end",
-                                          "permute arrays", "neighbour list", "HCSR classification",
-                                          "renormalisation L", "dummy walls", "flow rates (+max |a|)",
-                                          "concentration rates", "save start, advance", "Shepard filter",
+enum { P_MOTION, P_BBOX, P_SORT, P_PERMUTE, P_LIST, P_CLASSIFY, P_WALLS, P_FLOW, P_SEG, P_FILTER, P_BOUNDS_CHECK,
+       P_NPROF };
+static const char *prof_name[P_NPROF] = {"save start, advance, motion", "bounding box (+sync)",
+                                          "cell keys, radix sort, start/end", "permute arrays", "neighbour list",
+                                          "HCSR classification", "dummy walls, renormalisation L",
+                                          "flow rates (+seg. coefficients)", "concentration rates", "Shepard filter",
                                           "dt bounds, blow-up check (+sync)"};
 static struct {
     int on;
@@ -206,6 +219,35 @@ template <class F> static void each(const gpu_t *g, size_t n, F f)
     if (n == 0) return;
     k_each<<<(unsigned)((n + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(n, f);
     CK(cudaGetLastError());
+}
+
+/* Teams (src/physics/hd.h): T consecutive threads per particle, f(i, lane,
+ * T), T a power of two dividing the warp, so that a team never straddles a
+ * warp and a team past n is out as a whole. */
+template <int T, class F> __global__ void k_team(size_t n, F f)
+{
+    size_t t = (size_t)blockIdx.x * blockDim.x + threadIdx.x, i = t / T;
+    if (i < n) f(i, (int)(t % T), T);
+}
+
+template <int T, class F> static void team_launch(const gpu_t *g, size_t n, F f)
+{
+    size_t nt = n * T;
+    k_team<T><<<(unsigned)((nt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(n, f);
+    CK(cudaGetLastError());
+}
+
+/* The neighbour-loop kernels, g->team threads per particle. */
+template <class F> static void team(const gpu_t *g, size_t n, F f)
+{
+    if (n == 0) return;
+    switch (g->team) {
+    case 1: team_launch<1>(g, n, f); break;
+    case 2: team_launch<2>(g, n, f); break;
+    case 4: team_launch<4>(g, n, f); break;
+    case 8: team_launch<8>(g, n, f); break;
+    default: team_launch<16>(g, n, f); break;
+    }
 }
 
 __global__ void k_permute(perm_tab t, const unsigned *perm, size_t n)
@@ -321,6 +363,26 @@ struct chk_merge {
         return r;
     }
 };
+/* The check and the next step's time-step bounds in one pass (gpu_check):
+ * nothing changes the store between them, and a host synchronisation per
+ * step is saved. */
+struct chkb {
+    chk c;
+    bnd3 b;
+    real amax; /* the largest |acc| (amag, when given) */
+};
+struct chkb_of {
+    chk_of c;
+    bnd_of b;
+    const real *amag;
+    __device__ chkb operator()(size_t i) const { return chkb{c(i), b(i), amag ? amag[i] : R(0.0)}; }
+};
+struct chkb_merge {
+    __device__ chkb operator()(const chkb &a, const chkb &b) const
+    {
+        return chkb{chk_merge()(a.c, b.c), bnd_max()(a.b, b.b), b.amax > a.amax ? b.amax : a.amax};
+    }
+};
 struct max_real {
     __device__ real operator()(real a, real b) const { return b > a ? b : a; }
 };
@@ -406,6 +468,27 @@ static void gpu_counts(gpu_t *g, size_t n, size_t ng)
     g->d.cap = g->alt.cap = g->cap;
 }
 
+/* Threads per particle in the neighbour loops: SPHSEG_GPU_TEAM (1, 2, 4, 8
+ * or 16), else GPU_TEAM_MAX of the dimension (by the length of the list:
+ * 4 in 2D, about 30 neighbours; 8 in 3D, about 140), halved while n T
+ * exceeds GPU_TEAM_THREADS: a small store runs more threads per particle
+ * (latency), a large one fills the device with one (the rule is measured in
+ * docs/gpu.md, "Teams"). */
+static int gpu_team_size(int dim, size_t n)
+{
+    const char *e = getenv("SPHSEG_GPU_TEAM");
+    if (e && *e) {
+        char *end;
+        long t = strtol(e, &end, 10);
+        if (*end || (t != 1 && t != 2 && t != 4 && t != 8 && t != 16))
+            error_exit(2, "SPHSEG_GPU_TEAM=%s: expected 1, 2, 4, 8 or 16 threads per particle", e);
+        return (int)t;
+    }
+    int t = dim == 3 ? GPU_TEAM_MAX_3D : GPU_TEAM_MAX_2D;
+    while (t > 1 && (double)n * t > GPU_TEAM_THREADS) t /= 2;
+    return t;
+}
+
 static gpu_t *gpu_get(sim_t *s)
 {
     if (s->be_data) return (gpu_t *)s->be_data;
@@ -436,9 +519,11 @@ static gpu_t *gpu_get(sim_t *s)
         s->halo->exposed_measured = 1;
         for (int k = 0; k < HX_EV; ++k) CK(cudaEventCreate(&g->hx->ev[k]));
     }
+    g->team = gpu_team_size(h->dim, n);
     message("gpu: device %d of %d, %s, %.1f GiB; %zu MiB of particle arrays (two sets), %zu MiB of neighbour "
-            "list (%u per particle)%s", g->dev, ndev, prop.name, (double)prop.totalGlobalMem / (1u << 30),
-            2 * n * part_bytes_per_particle() >> 20, (n * g->nl_cap * sizeof(unsigned)) >> 20, g->nl_cap,
+            "list (%u per particle), %d threads per particle in neighbour loops%s", g->dev, ndev, prop.name,
+            (double)prop.totalGlobalMem / (1u << 30), 2 * n * part_bytes_per_particle() >> 20,
+            (n * g->nl_cap * sizeof(unsigned)) >> 20, g->nl_cap, g->team,
             !g->hx ? "" : g->hx->cuda_aware ? "; halo: CUDA-aware MPI on device buffers"
                                             : "; halo: packed on the device, staged through pinned host memory");
     g->d = *h;
@@ -452,12 +537,25 @@ static gpu_t *gpu_get(sim_t *s)
     g->dres = (double *)dev_alloc(STEP_NBOUNDS * sizeof(double));
     CK(cudaMemset(g->dres, 0, STEP_NBOUNDS * sizeof(double)));
     g->dfirst = (long long *)dev_alloc(sizeof(long long));
-    g->dchk = (chk *)dev_alloc(sizeof(chk));
-    CK(cudaMallocHost((void **)&g->hchk, sizeof(chk)));
+    g->dchk = (chkb *)dev_alloc(sizeof(chkb));
+    CK(cudaMallocHost((void **)&g->hchk, sizeof(chkb)));
     CK(cudaMallocHost((void **)&g->hbox, sizeof(box)));
     CK(cudaMallocHost((void **)&g->hres, STEP_NBOUNDS * sizeof(double)));
     CK(cudaMallocHost((void **)&g->hfirst, sizeof(long long)));
     s->be_data = g;
+    return g;
+}
+
+static void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t);
+
+/* gpu_get for a hook: the held-back save and advance run first; for a hook
+ * that changes the store (mut), the bounds taken by the last check no
+ * longer hold. */
+static gpu_t *gpu_hook(sim_t *s, int mut)
+{
+    gpu_t *g = gpu_get(s);
+    gpu_step_kernel(s, g, 0, 0.0);
+    if (mut) g->bnd_fresh = 0;
     return g;
 }
 
@@ -641,30 +739,39 @@ static sel sel_all(void) { return sel{NULL, 0, 0}; }
 static sel sel_in(const gpu_t *g, int lo) { return g->lvl ? sel{g->lvl, (uint8_t)lo, 3} : sel_all(); }
 static sel sel_bd(const gpu_t *g, int lo) { return sel{g->lvl, 0, (uint8_t)(lo - 1)}; }
 
-/* Dummy walls (paper §4.1) over owned particles and ghosts. */
-static void gpu_walls(gpu_t *g, const flow_ctx *fc, sel sl)
+/* Over owned particles and ghosts in sl: the dummy walls (paper §4.1;
+ * walls) and the conservative scheme's L of the material (renorm). Neither
+ * reads what the other writes: a small store (several threads per
+ * particle, latency-bound) runs them as one kernel, a large one as two (the
+ * merged kernel would run both at the larger register count: 2 % slower on
+ * the 3D drum, docs/gpu.md). */
+static void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl)
 {
     particles_t p = g->d;
     grid_view v = g->view;
-    flow_ctx c = *fc;
+    flow_ctx c = s->flow;
+    seg_ctx sc = s->seg;
+    const size_t n = g->n + g->ng;
     prof_begin(g->st);
-    each(g, g->n + g->ng, [=] __device__(size_t i) {
-        particles_t q = p;
-        if (q.kind[i] == KIND_DUMMY && sel_on(sl, i)) flow_wall(i, &q, &v, &c);
-    });
+    if (walls && renorm && g->team > 1) {
+        team(g, n, [=] __device__(size_t i, int lane, int T) {
+            if (!sel_on(sl, i)) return;
+            particles_t q = p;
+            if (q.kind[i] == KIND_DUMMY) flow_wall_team(i, &q, &v, &c, lane, T);
+            else if (q.kind[i] == KIND_MATERIAL) seg_renorm_team(i, &q, &v, &sc, lane, T);
+        });
+    } else {
+        if (walls)
+            team(g, n, [=] __device__(size_t i, int lane, int T) {
+                particles_t q = p;
+                if (q.kind[i] == KIND_DUMMY && sel_on(sl, i)) flow_wall_team(i, &q, &v, &c, lane, T);
+            });
+        if (renorm)
+            team(g, n, [=] __device__(size_t i, int lane, int T) {
+                if (p.kind[i] == KIND_MATERIAL && sel_on(sl, i)) seg_renorm_team(i, &p, &v, &sc, lane, T);
+            });
+    }
     prof_end(g->st, P_WALLS);
-}
-
-static void gpu_renorm(gpu_t *g, const seg_ctx *sc, sel sl)
-{
-    particles_t q = g->d;
-    grid_view v = g->view;
-    seg_ctx c = *sc;
-    prof_begin(g->st);
-    each(g, g->n + g->ng, [=] __device__(size_t i) {
-        if (q.kind[i] == KIND_MATERIAL && sel_on(sl, i)) seg_renorm(i, &q, &v, &c);
-    });
-    prof_end(g->st, P_RENORM);
 }
 
 /* ---- ghost refreshes (several ranks) ------------------------------------------ */
@@ -835,8 +942,7 @@ static void gpu_settle(sim_t *s, gpu_t *g)
     dhalo *x = g->hx;
     if (!x || !x->pending) return;
     gpu_refresh_finish(s, g);
-    if (x->pend_renorm) gpu_renorm(g, &s->seg, sel_bd(g, 2));
-    if (x->pend_walls) gpu_walls(g, &s->flow, sel_bd(g, 2));
+    gpu_walls_renorm(s, g, x->pend_walls, x->pend_renorm, sel_bd(g, 2));
     x->pend_renorm = x->pend_walls = 0;
 }
 
@@ -922,22 +1028,29 @@ static ftab moving_fields(const sim_t *s, const gpu_t *g)
 
 /* ---- the hooks ----------------------------------------------------------- */
 
+/* The largest |acc| of the last flow-rate evaluation into dres[STEP_ACC] (a
+ * real, widened on read), if not reduced yet: the check folds it into its
+ * own pass; a build or a load balance, which reorder the store, take it
+ * first. */
+static void gpu_acc_reduce(gpu_t *g)
+{
+    if (!g->acc_pending) return;
+    reduce(g, g->amag, (real *)(g->dres + STEP_ACC), g->n, max_real(), R(0.0));
+    g->acc_pending = 0;
+}
+
 static void gpu_prepare(sim_t *s, double t, int classify)
 {
     gpu_t *g = gpu_get(s);
+    g->bnd_fresh = 0;
     gpu_settle(s, g);
-    particles_t p = g->d;
-    prof_begin(g->st);
-    const int flow = s->flow_on;
-    wall_geom w = s->flow.w;
-    kin_params kin = s->kin;
-    each(g, g->n, [=] __device__(size_t i) { step_place(i, &p, flow, &w, &kin, t); });
-    prof_end(g->st, P_MOTION);
+    gpu_step_kernel(s, g, 1, t); /* with the held-back save and advance */
     int exact = classify == 2 || (s->hcsr && classify);
     int renorm = s->seg_on && classify && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm;
     int build = !g->built || g->stale || g->every || exact;
     if (s->halo) build = comm_max((double)build) > 0; /* a build exchanges: every rank or none */
     if (build) {
+        gpu_acc_reduce(g); /* before the store is re-sorted */
         if (s->halo) gpu_full_exchange(s, g);
         real skin = exact ? R(0.0) : g->skin, sup = R(2.0) * s->seg.k.h + skin;
         gpu_build(g, s->halo, s->p.dim, sup, exact ? s->seg.k.support2 : sup * sup,
@@ -956,8 +1069,7 @@ static void gpu_prepare(sim_t *s, double t, int classify)
                 gpu_refresh(s, g, c);
             }
         }
-        if (renorm) gpu_renorm(g, &s->seg, sel_all());
-        if (s->flow_on) gpu_walls(g, &s->flow, sel_all());
+        gpu_walls_renorm(s, g, s->flow_on, renorm, sel_all());
         return;
     }
     if (s->halo && !g->hx->overlap) gpu_refresh(s, g, moving_fields(s, g));
@@ -965,26 +1077,34 @@ static void gpu_prepare(sim_t *s, double t, int classify)
         gpu_refresh_start(s, g, moving_fields(s, g));
         g->hx->pend_renorm = renorm;
         g->hx->pend_walls = s->flow_on;
-        if (renorm) gpu_renorm(g, &s->seg, sel_in(g, 2));
-        if (s->flow_on) gpu_walls(g, &s->flow, sel_in(g, 2));
+        gpu_walls_renorm(s, g, s->flow_on, renorm, sel_in(g, 2));
         return;
     }
-    if (renorm) gpu_renorm(g, &s->seg, sel_all());
-    if (s->flow_on) gpu_walls(g, &s->flow, sel_all());
+    gpu_walls_renorm(s, g, s->flow_on, renorm, sel_all());
 }
 
+/* The flow rates of the owned particles in sl, and with segregation their
+ * concentration coefficients (seg_coeffs reads only i's C and the shear
+ * rate just computed). */
 static void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl)
 {
     particles_t p = g->d;
     grid_view v = g->view;
     flow_ctx c = s->flow;
+    seg_ctx sc = s->seg;
+    const int seg = s->seg_on;
     real *amag = g->amag;
     prof_begin(g->st);
-    each(g, g->n, [=] __device__(size_t i) {
+    team(g, g->n, [=] __device__(size_t i, int lane, int T) {
         if (!sel_on(sl, i)) return;
         particles_t q = p;
-        amag[i] = q.kind[i] == KIND_MATERIAL ? flow_rates(i, &q, &v, &c) : R(0.0);
+        const int mat = q.kind[i] == KIND_MATERIAL;
+        real a = mat ? flow_rates_team(i, &q, &v, &c, lane, T) : R(0.0);
+        if (lane != 0) return;
+        amag[i] = a;
+        if (seg && mat) seg_coeffs(i, &q, &sc);
     });
+    g->acc_pending = 1;
     prof_end(g->st, P_FLOW);
 }
 
@@ -1003,14 +1123,14 @@ static void gpu_dcdt(sim_t *s, gpu_t *g, sel sl)
     particles_t p = g->d;
     grid_view v = g->view;
     seg_ctx c = s->seg;
-    each(g, g->n, [=] __device__(size_t i) {
-        if (sel_on(sl, i)) seg_dCdt(i, &p, &v, &c);
+    team(g, g->n, [=] __device__(size_t i, int lane, int T) {
+        if (sel_on(sl, i)) seg_dCdt_team(i, &p, &v, &c, lane, T);
     });
 }
 
 static void gpu_rates(sim_t *s)
 {
-    gpu_t *g = gpu_get(s);
+    gpu_t *g = gpu_hook(s, 1);
     const int overlap = g->hx && g->hx->pending;
     if (s->flow_on) {
         if (overlap) { /* level 3 reads nothing the refresh in flight brings */
@@ -1021,8 +1141,6 @@ static void gpu_rates(sim_t *s)
             gpu_settle(s, g);
             gpu_flow_rates(s, g, sel_all());
         }
-        /* the largest |acc| goes to dres[STEP_ACC] as a real, widened on read */
-        reduce(g, g->amag, (real *)(g->dres + STEP_ACC), g->n, max_real(), R(0.0));
     }
     gpu_settle(s, g);
     if (s->seg_on) {
@@ -1032,64 +1150,78 @@ static void gpu_rates(sim_t *s)
             t.n = 0;
             ft_add(&t, g->d.gdot, sizeof(real));
             gpu_refresh(s, g, t);
-            gpu_seg_coeffs(s, g, 0, g->n + g->ng);
+            gpu_seg_coeffs(s, g, g->n, g->n + g->ng); /* the owned: with the flow rates */
             gpu_dcdt(s, g, sel_all());
         } else if (s->halo && s->flow_on) { /* the ghosts' shear rate, while the interior goes on */
             ftab t;
             t.n = 0;
             ft_add(&t, g->d.gdot, sizeof(real));
             gpu_refresh_start(s, g, t);
-            gpu_seg_coeffs(s, g, 0, g->n);
             gpu_dcdt(s, g, sel_in(g, 2));
             gpu_refresh_finish(s, g);
             gpu_seg_coeffs(s, g, g->n, g->n + g->ng);
             gpu_dcdt(s, g, sel_bd(g, 2));
         } else {
-            gpu_seg_coeffs(s, g, 0, g->n + g->ng);
+            if (!s->flow_on) gpu_seg_coeffs(s, g, 0, g->n + g->ng);
             gpu_dcdt(s, g, sel_all());
         }
         prof_end(g->st, P_SEG);
     }
 }
 
+/* save_start and advance only note what to do: the per-particle updates
+ * run in one kernel with the next prepare's wall or kinematic motion
+ * (integrate_step calls save_start, advance, prepare in a row), or alone
+ * when another hook comes first (gpu_hook). Each particle's updates are its
+ * own, so running them together changes nothing. */
+static void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t)
+{
+    const int sv = g->pend_save, ad = g->pend_adv;
+    if (!sv && !ad && !place) return;
+    g->pend_save = g->pend_adv = 0;
+    particles_t p = g->d;
+    flow_ctx c = g->pend_fc;
+    const int flow = s->flow_on, seg = s->seg_on;
+    const real a = g->pend_a;
+    wall_geom w = s->flow.w;
+    kin_params kin = s->kin;
+    prof_begin(g->st);
+    each(g, g->n, [=] __device__(size_t i) {
+        particles_t q = p;
+        if (sv) step_save(i, &q, flow);
+        if (ad) step_advance(i, &q, a, &c, flow, seg);
+        if (place) step_place(i, &q, flow, &w, &kin, t);
+    });
+    prof_end(g->st, P_MOTION);
+}
+
 static void gpu_save_start(sim_t *s)
 {
-    gpu_t *g = gpu_get(s);
-    gpu_settle(s, g);
-    particles_t p = g->d;
-    const int flow = s->flow_on;
-    prof_begin(g->st);
-    each(g, g->n, [=] __device__(size_t i) { step_save(i, &p, flow); });
-    prof_end(g->st, P_SAVE_ADVANCE);
+    gpu_t *g = gpu_hook(s, 1);
+    g->pend_save = 1;
 }
 
 static void gpu_advance(sim_t *s, double a)
 {
-    gpu_t *g = gpu_get(s);
-    gpu_settle(s, g);
-    particles_t p = g->d;
-    flow_ctx c = s->flow;
-    const int flow = s->flow_on, seg = s->seg_on;
-    const real ar = (real)a;
-    prof_begin(g->st);
-    each(g, g->n, [=] __device__(size_t i) {
-        particles_t q = p;
-        step_advance(i, &q, ar, &c, flow, seg);
-    });
-    prof_end(g->st, P_SAVE_ADVANCE);
+    gpu_t *g = gpu_get(s); /* a save_start just before stays held */
+    if (g->pend_adv) gpu_step_kernel(s, g, 0, 0.0);
+    g->bnd_fresh = 0;
+    g->pend_adv = 1;
+    g->pend_a = (real)a;
+    g->pend_fc = s->flow;
 }
 
 static void gpu_filter(sim_t *s)
 {
-    gpu_t *g = gpu_get(s);
+    gpu_t *g = gpu_hook(s, 1);
     gpu_settle(s, g);
     particles_t p = g->d;
     grid_view v = g->view;
     flow_ctx c = s->flow;
     prof_begin(g->st);
-    each(g, g->n, [=] __device__(size_t i) {
+    team(g, g->n, [=] __device__(size_t i, int lane, int T) {
         particles_t q = p;
-        if (q.kind[i] == KIND_MATERIAL) flow_shepard(i, &q, &v, &c);
+        if (q.kind[i] == KIND_MATERIAL) flow_shepard_team(i, &q, &v, &c, lane, T);
     });
     each(g, g->n, [=] __device__(size_t i) { flow_shepard_store(i, &p); });
     prof_end(g->st, P_FILTER);
@@ -1099,20 +1231,24 @@ static void gpu_filter(sim_t *s)
         for (int q = 0; q < (s->p.dim == 3 ? 6 : 4); ++q) ft_add(&t, g->d.sig[q], sizeof(real));
         gpu_refresh(s, g, t);
     }
-    gpu_walls(g, &s->flow, sel_all());
+    gpu_walls_renorm(s, g, 1, 0, sel_all());
 }
 
 /* Owned particles only: no refresh needs to land first. */
 static void gpu_bounds(sim_t *s, double out[STEP_NBOUNDS])
 {
-    gpu_t *g = gpu_get(s);
-    bnd3 init = {{0, 0, 0}};
-    prof_begin(g->st);
-    auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{g->d, s->step_c});
-    reduce(g, it, (bnd3 *)g->dres, g->n, bnd_max(), init);
-    CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
-    CK(cudaStreamSynchronize(g->st));
-    prof_end(g->st, P_BOUNDS_CHECK);
+    gpu_t *g = gpu_hook(s, 0);
+    if (!g->bnd_fresh) { /* the first step, or a store changed since the check */
+        bnd3 init = {{0, 0, 0}};
+        prof_begin(g->st);
+        gpu_acc_reduce(g);
+        auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{g->d, s->step_c});
+        reduce(g, it, (bnd3 *)g->dres, g->n, bnd_max(), init);
+        CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
+        CK(cudaStreamSynchronize(g->st));
+        prof_end(g->st, P_BOUNDS_CHECK);
+    }
+    g->bnd_fresh = 0;
     for (int k = 0; k < 3; ++k) out[k] = g->hres[k];
     real acc;
     memcpy(&acc, g->hres + STEP_ACC, sizeof acc);
@@ -1121,25 +1257,35 @@ static void gpu_bounds(sim_t *s, double out[STEP_NBOUNDS])
 
 static long gpu_check(sim_t *s)
 {
-    gpu_t *g = gpu_get(s);
+    gpu_t *g = gpu_hook(s, 0);
     prof_begin(g->st);
-    auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0),
-                                              chk_of{g->d, s->step_c, s->t, g->xb[0], g->xb[1], g->xb[2]});
-    chk init = {(long long)g->n, 0, 0};
-    reduce(g, it, g->dchk, g->n, chk_merge(), init);
-    CK(cudaMemcpyAsync(g->hchk, g->dchk, sizeof(chk), cudaMemcpyDeviceToHost, g->st));
+    const int acc = g->acc_pending; /* |acc| in the same pass */
+    chkb_of f = {chk_of{g->d, s->step_c, s->t, g->xb[0], g->xb[1], g->xb[2]}, bnd_of{g->d, s->step_c},
+                 acc ? g->amag : NULL};
+    auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), f);
+    chkb init = {{(long long)g->n, 0, 0}, {{0, 0, 0}}, R(0.0)};
+    reduce(g, it, g->dchk, g->n, chkb_merge(), init);
+    if (acc) { /* dres[STEP_ACC] as gpu_acc_reduce leaves it */
+        CK(cudaMemcpyAsync(g->dres + STEP_ACC, &g->dchk->amax, sizeof(real), cudaMemcpyDeviceToDevice, g->st));
+        g->acc_pending = 0;
+    }
+    CK(cudaMemcpyAsync(g->hchk, g->dchk, sizeof(chkb), cudaMemcpyDeviceToHost, g->st));
+    CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
     CK(cudaStreamSynchronize(g->st));
     prof_end(g->st, P_BOUNDS_CHECK);
+    for (int k = 0; k < 3; ++k) g->hres[k] = g->hchk->b.v[k];
+    g->bnd_fresh = 1;
     if (s->halo) hx_resolve(g, s->halo); /* whole pairs only: one may be in flight */
-    double D = sqrt((double)g->hchk->build2), d = sqrt((double)g->hchk->step2), skin = g->skin;
+    const chk *c = &g->hchk->c;
+    double D = sqrt((double)c->build2), d = sqrt((double)c->step2), skin = g->skin;
     g->stale |= D + 2 * d > 0.5 * skin;
     g->every = !s->flow_on || d > 0.25 * skin; /* prescribed motion: x_n is not kept */
-    return g->hchk->first >= (long long)g->n ? -1 : (long)g->hchk->first;
+    return c->first >= (long long)g->n ? -1 : (long)c->first;
 }
 
 static void gpu_to_host(sim_t *s)
 {
-    gpu_t *g = gpu_get(s);
+    gpu_t *g = gpu_hook(s, 0);
     gpu_settle(s, g);
     gpu_download(s, g);
     if (s->halo) hx_resolve(g, s->halo);
@@ -1148,8 +1294,9 @@ static void gpu_to_host(sim_t *s)
 /* A load balance moved particles between ranks on the host: take them. */
 static void gpu_from_host(sim_t *s)
 {
-    gpu_t *g = gpu_get(s);
+    gpu_t *g = gpu_hook(s, 1);
     gpu_settle(s, g);
+    gpu_acc_reduce(g);
     CK(cudaStreamSynchronize(g->st));
     gpu_reserve(g, s->p.n);
     gpu_counts(g, s->p.n, 0);

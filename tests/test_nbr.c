@@ -75,7 +75,8 @@ static void test_nbr_permutes_fields(void **st)
 /* The neighbour list (grid_list_fill, the GPU backend's) visits the
  * in-support particles of the cell scan in the same order, so sums come out
  * bit-identical; a particle with more neighbours than the capacity falls
- * back to the cell scan. Reference: the cell scan itself. */
+ * back to the cell scan; the lanes of a team (NBR_BEGIN_T) share the visits
+ * out. Reference: the cell scan itself. */
 static void check_list(int dim, unsigned cap)
 {
     const size_t n = 2000;
@@ -110,6 +111,29 @@ static void check_list(int dim, unsigned cap)
             }
         NBR_END
         assert_int_equal(k, m);
+        /* teams (hd.h): lane l of T meets every T-th entry of each segment
+         * from the l-th on; between them the lanes meet each neighbour of
+         * the scan exactly once, each lane in the scan's order */
+        for (int T = 2; T <= 16; T *= 2) {
+            char *seen = calloc(m, 1);
+            size_t met = 0;
+            for (int l = 0; l < T; ++l) {
+                size_t last = 0;
+                int any = 0;
+                NBR_BEGIN_T(&lv, p.x, i, j, l, T)
+                    real xij[3];
+                    if (grid_pair(dim, p.x, i, j, xij) >= s2) continue;
+                    size_t pos = 0;
+                    while (pos < m && seq[pos] != j) ++pos;
+                    assert_true(pos < m);
+                    assert_int_equal(seen[pos], 0);
+                    assert_true(!any || pos > last);
+                    seen[pos] = 1, last = pos, any = 1, ++met;
+                NBR_END
+            }
+            assert_int_equal(met, m);
+            free(seen);
+        }
     }
     if (cap < 8) assert_true(over > 0); /* the fallback was exercised */
     free(seq);

@@ -42,8 +42,8 @@ static void coeffs(fixture *f)
 
 static double rate(const fixture *f, size_t i)
 {
-    seg_rate r = f->c.scheme == 2 ? seg_rate_conservative(i, &f->p, &f->g.view, &f->c)
-                                  : seg_rate_hcsr(i, &f->p, &f->g.view, &f->c);
+    seg_rate r = f->c.scheme == 2 ? seg_rate_conservative(i, &f->p, &f->g.view, &f->c, 0, 1)
+                                  : seg_rate_hcsr(i, &f->p, &f->g.view, &f->c, 0, 1);
     return r.seg + r.diff + r.src;
 }
 

@@ -36,15 +36,17 @@ typedef struct flow_ctx {
 
 /* Dummy particle d: velocity and stress extrapolated from the material in
  * its support (paper §4.1). A dummy with no material in reach takes the
- * wall velocity and zero stress. */
-HD_INLINE void flow_wall(size_t d, particles_t *p, const grid_view *g, const flow_ctx *c)
+ * wall velocity and zero stress. Lane `lane` of a team of nlanes (hd.h);
+ * lane 0 writes. */
+HD_INLINE void flow_wall_team(size_t d, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
+                              int nlanes)
 {
     const sph_ctx *k = &c->k;
     wall_sums ws = {0, {0, 0, 0}, {0, 0, 0, 0, 0, 0}, {0, 0, 0}};
     real xd[3] = {p->x[0][d], p->x[1][d], p->x[2][d]}, aw[3], geff[3];
     wall_accel(&c->w, xd, aw);
     for (int a = 0; a < 3; ++a) geff[a] = c->g[a] - aw[a];
-    NBR_BEGIN(g, p->x, d, m)
+    NBR_BEGIN_T(g, p->x, d, m, lane, nlanes)
         if (p->kind[m] != KIND_MATERIAL) continue;
         real xdm[3];
         real r2 = grid_pair(k->dim, p->x, d, m, xdm);
@@ -54,6 +56,11 @@ HD_INLINE void flow_wall(size_t d, particles_t *p, const grid_view *g, const flo
         real sm[6] = {p->sig[0][m], p->sig[1][m], p->sig[2][m], p->sig[3][m], p->sig[4][m], p->sig[5][m]};
         wall_add(&ws, W, p->vol[m], c->rho * p->vol[m], um, sm, geff, xdm);
     NBR_END
+    team_sum(&ws.w, 1, nlanes);
+    team_sum(ws.u, 3, nlanes);
+    team_sum(ws.s, 6, nlanes);
+    team_sum(ws.gr, 3, nlanes);
+    if (lane != 0) return;
     /* the wall velocity at d: drum rotation omega e_z x (x_d - centre), or the
      * box's translation; the normal from d's reference position (the box
      * translates rigidly, so X0 is d in the box frame) */
@@ -81,9 +88,11 @@ HD_INLINE void flow_wall(size_t d, particles_t *p, const grid_view *g, const flo
     for (int q = 0; q < 6; ++q) p->sig[q][d] = sd[q];
 }
 
-/* Material particle i: acc (3.9 + g), dsig (C1) and gdot from the current
- * positions, velocities and stresses of i and its neighbours (material and
- * dummy). Returns |acc|. */
+HD_INLINE void flow_wall(size_t d, particles_t *p, const grid_view *g, const flow_ctx *c)
+{
+    flow_wall_team(d, p, g, c, 0, 1);
+}
+
 /* What flow_rates reads of neighbour j besides its position. */
 HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6], real *volj)
 {
@@ -92,7 +101,12 @@ HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6
     *volj = p->vol[j];
 }
 
-HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)
+/* Material particle i: acc (3.9 + g), dsig (C1) and gdot from the current
+ * positions, velocities and stresses of i and its neighbours (material and
+ * dummy). Returns |acc|. Lane `lane` of a team of nlanes (hd.h): lane 0
+ * writes and returns |acc|, the others return 0. */
+HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
+                               int nlanes)
 {
     const sph_ctx *k = &c->k;
     real L[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, a[3] = {0, 0, 0};
@@ -101,7 +115,7 @@ HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const fl
      * loop through the particles_t pointers); j's before or after the
      * distance test by SPH_EARLY_LOADS (hd.h) */
     const real xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]}, ui[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
-    NBR_BEGIN(g, p->x, i, j)
+    NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
         if (j == i) continue;
         real uj[3], sj[6], volj = 0;
         if (SPH_EARLY_LOADS) flow_load_j(p, j, uj, sj, &volj);
@@ -116,6 +130,9 @@ HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const fl
         real Pi = c->alpha_av > 0 ? mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij) : R(0.0);
         mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
     NBR_END
+    team_sum(L, 9, nlanes);
+    team_sum(a, 3, nlanes);
+    if (lane != 0) return R(0.0);
     real eps[6], w[3], ds[6];
     mom_strain_spin(L, eps, w);
     stress_rate_elastic(si, eps, w, c->m.G, c->m.K, ds);
@@ -124,6 +141,11 @@ HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const fl
     p->gdot[i] = stress_shear_rate(eps);
     real a2 = p->acc[0][i] * p->acc[0][i] + p->acc[1][i] * p->acc[1][i] + p->acc[2][i] * p->acc[2][i];
     return (real)sqrt((double)a2);
+}
+
+HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)
+{
+    return flow_rates_team(i, p, g, c, 0, 1);
 }
 
 /* Material particle i, a in seconds: x = x_n + a u, u = u_n + a acc,
@@ -154,12 +176,14 @@ HD_INLINE void flow_shepard_store(size_t i, const particles_t *p)
 }
 
 /* Shepard filter (3.12) for material particle i, over its material
- * neighbours (self included), into dsig[] (the caller copies it back). */
-HD_INLINE void flow_shepard(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)
+ * neighbours (self included), into dsig[] (the caller copies it back).
+ * Lane `lane` of a team of nlanes (hd.h); lane 0 writes. */
+HD_INLINE void flow_shepard_team(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
+                                 int nlanes)
 {
     const sph_ctx *k = &c->k;
     real acc[6] = {0, 0, 0, 0, 0, 0}, wsum = 0;
-    NBR_BEGIN(g, p->x, i, j)
+    NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
         if (p->kind[j] != KIND_MATERIAL) continue;
         real xij[3];
         real r2 = grid_pair(k->dim, p->x, i, j, xij);
@@ -167,7 +191,15 @@ HD_INLINE void flow_shepard(size_t i, particles_t *p, const grid_view *g, const 
         real sj[6] = {p->sig[0][j], p->sig[1][j], p->sig[2][j], p->sig[3][j], p->sig[4][j], p->sig[5][j]};
         shepard_add(acc, &wsum, kernel_w((real)sqrt((double)r2), k->h, k->alpha), sj);
     NBR_END
+    team_sum(acc, 6, nlanes);
+    team_sum(&wsum, 1, nlanes);
+    if (lane != 0) return;
     for (int q = 0; q < 6; ++q) p->dsig[q][i] = acc[q] / wsum; /* wsum >= W(0) > 0 */
+}
+
+HD_INLINE void flow_shepard(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)
+{
+    flow_shepard_team(i, p, g, c, 0, 1);
 }
 
 #endif

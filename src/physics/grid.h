@@ -91,7 +91,12 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
  * holds the same particles within the support in the same order, so that
  * sums come out alike. Bodies test the distance themselves and may
  * `continue`. */
-#define NBR_BEGIN(g, x, i, j)                                                          \
+#define NBR_BEGIN(g, x, i, j) NBR_BEGIN_T(g, x, i, j, 0, 1)
+
+/* The same loop for lane `lane` of a team of `nlanes` (hd.h): entries
+ * lane, lane + nlanes, ... of each segment (the list, or each cell), so that
+ * the lanes of a team meet every neighbour exactly once between them. */
+#define NBR_BEGIN_T(g, x, i, j, lane, nlanes)                                          \
     {                                                                                  \
         int c0_[3];                                                                    \
         grid_cell_coords((g), (x)[0], (x)[1], (x)[2], (i), c0_);                       \
@@ -114,7 +119,7 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
                 if (s_ % nsub_ == 0) a_ = (g)->start[cell_], b_ = (g)->end[cell_];     \
                 else a_ = (g)->gstart[cell_], b_ = (g)->gend[cell_];                   \
             }                                                                          \
-            for (size_t q_ = a_; q_ < b_; ++q_) {                                      \
+            for (size_t q_ = a_ + (size_t)(lane); q_ < b_; q_ += (size_t)(nlanes)) {   \
                 const size_t j = lst_ ? (size_t)(g)->nl[q_ * (g)->nl_stride + (i)] : q_;
 
 #define NBR_END                                                                        \

@@ -37,4 +37,25 @@ typedef double real;
 #define SPH_EARLY_LOADS 0
 #endif
 
+/* Teams: the neighbour-loop bodies take (lane, nlanes) and sum over every
+ * nlanes-th entry of the particle's neighbours from entry lane on
+ * (NBR_BEGIN_T, grid.h); team_sum then adds the partial sums of the team.
+ * On the GPU a team is nlanes consecutive threads of one warp (a power of
+ * two up to 32), summed by a butterfly in a fixed order, so that every lane
+ * holds the same bits and runs stay bit-identical; on the host nlanes is 1
+ * and team_sum does nothing. */
+HD_INLINE void team_sum(real *v, int n, int nlanes)
+{
+#ifdef __CUDA_ARCH__
+    if (nlanes > 1) {
+        const unsigned lane = threadIdx.x & 31u, base = lane & ~(unsigned)(nlanes - 1);
+        const unsigned mask = nlanes == 32 ? 0xffffffffu : ((1u << nlanes) - 1u) << base;
+        for (int k = 0; k < n; ++k)
+            for (int o = nlanes >> 1; o > 0; o >>= 1) v[k] += __shfl_xor_sync(mask, v[k], o, nlanes);
+    }
+#else
+    (void)v, (void)n, (void)nlanes;
+#endif
+}
+
 #endif

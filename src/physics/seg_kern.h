@@ -78,8 +78,8 @@ HD_INLINE void seg_fields(const seg_ctx *c, const particles_t *p, size_t j, real
  * treatment: standard difference gradients inside (3.13), C1 gradients at
  * boundary particles (App. E), diffusion with psi~ (4.13), CCSR source (4.9)
  * at walls, MCSR source (4.16) at the free surface. */
-HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view *g,
-                                 const seg_ctx *c)
+HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c,
+                                 int lane, int nlanes)
 {
     const sph_ctx *k = &c->k;
     const seg_params *sp = &c->sp;
@@ -92,7 +92,7 @@ HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view
     real ni[3] = {p->nrm[0][i], p->nrm[1][i], p->nrm[2][i]};
     real gx[2] = {0, 0}, diff = 0, qs = 0;
     seg_c1 s1 = {{0}, {0}};
-    NBR_BEGIN(g, p->x, i, j)
+    NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
         real xij[3];
         real r2 = grid_pair(k->dim, p->x, i, j, xij);
         if (r2 >= k->support2) continue;
@@ -119,6 +119,13 @@ HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view
         diff += (p->psi[i] * Di + p->psi[j] * p->segD[j]) * (Ci - Cj) * f * r2 / (r2 + k->eta2);
         if (mcsr) qs += ni[0] * grad[0] + ni[1] * grad[1] + ni[2] * grad[2];
     NBR_END
+    team_sum(gx, 2, nlanes);
+    team_sum(&diff, 1, nlanes);
+    team_sum(&qs, 1, nlanes);
+    if (bnd) {
+        team_sum(s1.M, 16, nlanes);
+        team_sum(s1.B, 8, nlanes);
+    }
     if (bnd) {
         real gc[2];
         if (!seg_c1_solve(&s1, k->dim, sp->ghat, gc)) gx[0] = gc[0], gx[1] = gc[1];
@@ -142,12 +149,13 @@ HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view
  * M_i = -sum_{j in Omega} V_j w_ij x_ij (x) x_ij, w_ij = x_ij.grad_i W_ij / r^2
  * (M = I in the interior of a regular lattice, tests/test_kernel.c). Stored
  * as xx, yy, zz, xy, xz, yz (zz = 1, xz = yz = 0 in 2D). Where M is singular
- * L = I. */
-HD_INLINE void seg_renorm(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c)
+ * L = I. Lane `lane` of a team of nlanes (hd.h); lane 0 writes. */
+HD_INLINE void seg_renorm_team(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c, int lane,
+                               int nlanes)
 {
     const sph_ctx *k = &c->k;
     real m[6] = {0, 0, 0, 0, 0, 0}; /* xx, yy, zz, xy, xz, yz */
-    NBR_BEGIN(g, p->x, i, j)
+    NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
         if (j == i || p->kind[j] != KIND_MATERIAL) continue;
         real xij[3];
         real r2 = grid_pair(k->dim, p->x, i, j, xij);
@@ -162,6 +170,8 @@ HD_INLINE void seg_renorm(size_t i, const particles_t *p, const grid_view *g, co
             m[5] += w * xij[1] * xij[2];
         }
     NBR_END
+    team_sum(m, 6, nlanes);
+    if (lane != 0) return;
     real l[6] = {1, 1, 1, 0, 0, 0};
     if (k->dim == 2) {
         real det = m[0] * m[1] - m[3] * m[3];
@@ -175,6 +185,11 @@ HD_INLINE void seg_renorm(size_t i, const particles_t *p, const grid_view *g, co
             l[0] = B[0], l[1] = B[4], l[2] = B[8], l[3] = B[1], l[4] = B[2], l[5] = B[5];
     }
     for (int q = 0; q < 6; ++q) p->L[q][i] = l[q];
+}
+
+HD_INLINE void seg_renorm(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c)
+{
+    seg_renorm_team(i, p, g, c, 0, 1);
 }
 
 /* (L_i + L_j)/2 applied to v (L_i, L_j as xx, yy, zz, xy, xz, yz). */
@@ -206,8 +221,8 @@ HD_INLINE void seg_load_j(const particles_t *p, size_t j, real Lj[6], real cqdv[
  * (side walls). Distinct particles never coincide, so the clipping eta of
  * (3.8), which lowers the Laplacian by ~1.5 % at h = 1.5 dr whatever dr, is
  * not needed. With renorm = 0, Lbar = I. */
-HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const grid_view *g,
-                                         const seg_ctx *c)
+HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c,
+                                         int lane, int nlanes)
 {
     const sph_ctx *k = &c->k;
     const seg_params *sp = &c->sp;
@@ -218,7 +233,7 @@ HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const g
     const real xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
     real Li[6];
     for (int m = 0; m < 6; ++m) Li[m] = p->L[m][i];
-    NBR_BEGIN(g, p->x, i, j)
+    NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
         if (j == i || p->kind[j] != KIND_MATERIAL) continue;
         real Lj[6], cqdv[4]; /* C, Q, D, V of j */
         if (SPH_EARLY_LOADS) seg_load_j(p, j, Lj, cqdv);
@@ -236,19 +251,30 @@ HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const g
         seg -= w * (Qi + Qj) * gx;
         diff += w * (Di + Dj) * (Ci - Cj) * xlx;
     NBR_END
+    team_sum(&seg, 1, nlanes);
+    team_sum(&diff, 1, nlanes);
     seg_rate out = {seg, diff, 0};
     return out;
 }
 
-/* rates(): dC_i/dt into p->dCdt (0 for dummies) by the scene's scheme. */
-HD_INLINE void seg_dCdt(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c)
+/* rates(): dC_i/dt into p->dCdt (0 for dummies) by the scene's scheme.
+ * Lane `lane` of a team of nlanes (hd.h; the rate bodies return the team's
+ * sums to every lane); lane 0 writes. */
+HD_INLINE void seg_dCdt_team(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c, int lane,
+                             int nlanes)
 {
     if (p->kind[i] != KIND_MATERIAL) {
-        p->dCdt[i] = 0;
+        if (lane == 0) p->dCdt[i] = 0;
         return;
     }
-    seg_rate r = c->scheme == 2 ? seg_rate_conservative(i, p, g, c) : seg_rate_hcsr(i, p, g, c);
-    p->dCdt[i] = r.seg + r.diff + r.src;
+    seg_rate r = c->scheme == 2 ? seg_rate_conservative(i, p, g, c, lane, nlanes)
+                                : seg_rate_hcsr(i, p, g, c, lane, nlanes);
+    if (lane == 0) p->dCdt[i] = r.seg + r.diff + r.src;
+}
+
+HD_INLINE void seg_dCdt(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c)
+{
+    seg_dCdt_team(i, p, g, c, 0, 1);
 }
 
 #endif
