@@ -132,6 +132,7 @@ static void ckpt_write_decomp(hid_t file, const halo_t *h)
     H5CHECK(g = H5Gcreate2(file, "Decomposition", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
     ckpt_attr_int64(g, "Method", h->method);
     ckpt_attr_int64(g, "Axis", h->axis);
+    ckpt_attr_int64(g, "CoarseCellWidth", h->blk);
     for (int k = 0; k < 3; ++k) {
         char name[16];
         snprintf(name, sizeof name, "CoarseCells%d", k);
@@ -440,6 +441,9 @@ static void ckpt_read_decomp(const char *file, hid_t f, int nranks, ckpt_run *r)
     H5CHECK(g = H5Gopen2(f, "Decomposition", H5P_DEFAULT));
     r->dec_method = (int)ckpt_get_int(file, g, "Method");
     r->dec_axis = (int)ckpt_get_int(file, g, "Axis");
+    htri_t has_blk;
+    H5CHECK(has_blk = H5Aexists(g, "CoarseCellWidth"));
+    r->dec_blk = has_blk ? (int)ckpt_get_int(file, g, "CoarseCellWidth") : HALO_DEPTH;
     long long nv = 1;
     for (int k = 0; k < 3; ++k) {
         char name[16];

@@ -15,7 +15,8 @@
  *                 NumPart (Count int64): the snapshots written so far, for
  *                 the XDMF index;
  *   /Decomposition (multi-rank runs) attributes Method, Axis, CoarseCells
- *                 (3); datasets Bounds (NumRanks + 1 slab bounds) and
+ *                 (3), CoarseCellWidth (halo_t.blk: METIS coarse-cell edge in
+ *                 lattice cells, the cutting backend's ghost depth); datasets Bounds (NumRanks + 1 slab bounds) and
  *                 Owners (the rank of each METIS coarse cell): mpi/halo.h;
  *   /Particles    RankCounts (NumRanks int64: the particles each rank held,
  *                 in rank order) and one dataset NN (00, 01, ...) per array
@@ -42,6 +43,8 @@ typedef struct ckpt_run {
     /* the domain decomposition (multi-rank runs; read back only on the same
      * rank count, so that the restart cuts the domain as the run did) */
     int dec_present, dec_method, dec_axis, dec_cg[3];
+    int dec_blk;              /* METIS: coarse-cell edge in lattice cells (halo_t.blk); HALO_DEPTH when
+                               * the checkpoint predates the attribute */
     long *dec_bound;          /* NumRanks + 1 slab bounds */
     int *dec_part;            /* METIS: the owner of each coarse cell */
 } ckpt_run;

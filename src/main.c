@@ -233,9 +233,16 @@ static void parallel_start(sim_t *s, const ckpt_run *rs)
     halo_init(s->halo, p->dim, R(2.0) * s->seg.k.h, method, axis, arr, narr);
     halo_set_depth(s->halo, s->be->ghost_depth);
     /* METIS parts are coarse cells as wide as the ghost depth: a cut saved
-     * by a backend with another depth is re-made (continues to round-off) */
-    if (rs && rs->dec_present && rs->dec_method == method &&
-        (method == HALO_SLABS || s->be->ghost_depth == HALO_DEPTH))
+     * with other coarse cells (a backend with another depth) is re-made, and
+     * the run continues to round-off rather than bit for bit */
+    int saved = rs && rs->dec_present && rs->dec_method == method;
+    if (saved && method == HALO_METIS && rs->dec_blk != s->halo->blk) {
+        if (comm_rank() == 0)
+            message("restart: the saved METIS parts are of coarse cells %d lattice cells wide, backend %s needs %d "
+                    "(its ghost depth): partitioning again", rs->dec_blk, s->be->name, s->halo->blk);
+        saved = 0;
+    }
+    if (saved)
         halo_restore(s->halo, method, rs->dec_axis, rs->dec_bound, rs->dec_cg, rs->dec_part);
     else
         halo_decompose(s->halo, p);

@@ -29,7 +29,11 @@ bit-identical to the same run done straight through (DESIGN.md: checkpoints
              3-rank run (the checkpoint carries the decomposition); restarted
              on 2 ranks from the same checkpoint it ends equal to the straight
              run to round-off (every field within 1e-8 of its scale, classes
-             equal: tests/validate_mpi.py's tolerance).
+             equal: tests/validate_mpi.py's tolerance). METIS: the checkpoint
+             records the coarse-cell width (2 on the CPU); set to 3 (a GPU
+             checkpoint) the restart partitions again and ends equal to
+             round-off; without it (older checkpoints) the cut is restored and
+             the run ends bit-identical.
   badfile:   --restart with a snapshot, a truncated file, a checkpoint of the
              other precision and one of another dimension: exit 2, one line
              naming the file and the problem.
@@ -197,10 +201,41 @@ def test_drum_ranks(args):
         d = same_snapshot(snap.list_snapshots(a)[-1], snap.list_snapshots(b)[-1])
         check("drum on 3 ranks (%s), restarted on 3: bit-identical at step 160" % method, not d,
               "differs in %s" % d if d else "")
+        if method == "metis":
+            metis_width(args, a, c, over)
         sphseg_np(args, 2, DRUM, c, over + ["Run:max_steps=160"], ["--restart", os.path.join(c, "checkpoint.h5")])
         good, worst = roundoff(snap.list_snapshots(a)[-1], snap.list_snapshots(c)[-1])
         check("drum on 3 ranks (%s), restarted on 2: equal to round-off at step 160" % method, good,
               "max field difference %.2e of its scale" % worst)
+
+
+def metis_width(args, a, c, over):
+    """METIS parts are coarse cells as wide as the ghost depth, which the
+    checkpoint records (/Decomposition CoarseCellWidth). A cut saved with
+    other coarse cells (a GPU run: depth 3) is made again at the restart, and
+    the run ends equal to the straight one to round-off; a checkpoint without
+    the attribute (older) is taken as the CPU's 2 and restored."""
+    for name, width in (("w3", 3), ("nowidth", None)):
+        e = c + "_" + name
+        shutil.copytree(c, e)
+        with h5py.File(os.path.join(e, "checkpoint.h5"), "r+") as f:
+            g = f["Decomposition"]
+            check("METIS checkpoint records its coarse-cell width (2 on the CPU)",
+                  int(g.attrs.get("CoarseCellWidth", -1)) == 2)
+            if width is None:
+                del g.attrs["CoarseCellWidth"]
+            else:
+                g.attrs["CoarseCellWidth"] = np.int64(width)
+        r = sphseg_np(args, 3, DRUM, e, over + ["Run:max_steps=160"], ["--restart", os.path.join(e, "checkpoint.h5")])
+        again = "partitioning again" in r.stdout + r.stderr
+        if width is None:
+            d = same_snapshot(snap.list_snapshots(a)[-1], snap.list_snapshots(e)[-1])
+            check("METIS checkpoint without a coarse-cell width restored: bit-identical at step 160",
+                  not again and not d, "differs in %s" % d if d else "")
+        else:
+            good, worst = roundoff(snap.list_snapshots(a)[-1], snap.list_snapshots(e)[-1])
+            check("METIS cut of coarse cells 3 wide made again on the CPU: equal to round-off at step 160",
+                  again and good, "re-cut %s, max field difference %.2e of its scale" % (again, worst))
 
 
 def test_stopfile(args, box_a):
