@@ -52,6 +52,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import drum_analysis  # noqa: E402
 import snap  # noqa: E402
+from drum_invariants import Checks, mass_bounds_conservation  # noqa: E402
 
 SCENE = os.path.join(HERE, "..", "inputs", "drum_3d.yml")
 BASE = ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025", "Material:E=1e5",
@@ -85,33 +86,12 @@ def main():
     R, dr, h = g["radius"], g["dr"], g["h_factor"] * g["dr"]
     L = round(g["length"] / dr) * dr
     w = -15 * 2 * np.pi / 60  # clockwise
-    ok = True
-
-    def check(name, good, detail):
-        nonlocal ok
-        ok &= bool(good)
-        print("%s %s: %s" % ("ok  " if good else "FAIL", name, detail))
-
-    ids0 = vol0 = None
-    rmax, zlo, zhi = 0.0, np.inf, -np.inf
-    for p in snap.list_snapshots(out):
-        s = snap.read_snapshot(p)
-        m = s["Kind"] == snap.MATERIAL
-        ids, vol = np.sort(s["ParticleIDs"][m]), s["Volume"][m].sum()
-        if ids0 is None:
-            ids0, vol0 = ids, vol
-        check("mass t=%g" % s["Time"], np.array_equal(ids, ids0) and vol == vol0,
-              "%d material of %d particles, sum V = %.6e m^3" % (len(ids), len(m), vol))
-        xm = s["Coordinates"][m]
-        rmax = max(rmax, np.hypot(xm[:, 0], xm[:, 1]).max())
-        zlo, zhi = min(zlo, xm[:, 2].min()), max(zhi, xm[:, 2].max())
+    check = Checks()
+    coords, dg = mass_bounds_conservation(check, out, "m^3")
+    rmax = max(np.hypot(x[:, 0], x[:, 1]).max() for x in coords)
+    zlo, zhi = min(x[:, 2].min() for x in coords), max(x[:, 2].max() for x in coords)
     check("containment", rmax < R and zlo > 0 and zhi < L,
           "max r = %.5f m (R = %.5f), z in [%.5f, %.5f] m (L = %.5f)" % (rmax, R, zlo, zhi, L))
-    dg = snap.read_diagnostics(out)
-    check("bounds", dg["C_min"].min() >= -0.01 and dg["C_max"].max() <= 1.01,
-          "C in [%.4f, %.4f]" % (dg["C_min"].min(), dg["C_max"].max()))
-    drift = np.abs(dg["small_volume_drift"]).max()
-    check("conservation", drift < 1e-10, "max |drift| %.2e" % drift)
 
     s = snap.read_snapshot(snap.list_snapshots(out)[-1])
     m = s["Kind"] == snap.MATERIAL
@@ -140,7 +120,7 @@ def main():
           "at t = %g s: max speed %.2e m/s (turning drum's wall %.2e), Omega = %.1e rad/s, kinetic energy "
           "%.2e J (peak %.2e; turning drum %.2e)" % (s["Time"], umax, abs(w) * R, om, ke_rest[-1], ke_rest.max(),
                                                     ke_turn[-1]))
-    sys.exit(0 if ok else 1)
+    sys.exit(0 if check.ok else 1)
 
 
 if __name__ == "__main__":
