@@ -1099,7 +1099,7 @@ static void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl)
         if (!sel_on(sl, i)) return;
         particles_t q = p;
         const int mat = q.kind[i] == KIND_MATERIAL;
-        real a = mat ? flow_rates_team(i, &q, &v, &c, lane, T) : R(0.0);
+        real a = mat ? flow_rates_team(i, &q, &v, &c, lane, T, 0) : R(0.0);
         if (lane != 0) return;
         amag[i] = a;
         if (seg && mat) seg_coeffs(i, &q, &sc);

@@ -44,8 +44,12 @@ static void cpu_prepare(sim_t *s, double t, int classify)
         cpu_refresh(s, cls, 5);
     }
     if (s->seg_on && classify && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) {
+        /* with computed flow the owned particles' L come with the next flow
+         * rates (same pairs, no pass of their own); here the ghosts' */
+        const long lo = s->flow_on ? (long)p->n : 0;
+        s->renorm_due = s->flow_on;
 #pragma omp parallel for schedule(static)
-        for (long i = 0; i < n; ++i)
+        for (long i = lo; i < n; ++i)
             if (p->kind[i] == KIND_MATERIAL) seg_renorm((size_t)i, p, &s->grid.view, &s->seg);
     }
     if (s->flow_on) cpu_walls(s);
@@ -55,14 +59,16 @@ static void cpu_flow_rates(sim_t *s)
 {
     particles_t *p = &s->p;
     const long n = (long)p->n;
+    const int renorm = s->renorm_due;
     double amax = 0;
 #pragma omp parallel for schedule(static) reduction(max : amax)
     for (long i = 0; i < n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
-        double a = flow_rates((size_t)i, p, &s->grid.view, &s->flow);
+        double a = flow_rates_team((size_t)i, p, &s->grid.view, &s->flow, 0, 1, renorm);
         amax = a > amax ? a : amax;
     }
     s->amax = amax;
+    s->renorm_due = 0;
 }
 
 /* V, Q, D of ghosts too (neighbours read them), dC/dt of owned particles. */

@@ -28,8 +28,10 @@ struct backend {
      * psi~ otherwise travel with the particles from the last
      * classification); classify == 2 classifies whatever the scheme
      * (snapshots show boundary classes and normals). The conservative
-     * scheme's renormalisation L is computed here too, when classify is set:
-     * once per step, like the classification. */
+     * scheme's renormalisation L is computed when classify is set: once per
+     * step, like the classification, at these positions; here, or for the
+     * owned particles in the next rates' flow pass (then s->renorm_due is
+     * set until that pass), but before the concentration rates read it. */
     void (*prepare)(struct sim *s, double t, int classify);
     /* Rates of every solved equation at the current state: with computed
      * flow acc, dsig and gdot (flow_rates; s->amax is set); then, with
@@ -81,6 +83,7 @@ typedef struct sim {
     int hcsr;          /* scheme needs the boundary classification */
     double surface_y;  /* initial free-surface height, m (geostatic stress) */
     double amax;       /* largest |acceleration| of the last rate evaluation, m/s^2 (CPU) */
+    int renorm_due;    /* the owned particles' L are due in the next flow rates (set by prepare) */
     double t;          /* simulated time, s */
     long step;
     double dt;         /* last time step, s */

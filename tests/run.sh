@@ -41,8 +41,9 @@ for v in tests/validate_*.py; do
     run_one "$(basename "$v" .py)" "$PYTHON" "$v" --sphseg "$BUILD/sphseg" --work "$tmp/$(basename "$v" .py)"
 done
 
-# the multi-rank comparison again on the GPU backend (skipped without a GPU)
+# the multi-rank comparison and the restarts again on the GPU backend (skipped without a GPU)
 run_one validate_mpi_gpu "$PYTHON" tests/validate_mpi.py --backend gpu --sphseg "$BUILD/sphseg" --work "$tmp/validate_mpi_gpu"
+run_one validate_restart_gpu "$PYTHON" tests/validate_restart.py --backend gpu --sphseg "$BUILD/sphseg" --work "$tmp/validate_restart_gpu"
 
 [ ${#skipped[@]} -gt 0 ] && echo "skipped: ${skipped[*]}"
 [ $fail -gt 0 ] && echo "failed: ${failed[*]}"

@@ -11,6 +11,9 @@
  *    no gravity and no walls, sum m_i a_i = 0 to round-off (the pair terms
  *    of 3.9 and 3.10 are antisymmetric);
  *  - the Shepard filter (3.12) leaves a uniform stress unchanged;
+ *  - flow_rates with renorm (the backends' fused pass) gives every material
+ *    particle of a perturbed block with dummy walls the L of seg_renorm,
+ *    bit for bit, and the same acc, dsig, gdot as flow_rates without it;
  *  - advance: a trial stress outside the cone ends on it (f = 0), a tensile
  *    one at the apex (0); x and u advance with the rate-state velocity;
  *  - wall motion: a drum dummy keeps its radius, turns by omega t and moves
@@ -105,6 +108,21 @@ static double rnd(unsigned *s)
     return ((*s >> 8) & 0xffff) / 32768.0 - 1.0;
 }
 
+/* Material positions jittered by up to 0.2 dr; random velocities and
+ * stresses on every particle. */
+static void scramble(particles_t *p, unsigned seed)
+{
+    for (size_t k = 0; k < p->n; ++k) {
+        if (p->kind[k] == KIND_MATERIAL) {
+            p->x[0][k] += (real)(0.2 * DR * rnd(&seed));
+            p->x[1][k] += (real)(0.2 * DR * rnd(&seed));
+        }
+        p->v[0][k] = (real)(0.05 * rnd(&seed));
+        p->v[1][k] = (real)(0.05 * rnd(&seed));
+        for (int q = 0; q < 6; ++q) p->sig[q][k] = (real)(-1000 + 500 * rnd(&seed));
+    }
+}
+
 static void test_momentum_conservation(void **st)
 {
     (void)st;
@@ -113,15 +131,8 @@ static void test_momentum_conservation(void **st)
     flow_ctx c = make_ctx();
     c.g[1] = 0;
     int n = 10;
-    unsigned seed = 7;
     tu_block2d(&p, n, n, DR, 0, 0);
-    for (size_t k = 0; k < p.n; ++k) {
-        p.x[0][k] += (real)(0.2 * DR * rnd(&seed));
-        p.x[1][k] += (real)(0.2 * DR * rnd(&seed));
-        p.v[0][k] = (real)(0.05 * rnd(&seed));
-        p.v[1][k] = (real)(0.05 * rnd(&seed));
-        for (int q = 0; q < 6; ++q) p.sig[q][k] = (real)(-1000 + 500 * rnd(&seed));
-    }
+    scramble(&p, 7);
     nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
     double sum[2] = {0, 0}, mag = 0;
     for (size_t k = 0; k < p.n; ++k) {
@@ -152,6 +163,42 @@ static void test_shepard_uniform(void **st)
         flow_shepard(k, &p, &g.view, &c); /* dummies (12345) must not enter */
         for (int q = 0; q < 6; ++q) assert_true(fabs(p.dsig[q][k] - p.sig[q][k]) < RT(1e-12) * 200);
     }
+    nbr_free(&g);
+    part_free(&p);
+}
+
+static void test_renorm_fused(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    seg_ctx sc;
+    memset(&sc, 0, sizeof sc);
+    sc.k = c.k;
+    tu_block2d(&p, 9, 9, DR, 3, 3);
+    scramble(&p, 11);
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    int nmat = 0, nbent = 0;
+    for (size_t k = 0; k < p.n; ++k) {
+        if (p.kind[k] != KIND_MATERIAL) continue;
+        seg_renorm(k, &p, &g.view, &sc);
+        real L0[6], acc0[3], ds0[6], gd0;
+        for (int q = 0; q < 6; ++q) L0[q] = p.L[q][k], p.L[q][k] = -7;
+        flow_rates(k, &p, &g.view, &c);
+        for (int q = 0; q < 6; ++q) assert_true(p.L[q][k] == -7); /* renorm off: L untouched */
+        for (int a = 0; a < 3; ++a) acc0[a] = p.acc[a][k];
+        for (int q = 0; q < 6; ++q) ds0[q] = p.dsig[q][k];
+        gd0 = p.gdot[k];
+        flow_rates_team(k, &p, &g.view, &c, 0, 1, 1);
+        for (int q = 0; q < 6; ++q) assert_true(p.L[q][k] == L0[q]);
+        for (int a = 0; a < 3; ++a) assert_true(p.acc[a][k] == acc0[a]);
+        for (int q = 0; q < 6; ++q) assert_true(p.dsig[q][k] == ds0[q]);
+        assert_true(p.gdot[k] == gd0);
+        nmat++;
+        nbent += fabs(L0[0] - 1) > 1e-3; /* the walls cut the support: L is not I */
+    }
+    assert_true(nmat == 81 && nbent > 0);
     nbr_free(&g);
     part_free(&p);
 }
@@ -269,6 +316,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_uniform_stress),        cmocka_unit_test(test_linear_velocity),
         cmocka_unit_test(test_momentum_conservation), cmocka_unit_test(test_shepard_uniform),
+        cmocka_unit_test(test_renorm_fused),
         cmocka_unit_test(test_advance),               cmocka_unit_test(test_drum_wall_motion),
         cmocka_unit_test(test_box_translation),       cmocka_unit_test(test_drum3d_walls),
     };

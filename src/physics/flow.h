@@ -18,6 +18,7 @@
 #include "grid.h"
 #include "momentum.h"
 #include "seg.h"
+#include "seg_kern.h"
 #include "sph.h"
 #include "stress.h"
 #include "wall.h"
@@ -104,12 +105,14 @@ HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6
 /* Material particle i: acc (3.9 + g), dsig (C1) and gdot from the current
  * positions, velocities and stresses of i and its neighbours (material and
  * dummy). Returns |acc|. Lane `lane` of a team of nlanes (hd.h): lane 0
- * writes and returns |acc|, the others return 0. */
+ * writes and returns |acc|, the others return 0. With renorm set, also the
+ * conservative scheme's L_i (seg_renorm_team: the same pairs, the same sums
+ * in the same order), which then costs no neighbour pass of its own. */
 HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
-                               int nlanes)
+                               int nlanes, int renorm)
 {
     const sph_ctx *k = &c->k;
-    real L[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, a[3] = {0, 0, 0};
+    real L[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, a[3] = {0, 0, 0}, m[6] = {0, 0, 0, 0, 0, 0};
     real si[6] = {p->sig[0][i], p->sig[1][i], p->sig[2][i], p->sig[3][i], p->sig[4][i], p->sig[5][i]};
     /* i's own values read once (the compiler cannot hoist them out of the
      * loop through the particles_t pointers); j's before or after the
@@ -124,6 +127,7 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
         if (r2 >= k->support2) continue;
         if (!SPH_EARLY_LOADS) flow_load_j(p, j, uj, sj, &volj);
         real f = kernel_f((real)sqrt((double)r2), k->h, k->alpha);
+        if (renorm && p->kind[j] == KIND_MATERIAL) seg_renorm_add(m, k->dim, -f * volj, xij);
         real gradW[3] = {f * xij[0], f * xij[1], f * xij[2]};
         real uij[3] = {ui[0] - uj[0], ui[1] - uj[1], ui[2] - uj[2]};
         mom_velgrad_add(L, volj, uij, gradW);
@@ -132,7 +136,9 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
     NBR_END
     team_sum(L, 9, nlanes);
     team_sum(a, 3, nlanes);
+    if (renorm) team_sum(m, 6, nlanes);
     if (lane != 0) return R(0.0);
+    if (renorm) seg_renorm_store(i, p, k->dim, m);
     real eps[6], w[3], ds[6];
     mom_strain_spin(L, eps, w);
     stress_rate_elastic(si, eps, w, c->m.G, c->m.K, ds);
@@ -145,7 +151,7 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
 
 HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)
 {
-    return flow_rates_team(i, p, g, c, 0, 1);
+    return flow_rates_team(i, p, g, c, 0, 1, 0);
 }
 
 /* Material particle i, a in seconds: x = x_n + a u, u = u_n + a acc,

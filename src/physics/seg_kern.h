@@ -145,6 +145,38 @@ HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view
     return out;
 }
 
+/* One pair's share of the renormalisation moment M_i (seg_renorm_team
+ * below): w = -V_j w_ij. */
+HD_INLINE void seg_renorm_add(real m[6], int dim, real w, const real xij[3])
+{
+    m[0] += w * xij[0] * xij[0];
+    m[1] += w * xij[1] * xij[1];
+    m[3] += w * xij[0] * xij[1];
+    if (dim == 3) {
+        m[2] += w * xij[2] * xij[2];
+        m[4] += w * xij[0] * xij[2];
+        m[5] += w * xij[1] * xij[2];
+    }
+}
+
+/* L_i = M_i^-1 (or I) from the summed moment m, into p->L. */
+HD_INLINE void seg_renorm_store(size_t i, const particles_t *p, int dim, const real m[6])
+{
+    real l[6] = {1, 1, 1, 0, 0, 0};
+    if (dim == 2) {
+        real det = m[0] * m[1] - m[3] * m[3];
+        if (det > R(1e-6) * (m[0] * m[0] + m[1] * m[1])) {
+            l[0] = m[1] / det, l[1] = m[0] / det, l[3] = -m[3] / det;
+        }
+    } else {
+        real A[9] = {m[0], m[3], m[4], m[3], m[1], m[5], m[4], m[5], m[2]};
+        real B[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+        if (!linalg_solve(3, A, B, 3, R(1e-6)))
+            l[0] = B[0], l[1] = B[4], l[2] = B[8], l[3] = B[1], l[4] = B[2], l[5] = B[5];
+    }
+    for (int q = 0; q < 6; ++q) p->L[q][i] = l[q];
+}
+
 /* Renormalisation of the conservative scheme: L_i = M_i^-1 with the moment
  * M_i = -sum_{j in Omega} V_j w_ij x_ij (x) x_ij, w_ij = x_ij.grad_i W_ij / r^2
  * (M = I in the interior of a regular lattice, tests/test_kernel.c). Stored
@@ -161,30 +193,11 @@ HD_INLINE void seg_renorm_team(size_t i, const particles_t *p, const grid_view *
         real r2 = grid_pair(k->dim, p->x, i, j, xij);
         if (r2 >= k->support2) continue;
         real w = -kernel_f((real)sqrt((double)r2), k->h, k->alpha) * p->vol[j];
-        m[0] += w * xij[0] * xij[0];
-        m[1] += w * xij[1] * xij[1];
-        m[3] += w * xij[0] * xij[1];
-        if (k->dim == 3) {
-            m[2] += w * xij[2] * xij[2];
-            m[4] += w * xij[0] * xij[2];
-            m[5] += w * xij[1] * xij[2];
-        }
+        seg_renorm_add(m, k->dim, w, xij);
     NBR_END
     team_sum(m, 6, nlanes);
     if (lane != 0) return;
-    real l[6] = {1, 1, 1, 0, 0, 0};
-    if (k->dim == 2) {
-        real det = m[0] * m[1] - m[3] * m[3];
-        if (det > R(1e-6) * (m[0] * m[0] + m[1] * m[1])) {
-            l[0] = m[1] / det, l[1] = m[0] / det, l[3] = -m[3] / det;
-        }
-    } else {
-        real A[9] = {m[0], m[3], m[4], m[3], m[1], m[5], m[4], m[5], m[2]};
-        real B[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-        if (!linalg_solve(3, A, B, 3, R(1e-6)))
-            l[0] = B[0], l[1] = B[4], l[2] = B[8], l[3] = B[1], l[4] = B[2], l[5] = B[5];
-    }
-    for (int q = 0; q < 6; ++q) p->L[q][i] = l[q];
+    seg_renorm_store(i, p, k->dim, m);
 }
 
 HD_INLINE void seg_renorm(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c)
