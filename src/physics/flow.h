@@ -122,8 +122,8 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
         if (j == i) continue;
         real uj[3], sj[6], volj = 0;
         if (SPH_EARLY_LOADS) flow_load_j(p, j, uj, sj, &volj);
-        real xij[3] = {xi[0] - p->x[0][j], xi[1] - p->x[1][j], k->dim == 3 ? xi[2] - p->x[2][j] : R(0.0)};
-        real r2 = xij[0] * xij[0] + xij[1] * xij[1] + xij[2] * xij[2]; /* as grid_pair */
+        real xij[3];
+        real r2 = grid_pair_xi(k->dim, xi, p->x, j, xij);
         if (r2 >= k->support2) continue;
         if (!SPH_EARLY_LOADS) flow_load_j(p, j, uj, sj, &volj);
         real f = kernel_f((real)sqrt((double)r2), k->h, k->alpha);

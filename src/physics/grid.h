@@ -127,7 +127,18 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
         }                                                                              \
     }
 
-/* Pair geometry: x_ij = x_i - x_j and r^2. */
+/* Pair geometry: x_ij = x_i - x_j and r^2, with x_i already at hand (read
+ * once outside a neighbour loop). */
+HD_INLINE real grid_pair_xi(int dim, const real xi[3], real *const *x, size_t j, real xij[3])
+{
+    xij[0] = xi[0] - x[0][j];
+    xij[1] = xi[1] - x[1][j];
+    xij[2] = dim == 3 ? xi[2] - x[2][j] : R(0.0);
+    return xij[0] * xij[0] + xij[1] * xij[1] + xij[2] * xij[2];
+}
+
+/* Pair geometry: x_ij = x_i - x_j and r^2 (the same arithmetic as
+ * grid_pair_xi, reading x_i at each call). */
 HD_INLINE real grid_pair(int dim, real *const *x, size_t i, size_t j, real xij[3])
 {
     xij[0] = x[0][i] - x[0][j];

@@ -125,8 +125,6 @@ HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view
     if (bnd) {
         team_sum(s1.M, 16, nlanes);
         team_sum(s1.B, 8, nlanes);
-    }
-    if (bnd) {
         real gc[2];
         if (!seg_c1_solve(&s1, k->dim, sp->ghat, gc)) gx[0] = gc[0], gx[1] = gc[1];
     }
@@ -250,8 +248,8 @@ HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const g
         if (j == i || p->kind[j] != KIND_MATERIAL) continue;
         real Lj[6], cqdv[4]; /* C, Q, D, V of j */
         if (SPH_EARLY_LOADS) seg_load_j(p, j, Lj, cqdv);
-        real xij[3] = {xi[0] - p->x[0][j], xi[1] - p->x[1][j], k->dim == 3 ? xi[2] - p->x[2][j] : R(0.0)};
-        real r2 = xij[0] * xij[0] + xij[1] * xij[1] + xij[2] * xij[2]; /* as grid_pair */
+        real xij[3];
+        real r2 = grid_pair_xi(k->dim, xi, p->x, j, xij);
         if (r2 >= k->support2) continue;
         if (!SPH_EARLY_LOADS) seg_load_j(p, j, Lj, cqdv);
         real Cj = cqdv[0], Qj = cqdv[1], Dj = cqdv[2], volj = cqdv[3];
