@@ -306,7 +306,7 @@ def test_walltime(args):
     h = ckpt_header(os.path.join(b, "checkpoint.h5"))
     check("walltime: stops in time with a checkpoint", "max_wall_time" in r.stdout and h["Time"] < 1e5 and el < 10,
           "%.2f s, checkpoint at step %d, t = %.4g s" % (el, h["Step"], h["Time"]))
-    t_end = (np.floor(h["Time"] / 3.25) + 1) * 3.25
+    t_end = float((np.floor(h["Time"] / 3.25) + 1) * 3.25)  # a Python float: numpy 2 reprs np.float64 as "np.float64(x)"
     sphseg(args, BOX, a, over + ["Run:t_end=%r" % t_end])
     sphseg(args, BOX, b, over + ["Run:t_end=%r" % t_end], ["--restart", os.path.join(b, "checkpoint.h5")])
     good, how = restart_agrees(args, snap.list_snapshots(a)[-1], snap.list_snapshots(b)[-1])
