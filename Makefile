@@ -26,17 +26,17 @@ PYTHON    ?= /usr/bin/python3
 BUILD     ?= build
 
 CFLAGS  ?= -O3 -march=native
-CFLAGS  += -std=c11 -D_POSIX_C_SOURCE=200809L -Wall -Wextra -Wno-unknown-pragmas -I. -Isrc
+override CFLAGS  += -std=c11 -D_POSIX_C_SOURCE=200809L -Wall -Wextra -Wno-unknown-pragmas -I. -Isrc
 LDLIBS  := -lm
 
 ifeq ($(PRECISION),single)
-  CFLAGS += -DSPHSEG_SINGLE
+  override CFLAGS += -DSPHSEG_SINGLE
 else ifneq ($(PRECISION),double)
   $(error PRECISION must be double or single, not '$(PRECISION)')
 endif
 ifeq ($(OPENMP),1)
-  CFLAGS  += -fopenmp
-  LDFLAGS += -fopenmp
+  override CFLAGS  += -fopenmp
+  override LDFLAGS += -fopenmp
 endif
 
 NVCC_PATH := $(shell command -v $(NVCC) 2>/dev/null)
@@ -48,13 +48,13 @@ ifeq ($(GPU),1)
   endif
   CUDA_HOME ?= $(patsubst %/bin/,%,$(dir $(NVCC_PATH)))
   NVFLAGS   ?= -O3
-  NVFLAGS   += -std=c++17 -arch=$(CUDA_ARCH) --extended-lambda -I. -Isrc -Xcompiler -Wall
-  CFLAGS    += -DSPHSEG_CUDA
+  override NVFLAGS   += -std=c++17 -arch=$(CUDA_ARCH) --extended-lambda -I. -Isrc -Xcompiler -Wall
+  override CFLAGS    += -DSPHSEG_CUDA
   GPU_OBJ   := $(BUILD)/obj/gpu/backend_gpu.o
   GPU_LIBS  := -L$(CUDA_HOME)/lib64 -Wl,-rpath,$(CUDA_HOME)/lib64 -lcudart -lstdc++
 endif
 ifeq ($(PRECISION),single)
-  NVFLAGS += -DSPHSEG_SINGLE
+  override NVFLAGS += -DSPHSEG_SINGLE
 endif
 
 ifdef HDF5_DIR
@@ -76,7 +76,7 @@ ifdef METIS_DIR
 else
   METIS_LIBS   := -lmetis
 endif
-CFLAGS += $(HDF5_CFLAGS) $(CYAML_CFLAGS) $(METIS_CFLAGS)
+override CFLAGS += $(HDF5_CFLAGS) $(CYAML_CFLAGS) $(METIS_CFLAGS)
 LIBS   := $(HDF5_LIBS) $(CYAML_LIBS) $(METIS_LIBS) $(LDLIBS)
 
 CORE_SRC := src/error.c src/scene.c src/particles.c src/nbr.c src/bound.c src/setup.c \
