@@ -224,7 +224,20 @@ template <class F> static void each(const gpu_t *g, size_t n, F f)
 /* Teams (src/physics/hd.h): T consecutive threads per particle, f(i, lane,
  * T), T a power of two dividing the warp, so that a team never straddles a
  * warp and a team past n is out as a whole. */
-template <int T, class F> __global__ void k_team(size_t n, F f)
+/* At least SPHSEG_TEAM_MINB blocks of BLOCK threads per SM: at most 128
+ * registers a thread on sm_90 (65536 / (128 * 4)). The flow rates want 144
+ * and spill a little at 128, yet the fourth block's warps hide more of the
+ * neighbour-gather latency: 1.20x on the 3D drum at 1.1e7 particles with the
+ * fused L, neutral on the 2D drums (docs/gpu.md, H100). 0 lets nvcc choose. */
+#ifndef SPHSEG_TEAM_MINB
+#define SPHSEG_TEAM_MINB 4
+#endif
+#if SPHSEG_TEAM_MINB > 0
+#define TEAM_LB __launch_bounds__(BLOCK, SPHSEG_TEAM_MINB)
+#else
+#define TEAM_LB
+#endif
+template <int T, class F> __global__ void TEAM_LB k_team(size_t n, F f)
 {
     size_t t = (size_t)blockIdx.x * blockDim.x + threadIdx.x, i = t / T;
     if (i < n) f(i, (int)(t % T), T);
@@ -752,13 +765,16 @@ static void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl)
     flow_ctx c = s->flow;
     seg_ctx sc = s->seg;
     const size_t n = g->n + g->ng;
+    const size_t rlo = s->renorm_due ? g->n : 0; /* the owned L due in the flow rates: the ghosts' here */
+    if (rlo >= n) renorm = 0;
+    if (!walls && !renorm) return;
     prof_begin(g->st);
     if (walls && renorm && g->team > 1) {
         team(g, n, [=] __device__(size_t i, int lane, int T) {
             if (!sel_on(sl, i)) return;
             particles_t q = p;
             if (q.kind[i] == KIND_DUMMY) flow_wall_team(i, &q, &v, &c, lane, T);
-            else if (q.kind[i] == KIND_MATERIAL) seg_renorm_team(i, &q, &v, &sc, lane, T);
+            else if (q.kind[i] == KIND_MATERIAL && i >= rlo) seg_renorm_team(i, &q, &v, &sc, lane, T);
         });
     } else {
         if (walls)
@@ -768,7 +784,7 @@ static void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl)
             });
         if (renorm)
             team(g, n, [=] __device__(size_t i, int lane, int T) {
-                if (p.kind[i] == KIND_MATERIAL && sel_on(sl, i)) seg_renorm_team(i, &p, &v, &sc, lane, T);
+                if (p.kind[i] == KIND_MATERIAL && i >= rlo && sel_on(sl, i)) seg_renorm_team(i, &p, &v, &sc, lane, T);
             });
     }
     prof_end(g->st, P_WALLS);
@@ -1047,6 +1063,7 @@ static void gpu_prepare(sim_t *s, double t, int classify)
     gpu_step_kernel(s, g, 1, t); /* with the held-back save and advance */
     int exact = classify == 2 || (s->hcsr && classify);
     int renorm = s->seg_on && classify && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm;
+    if (renorm) s->renorm_due = s->flow_on; /* the owned L: with the next flow rates (sim.h) */
     int build = !g->built || g->stale || g->every || exact;
     if (s->halo) build = comm_max((double)build) > 0; /* a build exchanges: every rank or none */
     if (build) {
@@ -1086,7 +1103,7 @@ static void gpu_prepare(sim_t *s, double t, int classify)
 /* The flow rates of the owned particles in sl, and with segregation their
  * concentration coefficients (seg_coeffs reads only i's C and the shear
  * rate just computed). */
-static void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl)
+template <int RENORM> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
 {
     particles_t p = g->d;
     grid_view v = g->view;
@@ -1094,16 +1111,24 @@ static void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl)
     seg_ctx sc = s->seg;
     const int seg = s->seg_on;
     real *amag = g->amag;
-    prof_begin(g->st);
     team(g, g->n, [=] __device__(size_t i, int lane, int T) {
         if (!sel_on(sl, i)) return;
         particles_t q = p;
         const int mat = q.kind[i] == KIND_MATERIAL;
-        real a = mat ? flow_rates_team(i, &q, &v, &c, lane, T, 0) : R(0.0);
+        real a = mat ? flow_rates_team(i, &q, &v, &c, lane, T, RENORM) : R(0.0);
         if (lane != 0) return;
         amag[i] = a;
         if (seg && mat) seg_coeffs(i, &q, &sc);
     });
+}
+
+/* (and the owned particles' L when prepare left them due: a kernel of its
+ * own, so that the other passes keep the smaller register count) */
+static void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl)
+{
+    prof_begin(g->st);
+    if (s->renorm_due) gpu_flow_pass<1>(s, g, sl);
+    else gpu_flow_pass<0>(s, g, sl);
     g->acc_pending = 1;
     prof_end(g->st, P_FLOW);
 }
@@ -1141,6 +1166,7 @@ static void gpu_rates(sim_t *s)
             gpu_settle(s, g);
             gpu_flow_rates(s, g, sel_all());
         }
+        s->renorm_due = 0;
     }
     gpu_settle(s, g);
     if (s->seg_on) {
