@@ -221,9 +221,6 @@ template <class F> static void each(const gpu_t *g, size_t n, F f)
     CK(cudaGetLastError());
 }
 
-/* Teams (src/physics/hd.h): T consecutive threads per particle, f(i, lane,
- * T), T a power of two dividing the warp, so that a team never straddles a
- * warp and a team past n is out as a whole. */
 /* At least SPHSEG_TEAM_MINB blocks of BLOCK threads per SM: at most 128
  * registers a thread on sm_90 (65536 / (128 * 4)). The flow rates want 144
  * and spill a little at 128, yet the fourth block's warps hide more of the
@@ -237,6 +234,9 @@ template <class F> static void each(const gpu_t *g, size_t n, F f)
 #else
 #define TEAM_LB
 #endif
+/* Teams (src/physics/hd.h): T consecutive threads per particle, f(i, lane,
+ * T), T a power of two dividing the warp, so that a team never straddles a
+ * warp and a team past n is out as a whole. */
 template <int T, class F> __global__ void TEAM_LB k_team(size_t n, F f)
 {
     size_t t = (size_t)blockIdx.x * blockDim.x + threadIdx.x, i = t / T;
@@ -782,9 +782,10 @@ static void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl)
                 particles_t q = p;
                 if (q.kind[i] == KIND_DUMMY && sel_on(sl, i)) flow_wall_team(i, &q, &v, &c, lane, T);
             });
-        if (renorm)
-            team(g, n, [=] __device__(size_t i, int lane, int T) {
-                if (p.kind[i] == KIND_MATERIAL && i >= rlo && sel_on(sl, i)) seg_renorm_team(i, &p, &v, &sc, lane, T);
+        if (renorm) /* particles rlo.. only: with the owned L due later, just the ghosts */
+            team(g, n - rlo, [=] __device__(size_t k, int lane, int T) {
+                const size_t i = rlo + k;
+                if (p.kind[i] == KIND_MATERIAL && sel_on(sl, i)) seg_renorm_team(i, &p, &v, &sc, lane, T);
             });
     }
     prof_end(g->st, P_WALLS);
