@@ -157,7 +157,7 @@ typedef struct gpu {
     real *amag;         /* |acc| of the last flow rate evaluation */
     int acc_pending;    /* amag not yet reduced into dres[STEP_ACC] (gpu_acc_reduce, gpu_check) */
     int pend_save, pend_adv; /* save_start and advance held back for the next kernel (gpu_step_kernel) */
-    real pend_a;
+    real pend_a, pend_w;
     flow_ctx pend_fc;
     int team;           /* threads per particle in the neighbour loops: 1, 2, 4, 8 or 16 */
     void *tmp;          /* CUB scratch */
@@ -1039,7 +1039,7 @@ static ftab moving_fields(const sim_t *s, const gpu_t *g)
         for (int q = 0; q < (dim == 3 ? 6 : 4); ++q) ft_add(&t, p.sig[q], sizeof(real));
     else
         ft_add(&t, p.gdot, sizeof(real));
-    if (s->seg_on) ft_add(&t, p.C, sizeof(real));
+    if (s->seg_on && !s->win.on) ft_add(&t, p.C, sizeof(real)); /* windows: refreshed by conc_step */
     return t;
 }
 
@@ -1110,7 +1110,7 @@ template <int RENORM> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
     grid_view v = g->view;
     flow_ctx c = s->flow;
     seg_ctx sc = s->seg;
-    const int seg = s->seg_on;
+    const int seg = s->seg_on && !s->win.on; /* in windows: the coefficients at their close */
     real *amag = g->amag;
     team(g, g->n, [=] __device__(size_t i, int lane, int T) {
         if (!sel_on(sl, i)) return;
@@ -1134,9 +1134,9 @@ static void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl)
     prof_end(g->st, P_FLOW);
 }
 
-static void gpu_seg_coeffs(sim_t *s, gpu_t *g, size_t a, size_t b)
+/* (p: g->d, or g->d reading the window's mean shear rate as gdot) */
+static void gpu_seg_coeffs(sim_t *s, gpu_t *g, particles_t p, size_t a, size_t b)
 {
-    particles_t p = g->d;
     seg_ctx c = s->seg;
     each(g, b - a, [=] __device__(size_t k) {
         size_t i = a + k;
@@ -1144,9 +1144,8 @@ static void gpu_seg_coeffs(sim_t *s, gpu_t *g, size_t a, size_t b)
     });
 }
 
-static void gpu_dcdt(sim_t *s, gpu_t *g, sel sl)
+static void gpu_dcdt(sim_t *s, gpu_t *g, particles_t p, sel sl)
 {
-    particles_t p = g->d;
     grid_view v = g->view;
     seg_ctx c = s->seg;
     team(g, g->n, [=] __device__(size_t i, int lane, int T) {
@@ -1170,27 +1169,27 @@ static void gpu_rates(sim_t *s)
         s->renorm_due = 0;
     }
     gpu_settle(s, g);
-    if (s->seg_on) {
+    if (s->seg_on && !s->win.on) {
         prof_begin(g->st);
         if (s->halo && s->flow_on && !g->hx->overlap) {
             ftab t;
             t.n = 0;
             ft_add(&t, g->d.gdot, sizeof(real));
             gpu_refresh(s, g, t);
-            gpu_seg_coeffs(s, g, g->n, g->n + g->ng); /* the owned: with the flow rates */
-            gpu_dcdt(s, g, sel_all());
+            gpu_seg_coeffs(s, g, g->d, g->n, g->n + g->ng); /* the owned: with the flow rates */
+            gpu_dcdt(s, g, g->d, sel_all());
         } else if (s->halo && s->flow_on) { /* the ghosts' shear rate, while the interior goes on */
             ftab t;
             t.n = 0;
             ft_add(&t, g->d.gdot, sizeof(real));
             gpu_refresh_start(s, g, t);
-            gpu_dcdt(s, g, sel_in(g, 2));
+            gpu_dcdt(s, g, g->d, sel_in(g, 2));
             gpu_refresh_finish(s, g);
-            gpu_seg_coeffs(s, g, g->n, g->n + g->ng);
-            gpu_dcdt(s, g, sel_bd(g, 2));
+            gpu_seg_coeffs(s, g, g->d, g->n, g->n + g->ng);
+            gpu_dcdt(s, g, g->d, sel_bd(g, 2));
         } else {
-            if (!s->flow_on) gpu_seg_coeffs(s, g, 0, g->n + g->ng);
-            gpu_dcdt(s, g, sel_all());
+            if (!s->flow_on) gpu_seg_coeffs(s, g, g->d, 0, g->n + g->ng);
+            gpu_dcdt(s, g, g->d, sel_all());
         }
         prof_end(g->st, P_SEG);
     }
@@ -1208,15 +1207,15 @@ static void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t)
     g->pend_save = g->pend_adv = 0;
     particles_t p = g->d;
     flow_ctx c = g->pend_fc;
-    const int flow = s->flow_on, seg = s->seg_on;
-    const real a = g->pend_a;
+    const int flow = s->flow_on, seg = s->seg_on && !s->win.on;
+    const real a = g->pend_a, w8 = g->pend_w;
     wall_geom w = s->flow.w;
     kin_params kin = s->kin;
     prof_begin(g->st);
     each(g, g->n, [=] __device__(size_t i) {
         particles_t q = p;
         if (sv) step_save(i, &q, flow);
-        if (ad) step_advance(i, &q, a, &c, flow, seg);
+        if (ad) step_advance(i, &q, a, &c, flow, seg, w8);
         if (place) step_place(i, &q, flow, &w, &kin, t);
     });
     prof_end(g->st, P_MOTION);
@@ -1228,14 +1227,79 @@ static void gpu_save_start(sim_t *s)
     g->pend_save = 1;
 }
 
-static void gpu_advance(sim_t *s, double a)
+static void gpu_advance(sim_t *s, double a, double w)
 {
     gpu_t *g = gpu_get(s); /* a save_start just before stays held */
     if (g->pend_adv) gpu_step_kernel(s, g, 0, 0.0);
     g->bnd_fresh = 0;
     g->pend_adv = 1;
     g->pend_a = (real)a;
+    g->pend_w = (real)w;
     g->pend_fc = s->flow;
+}
+
+/* Concentration windows (sim.h): the mean shear rate over the window, here
+ * and in the ghosts; L of every material particle at the window's end; the
+ * bounds at that rate (into dres[0..2]: the next gpu_bounds takes its own). */
+static void gpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS])
+{
+    gpu_t *g = gpu_hook(s, 1);
+    gpu_settle(s, g);
+    particles_t p = g->d;
+    const real inv = (real)(1.0 / T);
+    prof_begin(g->st);
+    each(g, g->n, [=] __device__(size_t i) {
+        particles_t q = p;
+        step_shear_mean(i, &q, inv);
+    });
+    if (s->halo) {
+        ftab t;
+        t.n = 0;
+        ft_add(&t, p.gsum, sizeof(real));
+        gpu_refresh(s, g, t);
+    }
+    if (s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) {
+        grid_view v = g->view;
+        seg_ctx sc = s->seg;
+        team(g, g->n + g->ng, [=] __device__(size_t i, int lane, int T) {
+            if (p.kind[i] == KIND_MATERIAL) seg_renorm_team(i, &p, &v, &sc, lane, T);
+        });
+    }
+    particles_t q = p;
+    q.gdot = p.gsum;
+    bnd3 init = {{0, 0, 0}};
+    auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{q, s->step_c});
+    reduce(g, it, (bnd3 *)g->dres, g->n, bnd_max(), init);
+    CK(cudaMemcpyAsync(g->hres, g->dres, 3 * sizeof(double), cudaMemcpyDeviceToHost, g->st));
+    CK(cudaStreamSynchronize(g->st));
+    prof_end(g->st, P_SEG);
+    out[STEP_D] = g->hres[0], out[STEP_WAVE] = g->hres[1], out[STEP_SPEED] = 0, out[STEP_ACC] = 0;
+}
+
+/* One midpoint step of C alone (length a) at the window's mean shear rate;
+ * the ghosts' C refreshed after each stage. */
+static void gpu_conc_step(sim_t *s, double a, int last)
+{
+    gpu_t *g = gpu_hook(s, 1);
+    gpu_settle(s, g);
+    particles_t p = g->d, q = g->d;
+    q.gdot = p.gsum;
+    ftab c;
+    c.n = 0;
+    ft_add(&c, p.C, sizeof(real));
+    prof_begin(g->st);
+    for (int stage = 0; stage < 2; ++stage) {
+        gpu_seg_coeffs(s, g, q, 0, g->n + g->ng);
+        gpu_dcdt(s, g, q, sel_all());
+        const real as = (real)(stage ? a : 0.5 * a);
+        each(g, g->n, [=] __device__(size_t i) {
+            particles_t r = p;
+            step_conc_advance(i, &r, as, stage);
+        });
+        if (s->halo) gpu_refresh(s, g, c);
+    }
+    if (last) CK(cudaMemsetAsync(p.gsum, 0, (g->n + g->ng) * sizeof(real), g->st));
+    prof_end(g->st, P_SEG);
 }
 
 static void gpu_filter(sim_t *s)
@@ -1381,9 +1445,9 @@ static void gpu_finish(sim_t *s)
 
 extern "C" const struct backend *backend_gpu(int local_rank)
 {
-    static const struct backend b = {"gpu",      gpu_prepare, gpu_rates, gpu_advance, gpu_save_start,
-                                      gpu_filter, gpu_bounds,  gpu_check, gpu_to_host, gpu_finish,
-                                      gpu_from_host, 3};
+    static const struct backend b = {"gpu",          gpu_prepare,    gpu_rates,  gpu_advance, gpu_conc_begin,
+                                      gpu_conc_step,  gpu_save_start, gpu_filter, gpu_bounds,  gpu_check,
+                                      gpu_to_host,    gpu_finish,     gpu_from_host, 3};
     g_local_rank = local_rank;
     return &b;
 }

@@ -391,7 +391,6 @@ static void halo_cut_slabs(halo_t *h, const double *w, long ncol)
         for (; c > b; --c) cum -= w[c - 1];
         h->bound[r] = b;
     }
-    halo_slab_neighbours(h);
 }
 
 /* METIS: k-way partition of the coarse-cell graph (vertex weights w, in
@@ -433,7 +432,6 @@ static void halo_cut_metis(halo_t *h, const double *w, size_t nv)
         free(xadj), free(adj), free(vw), free(part);
     }
     MPICHECK(MPI_Bcast(h->part, (int)nv, MPI_INT, 0, MPI_COMM_WORLD));
-    halo_metis_neighbours(h);
 }
 
 /* Send every particle (whole) to the rank owning its cell: all-to-all. */
@@ -507,10 +505,19 @@ static double *halo_weights(halo_t *h, const particles_t *p, size_t nbin, double
     return w;
 }
 
+/* The cut only: the neighbours and their ghost lists stay as they are
+ * until halo_neighbours (a cut that halo_recut drops must not clear them). */
 static void halo_cut(halo_t *h, const double *w, size_t nbin)
 {
     if (h->method == HALO_METIS) halo_cut_metis(h, w, nbin);
     else halo_cut_slabs(h, w, (long)nbin);
+}
+
+/* The neighbour ranks of the cut in force; the ghost lists start empty. */
+static void halo_neighbours(halo_t *h)
+{
+    if (h->method == HALO_METIS) halo_metis_neighbours(h);
+    else halo_slab_neighbours(h);
 }
 
 void halo_decompose(halo_t *h, particles_t *p)
@@ -521,6 +528,7 @@ void halo_decompose(halo_t *h, particles_t *p)
     double *w = halo_weights(h, p, nbin, 1.0);
     halo_cut(h, w, nbin);
     free(w);
+    halo_neighbours(h);
     halo_route(h, p);
     h->wall_comm += MPI_Wtime() - t0;
 }
@@ -586,21 +594,19 @@ int halo_recut(halo_t *h, particles_t *p, double cost, double imb, double thresh
     free(w);
     int moved = halo_owned_after(h, p) != (long long)p->n, any = 0;
     MPICHECK(MPI_Allreduce(&moved, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD));
-    if (!any) {
+    if (!any) { /* the old cut, and its neighbours and ghost lists, which were never cleared */
         memcpy(h->bound, ob, ((size_t)h->size + 1) * sizeof(long));
         if (h->method == HALO_METIS) {
             memcpy(h->cg_n, ocg, sizeof ocg);
             free(h->part);
             h->part = op, op = NULL;
-            halo_metis_neighbours(h);
-        } else {
-            halo_slab_neighbours(h);
         }
     }
     free(ob), free(op);
     if (any) {
         message("load balance: the slowest rank took %.0f %% more than the mean (threshold %.0f %%): domains "
                 "re-cut", 100 * imb, 100 * threshold);
+        halo_neighbours(h);
         halo_route(h, p);
     }
     h->wall_comm += MPI_Wtime() - t0;

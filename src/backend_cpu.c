@@ -71,10 +71,10 @@ static void cpu_flow_rates(sim_t *s)
     s->renorm_due = 0;
 }
 
-/* V, Q, D of ghosts too (neighbours read them), dC/dt of owned particles. */
-static void cpu_conc_rates(sim_t *s)
+/* V, Q, D of ghosts too (neighbours read them), dC/dt of owned particles;
+ * from the shear rate p->gdot (the window's mean, gsum, in a window). */
+static void cpu_conc_rates(sim_t *s, particles_t *p)
 {
-    particles_t *p = &s->p;
     const long n = (long)p->n, ng = (long)(p->n + p->ng);
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < ng; ++i)
@@ -87,11 +87,59 @@ static void cpu_conc_rates(sim_t *s)
 static void cpu_rates(sim_t *s)
 {
     if (s->flow_on) cpu_flow_rates(s);
-    if (s->flow_on && s->seg_on) {
+    if (s->flow_on && s->seg_on && !s->win.on) {
         void *g[] = {s->p.gdot};
         cpu_refresh(s, g, 1);
     }
-    if (s->seg_on) cpu_conc_rates(s);
+    if (s->seg_on && !s->win.on) cpu_conc_rates(s, &s->p);
+}
+
+/* Concentration windows (sim.h): the mean shear rate over the window, here
+ * and in the ghosts; L at the window's end; the bounds at that rate. */
+static void cpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS])
+{
+    particles_t *p = &s->p, q = *p;
+    const long n = (long)p->n, ng = (long)(p->n + p->ng);
+    const real inv = (real)(1.0 / T);
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < n; ++i) step_shear_mean((size_t)i, p, inv);
+    void *g[] = {p->gsum};
+    cpu_refresh(s, g, 1);
+    if (s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) {
+#pragma omp parallel for schedule(static)
+        for (long i = 0; i < ng; ++i)
+            if (p->kind[i] == KIND_MATERIAL) seg_renorm((size_t)i, p, &s->grid.view, &s->seg);
+    }
+    q.gdot = p->gsum;
+    double dmax = 0, wmax = 0;
+#pragma omp parallel for schedule(static) reduction(max : dmax, wmax)
+    for (long i = 0; i < n; ++i) {
+        if (p->kind[i] != KIND_MATERIAL) continue;
+        double b[3];
+        step_bounds_of((size_t)i, &q, &s->step_c, b);
+        dmax = b[0] > dmax ? b[0] : dmax;
+        wmax = b[1] > wmax ? b[1] : wmax;
+    }
+    out[STEP_D] = dmax, out[STEP_WAVE] = wmax, out[STEP_SPEED] = 0, out[STEP_ACC] = 0;
+}
+
+/* One midpoint step of C alone (length a) at the window's mean shear rate. */
+static void cpu_conc_step(sim_t *s, double a, int last)
+{
+    particles_t *p = &s->p, q = *p;
+    const long n = (long)p->n, ng = (long)(p->n + p->ng);
+    q.gdot = p->gsum;
+    void *c[] = {p->C};
+    for (int stage = 0; stage < 2; ++stage) {
+        cpu_conc_rates(s, &q);
+        const real as = (real)(stage ? a : 0.5 * a);
+#pragma omp parallel for schedule(static)
+        for (long i = 0; i < n; ++i) step_conc_advance((size_t)i, p, as, stage);
+        cpu_refresh(s, c, 1);
+    }
+    if (!last) return;
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < ng; ++i) p->gsum[i] = 0;
 }
 
 static void cpu_save_start(sim_t *s)
@@ -102,12 +150,13 @@ static void cpu_save_start(sim_t *s)
     for (long i = 0; i < n; ++i) step_save((size_t)i, p, s->flow_on);
 }
 
-static void cpu_advance(sim_t *s, double a)
+static void cpu_advance(sim_t *s, double a, double w)
 {
     particles_t *p = &s->p;
     const long n = (long)p->n;
+    const int seg = s->seg_on && !s->win.on;
 #pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) step_advance((size_t)i, p, (real)a, &s->flow, s->flow_on, s->seg_on);
+    for (long i = 0; i < n; ++i) step_advance((size_t)i, p, (real)a, &s->flow, s->flow_on, seg, (real)w);
 }
 
 /* Shepard filter (3.12) of the material stress, then the dummies again. */
@@ -166,7 +215,8 @@ static void cpu_finish(sim_t *s)
 
 const struct backend *backend_cpu(void)
 {
-    static const struct backend b = {"cpu",      cpu_prepare, cpu_rates, cpu_advance, cpu_save_start, cpu_filter,
-                                      cpu_bounds, cpu_check,   cpu_to_host, cpu_finish, cpu_from_host, HALO_DEPTH};
+    static const struct backend b = {"cpu",          cpu_prepare,   cpu_rates,      cpu_advance, cpu_conc_begin,
+                                      cpu_conc_step,  cpu_save_start, cpu_filter,     cpu_bounds,  cpu_check,
+                                      cpu_to_host,    cpu_finish,     cpu_from_host,  HALO_DEPTH};
     return &b;
 }

@@ -99,6 +99,9 @@ static void ckpt_write_header(hid_t file, const sim_t *s, long long ntot, const 
     ckpt_attr_int64(g, "Step", s->step);
     ckpt_attr_double(g, "Dt", s->dt);
     ckpt_attr_double(g, "Amax", s->amax);
+    ckpt_attr_int64(g, "WindowSteps", s->win.k); /* the open concentration window (sim.h) */
+    ckpt_attr_int64(g, "WindowTarget", s->win.K);
+    ckpt_attr_double(g, "WindowLength", s->win.T);
     io_attr_string(g, "Scene", scene_text);
     H5CHECK(H5Gclose(g));
 }
@@ -473,6 +476,9 @@ void ckpt_read(const char *file, sim_t *s, ckpt_run *r)
     s->step = (long)ckpt_get_int(file, g, "Step");
     s->dt = ckpt_get_double(file, g, "Dt");
     s->amax = ckpt_get_double(file, g, "Amax");
+    s->win.k = (long)ckpt_get_int(file, g, "WindowSteps");
+    s->win.K = (long)ckpt_get_int(file, g, "WindowTarget");
+    s->win.T = ckpt_get_double(file, g, "WindowLength");
     H5CHECK(H5Gclose(g));
     ckpt_read_run(file, f, r);
     ckpt_read_particles(file, f, s, (int)s->sc->geometry.dim, ntot, nranks);

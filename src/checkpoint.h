@@ -8,6 +8,8 @@
  *   /Header       attributes Code ("sphseg"), Version, Checkpoint (1),
  *                 Precision ("double" | "single"), RealBytes, Dimension,
  *                 NumRanks, NumPart_Total, NumArrays, Time, Step, Dt, Amax,
+ *                 WindowSteps, WindowTarget, WindowLength (the open
+ *                 concentration window: steps, its K, seconds; sim.h),
  *                 Scene (the used-parameters text);
  *   /Diagnostics  attributes SmallVolume0 (sum C_i V_i at t = 0), MaxDrift,
  *                 Warned (the diag state);

@@ -1,6 +1,7 @@
 /* integrate.c — predictor–corrector time integration (paper eqs. 3.17–3.18)
  * and the time-step bounds of the concentration solver. */
 #include <math.h>
+#include <string.h>
 #include "error.h"
 #include "mpi/comm.h"
 #include "sim.h"
@@ -18,19 +19,70 @@
 void integrate_step(sim_t *s, double dt)
 {
     const struct backend *be = s->be; /* the state is prepared at t (run start, last step) */
+    const int win = s->win.on;        /* C in windows: the flow alone here (integrate_conc) */
     s->flow.damping = (real)(s->t < s->sc->flow.damping_until ? s->sc->flow.damping : 0.0);
     be->rates(s);
     be->save_start(s);
-    be->advance(s, 0.5 * dt);
+    be->advance(s, 0.5 * dt, 0.0);
     be->prepare(s, s->t + 0.5 * dt, 0);
     be->rates(s);
-    be->advance(s, dt);
-    be->prepare(s, s->t + dt, 1);
+    be->advance(s, dt, win ? dt : 0.0);
+    be->prepare(s, s->t + dt, !win); /* windows classify and renormalise at their close */
     s->t += dt;
     s->step++;
     s->dt = dt;
+    if (win) s->win.k++, s->win.T += dt;
     unsigned every = s->sc->flow.shepard_every;
     if (s->flow_on && every > 0 && s->step % (long)every == 0) be->filter(s);
+}
+
+/* The largest K that Segregation:every auto gives. The window's
+ * concentration step costs about one flow step (two neighbour passes of dC/dt,
+ * one of L, the coefficients), so its share of the run is about 1/K: at
+ * K = 100 the remaining speed-up is under 1 %, while the error of the
+ * window (the geometry and C of its end for the whole window) grows with
+ * K. docs/gpu.md "Concentration windows" measures both. */
+#define CONC_AUTO_MAX 100
+
+int integrate_conc_auto_max(void) { return CONC_AUTO_MAX; }
+
+void integrate_conc_init(sim_t *s)
+{
+    unsigned every = s->sc->segregation.every_k;
+    memset(&s->win, 0, sizeof s->win);
+    s->win.every = every;
+    s->win.on = s->flow_on && s->seg_on && every != 1;
+}
+
+/* dt bound of the concentration equation alone (docs/numerics.md), from
+ * the largest D and |dQ/dC| over all ranks; INFINITY when neither bounds it. */
+static double conc_dt(const sim_t *s, double dmax, double wmax)
+{
+    const struct scene *sc = s->sc;
+    double h = s->seg.k.h, dt = INFINITY;
+    if (dmax > 0) dt = fmin(dt, sc->run.cfl_diffusion * h * h / dmax);
+    if (wmax > 0) dt = fmin(dt, sc->run.cfl_segregation * h / wmax);
+    return dt;
+}
+
+/* The window's concentration step at its end t: the classes (HCSR schemes)
+ * and L of these positions, the window's mean shear rate, and C advanced by
+ * the midpoint rule over the window's length T, in as many equal steps as
+ * the concentration's own bounds at that shear rate ask (one, normally). */
+int integrate_conc(sim_t *s, int force)
+{
+    conc_window *w = &s->win;
+    if (!w->on || w->k == 0 || (!force && w->k < w->K)) return 0;
+    const struct backend *be = s->be;
+    if (s->hcsr) be->prepare(s, s->t, 1);
+    double b[STEP_NBOUNDS];
+    be->conc_begin(s, w->T, b);
+    double tc = conc_dt(s, comm_max(b[STEP_D]), comm_max(b[STEP_WAVE]));
+    long m = tc >= w->T ? 1 : (long)ceil(w->T / tc);
+    for (long q = 0; q < m; ++q) be->conc_step(s, w->T / (double)m, q == m - 1);
+    w->windows++, w->substeps += m;
+    w->k = 0, w->T = 0;
+    return 1;
 }
 
 /* Time-step bounds (derivation in docs/numerics.md):
@@ -53,11 +105,15 @@ double integrate_dt(sim_t *s)
     double h = s->seg.k.h, b[STEP_NBOUNDS];
     s->be->bounds(s, b);
     double dmax = comm_max(b[STEP_D]), amax = comm_max(b[STEP_WAVE]), umax = comm_max(b[STEP_SPEED]);
-    double dt = sc->run.dt_max;
-    if (dmax > 0) dt = fmin(dt, sc->run.cfl_diffusion * h * h / dmax);
-    if (amax > 0) dt = fmin(dt, sc->run.cfl_segregation * h / amax);
+    double dt = sc->run.dt_max, tc = conc_dt(s, dmax, amax);
+    if (!s->win.on) dt = fmin(dt, tc);
     if (umax > 0) dt = fmin(dt, sc->run.cfl_kinematic * h / umax);
     if (s->flow_on) /* (3.19); |acc| from the last rate evaluation */
         dt = fmin(dt, stress_dt((real)sc->run.cfl_flow, (real)h, (real)comm_max(b[STEP_ACC]), s->flow.cs));
+    conc_window *w = &s->win;
+    if (w->on && w->k == 0) { /* a window opens: its length in steps */
+        double k = w->every ? (double)w->every : fmin(floor(tc / dt), (double)CONC_AUTO_MAX);
+        w->K = k < 1 ? 1 : (long)k;
+    }
     return dt;
 }

@@ -268,7 +268,7 @@ static void parallel_balance(sim_t *s, double *cost)
         s->be->to_host(s); /* the re-cut reads positions and moves whole particles */
         if (halo_recut(s->halo, &s->p, *cost, imb, thr)) {
             s->be->from_host(s);
-            s->be->prepare(s, s->t, 1);
+            s->be->prepare(s, s->t, !s->win.on);
         }
     }
     *cost = 0;
@@ -345,6 +345,10 @@ static void run(sim_t *s, outputs *o, ckpt_run *rs)
         if (s->halo) cost += diag_wall() - t_step - (s->halo->wall_comm - comm0);
         parallel_balance(s, &cost);
         if (fabs(s->t - t_next) <= 1e-9 * fmax(1.0, t_next)) s->t = t_next;
+        /* C in windows: closed after K steps, and at every diagnostics row,
+         * snapshot and the end, so that they see C of t (not at max_steps
+         * or an early stop: the checkpoint carries the open window) */
+        integrate_conc(s, s->t >= t_diag || s->t >= t_out || s->t >= sc->run.t_end);
         check_finite(s, &d);
         int last = sc->run.max_steps > 0 && s->step >= (long)sc->run.max_steps;
         double t_io = diag_wall();
@@ -394,6 +398,9 @@ static void run(sim_t *s, outputs *o, ckpt_run *rs)
     message("done: %ld steps, %.3f s wall, %.4e particle-steps/s, max |drift of sum C V| %.3e, %.3f s of the "
             "wall in output and diagnostics (not in the rate), %.3f s in halo exchange", s->step, wall,
             stepping > 0 ? (double)(s->step - d.step0) * ntot / stepping : 0.0, d.max_drift, io, halo);
+    if (s->win.on && s->win.windows > 0)
+        message("concentration: %ld windows of %.1f flow steps on average, %ld midpoint steps of C", s->win.windows,
+                (double)(s->step - d.step0 - s->win.k) / (double)s->win.windows, s->win.substeps);
     diag_close(&d);
 }
 
@@ -427,6 +434,7 @@ int main(int argc, char **argv)
     if (ndev > 0) s.be = backend_gpu(comm_local_rank());
 #endif
     setup_contexts(&s);
+    integrate_conc_init(&s);
     ckpt_run rs = {0};
     if (c.restart)
         ckpt_read(c.restart, &s, &rs); /* exits 2 on a bad checkpoint */
@@ -449,6 +457,15 @@ int main(int argc, char **argv)
     if (s.flow_on)
         message("flow: c_s = %.4g m/s, h/c_s = %.3g s, Shepard filter every %u steps, alpha_av = %g",
                 (double)s.flow.cs, (double)(s.seg.k.h / s.flow.cs), sc.flow.shepard_every, sc.flow.alpha_av);
+    if (s.win.on && sc.segregation.every_k)
+        message("concentration: one midpoint step every %u flow steps (Segregation:every), at the window's mean "
+                "shear rate", sc.segregation.every_k);
+    else if (s.win.on)
+        message("concentration: one midpoint step every K flow steps, K from its own time-step bounds, at most %d "
+                "(Segregation:every auto), at the window's mean shear rate", integrate_conc_auto_max());
+    else if (s.win.k > 0)
+        input_error("%s: the checkpoint has an open concentration window (%ld flow steps): restart it with "
+                    "Segregation:every other than 1", c.restart, s.win.k);
     run(&s, &o, c.restart ? &rs : NULL);
     ckpt_run_free(&rs);
     s.be->finish(&s);

@@ -21,6 +21,7 @@ static const struct part_array part_arrays[] = {
     {offsetof(particles_t, v[2]), sizeof(real)},      {offsetof(particles_t, vol), sizeof(real)},
     {offsetof(particles_t, C), sizeof(real)},         {offsetof(particles_t, C_n), sizeof(real)},
     {offsetof(particles_t, dCdt), sizeof(real)},      {offsetof(particles_t, gdot), sizeof(real)},
+    {offsetof(particles_t, gsum), sizeof(real)},
     {offsetof(particles_t, nrm[0]), sizeof(real)},    {offsetof(particles_t, nrm[1]), sizeof(real)},
     {offsetof(particles_t, nrm[2]), sizeof(real)},    {offsetof(particles_t, psi), sizeof(real)},
     {offsetof(particles_t, segV), sizeof(real)},     {offsetof(particles_t, segQ), sizeof(real)},

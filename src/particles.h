@@ -33,6 +33,9 @@ typedef struct particles {
     real *C_n;    /* C at the start of the step (predictor-corrector) */
     real *dCdt;   /* concentration rate, 1/s */
     real *gdot;   /* shear-rate magnitude, 1/s */
+    real *gsum;   /* concentration windows (Segregation:every): the shear rate integrated
+                   * over the open window, -; divided by its length at the window's
+                   * concentration step, where it is the window's mean shear rate, 1/s */
     real *nrm[3]; /* HCSR normal, pointing into the material */
     real *psi;    /* smoothed degenerate function psi~ (4.14, 4.18) */
     real *segV;   /* segregation velocity V(C, gdot), m/s, per rate evaluation */

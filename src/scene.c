@@ -112,6 +112,7 @@ static const cyaml_schema_field_t segregation_fields[] = {
     ENM(scene_segregation, scheme, seg_schemes),
     ENM(scene_segregation, renormalize, on_off),
     FLT(scene_segregation, drift_tol, OPT),
+    CYAML_FIELD_STRING_PTR("every", OPT, struct scene_segregation, every, 0, CYAML_UNLIMITED),
     CYAML_FIELD_END,
 };
 
@@ -234,6 +235,7 @@ static const struct scene_default scene_defaults[] = {
     {"Segregation", "scheme", "conservative"},
     {"Segregation", "renormalize", "on"},
     {"Segregation", "drift_tol", "1e-3"},
+    {"Segregation", "every", "auto"},
     {"Initial", "C_below", "0"},
     {"Initial", "C_above", "1"},
     {"Initial", "split", "0.5"},
@@ -1109,6 +1111,25 @@ static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g)
     return 0;
 }
 
+/* Segregation:every: "auto" (every_k = 0) or a whole number of flow steps
+ * from 1 to SCENE_EVERY_MAX. */
+static int check_every(struct scene_ctx *c, struct scene_segregation *g)
+{
+    const char *e = g->every ? g->every : "";
+    if (!strcmp(e, "auto")) {
+        g->every_k = 0;
+        return 0;
+    }
+    char *end;
+    errno = 0;
+    long k = strtol(e, &end, 10);
+    if (!*e || *end || errno || k < 1 || k > SCENE_EVERY_MAX)
+        return fail_at(c, "Segregation:every", "expected auto or a whole number of flow steps from 1 to %d, got "
+                       "'%.40s'", SCENE_EVERY_MAX, e);
+    g->every_k = (unsigned)k;
+    return 0;
+}
+
 static int check_special(struct scene_ctx *c, const struct scene *s)
 {
     const double *g = s->physics.gravity;
@@ -1166,7 +1187,7 @@ static int parse_steps(struct scene_ctx *c, struct scene *s)
         require_model_keys(c) || add_defaults(c) || load_struct(c, s))
         return -1;
     if (!leaf_find(c, "Output:diag_dt")) s->output.diag_dt = s->output.dt / 20;
-    if (check_ranges(c, s) || check_special(c, s)) return -1;
+    if (check_ranges(c, s) || check_special(c, s) || check_every(c, &s->segregation)) return -1;
     s->path = strdup(c->path);
     if (!s->path || keys_keep(c, s)) return fail(c, -1, 0, NULL, "out of memory");
     s->text = c->text;
@@ -1353,6 +1374,7 @@ void scene_free(struct scene *s)
         free(s->keys);
     }
     free(s->run.backend);
+    free(s->segregation.every);
     free(s->path);
     free(s->text);
     memset(s, 0, sizeof *s);

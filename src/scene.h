@@ -70,6 +70,9 @@ struct scene_segregation {
                              * renormalisation (restores consistency where the
                              * support is cut); default on */
     double drift_tol;       /* relative drift of sum C_i V_i that triggers a warning; default 1e-3 */
+    char *every;            /* auto | K >= 1: with computed flow, C advances once every K flow
+                             * steps (integrate.c); default auto */
+    unsigned every_k;       /* every as a number: K, or 0 for auto (set by the checks) */
 };
 
 struct scene_initial {
@@ -160,6 +163,8 @@ struct scene {
  * place of FILE:LINE for an override; "FILE: why" when the file cannot be
  * read). SCENE_ERRLEN bytes always suffice. */
 enum { SCENE_ERRLEN = 1024 };
+/* The largest Segregation:every a scene may give. */
+enum { SCENE_EVERY_MAX = 1000000 };
 int scene_parse(struct scene *s, const char *path, int n_over, char **over, char *err,
                 size_t errlen);
 

@@ -37,10 +37,22 @@ struct backend {
      * flow acc, dsig and gdot (flow_rates; s->amax is set); then, with
      * segregation on, dC/dt into p.dCdt (which reads gdot). */
     void (*rates)(struct sim *s);
-    /* X = X_n + a dX/dt for the solved fields of material particles (C; and
-     * x, u, sigma with the return mapping when the flow is computed); a in
-     * seconds. */
-    void (*advance)(struct sim *s, double a);
+    /* X = X_n + a dX/dt for the solved fields of material particles (C
+     * unless it advances in windows; and x, u, sigma with the return mapping
+     * when the flow is computed); a in seconds. w > 0 (windows): add w times
+     * the last rates' shear rate to each material particle's gsum. */
+    void (*advance)(struct sim *s, double a, double w);
+    /* Concentration windows (s->win, integrate_conc): the state is prepared
+     * at the window's end (and classified when the scheme needs it).
+     * conc_begin turns gsum into the window's mean shear rate (length T),
+     * over the owned particles and their ghosts, computes the conservative
+     * scheme's L at these positions when it is on, and gives the local
+     * STEP_D and STEP_WAVE bounds at that shear rate (the rest 0).
+     * conc_step is one midpoint step of C alone, of length a, with the
+     * segregation coefficients at that mean shear rate; the last one of a
+     * window clears gsum for the next. */
+    void (*conc_begin)(struct sim *s, double T, double out[STEP_NBOUNDS]);
+    void (*conc_step)(struct sim *s, double a, int last);
     /* Copy the solved fields into their start-of-step copies. */
     void (*save_start)(struct sim *s);
     /* Shepard filter of the material stress (3.12), then the dummies again. */
@@ -66,6 +78,18 @@ struct backend {
     int ghost_depth;
 };
 
+/* The concentration equation in windows of K flow steps (Segregation:every,
+ * integrate.c): the flow steps alone, each material particle integrates its
+ * shear rate (gsum), and when the window closes C takes one midpoint step
+ * of the window's length with the window's mean shear rate. */
+typedef struct conc_window {
+    int on;         /* computed flow with segregation and Segregation:every != 1 */
+    unsigned every; /* Segregation:every: K, or 0 for auto */
+    long k, K;      /* flow steps in the open window; its length in steps (set at its first) */
+    double T;       /* the open window's length so far, s */
+    long windows, substeps; /* closed so far; their midpoint steps (> windows when C needed more) */
+} conc_window;
+
 typedef struct sim {
     const struct scene *sc;
     const struct backend *be;
@@ -84,6 +108,7 @@ typedef struct sim {
     double surface_y;  /* initial free-surface height, m (geostatic stress) */
     double amax;       /* largest |acceleration| of the last rate evaluation, m/s^2 (CPU) */
     int renorm_due;    /* the owned particles' L are due in the next flow rates (set by prepare) */
+    conc_window win;   /* the concentration's windows (integrate.c) */
     double t;          /* simulated time, s */
     long step;
     double dt;         /* last time step, s */
@@ -105,7 +130,15 @@ const struct backend *backend_gpu(int local_rank);
 
 /* One predictor–corrector step (3.17–3.18) of length dt (src/integrate.c). */
 void integrate_step(sim_t *s, double dt);
-/* The stable time step (s): bounds by diffusion, segregation, kinematics. */
+/* The stable time step (s): bounds by diffusion, segregation, kinematics;
+ * with concentration windows it also fixes the next window's length. */
 double integrate_dt(sim_t *s);
+/* Concentration windows: set s->win from the scene (after setup_contexts). */
+void integrate_conc_init(sim_t *s);
+/* The largest K that Segregation:every auto gives. */
+int integrate_conc_auto_max(void);
+/* Close the open window (C at s->t) if it has its K steps, or if force and
+ * it holds any step; returns whether C was advanced. */
+int integrate_conc(sim_t *s, int force);
 
 #endif

@@ -116,12 +116,32 @@ HD_INLINE void step_save(size_t i, const particles_t *p, int flow_on)
 }
 
 /* advance(): X = X_n + a dX/dt for material particle i (flow_advance reads
- * C before it moves). */
-HD_INLINE void step_advance(size_t i, particles_t *p, real a, const flow_ctx *c, int flow_on, int seg_on)
+ * C before it moves). With the concentration in windows (seg_on 0 then),
+ * the shear rate of the last rate evaluation adds w gdot to the window's
+ * integral (w: the corrector's dt, 0 in the predictor): the midpoint rule
+ * for the integral of gdot over the window. */
+HD_INLINE void step_advance(size_t i, particles_t *p, real a, const flow_ctx *c, int flow_on, int seg_on, real w)
 {
     if (p->kind[i] != KIND_MATERIAL) return;
+    if (w > 0) p->gsum[i] += w * p->gdot[i];
     if (flow_on) flow_advance(i, p, a, c);
     if (seg_on) p->C[i] = p->C_n[i] + a * p->dCdt[i];
+}
+
+/* Concentration windows (integrate_conc): material particle i's mean shear
+ * rate over a window of length T, from the integral. */
+HD_INLINE void step_shear_mean(size_t i, particles_t *p, real inv_T)
+{
+    if (p->kind[i] == KIND_MATERIAL) p->gsum[i] *= inv_T;
+}
+
+/* Concentration windows: one stage of the window's midpoint step for C
+ * alone, C = C_n + a dC/dt (stage 0 first copies C_n = C). */
+HD_INLINE void step_conc_advance(size_t i, particles_t *p, real a, int stage)
+{
+    if (p->kind[i] != KIND_MATERIAL) return;
+    if (stage == 0) p->C_n[i] = p->C[i];
+    p->C[i] = p->C_n[i] + a * p->dCdt[i];
 }
 
 #endif
