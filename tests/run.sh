@@ -37,6 +37,7 @@ run_one checkpoint_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUI
 run_one io_ranks bash tests/test_io_ranks.sh "$BUILD/tests/test_io_ranks" "$BUILD/tests/test_io"
 run_one jobs bash tests/test_jobs.sh "$BUILD/sphseg"
 run_one blowup bash tests/test_blowup.sh "$BUILD/sphseg"
+run_one settings_warnings bash tests/test_settings_warnings.sh "$BUILD/sphseg"
 for v in tests/validate_*.py; do
     run_one "$(basename "$v" .py)" "$PYTHON" "$v" --sphseg "$BUILD/sphseg" --work "$tmp/$(basename "$v" .py)"
 done

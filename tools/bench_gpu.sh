@@ -11,7 +11,15 @@
 #   2d_shear   the concentration solver alone: the oscillatory shear box
 #              (inputs/shearbox_2d.yml, conservative scheme), 1e4 to 3e7;
 #   2d_drum    the EN drum of Table 1 at its own resolution (dr = 0.5 mm,
-#              about 1e4 particles): steps per second of the small problem.
+#              about 1e4 particles): steps per second of the small problem;
+#   *_win      the drums with concentration windows (Segregation:every auto,
+#              the default since 44e28c2; 3d_block, 2d_drum and 3d_drum take
+#              C in every flow step, Segregation:every=1, as before, so that
+#              the series compare with earlier benches and the pair gives the
+#              windows' ratio in one run);
+#   3d_drum    the 3D drum of 1.1e7 particles (inputs/drum_3d.yml at
+#              dr = 0.25 mm, length 0.1 m; when MAX_PARTICLES >= 1.2e7),
+#              200 steps (two windows of 100).
 # Particle-steps count material and dummy particles; the rate excludes
 # set-up, output and diagnostics (the "done:" line of sphseg).
 # Usage: tools/bench_gpu.sh CSV BIN_DOUBLE [BIN_SINGLE] [MAX_PARTICLES] (an empty BIN skips its precision)
@@ -54,7 +62,8 @@ sweep() { # precision binary
         one 3d_block "$prec" "$bin" "$steps" inputs/column_2d.yml Geometry:dim=3 Geometry:dr="$dr" \
             Geometry:width=0.1 Geometry:height=0.1 Geometry:depth=0.1 Initial:stress=geostatic \
             Segregation:enabled=on Segregation:model=shear_rate Segregation:d_small=0.00025 \
-            Segregation:d_large=0.0005 Initial:C_below=0.5 Initial:C_above=0.5 Flow:damping_until=0 Run:t_end=1e3
+            Segregation:d_large=0.0005 Initial:C_below=0.5 Initial:C_above=0.5 Flow:damping_until=0 Run:t_end=1e3 \
+            Segregation:every=1
     done
     for n in 1e4 1e5 1e6 1e7 3e7; do
         python3 -c "import sys; sys.exit(0 if $n <= $nmax else 1)" || continue
@@ -63,7 +72,12 @@ sweep() { # precision binary
         steps=$(python3 -c "print(max(50, min(2000, int(5e9 / $n))))")
         one 2d_shear "$prec" "$bin" "$steps" inputs/shearbox_2d.yml Geometry:dr="$dr" Run:t_end=1e6
     done
-    one 2d_drum "$prec" "$bin" 3000 inputs/drum_2d_EN.yml
+    one 2d_drum "$prec" "$bin" 3000 inputs/drum_2d_EN.yml Segregation:every=1
+    one 2d_drum_win "$prec" "$bin" 3000 inputs/drum_2d_EN.yml
+    if python3 -c "import sys; sys.exit(0 if 1.2e7 <= $nmax else 1)"; then
+        one 3d_drum "$prec" "$bin" 200 inputs/drum_3d.yml Geometry:dr=0.00025 Geometry:length=0.1 Segregation:every=1
+        one 3d_drum_win "$prec" "$bin" 200 inputs/drum_3d.yml Geometry:dr=0.00025 Geometry:length=0.1
+    fi
 }
 
 [ -n "$bind" ] && sweep double "$bind"

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# The warnings for flow settings outside the measured range (src/main.c,
+# flow_warn_settings; docs/gpu.md "Stiffness, artificial viscosity and CFL"):
+# alpha_av sqrt(E) more than 2x off Table 1's (0.1 at 10 MPa), and
+# Run:cfl_flow > 0.2. Each probe is a 1-step CPU drum; the warning must be
+# there when the setting is off and absent when it is in range.
+set -u
+bin=${1:?usage: test_settings_warnings.sh BUILD/sphseg}
+here=$(cd "$(dirname "$0")" && pwd)
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+fail=0
+probe() { # name, expect (yes|no), pattern, -P overrides...
+    local name=$1 want=$2 pat=$3; shift 3
+    local args=() o
+    for o in "$@"; do args+=(-P "$o"); done
+    OMP_NUM_THREADS=1 "$bin" "$here/../inputs/drum_2d_EV.yml" -o "$tmp/o" --backend cpu -P Geometry:dr=0.0025 \
+        -P Run:max_steps=1 -P Run:progress_s=1e9 "${args[@]}" >"$tmp/log" 2>&1 || { echo "FAIL $name: exit $?"; fail=1; return; }
+    local got=no
+    grep -q "warning: .*$pat" "$tmp/log" && got=yes
+    if [ "$got" = "$want" ]; then echo "ok   $name"; else echo "FAIL $name: warning '$pat' $got, expected $want"; fail=1; fi
+}
+probe "Table 1 settings: no AV warning" no "alpha_av"
+probe "E 0.1 MPa, alpha 0.1: AV warning" yes "alpha_av \* sqrt(Material:E) is 0.1 times" Material:E=1e5
+probe "E 0.1 MPa, alpha 1.0: no AV warning" no "alpha_av" Material:E=1e5 Flow:alpha_av=1.0
+probe "E 10 MPa, alpha 0.5: AV warning" yes "alpha_av" Flow:alpha_av=0.5
+probe "cfl_flow 0.2: no CFL warning" no "cfl_flow" Run:cfl_flow=0.2
+probe "cfl_flow 0.3: CFL warning" yes "Run:cfl_flow = 0.3 > 0.2" Run:cfl_flow=0.3
+exit $fail
