@@ -1039,7 +1039,7 @@ static ftab moving_fields(const sim_t *s, const gpu_t *g)
         for (int q = 0; q < (dim == 3 ? 6 : 4); ++q) ft_add(&t, p.sig[q], sizeof(real));
     else
         ft_add(&t, p.gdot, sizeof(real));
-    if (s->seg_on && !s->win.on) ft_add(&t, p.C, sizeof(real)); /* windows: refreshed by conc_step */
+    if (s->seg_on && !s->win.on) ft_add(&t, p.C, sizeof(creal)); /* windows: refreshed by conc_step */
     return t;
 }
 
@@ -1286,7 +1286,7 @@ static void gpu_conc_step(sim_t *s, double a, int last)
     q.gdot = p.gsum;
     ftab c;
     c.n = 0;
-    ft_add(&c, p.C, sizeof(real));
+    ft_add(&c, p.C, sizeof(creal));
     prof_begin(g->st);
     for (int stage = 0; stage < 2; ++stage) {
         gpu_seg_coeffs(s, g, q, 0, g->n + g->ng);

@@ -38,7 +38,7 @@ IO_ARRAY(io_id, p->id)
 const struct io_field io_fields[] = {
     {"Coordinates", IO_REAL, 3, "m", "Particle position (x, y, z); z = 0 in 2D", io_x},
     {"Velocities", IO_REAL, 3, "m/s", "Particle velocity (vx, vy, vz); vz = 0 in 2D", io_v},
-    {"Concentration", IO_REAL, 1, "-",
+    {"Concentration", IO_CREAL, 1, "-",
      "Small-grain volume concentration C (eq. 2.10); meaningful for Kind = 0 (material) only", io_c},
     {"ShearRate", IO_REAL, 1, "1/s", "Shear-rate magnitude gdot", io_gdot},
     {"Stress", IO_REAL, 6, "Pa",
@@ -60,12 +60,12 @@ const int io_nfields = (int)(sizeof io_fields / sizeof io_fields[0]);
 
 static hid_t io_mem_type(enum io_type t)
 {
-    return t == IO_REAL ? H5T_NATIVE_DOUBLE : t == IO_UINT8 ? H5T_NATIVE_UINT8 : H5T_NATIVE_INT64;
+    return t == IO_REAL || t == IO_CREAL ? H5T_NATIVE_DOUBLE : t == IO_UINT8 ? H5T_NATIVE_UINT8 : H5T_NATIVE_INT64;
 }
 
 static hid_t io_file_type(enum io_type t)
 {
-    return t == IO_REAL ? H5T_IEEE_F64LE : t == IO_UINT8 ? H5T_STD_U8LE : H5T_STD_I64LE;
+    return t == IO_REAL || t == IO_CREAL ? H5T_IEEE_F64LE : t == IO_UINT8 ? H5T_STD_U8LE : H5T_STD_I64LE;
 }
 
 /* ---- small helpers -------------------------------------------------------- */
@@ -289,6 +289,11 @@ static void io_gather(const struct io_field *f, const particles_t *p, const size
             double *d = (double *)buf + c;
             for (size_t k = 0; k < n; k++)
                 d[k * nc] = (double)s[order[k]];
+        } else if (f->type == IO_CREAL) {
+            const creal *s = a;
+            double *d = (double *)buf + c;
+            for (size_t k = 0; k < n; k++)
+                d[k * nc] = (double)s[order[k]];
         } else if (f->type == IO_UINT8) {
             const uint8_t *s = a;
             uint8_t *d = (uint8_t *)buf + c;
@@ -303,7 +308,7 @@ static void io_gather(const struct io_field *f, const particles_t *p, const size
     }
 }
 
-static size_t io_type_size(enum io_type t) { return t == IO_REAL ? 8 : t == IO_UINT8 ? 1 : 8; }
+static size_t io_type_size(enum io_type t) { return t == IO_REAL || t == IO_CREAL ? 8 : t == IO_UINT8 ? 1 : 8; }
 
 /* Field f of this rank's file rows, in ID order, into out (x->m rows); tmp
  * holds max(n, m) rows of the widest field. Collective. */
@@ -312,7 +317,7 @@ static void io_xchg_field(const struct io_xchg *x, const struct io_field *f, con
 {
     size_t row = io_type_size(f->type) * (size_t)f->ncomp;
     MPI_Datatype t;
-    MPI_Datatype base = f->type == IO_REAL ? MPI_DOUBLE : f->type == IO_UINT8 ? MPI_UINT8_T : MPI_INT64_T;
+    MPI_Datatype base = f->type == IO_REAL || f->type == IO_CREAL ? MPI_DOUBLE : f->type == IO_UINT8 ? MPI_UINT8_T : MPI_INT64_T;
     MPICHECK(MPI_Type_contiguous(f->ncomp, base, &t));
     MPICHECK(MPI_Type_commit(&t));
     io_gather(f, p, x->send_order, tmp);
@@ -437,7 +442,7 @@ int io_write_snapshot(const char *outdir, int index, const particles_t *p, doubl
 
 static void io_xdmf_item(FILE *fp, const struct io_field *f, const char *h5name, long long n)
 {
-    const char *nt = f->type == IO_REAL ? "Float" : f->type == IO_UINT8 ? "UChar" : "Int";
+    const char *nt = f->type == IO_REAL || f->type == IO_CREAL ? "Float" : f->type == IO_UINT8 ? "UChar" : "Int";
     int prec = f->type == IO_UINT8 ? 1 : 8;
     if (f->ncomp > 1)
         fprintf(fp, "          <DataItem Dimensions=\"%lld %d\"", n, f->ncomp);

@@ -21,12 +21,12 @@
 #define SPHSEG_IO_H
 #include "particles.h"
 
-enum io_type { IO_REAL = 0, IO_UINT8 = 1, IO_INT64 = 2 };
+enum io_type { IO_REAL = 0, IO_UINT8 = 1, IO_INT64 = 2, IO_CREAL = 3 }; /* CREAL: creal (hd.h) */
 
 /* One output field, declared once (STYLE.md "Output fields are a table"). */
 struct io_field {
     const char *name;        /* dataset name under /Particles */
-    enum io_type type;       /* element type in memory (real is stored as double) */
+    enum io_type type;       /* element type in memory (real and creal are stored as double) */
     int ncomp;               /* 1 or 3 */
     const char *units;       /* SI units, "-" if none */
     const char *description; /* one line */

@@ -29,9 +29,9 @@ typedef struct particles {
     real *X0[3];  /* reference (initial) position, m, for prescribed kinematics */
     real *v[3];   /* velocity, m/s */
     real *vol;    /* volume m_i/rho_i, m^d */
-    real *C;      /* small-grain concentration, - */
-    real *C_n;    /* C at the start of the step (predictor-corrector) */
-    real *dCdt;   /* concentration rate, 1/s */
+    creal *C;     /* small-grain concentration, - (double in both precisions: hd.h) */
+    creal *C_n;   /* C at the start of the step (predictor-corrector) */
+    creal *dCdt;  /* concentration rate, 1/s */
     real *gdot;   /* shear-rate magnitude, 1/s */
     real *gsum;   /* concentration windows (Segregation:every): the shear rate integrated
                    * over the open window, -; divided by its length at the window's

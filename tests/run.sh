@@ -38,6 +38,9 @@ run_one io_ranks bash tests/test_io_ranks.sh "$BUILD/tests/test_io_ranks" "$BUIL
 run_one jobs bash tests/test_jobs.sh "$BUILD/sphseg"
 run_one blowup bash tests/test_blowup.sh "$BUILD/sphseg"
 run_one settings_warnings bash tests/test_settings_warnings.sh "$BUILD/sphseg"
+# the single-precision build for validate_single.py (CPU only: a minute on 2 cores)
+export BUILD
+run_one single_build make -s -j2 PRECISION=single GPU=0 BUILD="$BUILD-single" all
 for v in tests/validate_*.py; do
     run_one "$(basename "$v" .py)" "$PYTHON" "$v" --sphseg "$BUILD/sphseg" --work "$tmp/$(basename "$v" .py)"
 done

@@ -148,7 +148,7 @@ static double *read_field(hid_t file, const struct io_field *f, long long n)
     H5Sget_simple_extent_dims(space, dims, NULL);
     assert_int_equal(dims[0], n);
     if (f->ncomp > 1) assert_int_equal(dims[1], f->ncomp);
-    hid_t want = f->type == IO_REAL ? H5T_IEEE_F64LE : f->type == IO_UINT8 ? H5T_STD_U8LE : H5T_STD_I64LE;
+    hid_t want = f->type == IO_REAL || f->type == IO_CREAL ? H5T_IEEE_F64LE : f->type == IO_UINT8 ? H5T_STD_U8LE : H5T_STD_I64LE;
     assert_true(H5Tequal(type, want) > 0);
     double *buf = malloc((n > 0 ? n : 1) * (size_t)f->ncomp * sizeof *buf);
     if (n > 0) assert_true(H5Dread(dset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0);

@@ -88,6 +88,7 @@ static void make_particles(particles_t *p)
             for (size_t k = 0; k < n; k++) {
                 double v = ref_value(f->name, c, p->id[k]);
                 if (f->type == IO_REAL) ((real *)a)[k] = (real)v;
+                else if (f->type == IO_CREAL) ((creal *)a)[k] = (creal)v;
                 else if (f->type == IO_UINT8) ((uint8_t *)a)[k] = (uint8_t)v;
             }
         }

@@ -20,6 +20,13 @@ typedef double real;
 #define R(x) ((real)(x))
 #endif
 
+/* The concentration, its start-of-step copy and its rate are double in both
+ * precisions (creal): a float C rounds at every update, and Σ C_i V_i then
+ * drifts by ~1e-5 in 2e4 steps (docs/gpu.md "Mixed precision"); with C,
+ * its rate and the pair sums of the conservative scheme in double the
+ * single build conserves it as the double build does. */
+typedef double creal;
+
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif
@@ -45,6 +52,21 @@ typedef double real;
  * holds the same bits and runs stay bit-identical; on the host nlanes is 1
  * and team_sum does nothing. */
 HD_INLINE void team_sum(real *v, int n, int nlanes)
+{
+#ifdef __CUDA_ARCH__
+    if (nlanes > 1) {
+        const unsigned lane = threadIdx.x & 31u, base = lane & ~(unsigned)(nlanes - 1);
+        const unsigned mask = nlanes == 32 ? 0xffffffffu : ((1u << nlanes) - 1u) << base;
+        for (int k = 0; k < n; ++k)
+            for (int o = nlanes >> 1; o > 0; o >>= 1) v[k] += __shfl_xor_sync(mask, v[k], o, nlanes);
+    }
+#else
+    (void)v, (void)n, (void)nlanes;
+#endif
+}
+
+/* team_sum of double sums (the concentration rates in the single build). */
+HD_INLINE void team_sum_c(creal *v, int n, int nlanes)
 {
 #ifdef __CUDA_ARCH__
     if (nlanes > 1) {

@@ -19,7 +19,7 @@ typedef struct seg_ctx {
 
 /* The three contributions to dC/dt, 1/s: segregation, diffusion, CSR source. */
 typedef struct seg_rate {
-    real seg, diff, src;
+    creal seg, diff, src;
 } seg_rate;
 
 /* Accumulators of the C1-consistent gradient system (App. E, E9–E14) for two
@@ -238,7 +238,7 @@ HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const g
     const sph_ctx *k = &c->k;
     const seg_params *sp = &c->sp;
     real Ci = p->C[i], Qi = p->segQ[i], Di = p->segD[i];
-    real seg = 0, diff = 0;
+    creal seg = 0, diff = 0; /* summed in double in both precisions (hd.h, creal) */
     /* i's own values read once; j's before or after the distance test by
      * SPH_EARLY_LOADS (hd.h) */
     const real xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
@@ -262,8 +262,8 @@ HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const g
         seg -= w * (Qi + Qj) * gx;
         diff += w * (Di + Dj) * (Ci - Cj) * xlx;
     NBR_END
-    team_sum(&seg, 1, nlanes);
-    team_sum(&diff, 1, nlanes);
+    team_sum_c(&seg, 1, nlanes);
+    team_sum_c(&diff, 1, nlanes);
     seg_rate out = {seg, diff, 0};
     return out;
 }

@@ -125,7 +125,7 @@ HD_INLINE void step_advance(size_t i, particles_t *p, real a, const flow_ctx *c,
     if (p->kind[i] != KIND_MATERIAL) return;
     if (w > 0) p->gsum[i] += w * p->gdot[i];
     if (flow_on) flow_advance(i, p, a, c);
-    if (seg_on) p->C[i] = p->C_n[i] + a * p->dCdt[i];
+    if (seg_on) p->C[i] = p->C_n[i] + (creal)a * p->dCdt[i];
 }
 
 /* Concentration windows (integrate_conc): material particle i's mean shear
@@ -141,7 +141,7 @@ HD_INLINE void step_conc_advance(size_t i, particles_t *p, real a, int stage)
 {
     if (p->kind[i] != KIND_MATERIAL) return;
     if (stage == 0) p->C_n[i] = p->C[i];
-    p->C[i] = p->C_n[i] + a * p->dCdt[i];
+    p->C[i] = p->C_n[i] + (creal)a * p->dCdt[i];
 }
 
 #endif
