@@ -249,7 +249,7 @@ static void parallel_start(sim_t *s, const ckpt_run *rs)
     parallel_report(s->halo, p);
 }
 
-/* Settings of the computed flow outside the range measured to be accurate
+/* Drums: settings of the computed flow outside the range measured to be accurate
  * (docs/gpu.md "Stiffness, artificial viscosity and CFL"): the flow depends
  * on the modulus through the artificial viscosity alpha c_s h (c_s ~ sqrt
  * E), so a softer material (a longer step) must raise alpha to keep
@@ -478,7 +478,7 @@ int main(int argc, char **argv)
     if (s.flow_on)
         message("flow: c_s = %.4g m/s, h/c_s = %.3g s, Shepard filter every %u steps, alpha_av = %g",
                 (double)s.flow.cs, (double)(s.seg.k.h / s.flow.cs), sc.flow.shepard_every, sc.flow.alpha_av);
-    if (s.flow_on) flow_warn_settings(&sc);
+    if (s.flow_on && sc.geometry.type == GEOM_DRUM) flow_warn_settings(&sc); /* measured on drums */
     if (s.win.on && sc.segregation.every_k)
         message("concentration: one midpoint step every %u flow steps (Segregation:every), at the window's mean "
                 "shear rate", sc.segregation.every_k);
