@@ -84,7 +84,7 @@ CORE_SRC := src/error.c src/scene.c src/particles.c src/nbr.c src/bound.c src/se
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
 HEADERS  := $(wildcard src/*.h src/physics/*.h mpi/*.h)
 
-UNIT_TESTS := test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint
+UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
 
 .PHONY: all deps run test unit bench clean format

@@ -10,7 +10,15 @@
  *  - momentum: on a perturbed block with random velocities and stresses,
  *    no gravity and no walls, sum m_i a_i = 0 to round-off (the pair terms
  *    of 3.9 and 3.10 are antisymmetric);
- *  - the Shepard filter (3.12) leaves a uniform stress unchanged;
+ *  - magnitudes: a linear stress field accelerates an interior particle by
+ *    div(sigma) / rho (the lattice moment 0.9974 at h = 1.5 dr, so within
+ *    0.5 %; a flipped pair-force sign gives -div sigma); the artificial
+ *    viscosity (3.10) of two approaching particles against its closed form
+ *    (to round-off), and none when they separate;
+ *  - the Shepard filter (3.12) leaves a uniform stress unchanged, and a
+ *    linear one in the interior; next to the base (support cut) it gives
+ *    the kernel-weighted mean of the material above, summed by hand over
+ *    the lattice offsets;
  *  - flow_rates with renorm (the backends' fused pass) gives every material
  *    particle of a perturbed block with dummy walls the L of seg_renorm,
  *    bit for bit, and the same acc, dsig, gdot as flow_rates without it;
@@ -167,6 +175,95 @@ static void test_shepard_uniform(void **st)
     part_free(&p);
 }
 
+/* sigma_xx = s1 x, sigma_yy = s2 y, sigma_xy = s3 (x + y): div sigma =
+ * (s1 + s3, s3 + s2), Pa/m. */
+static void test_linear_stress(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    c.g[1] = 0;
+    int n = 12;
+    tu_block2d(&p, n, n, DR, 0, 0);
+    const double s1 = 3e5, s2 = -8e5, s3 = 5e5;
+    for (size_t k = 0; k < p.n; ++k) {
+        double x = p.x[0][k], y = p.x[1][k];
+        p.sig[0][k] = (real)(-2000 + s1 * x), p.sig[1][k] = (real)(-3000 + s2 * y);
+        p.sig[3][k] = (real)(s3 * (x + y)), p.sig[2][k] = -2500;
+    }
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    size_t i = centre(&p, n);
+    flow_rates(i, &p, &g.view, &c);
+    double ax = (s1 + s3) / c.rho, ay = (s3 + s2) / c.rho, mag = hypot(ax, ay);
+    assert_true(fabs(p.acc[0][i] - ax) < 0.005 * mag && fabs(p.acc[1][i] - ay) < 0.005 * mag);
+    nbr_free(&g);
+    part_free(&p);
+}
+
+/* Two material particles r = 1.2 dr apart on x, no stress, no gravity: i
+ * moving at 0.3 m/s toward j at rest. (3.10): Pi = alpha c h (u_ij.x_ij) /
+ * (rho (r^2 + 0.01 h^2)), a_i = m_j Pi grad_i W_ij, grad_i W = F(r) x_ij,
+ * F = (1/r) dW/dr; a decelerates i (negative here). Receding: a_i = 0. */
+static void test_viscosity_closed_form(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    c.g[1] = 0;
+    double r = 1.2 * DR, V = DR * DR, h = c.k.h;
+    part_alloc(&p, 2, 2);
+    tu_put(&p, 0, 0, 0, KIND_MATERIAL, V);
+    tu_put(&p, r, 0, 0, KIND_MATERIAL, V);
+    for (int dir = 1; dir >= -1; dir -= 2) {
+        p.v[0][0] = (real)(0.3 * dir), p.v[0][1] = 0;
+        nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+        size_t i = tu_find(&p, 0);
+        flow_rates(i, &p, &g.view, &c);
+        double ux = 0.3 * dir * -r; /* u_ij.x_ij */
+        double Pi = ux < 0 ? c.alpha_av * c.cs * h * ux / (c.rho * (r * r + 0.01 * h * h)) : 0;
+        double ax = c.rho * V * Pi * kernel_f((real)r, c.k.h, c.k.alpha) * -r;
+        if (dir > 0) assert_true(ax < 0 && fabs(p.acc[0][i] - ax) < RT(1e-12) * fabs(ax));
+        else assert_true(p.acc[0][i] == 0);
+        assert_true(p.acc[1][i] == 0);
+    }
+    nbr_free(&g);
+    part_free(&p);
+}
+
+/* sigma_yy = -1e4 (H - y) (hydrostatic, Pa) on an 8 x 8 block with walls. */
+static void test_shepard_linear(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    int n = 8;
+    double H = n * DR, gam = 1e4, h = c.k.h;
+    tu_block2d(&p, n, n, DR, 3, 3);
+    for (size_t k = 0; k < p.n; ++k)
+        for (int q = 0; q < 6; ++q)
+            p.sig[q][k] = (real)(p.kind[k] == KIND_MATERIAL ? (q == 1 ? -gam * (H - p.x[1][k]) : 0) : 12345);
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    size_t in = tu_find(&p, 4 * n + 4), low = tu_find(&p, 4); /* row 4, and row 0 (on the base) */
+    flow_shepard(in, &p, &g.view, &c);
+    assert_true(fabs(p.dsig[1][in] - p.sig[1][in]) < RT(1e-12) * gam * H);
+    flow_shepard(low, &p, &g.view, &c);
+    double num = 0, den = 0; /* rows b >= 0 above particle (4, 0): the material */
+    for (int a = -3; a <= 3; ++a)
+        for (int b = 0; b <= 3; ++b) {
+            double rr = hypot(a * DR, b * DR);
+            if (rr >= 2 * h) continue;
+            double W = kernel_w((real)rr, c.k.h, c.k.alpha);
+            num += W * -gam * (H - (b + 0.5) * DR), den += W;
+        }
+    assert_true(fabs(p.dsig[1][low] - num / den) < RT(1e-12) * gam * H);
+    assert_true(fabs(p.dsig[1][low] - p.sig[1][low]) > 0.1 * gam * DR); /* the cut support biases it */
+    nbr_free(&g);
+    part_free(&p);
+}
+
 static void test_renorm_fused(void **st)
 {
     (void)st;
@@ -316,7 +413,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_uniform_stress),        cmocka_unit_test(test_linear_velocity),
         cmocka_unit_test(test_momentum_conservation), cmocka_unit_test(test_shepard_uniform),
-        cmocka_unit_test(test_renorm_fused),
+        cmocka_unit_test(test_renorm_fused),          cmocka_unit_test(test_linear_stress),
+        cmocka_unit_test(test_viscosity_closed_form), cmocka_unit_test(test_shepard_linear),
         cmocka_unit_test(test_advance),               cmocka_unit_test(test_drum_wall_motion),
         cmocka_unit_test(test_box_translation),       cmocka_unit_test(test_drum3d_walls),
     };
