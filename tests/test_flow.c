@@ -24,6 +24,11 @@
  *    bit for bit, and the same acc, dsig, gdot as flow_rates without it;
  *  - advance: a trial stress outside the cone ends on it (f = 0), a tensile
  *    one at the apex (0); x and u advance with the rate-state velocity;
+ *  - a drum dummy's stress (4.3) in a fast-turning drum: material in the
+ *    rotating frame's hydrostatic state, sigma_aa = -P0 - rho geff_a
+ *    (x - x_d)_a with geff = g - a_w (a_w = -omega^2 (x_d - centre), the
+ *    wall's centripetal acceleration), extrapolates to -P0 exactly at the
+ *    dummy (to round-off; g + a_w misses by ~10 % of P0);
  *  - wall motion: a drum dummy keeps its radius, turns by omega t and moves
  *    at omega e_z x r; a translating box moves its dummies by u t;
  *  - 3D drum: a dummy keeps its z as it turns; normals radial on the
@@ -335,6 +340,37 @@ static void test_advance(void **st)
     part_free(&p);
 }
 
+static void test_drum_dummy_stress(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    c.w.type = WALL_DRUM, c.w.radius = (real)0.03, c.w.omega = 60; /* a_w = 108 m/s^2 at r = R */
+    double xd = 0.0305, yd = 0.0005, P0 = 5000, V = DR * DR;
+    real aw[3], xdv[3] = {(real)xd, (real)yd, 0};
+    wall_accel(&c.w, xdv, aw);
+    double geff[2] = {c.g[0] - aw[0], c.g[1] - aw[1]};
+    assert_true(fabs(aw[0] + 60.0 * 60.0 * xd) < RT(1e-9) * 100); /* centripetal, towards the axis */
+    part_alloc(&p, 2, 64);
+    tu_put(&p, xd, yd, 0, KIND_DUMMY, V);
+    for (int i = 0; i < 4; ++i) /* the material on the drum's side of the dummy */
+        for (int j = -3; j <= 3; ++j) {
+            double x = xd - (i + 1) * DR, y = yd + j * DR;
+            tu_put(&p, x, y, 0, KIND_MATERIAL, V);
+            size_t k = p.n - 1;
+            p.sig[0][k] = (real)(-P0 - c.rho * geff[0] * (x - xd));
+            p.sig[1][k] = (real)(-P0 - c.rho * geff[1] * (y - yd));
+            p.sig[2][k] = (real)-P0;
+        }
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    size_t d = tu_find(&p, 0);
+    flow_wall(d, &p, &g.view, &c);
+    for (int a = 0; a < 3; ++a) assert_true(fabs(p.sig[a][d] + P0) < RT(1e-10) * P0);
+    nbr_free(&g);
+    part_free(&p);
+}
+
 static void test_drum_wall_motion(void **st)
 {
     (void)st;
@@ -415,7 +451,8 @@ int main(void)
         cmocka_unit_test(test_momentum_conservation), cmocka_unit_test(test_shepard_uniform),
         cmocka_unit_test(test_renorm_fused),          cmocka_unit_test(test_linear_stress),
         cmocka_unit_test(test_viscosity_closed_form), cmocka_unit_test(test_shepard_linear),
-        cmocka_unit_test(test_advance),               cmocka_unit_test(test_drum_wall_motion),
+        cmocka_unit_test(test_advance),               cmocka_unit_test(test_drum_dummy_stress),
+        cmocka_unit_test(test_drum_wall_motion),
         cmocka_unit_test(test_box_translation),       cmocka_unit_test(test_drum3d_walls),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
