@@ -49,7 +49,13 @@ run_one checkpoint_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUI
 run_one io_ranks bash tests/test_io_ranks.sh "$BUILD/tests/test_io_ranks" "$BUILD/tests/test_io"
 run_one jobs bash tests/test_jobs.sh "$BUILD/sphseg"
 run_one blowup bash tests/test_blowup.sh "$BUILD/sphseg"
+# the validations, shortest first (FAIL_FAST stops sooner), then any others
+vals=()
+for n in restart column steady drum drum3d mpi; do [ -f "tests/validate_$n.py" ] && vals+=("tests/validate_$n.py"); done
 for v in tests/validate_*.py; do
+    case " ${vals[*]} " in *" $v "*) ;; *) vals+=("$v") ;; esac
+done
+for v in "${vals[@]}"; do
     run_one "$(basename "$v" .py)" "$PYTHON" "$v" --sphseg "$BUILD/sphseg" --work "$tmp/$(basename "$v" .py)"
 done
 

@@ -29,6 +29,9 @@
  *    (x - x_d)_a with geff = g - a_w (a_w = -omega^2 (x_d - centre), the
  *    wall's centripetal acceleration), extrapolates to -P0 exactly at the
  *    dummy (to round-off; g + a_w misses by ~10 % of P0);
+ *  - a side-wall dummy of a hydrostatic column: at mid-height (4.3) gives
+ *    the column's stress at its depth; above the free surface (4.3) would
+ *    extrapolate tension, which grains cannot carry: zero stress;
  *  - wall motion: a drum dummy keeps its radius, turns by omega t and moves
  *    at omega e_z x r; a translating box moves its dummies by u t;
  *  - 3D drum: a dummy keeps its z as it turns; normals radial on the
@@ -371,6 +374,35 @@ static void test_drum_dummy_stress(void **st)
     part_free(&p);
 }
 
+static void test_dummy_above_surface(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx(); /* g = -9.81 y */
+    int n = 8;
+    double H = n * DR, rg = c.rho * 9.81;
+    tu_block2d(&p, n, n, DR, 3, 3); /* side walls reach 3 rows above the material */
+    for (size_t k = 0; k < p.n; ++k)
+        p.sig[1][k] = (real)(p.kind[k] == KIND_MATERIAL ? -rg * (H - p.x[1][k]) : 0);
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    int mid = 0, above = 0;
+    for (size_t d = 0; d < p.n; ++d) {
+        double x = p.x[0][d], y = p.x[1][d];
+        if (p.kind[d] != KIND_DUMMY || x > 0 || x < -DR) continue; /* the left wall's first layer */
+        flow_wall(d, &p, &g.view, &c);
+        if (fabs(y - 4.5 * DR) < 0.1 * DR) /* mid-height: the column's stress */
+            mid++, assert_true(fabs(p.sig[1][d] + rg * (H - y)) < 1e-9 * rg * H);
+        if (y > H + DR) { /* 1.5 dr above the surface, material in reach */
+            above++;
+            for (int q = 0; q < 6; ++q) assert_true(p.sig[q][d] == 0);
+        }
+    }
+    assert_true(mid == 1 && above == 2);
+    nbr_free(&g);
+    part_free(&p);
+}
+
 static void test_drum_wall_motion(void **st)
 {
     (void)st;
@@ -452,7 +484,7 @@ int main(void)
         cmocka_unit_test(test_renorm_fused),          cmocka_unit_test(test_linear_stress),
         cmocka_unit_test(test_viscosity_closed_form), cmocka_unit_test(test_shepard_linear),
         cmocka_unit_test(test_advance),               cmocka_unit_test(test_drum_dummy_stress),
-        cmocka_unit_test(test_drum_wall_motion),
+        cmocka_unit_test(test_dummy_above_surface),   cmocka_unit_test(test_drum_wall_motion),
         cmocka_unit_test(test_box_translation),       cmocka_unit_test(test_drum3d_walls),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

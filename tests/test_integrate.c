@@ -11,7 +11,16 @@
  *    with it; t, step and dt advanced;
  *  - the Shepard filter every Flow:shepard_every steps with computed flow,
  *    never without it or with shepard_every = 0;
- *  - the settling damping on while t < Flow:damping_until, off after. */
+ *  - the settling damping on while t < Flow:damping_until, off after;
+ *  - the store's stage update (step_save, step_advance as the CPU backend
+ *    calls them): both stages start from the start-of-step C, so after the
+ *    predictor (dt/2) and the corrector (dt) C = C_n + dt r, not
+ *    C_n + 3/2 dt r;
+ *  - integrate_dt (mock bounds): the diffusion step is stable: dt times the
+ *    Gershgorin bound of the SPH Laplacian, 4 D sum_j |F_ij| V_j summed here
+ *    over a lattice at h = 1.5 dr, stays within the midpoint rule's
+ *    stability limit 2; the flow step is (3.19), chi min(sqrt(h/a), h/c_s). */
+#include <mpi.h>
 #include <string.h>
 #include "sim.h"
 #include "testutil.h"
@@ -37,8 +46,15 @@ static void m_advance(sim_t *s, double a) { (void)s, M.y = M.y_n + a * M.r; }
 static void m_save(sim_t *s) { (void)s, M.y_n = M.y; }
 static void m_filter(sim_t *s) { (void)s, M.filters++; }
 
+static double B[STEP_NBOUNDS]; /* what the mock's bounds hook reports */
+static void m_bounds(sim_t *s, double out[STEP_NBOUNDS])
+{
+    (void)s;
+    for (int k = 0; k < STEP_NBOUNDS; ++k) out[k] = B[k];
+}
+
 static const struct backend MOCK = {"mock", m_prepare, m_rates, m_advance, m_save, m_filter,
-                                    NULL,   NULL,      NULL,    NULL,      NULL,   1};
+                                    m_bounds, NULL,    NULL,    NULL,      NULL,   1};
 
 static void start(sim_t *s, struct scene *sc)
 {
@@ -110,9 +126,56 @@ static void test_filter_and_damping(void **st)
     assert_int_equal(M.filters, 3);
 }
 
-int main(void)
+static void test_stage_update(void **st)
 {
+    (void)st;
+    particles_t p;
+    flow_ctx c;
+    memset(&c, 0, sizeof c);
+    part_alloc(&p, 2, 1);
+    p.n = 1, p.kind[0] = KIND_MATERIAL, p.C[0] = (real)0.25, p.dCdt[0] = 2;
+    step_save(0, &p, 0);
+    step_advance(0, &p, (real)0.05, &c, 0, 1); /* predictor, dt = 0.1 */
+    assert_true(fabs(p.C[0] - 0.35) < RT(1e-14));
+    p.dCdt[0] = 3; /* the midpoint rate */
+    step_advance(0, &p, (real)0.1, &c, 0, 1);
+    assert_true(fabs(p.C[0] - 0.55) < RT(1e-14));
+    part_free(&p);
+}
+
+static void test_dt_bounds(void **st)
+{
+    (void)st;
+    sim_t s;
+    struct scene sc;
+    start(&s, &sc);
+    const double dr = 1e-3, h = 1.5 * dr, D = 1e-6;
+    sc.run.dt_max = 1e9, sc.run.cfl_diffusion = 0.1, sc.run.cfl_segregation = 0.2, sc.run.cfl_kinematic = 1;
+    sc.run.cfl_flow = 0.1;
+    s.seg.k = sph_make(2, (real)h, (real)dr);
+    memset(B, 0, sizeof B);
+    B[STEP_D] = D;
+    double dt = integrate_dt(&s), gersh = 0;
+    for (int a = -3; a <= 3; ++a)
+        for (int b = -3; b <= 3; ++b) {
+            double r = hypot(a, b) * dr;
+            if (r > 0 && r < 2 * h) gersh += 4 * D * fabs(kernel_f((real)r, s.seg.k.h, s.seg.k.alpha)) * dr * dr;
+        }
+    print_message("diffusion: dt %.3e s, Gershgorin radius x dt = %.3f (stable <= 2)\n", dt, gersh * dt);
+    assert_true(gersh * dt <= 2 && gersh * dt > 0.5); /* stable, and not needlessly short */
+    memset(B, 0, sizeof B);
+    s.flow_on = 1, s.flow.cs = 10, B[STEP_ACC] = 50;
+    dt = integrate_dt(&s);
+    assert_true(fabs(dt - 0.1 * fmin(sqrt(h / 50), h / 10)) < RT(1e-12) * dt);
+}
+
+int main(int argc, char **argv)
+{
+    MPI_Init(&argc, &argv);
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_order), cmocka_unit_test(test_stages),
-                                       cmocka_unit_test(test_filter_and_damping)};
-    return cmocka_run_group_tests(tests, NULL, NULL);
+                                       cmocka_unit_test(test_filter_and_damping), cmocka_unit_test(test_stage_update),
+                                       cmocka_unit_test(test_dt_bounds)};
+    int r = cmocka_run_group_tests(tests, NULL, NULL);
+    MPI_Finalize();
+    return r;
 }
