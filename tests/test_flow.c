@@ -7,6 +7,10 @@
  *    interior within the lattice-moment error of the kernel at h = 1.5 dr
  *    (0.3 %, tests/test_kernel.c): the shear rate sqrt(2 e:e) and the
  *    elastic stress rate 2G e + K tr(eps) I within 1 %;
+ *  - objectivity: a block in rigid rotation u = Omega e_z x x carrying a
+ *    uniform stress diag(s1, s2) has no strain rate, and its stress turns
+ *    with it: d sigma_xy/dt = Omega (s1 - s2), d sigma_xx/dt = 0 (the
+ *    derivative of R sigma R^T; within 1 %, the lattice moment);
  *  - momentum: on a perturbed block with random velocities and stresses,
  *    no gravity and no walls, sum m_i a_i = 0 to round-off (the pair terms
  *    of 3.9 and 3.10 are antisymmetric);
@@ -113,6 +117,30 @@ static void test_linear_velocity(void **st)
     double dmax = 0;
     for (int q = 0; q < 6; ++q) dmax = fmax(dmax, fabs(ds[q]));
     for (int q = 0; q < 6; ++q) assert_true(fabs(p.dsig[q][i] - ds[q]) < 0.01 * dmax);
+    nbr_free(&g);
+    part_free(&p);
+}
+
+static void test_rigid_rotation(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    int n = 12;
+    tu_block2d(&p, n, n, DR, 0, 0);
+    const double Om = 3.0, s1 = -4000, s2 = -1000; /* rad/s, Pa */
+    for (size_t k = 0; k < p.n; ++k) {
+        p.v[0][k] = (real)(-Om * p.x[1][k]), p.v[1][k] = (real)(Om * p.x[0][k]);
+        p.sig[0][k] = (real)s1, p.sig[1][k] = (real)s2, p.sig[2][k] = (real)s2;
+    }
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    size_t i = centre(&p, n);
+    flow_rates(i, &p, &g.view, &c);
+    double rate = Om * (s1 - s2);
+    assert_true(fabs(p.gdot[i]) < RT(1e-9) * Om);
+    assert_true(fabs(p.dsig[3][i] - rate) < 0.01 * fabs(rate));
+    assert_true(fabs(p.dsig[0][i]) < RT(1e-9) * fabs(rate) && fabs(p.dsig[1][i]) < RT(1e-9) * fabs(rate));
     nbr_free(&g);
     part_free(&p);
 }
@@ -480,6 +508,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_uniform_stress),        cmocka_unit_test(test_linear_velocity),
+        cmocka_unit_test(test_rigid_rotation),
         cmocka_unit_test(test_momentum_conservation), cmocka_unit_test(test_shepard_uniform),
         cmocka_unit_test(test_renorm_fused),          cmocka_unit_test(test_linear_stress),
         cmocka_unit_test(test_viscosity_closed_form), cmocka_unit_test(test_shepard_linear),
