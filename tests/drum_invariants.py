@@ -17,10 +17,10 @@ class Checks:
 
 
 def diagnostics_columns(check, out, rho):
-    """The diagnostics' n_material, kinetic_energy and max_speed columns at
-    every snapshot time against the snapshot: the count of material
-    particles, 1/2 rho sum V_i |u_i|^2 and max |u_i| over them (rho the bulk
-    density), to 1e-12 (summation order)."""
+    """The diagnostics' n_material, kinetic_energy, max_speed, C_min and
+    C_max columns at every snapshot time against the snapshot: the count of
+    material particles, 1/2 rho sum V_i |u_i|^2, max |u_i|, min and max C_i
+    over them (rho the bulk density), to 1e-12 (summation order)."""
     dg = snap.read_diagnostics(out)
     worst, n_bad = 0.0, 0
     for p in snap.list_snapshots(out):
@@ -32,12 +32,14 @@ def diagnostics_columns(check, out, rho):
         m = s["Kind"] == snap.MATERIAL
         v2 = np.sum(np.asarray(s["Velocities"], dtype=float)[m] ** 2, axis=1)
         ke = 0.5 * rho * np.sum(np.asarray(s["Volume"], dtype=float)[m] * v2)
-        row = {c: float(dg[c][k[0]]) for c in ("n_material", "kinetic_energy", "max_speed")}
+        row = {c: float(dg[c][k[0]]) for c in ("n_material", "kinetic_energy", "max_speed", "C_min", "C_max")}
         n_bad += row["n_material"] != m.sum()
-        for got, ref in ((row["kinetic_energy"], ke), (row["max_speed"], np.sqrt(v2.max()))):
+        C = np.asarray(s["Concentration"], dtype=float)[m]
+        for got, ref in ((row["kinetic_energy"], ke), (row["max_speed"], np.sqrt(v2.max())),
+                         (row["C_min"], C.min()), (row["C_max"], C.max())):
             worst = max(worst, abs(got - ref) / max(abs(ref), 1e-300) if ref != 0 or got != 0 else 0.0)
     check("diagnostics", n_bad == 0 and worst <= 1e-12,
-          "n_material, kinetic_energy, max_speed against the snapshots: %d count mismatches, largest "
+          "n_material, kinetic_energy, max_speed, C_min, C_max against the snapshots: %d count mismatches, largest "
           "relative difference %.1e" % (n_bad, worst))
 
 

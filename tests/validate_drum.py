@@ -31,7 +31,7 @@ physical invariants of paper §6 with tolerances.
                  snapshots, stays below 1e-10 (the conservative scheme
                  conserves it to round-off), and diagnostics.csv agrees with
                  the snapshots (drum_invariants.py);
-  diagnostics:   the kinetic energy, largest speed and material count of
+  diagnostics:   the kinetic energy, largest speed, C range and material count of
                  diagnostics.csv equal those of the snapshots.
 """
 import argparse
