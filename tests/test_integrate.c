@@ -53,8 +53,9 @@ static void m_bounds(sim_t *s, double out[STEP_NBOUNDS])
     for (int k = 0; k < STEP_NBOUNDS; ++k) out[k] = B[k];
 }
 
-static const struct backend MOCK = {"mock", m_prepare, m_rates, m_advance, m_save, m_filter,
-                                    m_bounds, NULL,    NULL,    NULL,      NULL,   1};
+static const struct backend MOCK = {.name = "mock",    .prepare = m_prepare, .rates = m_rates,
+                                    .advance = m_advance, .save_start = m_save, .filter = m_filter,
+                                    .bounds = m_bounds,   .ghost_depth = 1};
 
 static void start(sim_t *s, struct scene *sc)
 {
