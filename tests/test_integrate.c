@@ -19,7 +19,10 @@
  *  - integrate_dt (mock bounds): the diffusion step is stable: dt times the
  *    Gershgorin bound of the SPH Laplacian, 4 D sum_j |F_ij| V_j summed here
  *    over a lattice at h = 1.5 dr, stays within the midpoint rule's
- *    stability limit 2; the flow step is (3.19), chi min(sqrt(h/a), h/c_s). */
+ *    stability limit 2; the flow step is (3.19), chi min(sqrt(h/a), h/c_s);
+ *  - the shear box's prescribed kinematics (kin_state) are consistent: the
+ *    velocity is the time derivative of the position (central differences
+ *    over the cycle) and the shear rate is |du_x/dy|; the base stays put. */
 #include <mpi.h>
 #include <string.h>
 #include "sim.h"
@@ -170,12 +173,33 @@ static void test_dt_bounds(void **st)
     assert_true(fabs(dt - 0.1 * fmin(sqrt(h / 50), h / 10)) < RT(1e-12) * dt);
 }
 
+static void test_kinematics(void **st)
+{
+    (void)st;
+    kin_params kp = {1, 0.57735, 2 * M_PI / 13.0};
+    const double e = 1e-3, y = 0.05, T = 13.0, tol = sizeof(real) == sizeof(float) ? 2e-3 : 1e-6;
+    real X0[3] = {(real)0.01, (real)y, 0}, X1[3] = {(real)0.01, (real)(2 * y), 0}, Xb[3] = {0, (real)-0.001, 0};
+    for (int k = 0; k < 16; ++k) {
+        double t = k * T / 16 + 0.3;
+        real xp[3], xm[3], x[3], u[3], u1[3], up[3], gd, g1;
+        kin_state(&kp, X0, t + e, xp, up, &gd);
+        kin_state(&kp, X0, t - e, xm, up, &gd);
+        kin_state(&kp, X0, t, x, u, &gd);
+        kin_state(&kp, X1, t, x, u1, &g1);
+        double dxdt = (xp[0] - xm[0]) / (2 * e), amp = kp.gamma0 * kp.omega * y;
+        assert_true(fabs(u[0] - dxdt) < tol * amp && u[1] == 0); /* truncation (omega e)^2 / 6 = 4e-8 */
+        assert_true(fabs(gd - fabs((u1[0] - u[0]) / y)) < RT(1e-9) * amp / y && gd == g1);
+        kin_state(&kp, Xb, t, x, u, &gd);
+        assert_true(x[0] == Xb[0] && u[0] == 0);
+    }
+}
+
 int main(int argc, char **argv)
 {
     MPI_Init(&argc, &argv);
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_order), cmocka_unit_test(test_stages),
                                        cmocka_unit_test(test_filter_and_damping), cmocka_unit_test(test_stage_update),
-                                       cmocka_unit_test(test_dt_bounds)};
+                                       cmocka_unit_test(test_dt_bounds), cmocka_unit_test(test_kinematics)};
     int r = cmocka_run_group_tests(tests, NULL, NULL);
     MPI_Finalize();
     return r;
