@@ -5,7 +5,7 @@
 #   make test    unit, validation and bad-input tests; ends with "N passed, N failed"
 #                (REQUIRE_GPU=1: a GPU test that skips, exit 77, fails; FAIL_FAST=1: stop at the first failure)
 #   make test-mutants  plant one bug at a time in a scratch copy and run the suite on it
-#                (tools/mutants.py; not part of CI: about an hour on 2 cores)
+#                (tools/mutants.py; not part of CI: half an hour to an hour on 2 cores)
 #   make bench   particle-steps per second, CPU (tools/bench.sh) and, where a GPU is visible, GPU (tools/bench_gpu.sh)
 # Variables a cluster user may set (e.g. from modules):
 #   CC, MPICC            C compiler and MPI wrapper (mpicc)
