@@ -3,6 +3,9 @@
 #   make         build build/sphseg with $(MPICC)
 #   make run     deps, build, and the default scene inputs/shearbox_2d.yml -> out/shearbox_2d/
 #   make test    unit, validation and bad-input tests; ends with "N passed, N failed"
+#                (REQUIRE_GPU=1: a GPU test that skips, exit 77, fails; FAIL_FAST=1: stop at the first failure)
+#   make test-mutants  plant one bug at a time in a scratch copy and run the suite on it
+#                (tools/mutants.py; not part of CI: half an hour to an hour on 2 cores)
 #   make bench   particle-steps per second, CPU (tools/bench.sh) and, where a GPU is visible, GPU (tools/bench_gpu.sh)
 # Variables a cluster user may set (e.g. from modules):
 #   CC, MPICC            C compiler and MPI wrapper (mpicc)
@@ -40,6 +43,9 @@ ifeq ($(OPENMP),1)
 endif
 
 NVCC_PATH := $(shell command -v $(NVCC) 2>/dev/null)
+ifeq ($(origin GPU)$(NVCC_PATH),undefined)
+  $(warning $(NVCC) not found: building without the CUDA backend (--backend gpu will be refused); load a CUDA module or set NVCC= for it, or GPU=0 to silence this)
+endif
 GPU ?= $(if $(NVCC_PATH),1,0)
 GPU_OBJ :=
 ifeq ($(GPU),1)
@@ -84,10 +90,10 @@ CORE_SRC := src/error.c src/scene.c src/particles.c src/nbr.c src/bound.c src/se
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
 HEADERS  := $(wildcard src/*.h src/physics/*.h mpi/*.h)
 
-UNIT_TESTS := test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint
+UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
 
-.PHONY: all deps run test unit bench clean format
+.PHONY: all deps run test unit bench clean format test-mutants
 all: $(BUILD)/sphseg
 
 $(BUILD)/obj/%.o: %.c $(HEADERS)
@@ -115,7 +121,10 @@ run: deps all
 unit: $(UNIT_BINS)
 
 test: all unit
-	@PYTHON=$(PYTHON) BUILD=$(BUILD) bash tests/run.sh
+	@PYTHON=$(PYTHON) BUILD=$(BUILD) UNIT_TESTS="$(UNIT_TESTS)" bash tests/run.sh
+
+test-mutants:
+	$(PYTHON) tools/mutants.py $(MUTANTS_ARGS)
 
 bench: all
 	@PYTHON=$(PYTHON) bash tools/bench.sh $(BUILD)/sphseg

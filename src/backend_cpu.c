@@ -40,6 +40,11 @@ static void cpu_prepare(sim_t *s, double t, int classify)
     n = (long)(p->n + p->ng);
     if ((s->hcsr && classify) || classify == 2) {
         bound_classify(&s->bw, p, &s->grid, &s->seg.k);
+        /* the ghosts an owned particle reads hold their whole support here
+         * and classify themselves alike; the refresh makes them the owner's
+         * values bit for bit whatever the summation order. Without psi in
+         * it the paper-scheme shear box and EN drum on 2 and 3 ranks were
+         * bit-identical (issue 20, tools/mutants.py ghost_psi_stale) */
         void *cls[] = {p->bclass, p->nrm[0], p->nrm[1], p->nrm[2], p->psi};
         cpu_refresh(s, cls, 5);
     }

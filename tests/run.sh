@@ -3,7 +3,11 @@
 # launch checks and the validation cases against reference solutions.
 # Ends with the line "N passed, N failed" and exits nonzero on any failure.
 # A test exiting 77 cannot run on this machine (the GPU tests without a GPU):
-# it is listed as skipped, above the closing line.
+# it is listed as skipped, above the closing line; with REQUIRE_GPU=1 (the
+# device runs) a skip is a failure. The unit tests are those the Makefile
+# lists (UNIT_TESTS, as make test passes it; else read from the Makefile):
+# a missing binary fails. FAIL_FAST=1 stops at the first failure
+# (tools/mutants.py).
 set -u
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
@@ -19,16 +23,24 @@ run_one() { # name, command...
     local rc=$?
     if [ $rc -eq 0 ]; then
         pass=$((pass + 1)); echo "PASS $name ($((SECONDS - t0)) s)"
-    elif [ $rc -eq 77 ]; then # a test that cannot run here (no GPU): counted neither way
+    elif [ $rc -eq 77 ] && [ "${REQUIRE_GPU:-0}" != 1 ]; then # cannot run here (no GPU): counted neither way
         skipped+=("$name"); echo "SKIP $name: $(tail -n 1 "$tmp/$name.log")"
     else
+        [ $rc -eq 77 ] && echo "    (exit 77, a skip, with REQUIRE_GPU=1)" >>"$tmp/$name.log"
         fail=$((fail + 1)); failed+=("$name"); echo "FAIL $name ($((SECONDS - t0)) s)"
         tail -n 30 "$tmp/$name.log" | sed 's/^/    /'
+        if [ "${FAIL_FAST:-0}" = 1 ]; then
+            echo "failed: $name (FAIL_FAST: the rest not run)"; echo "$pass passed, $fail failed"; exit 1
+        fi
     fi
 }
 
-for t in "$BUILD"/tests/test_*; do
-    [ -x "$t" ] && run_one "$(basename "$t")" "$t"
+missing() { echo "no executable $1 (not built?)"; return 1; }
+UNIT_TESTS=${UNIT_TESTS:-$(sed -n 's/^UNIT_TESTS *:= *//p' Makefile)}
+[ -n "$UNIT_TESTS" ] || { echo "no unit tests listed (UNIT_TESTS in the Makefile)"; exit 1; }
+for name in $UNIT_TESTS; do
+    t="$BUILD/tests/$name"
+    if [ -x "$t" ]; then run_one "$name" "$t"; else run_one "$name" missing "$t"; fi
 done
 run_one badinput bash tests/test_badinput.sh "$BUILD/sphseg"
 run_one mpi_launch bash tests/test_launch.sh "$BUILD/sphseg"
@@ -41,7 +53,13 @@ run_one settings_warnings bash tests/test_settings_warnings.sh "$BUILD/sphseg"
 # the single-precision build for validate_single.py (CPU only: a minute on 2 cores)
 export BUILD
 run_one single_build make -s -j2 PRECISION=single GPU=0 BUILD="$BUILD-single" all
+# the validations, shortest first (FAIL_FAST stops sooner), then any others
+vals=()
+for n in restart column steady drum drum3d mpi; do [ -f "tests/validate_$n.py" ] && vals+=("tests/validate_$n.py"); done
 for v in tests/validate_*.py; do
+    case " ${vals[*]} " in *" $v "*) ;; *) vals+=("$v") ;; esac
+done
+for v in "${vals[@]}"; do
     run_one "$(basename "$v" .py)" "$PYTHON" "$v" --sphseg "$BUILD/sphseg" --work "$tmp/$(basename "$v" .py)"
 done
 

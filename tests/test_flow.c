@@ -7,15 +7,35 @@
  *    interior within the lattice-moment error of the kernel at h = 1.5 dr
  *    (0.3 %, tests/test_kernel.c): the shear rate sqrt(2 e:e) and the
  *    elastic stress rate 2G e + K tr(eps) I within 1 %;
+ *  - objectivity: a block in rigid rotation u = Omega e_z x x carrying a
+ *    uniform stress diag(s1, s2) has no strain rate, and its stress turns
+ *    with it: d sigma_xy/dt = Omega (s1 - s2), d sigma_xx/dt = 0 (the
+ *    derivative of R sigma R^T; within 1 %, the lattice moment);
  *  - momentum: on a perturbed block with random velocities and stresses,
  *    no gravity and no walls, sum m_i a_i = 0 to round-off (the pair terms
  *    of 3.9 and 3.10 are antisymmetric);
- *  - the Shepard filter (3.12) leaves a uniform stress unchanged;
+ *  - magnitudes: a linear stress field accelerates an interior particle by
+ *    div(sigma) / rho (the lattice moment 0.9974 at h = 1.5 dr, so within
+ *    0.5 %; a flipped pair-force sign gives -div sigma); the artificial
+ *    viscosity (3.10) of two approaching particles against its closed form
+ *    (to round-off), and none when they separate;
+ *  - the Shepard filter (3.12) leaves a uniform stress unchanged, and a
+ *    linear one in the interior; next to the base (support cut) it gives
+ *    the kernel-weighted mean of the material above, summed by hand over
+ *    the lattice offsets;
  *  - flow_rates with renorm (the backends' fused pass) gives every material
  *    particle of a perturbed block with dummy walls the L of seg_renorm,
  *    bit for bit, and the same acc, dsig, gdot as flow_rates without it;
  *  - advance: a trial stress outside the cone ends on it (f = 0), a tensile
  *    one at the apex (0); x and u advance with the rate-state velocity;
+ *  - a drum dummy's stress (4.3) in a fast-turning drum: material in the
+ *    rotating frame's hydrostatic state, sigma_aa = -P0 - rho geff_a
+ *    (x - x_d)_a with geff = g - a_w (a_w = -omega^2 (x_d - centre), the
+ *    wall's centripetal acceleration), extrapolates to -P0 exactly at the
+ *    dummy (to round-off; g + a_w misses by ~10 % of P0);
+ *  - a side-wall dummy of a hydrostatic column: at mid-height (4.3) gives
+ *    the column's stress at its depth; above the free surface (4.3) would
+ *    extrapolate tension, which grains cannot carry: zero stress;
  *  - wall motion: a drum dummy keeps its radius, turns by omega t and moves
  *    at omega e_z x r; a translating box moves its dummies by u t;
  *  - 3D drum: a dummy keeps its z as it turns; normals radial on the
@@ -101,6 +121,30 @@ static void test_linear_velocity(void **st)
     part_free(&p);
 }
 
+static void test_rigid_rotation(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    int n = 12;
+    tu_block2d(&p, n, n, DR, 0, 0);
+    const double Om = 3.0, s1 = -4000, s2 = -1000; /* rad/s, Pa */
+    for (size_t k = 0; k < p.n; ++k) {
+        p.v[0][k] = (real)(-Om * p.x[1][k]), p.v[1][k] = (real)(Om * p.x[0][k]);
+        p.sig[0][k] = (real)s1, p.sig[1][k] = (real)s2, p.sig[2][k] = (real)s2;
+    }
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    size_t i = centre(&p, n);
+    flow_rates(i, &p, &g.view, &c);
+    double rate = Om * (s1 - s2);
+    assert_true(fabs(p.gdot[i]) < RT(1e-9) * Om);
+    assert_true(fabs(p.dsig[3][i] - rate) < 0.01 * fabs(rate));
+    assert_true(fabs(p.dsig[0][i]) < RT(1e-9) * fabs(rate) && fabs(p.dsig[1][i]) < RT(1e-9) * fabs(rate));
+    nbr_free(&g);
+    part_free(&p);
+}
+
 /* Deterministic pseudo-random numbers in [-1, 1). */
 static double rnd(unsigned *s)
 {
@@ -163,6 +207,95 @@ static void test_shepard_uniform(void **st)
         flow_shepard(k, &p, &g.view, &c); /* dummies (12345) must not enter */
         for (int q = 0; q < 6; ++q) assert_true(fabs(p.dsig[q][k] - p.sig[q][k]) < RT(1e-12) * 200);
     }
+    nbr_free(&g);
+    part_free(&p);
+}
+
+/* sigma_xx = s1 x, sigma_yy = s2 y, sigma_xy = s3 (x + y): div sigma =
+ * (s1 + s3, s3 + s2), Pa/m. */
+static void test_linear_stress(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    c.g[1] = 0;
+    int n = 12;
+    tu_block2d(&p, n, n, DR, 0, 0);
+    const double s1 = 3e5, s2 = -8e5, s3 = 5e5;
+    for (size_t k = 0; k < p.n; ++k) {
+        double x = p.x[0][k], y = p.x[1][k];
+        p.sig[0][k] = (real)(-2000 + s1 * x), p.sig[1][k] = (real)(-3000 + s2 * y);
+        p.sig[3][k] = (real)(s3 * (x + y)), p.sig[2][k] = -2500;
+    }
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    size_t i = centre(&p, n);
+    flow_rates(i, &p, &g.view, &c);
+    double ax = (s1 + s3) / c.rho, ay = (s3 + s2) / c.rho, mag = hypot(ax, ay);
+    assert_true(fabs(p.acc[0][i] - ax) < 0.005 * mag && fabs(p.acc[1][i] - ay) < 0.005 * mag);
+    nbr_free(&g);
+    part_free(&p);
+}
+
+/* Two material particles r = 1.2 dr apart on x, no stress, no gravity: i
+ * moving at 0.3 m/s toward j at rest. (3.10): Pi = alpha c h (u_ij.x_ij) /
+ * (rho (r^2 + 0.01 h^2)), a_i = m_j Pi grad_i W_ij, grad_i W = F(r) x_ij,
+ * F = (1/r) dW/dr; a decelerates i (negative here). Receding: a_i = 0. */
+static void test_viscosity_closed_form(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    c.g[1] = 0;
+    double r = 1.2 * DR, V = DR * DR, h = c.k.h;
+    part_alloc(&p, 2, 2);
+    tu_put(&p, 0, 0, 0, KIND_MATERIAL, V);
+    tu_put(&p, r, 0, 0, KIND_MATERIAL, V);
+    for (int dir = 1; dir >= -1; dir -= 2) {
+        p.v[0][0] = (real)(0.3 * dir), p.v[0][1] = 0;
+        nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+        size_t i = tu_find(&p, 0);
+        flow_rates(i, &p, &g.view, &c);
+        double ux = 0.3 * dir * -r; /* u_ij.x_ij */
+        double Pi = ux < 0 ? c.alpha_av * c.cs * h * ux / (c.rho * (r * r + 0.01 * h * h)) : 0;
+        double ax = c.rho * V * Pi * kernel_f((real)r, c.k.h, c.k.alpha) * -r;
+        if (dir > 0) assert_true(ax < 0 && fabs(p.acc[0][i] - ax) < RT(1e-12) * fabs(ax));
+        else assert_true(p.acc[0][i] == 0);
+        assert_true(p.acc[1][i] == 0);
+    }
+    nbr_free(&g);
+    part_free(&p);
+}
+
+/* sigma_yy = -1e4 (H - y) (hydrostatic, Pa) on an 8 x 8 block with walls. */
+static void test_shepard_linear(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    int n = 8;
+    double H = n * DR, gam = 1e4, h = c.k.h;
+    tu_block2d(&p, n, n, DR, 3, 3);
+    for (size_t k = 0; k < p.n; ++k)
+        for (int q = 0; q < 6; ++q)
+            p.sig[q][k] = (real)(p.kind[k] == KIND_MATERIAL ? (q == 1 ? -gam * (H - p.x[1][k]) : 0) : 12345);
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    size_t in = tu_find(&p, 4 * n + 4), low = tu_find(&p, 4); /* row 4, and row 0 (on the base) */
+    flow_shepard(in, &p, &g.view, &c);
+    assert_true(fabs(p.dsig[1][in] - p.sig[1][in]) < RT(1e-12) * gam * H);
+    flow_shepard(low, &p, &g.view, &c);
+    double num = 0, den = 0; /* rows b >= 0 above particle (4, 0): the material */
+    for (int a = -3; a <= 3; ++a)
+        for (int b = 0; b <= 3; ++b) {
+            double rr = hypot(a * DR, b * DR);
+            if (rr >= 2 * h) continue;
+            double W = kernel_w((real)rr, c.k.h, c.k.alpha);
+            num += W * -gam * (H - (b + 0.5) * DR), den += W;
+        }
+    assert_true(fabs(p.dsig[1][low] - num / den) < RT(1e-12) * gam * H);
+    assert_true(fabs(p.dsig[1][low] - p.sig[1][low]) > 0.1 * gam * DR); /* the cut support biases it */
     nbr_free(&g);
     part_free(&p);
 }
@@ -235,6 +368,66 @@ static void test_advance(void **st)
     assert_true(fabs(pr - 1000) < RT(1e-9) * 1000); /* g = sqrt(J2): the pressure stays */
     assert_true(fabs(sqrt(stress_J2(s)) - stress_kmu(mu) * pr) < RT(1e-9) * 1000);
     for (int q = 0; q < 6; ++q) assert_true(p.sig[q][1] == 0);
+    part_free(&p);
+}
+
+static void test_drum_dummy_stress(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx();
+    c.w.type = WALL_DRUM, c.w.radius = (real)0.03, c.w.omega = 60; /* a_w = 108 m/s^2 at r = R */
+    double xd = 0.0305, yd = 0.0005, P0 = 5000, V = DR * DR;
+    real aw[3], xdv[3] = {(real)xd, (real)yd, 0};
+    wall_accel(&c.w, xdv, aw);
+    double geff[2] = {c.g[0] - aw[0], c.g[1] - aw[1]};
+    assert_true(fabs(aw[0] + 60.0 * 60.0 * xd) < RT(1e-9) * 100); /* centripetal, towards the axis */
+    part_alloc(&p, 2, 64);
+    tu_put(&p, xd, yd, 0, KIND_DUMMY, V);
+    for (int i = 0; i < 4; ++i) /* the material on the drum's side of the dummy */
+        for (int j = -3; j <= 3; ++j) {
+            double x = xd - (i + 1) * DR, y = yd + j * DR;
+            tu_put(&p, x, y, 0, KIND_MATERIAL, V);
+            size_t k = p.n - 1;
+            p.sig[0][k] = (real)(-P0 - c.rho * geff[0] * (x - xd));
+            p.sig[1][k] = (real)(-P0 - c.rho * geff[1] * (y - yd));
+            p.sig[2][k] = (real)-P0;
+        }
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    size_t d = tu_find(&p, 0);
+    flow_wall(d, &p, &g.view, &c);
+    for (int a = 0; a < 3; ++a) assert_true(fabs(p.sig[a][d] + P0) < RT(1e-10) * P0);
+    nbr_free(&g);
+    part_free(&p);
+}
+
+static void test_dummy_above_surface(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c = make_ctx(); /* g = -9.81 y */
+    int n = 8;
+    double H = n * DR, rg = c.rho * 9.81;
+    tu_block2d(&p, n, n, DR, 3, 3); /* side walls reach 3 rows above the material */
+    for (size_t k = 0; k < p.n; ++k)
+        p.sig[1][k] = (real)(p.kind[k] == KIND_MATERIAL ? -rg * (H - p.x[1][k]) : 0);
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    int mid = 0, above = 0;
+    for (size_t d = 0; d < p.n; ++d) {
+        double x = p.x[0][d], y = p.x[1][d];
+        if (p.kind[d] != KIND_DUMMY || x > 0 || x < -DR) continue; /* the left wall's first layer */
+        flow_wall(d, &p, &g.view, &c);
+        if (fabs(y - 4.5 * DR) < 0.1 * DR) /* mid-height: the column's stress */
+            mid++, assert_true(fabs(p.sig[1][d] + rg * (H - y)) < 1e-9 * rg * H);
+        if (y > H + DR) { /* 1.5 dr above the surface, material in reach */
+            above++;
+            for (int q = 0; q < 6; ++q) assert_true(p.sig[q][d] == 0);
+        }
+    }
+    assert_true(mid == 1 && above == 2);
+    nbr_free(&g);
     part_free(&p);
 }
 
@@ -315,9 +508,12 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_uniform_stress),        cmocka_unit_test(test_linear_velocity),
+        cmocka_unit_test(test_rigid_rotation),
         cmocka_unit_test(test_momentum_conservation), cmocka_unit_test(test_shepard_uniform),
-        cmocka_unit_test(test_renorm_fused),
-        cmocka_unit_test(test_advance),               cmocka_unit_test(test_drum_wall_motion),
+        cmocka_unit_test(test_renorm_fused),          cmocka_unit_test(test_linear_stress),
+        cmocka_unit_test(test_viscosity_closed_form), cmocka_unit_test(test_shepard_linear),
+        cmocka_unit_test(test_advance),               cmocka_unit_test(test_drum_dummy_stress),
+        cmocka_unit_test(test_dummy_above_surface),   cmocka_unit_test(test_drum_wall_motion),
         cmocka_unit_test(test_box_translation),       cmocka_unit_test(test_drum3d_walls),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -59,6 +59,15 @@ static void test_velocity(void **st)
     wall_velocity(&ws, uw, n, 1, ud); /* free slip */
     assert_true(fabs(ud[0] - u[0]) < RT(1e-12));           /* tangential passes */
     assert_true(fabs(0.5 * (ud[1] + u[1]) - 0) < RT(1e-12)); /* normal mirrored about u_w.n = 0 */
+    /* a piston: the wall moves along its normal at 0.3 m/s and slides at
+     * -0.7 m/s; free slip mirrors the normal velocity about the wall's
+     * (impermeability: (u_d + u_m).n / 2 = u_w.n) and ignores its sliding */
+    real up[3] = {(real)-0.7, (real)0.3, 0};
+    wall_velocity(&ws, up, n, 1, ud);
+    assert_true(fabs(ud[0] - u[0]) < RT(1e-12));
+    assert_true(fabs(0.5 * (ud[1] + u[1]) - 0.3) < RT(1e-12));
+    wall_velocity(&ws, up, n, 0, ud); /* no slip follows both components */
+    for (int a = 0; a < 2; ++a) assert_true(fabs(0.5 * (ud[a] + u[a]) - up[a]) < RT(1e-12));
 }
 
 static void test_shepard_constant(void **st)

@@ -4,10 +4,12 @@ zero, and must reach vertical equilibrium sigma_yy = -rho g (H - y) (the
 analytic stress of a laterally uniform column between frictionless walls)
 and stay at rest once the settling damping ends at t = 0.1 s.
 
-Tolerances (measured 2.0e-3, 2.9e-3, 3.3e-3 dr and 2.0e-2 dr at this size,
-docs/granular.md):
-  interior mean |sigma_yy - ref| / (rho g H) <= 0.01, max <= 0.02;
-  displacement from t = 0.1 to 0.2 s: median <= 0.01 dr, max <= 0.05 dr
+Tolerances at about twice the measured errors (measured 2.0e-3, 2.9e-3,
+3.3e-3 dr and 2.0e-2 dr at this size, docs/granular.md, and again for issue
+20): a column without its Shepard filter ends at 6.8e-3, one with an
+unweighted filter creeps by 1.5e-2 dr (median; the mutation test of issue 20):
+  interior mean |sigma_yy - ref| / (rho g H) <= 4e-3, max <= 6e-3;
+  displacement from t = 0.1 to 0.2 s: median <= 7e-3 dr, max <= 4e-2 dr
   (a column that creeps or slumps moves by whole spacings).
 """
 import argparse
@@ -42,8 +44,8 @@ def main():
     out = os.path.join(a.work, "settled")
     run(a.sphseg, out, [])
     r = column_check.analyze(out)
-    checks = [("stress error mean", r["err_mean"], 0.01), ("stress error max", r["err_max"], 0.02),
-              ("creep median / dr", r["creep_median_dr"], 0.01), ("creep max / dr", r["creep_max_dr"], 0.05)]
+    checks = [("stress error mean", r["err_mean"], 4e-3), ("stress error max", r["err_max"], 6e-3),
+              ("creep median / dr", r["creep_median_dr"], 7e-3), ("creep max / dr", r["creep_max_dr"], 4e-2)]
     for name, got, tol in checks:
         good = got <= tol
         ok &= good

@@ -2,8 +2,8 @@
 E = 0.1 MPa, 2 s = 1/6 revolution; about 300 material particles): the
 physical invariants of paper §6 with tolerances.
 
-  mass:          the material particle IDs and sum V_i are the same in every
-                 snapshot (no particle lost, none created);
+  mass:          the material particle IDs are the same in every snapshot
+                 (no particle lost, none created), every Volume dr^2;
   containment:   every material particle stays inside the drum, r < R;
   bounds:        C stays in [-0.01, 1.01] (diagnostics.csv C_min, C_max);
   rolling:       at t = 2 s the bed has avalanched: the free surface is flat
@@ -12,12 +12,27 @@ physical invariants of paper §6 with tolerances.
                  for a bed that flows; measured 22-23 degrees at dr = 1 mm,
                  docs/granular.md), and the surface moves at 1-20 cm/s (the
                  paper's DEM: 6-7 cm/s);
+  direction:     the bed turns with the drum (its mean angular velocity has
+                 the drum's sign) and its surface rises on the side the wall
+                 carries up (slope of the drum's sign: down to the right for
+                 a clockwise drum);
+  friction:      the stress ratio sqrt(J2)/p of the material particles at
+                 t = 1 .. 2 s stays inside the mu_d cone (k_mu of eq. 2.12,
+                 written out in drum_invariants.py) and, mu(I) (2.14) being
+                 above mu_s where the bed flows, more than FRICTION_FRAC of
+                 them lie beyond the mu_s cone by 0.1 % (measured 0.56,
+                 0.28, 0.65 at t = 1, 1.5, 2 s); a constant friction mu_s
+                 keeps every one within it;
   segregation:   small grains move toward the core: the segregation index of
                  tools/drum_analysis.py (C-weighted versus plain mean distance
                  from the bed's centroid) is positive at 2 s and larger than
                  at 1.5 s;
-  conservation:  the relative drift of sum C_i V_i stays below 1e-10 (the
-                 conservative scheme conserves it to round-off).
+  conservation:  the relative drift of sum C_i V_i, recomputed from the
+                 snapshots, stays below 1e-10 (the conservative scheme
+                 conserves it to round-off), and diagnostics.csv agrees with
+                 the snapshots (drum_invariants.py);
+  diagnostics:   the kinetic energy, largest speed, C range and material count of
+                 diagnostics.csv equal those of the snapshots.
 """
 import argparse
 import os
@@ -30,9 +45,11 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import drum_analysis  # noqa: E402
 import snap  # noqa: E402
-from drum_invariants import Checks, mass_bounds_conservation  # noqa: E402
+from drum_invariants import (Checks, diagnostics_columns, drum_omega, kmu, mass_bounds_conservation,  # noqa: E402
+                             omega_of, stress_ratio)
 
 SCENE = os.path.join(HERE, "..", "inputs", "drum_2d_EV.yml")
+FRICTION_FRAC = 0.1
 
 
 def main():
@@ -51,7 +68,8 @@ def main():
     par = drum_analysis.used_params(out)
     R = par["Geometry"]["radius"]
     check = Checks()
-    coords, _ = mass_bounds_conservation(check, out, "m^2")
+    coords, _ = mass_bounds_conservation(check, out, "m^2", par["Geometry"]["dr"], 2)
+    diagnostics_columns(check, out, par["Physics"]["rho"])
     rmax = max(np.hypot(*x[:, :2].T).max() for x in coords)
     check("containment", rmax < R, "max r = %.5f m, R = %.5f m" % (rmax, R))
     paths = snap.list_snapshots(out)
@@ -60,6 +78,21 @@ def main():
     us = np.nanmax(d2.interp(pts, d2.speed))
     check("rolling", 15 <= d2.angle <= 35 and d2.flatness < 1 and 0.01 <= us <= 0.2,
           "angle %.1f deg, flatness %.2f dr, surface speed %.1f cm/s" % (d2.angle, d2.flatness, 100 * us))
+    w = drum_omega(par)
+    s = snap.read_snapshot(paths[-1])
+    m = s["Kind"] == snap.MATERIAL
+    om = omega_of(s["Coordinates"][m], s["Velocities"][m], s["Volume"][m])
+    check("direction", om * w > 0 and d2.slope * w > 0,
+          "bed Omega = %.3f rad/s, drum omega = %.3f rad/s, surface slope %.3f" % (om, w, d2.slope))
+    mat = par["Material"]
+    frac, worst = [], 0.0
+    for p in drum_analysis.pick(paths, [1.0, 1.5, 2.0]):
+        r = stress_ratio(snap.read_snapshot(p))
+        frac.append(np.mean(r > 1.001 * kmu(mat["mu_s"])))
+        worst = max(worst, r.max() / kmu(mat["mu_d"]))
+    check("friction", worst <= 1 + 1e-9 and min(frac) > FRICTION_FRAC,
+          "sqrt(J2)/p at most %.4f of the mu_d cone; beyond the mu_s cone: %s of the particles" % (
+              worst, ", ".join("%.3f" % f for f in frac)))
     s15, s2 = d15.segregation_index(), d2.segregation_index()
     check("segregation", s2 > 0 and s2 > s15, "index %.2e at 1.5 s, %.2e at 2 s" % (s15, s2))
     sys.exit(0 if check.ok else 1)

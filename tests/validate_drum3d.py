@@ -52,7 +52,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import drum_analysis  # noqa: E402
 import snap  # noqa: E402
-from drum_invariants import Checks, mass_bounds_conservation  # noqa: E402
+from drum_invariants import Checks, diagnostics_columns, mass_bounds_conservation, omega_of  # noqa: E402
 
 SCENE = os.path.join(HERE, "..", "inputs", "drum_3d.yml")
 BASE = ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025", "Material:E=1e5",
@@ -65,12 +65,6 @@ def run(sphseg, out, over):
     if r.returncode != 0:
         print(r.stderr)
         sys.exit("FAIL: sphseg exited with %d" % r.returncode)
-
-
-def omega_of(x, v, vol):
-    """Mean angular velocity about the z axis, rad/s (counter-clockwise > 0)."""
-    lz = np.sum(vol * (x[:, 0] * v[:, 1] - x[:, 1] * v[:, 0]))
-    return lz / np.sum(vol * (x[:, 0] ** 2 + x[:, 1] ** 2))
 
 
 def main():
@@ -87,7 +81,8 @@ def main():
     L = round(g["length"] / dr) * dr
     w = -15 * 2 * np.pi / 60  # clockwise
     check = Checks()
-    coords, dg = mass_bounds_conservation(check, out, "m^3")
+    coords, dg = mass_bounds_conservation(check, out, "m^3", dr, 3)
+    diagnostics_columns(check, out, par["Physics"]["rho"])
     rmax = max(np.hypot(x[:, 0], x[:, 1]).max() for x in coords)
     zlo, zhi = min(x[:, 2].min() for x in coords), max(x[:, 2].max() for x in coords)
     check("containment", rmax < R and zlo > 0 and zhi < L,

@@ -5,14 +5,15 @@ decomposition, ghost exchange, migration: mpi/halo.h) and the last snapshots
 are compared particle by particle (matched by ParticleIDs):
 
   every field of the 2- and 3-rank runs equals the 1-rank run's to round-off:
-  max |multi - one| <= TOL * max |one| per field (TOL = 1e-8). The slabs are
-  cut on the cell lattice the one-rank run uses, so a rank sums a particle's
-  neighbours in the one-rank order except where migration reordered a cell;
-  the runs then differ by a few ulps that tens to a thousand steps of a
-  granular flow amplify to ~1e-14 (measured); a missing or stale ghost gives
-  differences of order one. The boundary classes must agree exactly.
-  The paper scheme (HCSR, C1 gradients) gets TOL_C1 = 1e-4, as in
-  validate_gpu.py (its boundary solves amplify round-off);
+  max |multi - one| <= TOL * max |one| per field (TOL = 1e-10 on the CPU).
+  The slabs are cut on the cell lattice the one-rank run uses, so a rank
+  sums a particle's neighbours in the one-rank order except where migration
+  reordered a cell; the runs then differ by a few ulps that tens to a
+  thousand steps of a granular flow amplify to ~1e-14 (measured, the paper
+  scheme included). A stale ghost can give differences as small as 1e-7 (a
+  ghost shear rate one stage old: 1-3e-7 and 9.4e-7 with the paper scheme,
+  as the mutation test of issue 20 found), so the bound sits well below. The
+  boundary classes must agree exactly;
   the drum cases must migrate particles across domains, and the one with a
   forced load balance must move the slab bounds, so that both paths are
   exercised; the METIS partition (Parallel:method metis) passes the same
@@ -22,7 +23,9 @@ are compared particle by particle (matched by ParticleIDs):
 --backend gpu (default cpu) runs every case, 1, 2 and 3 ranks and the
 repeated run, with sphseg --backend gpu (ranks take devices by local rank;
 on a one-GPU machine they share it) and checks
-the same things: the same TOL = 1e-8 and TOL_C1 = 1e-4 bounds. The GPU backend
+the same things: looser bounds, TOL_GPU = 1e-8 and, for the paper scheme (HCSR, C1
+gradients, whose boundary solves amplify round-off), TOL_C1 = 1e-4, as in
+validate_gpu.py. The GPU backend
 keeps a Verlet list with a skin and rebuilds it when a particle has moved far
 enough; on different rank counts the rebuilds fall on different steps, so the
 neighbour sums are taken in different orders: the same kind of round-off,
@@ -57,8 +60,9 @@ sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import snap  # noqa: E402
 
 INPUTS = os.path.join(HERE, "..", "inputs")
-TOL = 1e-8
-TOL_C1 = 1e-4
+TOL = 1e-10     # CPU, any scheme, across rank counts
+TOL_GPU = 1e-8  # GPU runs, and the GPU against the CPU
+TOL_C1 = 1e-4   # GPU runs of the paper scheme
 DRUM = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:shepard_every=20"]
 
 # name, scene, steps, overrides, what must happen on several ranks
@@ -163,7 +167,7 @@ def main():
     ran_paper_3 = False
     for name, scene, steps, over, must in cases:
         steps = scaled(steps, a.steps_scale)
-        tol = TOL_C1 if "Segregation:scheme=paper" in over else TOL
+        tol = TOL if not gpu else (TOL_C1 if "Segregation:scheme=paper" in over else TOL_GPU)
         res, logs = {}, {}
         for np_ in (1, 2, 3):
             out = os.path.join(a.work, "%s_%d" % (name, np_))

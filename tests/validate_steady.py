@@ -7,7 +7,9 @@ A column at rest (Kinematics:velocity rest) starts uniform at C = phi0 and
 runs to t = 4 H^2/D, by which time the FV reference (tools/seg1d.py) has
 converged to its steady state to < 1e-6. Tolerance: MAE <= MAE_TOL at
 dr/H = 0.04 (the error of the SPH profile against eq. 28; the reference
-shows the remaining time-dependence is negligible).
+shows the remaining time-dependence is negligible): 0.012, twice the largest
+measured error of the conservative scheme (0.0061, 0.0031, 0.0034 for the
+three cases, issue 20).
 """
 import argparse
 import os
@@ -21,14 +23,16 @@ import seg1d  # noqa: E402
 import snap  # noqa: E402
 import study  # noqa: E402
 
-MAE_TOL = 0.02
+MAE_TOL = 0.012
 CASES = [(0.5, 5.0), (0.3, 20.0), (0.7, 40.0)]
 # The paper scheme is unstable once the particle Peclet number V h / D passes
-# about 2 (Pe = 40 here gives 2.4; docs/shearbox.md), and where it is stable
-# its steady state is shifted by its drift of sum C_i V_i (its mean C moves):
-# its errors are printed for the record, not held to MAE_TOL; a blow-up must
-# end the run with exit status 3.
+# about 2 (Pe = 40 here gives 2.4; docs/shearbox.md): there it must end the
+# run with exit status 3. Where it is stable its steady state is shifted by
+# its drift of sum C_i V_i (its mean C moves), so it is held to its own
+# measured errors, with a margin of about 1.5 (measured MAE 0.0629 with mean
+# C 0.5376 at Pe = 5, 0.0522 with mean C 0.3493 at Pe = 20; issue 20).
 PAPER_STABLE_PE = 20.0
+PAPER_MAE = {5.0: 0.095, 20.0: 0.08}
 
 
 def run(sphseg, out, phi0, Pe, scheme, dr_over_H=0.04, D=1e-6):
@@ -59,20 +63,19 @@ def main():
     for scheme in ("paper", "conservative"):
         for phi0, Pe in CASES:
             rc, z, C = run(a.sphseg, os.path.join(a.work, f"{scheme}_{phi0}_{Pe}"), phi0, Pe, scheme)
-            if rc != 0:
-                good = scheme == "paper" and Pe > PAPER_STABLE_PE and rc == 3
+            blows_up = scheme == "paper" and Pe > PAPER_STABLE_PE
+            if rc != 0 or blows_up:
+                good = blows_up and rc == 3
                 ok &= good
-                print(f"{'ok ' if good else 'BAD'} {scheme:12s} phi0={phi0} Pe={Pe:5.1f}: exit {rc}: {z}")
+                print(f"{'ok ' if good else 'BAD'} {scheme:12s} phi0={phi0} Pe={Pe:5.1f}: exit {rc}"
+                      f"{' (exit 3 expected)' if blows_up else ''}: {z if rc else ''}")
                 continue
             ref = seg1d.steady_analytic(z, phi0, Pe)
             e = seg1d.mae(C, ref)
-            good = e <= MAE_TOL
-            if scheme == "conservative":
-                ok &= good
-                tag = "ok " if good else "BAD"
-            else:
-                tag = "inf"
-            print(f"{tag} {scheme:12s} phi0={phi0} Pe={Pe:5.1f}: MAE={e:.4f} "
+            tol = MAE_TOL if scheme == "conservative" else PAPER_MAE[Pe]
+            good = e <= tol
+            ok &= good
+            print(f"{'ok ' if good else 'BAD'} {scheme:12s} phi0={phi0} Pe={Pe:5.1f}: MAE={e:.4f} (tolerance {tol}) "
                   f"max={np.max(np.abs(C - ref)):.4f} mean C={np.mean(C):.4f}")
     return 0 if ok else 1
 

@@ -260,7 +260,7 @@ def plot_global(outdir, png):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    dg = snap.read_diagnostics(outdir)
+    dg = snap.read_diagnostics(outdir, partial=True)
     d0 = Drum(snap.list_snapshots(outdir)[0], used_params(outdir))
     total = d0.vol.sum() * d0.width  # all the material, m^2 per unit depth in 2D, m^3 in 3D
     fig, ax = plt.subplots(1, 2, figsize=(9, 3.4))
@@ -296,7 +296,7 @@ def main():
         print("%8.3f %8.2f° %8.2f dr %9.2f cm/s %12.4f %5.3f-%5.3f"
               % (d.t, d.angle, d.flatness, 100 * np.nanmax(d.interp(pts, d.speed)), d.segregation_index(),
                  d.C.min(), d.C.max()))
-    dg = snap.read_diagnostics(a.outdir)
+    dg = snap.read_diagnostics(a.outdir, partial=True)
     print("max |relative drift of sum C_i V_i|: %.3e" % np.abs(dg["small_volume_drift"]).max())
     if a.png:
         sel = drums[1:] if len(drums) > 3 and not a.times else drums

@@ -50,31 +50,44 @@ class Params:
 
 
 def _sec(d, name):
-    """Section `name` of the used_params dict (empty if absent)."""
-    return d.get(name) or {}
+    """Section `name` of the used_params dict; a missing one is an error."""
+    if not isinstance(d.get(name), dict):
+        raise KeyError(f"used_params: no section {name}")
+    return d[name]
+
+
+def _key(sec, name, key):
+    """sec[key]; a missing key is an error naming Section:key (the solver's
+    used_params.yml holds every key, defaults included: a reference built
+    from a default the run did not use would compare with the wrong PDE)."""
+    if key not in sec:
+        raise KeyError(f"used_params: no {name}:{key}")
+    return sec[key]
 
 
 def params_from_dict(d):
-    """Build Params from a dict shaped like the solver's used_params.yml."""
+    """Build Params from a dict shaped like the solver's used_params.yml;
+    every key it reads must be there."""
     geo, kin = _sec(d, "Geometry"), _sec(d, "Kinematics")
     seg, ini = _sec(d, "Segregation"), _sec(d, "Initial")
-    f = lambda sec, key, default: float(sec.get(key, default))
-    flux = str(seg.get("flux", "symmetric")).lower()
-    model = str(seg.get("model", "constant")).lower()
+    f = lambda sec, name, key: float(_key(sec, name, key))
+    flux = str(_key(seg, "Segregation", "flux")).lower()
+    model = str(_key(seg, "Segregation", "model")).lower()
     if flux not in ("symmetric", "asymmetric"):
         raise ValueError(f"unknown Segregation.flux {flux!r}")
     if model not in ("constant", "shear_rate"):
         raise ValueError(f"unknown Segregation.model {model!r}")
+    S, K, I = "Segregation", "Kinematics", "Initial"
     return Params(
-        H=float(geo["height"]), flux=flux,
-        A=f(seg, "A", 1.6), kappa=f(seg, "kappa", 0.89), model=model,
-        V=f(seg, "V", 0.0), D=f(seg, "D", 0.0),
-        chi_V=f(seg, "chi_V", 0.11), chi_D=f(seg, "chi_D", 0.0307),
-        d_small=f(seg, "d_small", 0.004), d_large=f(seg, "d_large", 0.008),
-        gamma0=f(kin, "gamma0", 0.57735), period=f(kin, "period", 13.0),
-        sheared=str(kin.get("velocity", "oscillatory_shear")).lower() != "rest",
-        C_below=f(ini, "C_below", 0.0), C_above=f(ini, "C_above", 1.0),
-        split=f(ini, "split", 0.5))
+        H=f(geo, "Geometry", "height"), flux=flux,
+        A=f(seg, S, "A"), kappa=f(seg, S, "kappa"), model=model,
+        V=f(seg, S, "V"), D=f(seg, S, "D"),
+        chi_V=f(seg, S, "chi_V"), chi_D=f(seg, S, "chi_D"),
+        d_small=f(seg, S, "d_small"), d_large=f(seg, S, "d_large"),
+        gamma0=f(kin, K, "gamma0"), period=f(kin, K, "period"),
+        sheared=str(_key(kin, K, "velocity")).lower() != "rest",
+        C_below=f(ini, I, "C_below"), C_above=f(ini, I, "C_above"),
+        split=f(ini, I, "split"))
 
 
 def params_from_yaml(path):

@@ -6,6 +6,7 @@ datasets under /Particles (Coordinates N x 3, Concentration, Kind (0 material,
 """
 import glob
 import os
+import sys
 
 import h5py
 import numpy as np
@@ -71,25 +72,75 @@ def row_profile(snap, dr):
 COMPARE_FIELDS = ("Coordinates", "Velocities", "Stress", "Concentration", "ShearRate", "Normal", "Psi", "Volume")
 
 
+class MissingField(KeyError):
+    """A field a comparison needs is missing from a snapshot."""
+
+
 def max_field_difference(ref, other, fields=COMPARE_FIELDS):
     """max over fields of max|other - ref| / max|ref|, for two snapshots (dicts
-    of read_snapshot) holding the same particles in the same order; fields
-    missing from ref are skipped."""
+    of read_snapshot) holding the same particles in the same order. A field
+    missing from either snapshot raises MissingField (a comparison that
+    silently skipped it would pass whatever it holds)."""
     worst = 0.0
     for f in fields:
-        if f not in ref:
-            continue
+        for name, s in (("reference", ref), ("other", other)):
+            if f not in s:
+                raise MissingField("field %s missing from the %s snapshot %s" % (f, name, s.get("path", "?")))
         a = np.asarray(ref[f])
         scale = max(float(np.max(np.abs(a))), 1e-300)
         worst = max(worst, float(np.max(np.abs(np.asarray(other[f]) - a))) / scale)
     return worst
 
 
-def read_diagnostics(outdir):
-    """diagnostics.csv as a dict of 1D numpy arrays keyed by column name
-    (diagnostics.csv.part while the run is still going)."""
+def read_diagnostics(outdir, partial=False):
+    """diagnostics.csv as a dict of 1D numpy arrays keyed by column name.
+    A finished run renames diagnostics.csv.part to diagnostics.csv; only with
+    partial=True (a run still going, or one that stopped) is the .part file
+    read, and then it is said on stderr."""
     path = os.path.join(outdir, "diagnostics.csv")
-    if not os.path.exists(path) and os.path.exists(path + ".part"):
+    if not os.path.exists(path):
+        if not (partial and os.path.exists(path + ".part")):
+            raise FileNotFoundError("%s: no diagnostics.csv%s" % (
+                outdir, " (only a .part file: the run did not finish; partial=True reads it)"
+                if os.path.exists(path + ".part") else ""))
         path += ".part"
+        print("note: reading %s (the run has not finished)" % path, file=sys.stderr)
     data = np.genfromtxt(path, delimiter=",", names=True)
     return {name: np.atleast_1d(data[name]) for name in data.dtype.names}
+
+
+def small_volume(s):
+    """sum C_i V_i over the material particles of a snapshot (read_snapshot)."""
+    m = np.asarray(s["Kind"]) == MATERIAL
+    return float(np.sum(np.asarray(s["Concentration"], dtype=float)[m] * np.asarray(s["Volume"], dtype=float)[m]))
+
+
+def conservation(outdir):
+    """The conservation of sum C_i V_i checked independently of the code's
+    own drift: S(t) recomputed from every snapshot of OUTDIR, and
+    diagnostics.csv held to it. Returns a dict:
+      drift     max |S(t) - S(0)| / |S(0)| over the snapshots;
+      column    max relative difference between the small_volume column and
+                S at the snapshot times (every snapshot time has a row);
+      reported  max |small_volume_drift - (small_volume - small_volume[0]) /
+                small_volume[0]|: the drift column against its definition on
+                the small_volume column (the same double operations: 0 when
+                the column is what the code computed);
+      snapshots the number of snapshots."""
+    paths = list_snapshots(outdir)
+    if not paths:
+        raise FileNotFoundError("%s: no snapshots" % outdir)
+    dg = read_diagnostics(outdir)
+    sv, t = np.asarray(dg["small_volume"], dtype=float), np.asarray(dg["time"], dtype=float)
+    S0, drift, column = None, 0.0, 0.0
+    for p in paths:
+        s = read_snapshot(p)
+        S = small_volume(s)
+        S0 = S if S0 is None else S0
+        drift = max(drift, abs(S - S0) / abs(S0))
+        k = np.nonzero(np.abs(t - float(s["Time"])) <= 1e-9 * max(1.0, abs(float(s["Time"]))))[0]
+        if len(k) == 0:
+            raise RuntimeError("%s: no diagnostics row at the snapshot time %.17g" % (outdir, float(s["Time"])))
+        column = max(column, abs(sv[k[0]] - S) / abs(S))
+    reported = float(np.max(np.abs(np.asarray(dg["small_volume_drift"], dtype=float) - (sv - sv[0]) / sv[0])))
+    return {"drift": drift, "column": column, "reported": reported, "snapshots": len(paths)}
