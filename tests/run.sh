@@ -41,6 +41,12 @@ run_one settings_warnings bash tests/test_settings_warnings.sh "$BUILD/sphseg"
 # the single-precision build for validate_single.py (CPU only: a minute on 2 cores)
 export BUILD
 run_one single_build make -s -j2 PRECISION=single GPU=0 BUILD="$BUILD-single" all
+# issue 19: what a cluster does to a job
+run_one signals bash tests/test_signals.sh "$BUILD/sphseg"
+run_one fulldisk bash tests/test_fulldisk.sh "$BUILD/sphseg"
+run_one outdir bash tests/test_outdir.sh "$BUILD/sphseg"
+run_one extremes bash tests/test_extremes.sh "$BUILD/sphseg"
+run_one restart_guard "$PYTHON" tests/test_restart_guard.py --sphseg "$BUILD/sphseg" --work "$tmp/restart_guard"
 for v in tests/validate_*.py; do
     run_one "$(basename "$v" .py)" "$PYTHON" "$v" --sphseg "$BUILD/sphseg" --work "$tmp/$(basename "$v" .py)"
 done
