@@ -3,6 +3,7 @@
 #   make         build build/sphseg with $(MPICC)
 #   make run     deps, build, and the default scene inputs/shearbox_2d.yml -> out/shearbox_2d/
 #   make test    unit, validation and bad-input tests; ends with "N passed, N failed"
+#   make test-slurm  a one-node SLURM (installed and started when root): real sbatch/srun jobs (tests/test_slurm.sh)
 #   make bench   particle-steps per second, CPU (tools/bench.sh) and, where a GPU is visible, GPU (tools/bench_gpu.sh)
 # Variables a cluster user may set (e.g. from modules):
 #   CC, MPICC            C compiler and MPI wrapper (mpicc)
@@ -88,7 +89,7 @@ HEADERS  := $(wildcard src/*.h src/physics/*.h mpi/*.h)
 UNIT_TESTS := test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
 
-.PHONY: all deps run test unit bench clean format
+.PHONY: all deps run test test-slurm unit bench clean format
 all: $(BUILD)/sphseg
 
 $(BUILD)/obj/%.o: %.c $(HEADERS)
@@ -110,13 +111,16 @@ deps:
 	@bash tools/deps.sh
 
 run: deps all
-	$(BUILD)/sphseg inputs/shearbox_2d.yml -o out/shearbox_2d
+	$(BUILD)/sphseg inputs/shearbox_2d.yml -o out/shearbox_2d --overwrite
 	$(PYTHON) tools/shearbox_compare.py out/shearbox_2d
 
 unit: $(UNIT_BINS)
 
 test: all unit
 	@PYTHON=$(PYTHON) BUILD=$(BUILD) bash tests/run.sh
+
+test-slurm: all
+	@PYTHON=$(PYTHON) bash tests/test_slurm.sh $(BUILD)/sphseg
 
 bench: all
 	@PYTHON=$(PYTHON) bash tools/bench.sh $(BUILD)/sphseg

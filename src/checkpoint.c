@@ -361,13 +361,15 @@ double ckpt_write(const char *outdir, const sim_t *s, const ckpt_run *r, const c
 
 /* ---- when to stop ------------------------------------------------------------- */
 
-static volatile sig_atomic_t ckpt_sig;
+static volatile sig_atomic_t ckpt_sig, ckpt_stepping;
 
 /* The first signal asks for a stop after the step; a second SIGTERM or
- * SIGINT ends the process at once (the default action). */
+ * SIGINT ends the process at once (the default action), and so does one
+ * before the first step (nothing to save yet; a SIGUSR1 then waits for the
+ * first step: it is a warning that the end is near). */
 static void ckpt_on_signal(int sig)
 {
-    if (ckpt_sig && (sig == SIGTERM || sig == SIGINT)) {
+    if ((ckpt_sig || !ckpt_stepping) && sig != SIGUSR1) {
         signal(sig, SIG_DFL);
         raise(sig);
         return;
@@ -385,6 +387,8 @@ void ckpt_signals_install(void)
     const int sigs[] = {SIGTERM, SIGUSR1, SIGINT, SIGHUP};
     for (size_t k = 0; k < sizeof sigs / sizeof sigs[0]; ++k) sigaction(sigs[k], &sa, NULL);
 }
+
+void ckpt_signals_stepping(void) { ckpt_stepping = 1; }
 
 void ckpt_clock_start(ckpt_clock *c, double wall0, double max_wall, const char *outdir)
 {

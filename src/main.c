@@ -441,7 +441,7 @@ static void run(sim_t *s, outputs *o, ckpt_run *rs)
     int ck_end = ck_every > 0 || sc->run.max_wall_time > 0;
     ckpt_clock ck;
     ckpt_clock_start(&ck, o->wall0, sc->run.max_wall_time, o->dir);
-    ckpt_signals_install(); /* from here a signal asks for a checkpoint; before, it ends the run at once */
+    ckpt_signals_stepping(); /* from here SIGTERM, SIGINT ask for a checkpoint; before, they end the run */
     while (s->t < sc->run.t_end) {
         double t_next = fmin(t_out, t_diag), dt = integrate_dt(s);
         if (s->t + dt >= t_next * (1 - 1e-12)) dt = t_next - s->t;
@@ -512,6 +512,7 @@ static void run(sim_t *s, outputs *o, ckpt_run *rs)
 int main(int argc, char **argv)
 {
     MPI_Init(&argc, &argv);
+    ckpt_signals_install();
     cli c = parse_cli(argc, argv);
     struct scene sc;
     scene_load(&sc, c.scene, c.n_over, c.over);
