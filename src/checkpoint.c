@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 #include "diag.h"
 #include "error.h"
@@ -362,19 +363,27 @@ double ckpt_write(const char *outdir, const sim_t *s, const ckpt_run *r, const c
 /* ---- when to stop ------------------------------------------------------------- */
 
 static volatile sig_atomic_t ckpt_sig, ckpt_stepping;
+static struct timespec ckpt_sig_at; /* when the first signal came */
 
-/* The first signal asks for a stop after the step; a second SIGTERM or
- * SIGINT ends the process at once (the default action), and so does one
+/* The first signal asks for a stop after the step; a second SIGTERM, SIGINT
+ * or SIGHUP ends the process at once (the default action), and so does one
  * before the first step (nothing to save yet; a SIGUSR1 then waits for the
- * first step: it is a warning that the end is near). */
+ * first step: it is a warning that the end is near). A second signal within
+ * CKPT_SIGNAL_ECHO_S of the first is the same event delivered twice (SLURM
+ * signals every task, and srun forwards its own copy) and is ignored. */
 static void ckpt_on_signal(int sig)
 {
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now); /* async-signal-safe */
+    if (ckpt_sig && (double)(now.tv_sec - ckpt_sig_at.tv_sec) +
+                            1e-9 * (double)(now.tv_nsec - ckpt_sig_at.tv_nsec) < CKPT_SIGNAL_ECHO_S)
+        return;
     if ((ckpt_sig || !ckpt_stepping) && sig != SIGUSR1) {
         signal(sig, SIG_DFL);
         raise(sig);
         return;
     }
-    if (!ckpt_sig) ckpt_sig = sig;
+    if (!ckpt_sig) ckpt_sig = sig, ckpt_sig_at = now;
 }
 
 void ckpt_signals_install(void)

@@ -112,12 +112,14 @@ typedef struct ckpt_clock {
 
 enum ckpt_stop { CKPT_GO = 0, CKPT_WALL = 1, CKPT_STOPFILE = 2, CKPT_SIGNAL = 3 };
 enum { CKPT_STOP_EVERY_S = 5 }; /* wall seconds between looks for OUTDIR/STOP */
+#define CKPT_SIGNAL_ECHO_S 0.25    /* a second signal this soon after the first is a copy of it */
 
 /* SIGTERM, SIGUSR1, SIGINT and SIGHUP ask for a stop: the step ends, a
  * checkpoint is written and the run exits 0 (ckpt_poll); a second SIGTERM,
- * SIGINT or SIGHUP ends the process at once, and so does one before
- * ckpt_signals_stepping (set-up: nothing to save); a SIGUSR1 then waits for
- * the first step. */
+ * SIGINT or SIGHUP ends the process at once (one within CKPT_SIGNAL_ECHO_S
+ * of the first is taken for a copy of it: SLURM signals each task and srun
+ * forwards the same signal), and so does one before ckpt_signals_stepping
+ * (set-up: nothing to save); a SIGUSR1 then waits for the first step. */
 void ckpt_signals_install(void);
 void ckpt_signals_stepping(void);
 void ckpt_clock_start(ckpt_clock *c, double wall0, double max_wall, const char *outdir);
