@@ -32,6 +32,9 @@ import time
 import h5py
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from ckpt_seal import reseal  # noqa: E402
+
 MPI = ["mpirun", "--oversubscribe", "--allow-run-as-root"]
 SHEAR, DRUM = "inputs/shearbox_2d.yml", "inputs/drum_2d_EV.yml"
 FAILS = []
@@ -53,25 +56,6 @@ def run(cmd, timeout=120):
         return p.returncode, p.stdout, p.stderr, time.time() - t0
     except subprocess.TimeoutExpired as e:
         return "timeout", e.stdout or "", e.stderr or "", time.time() - t0
-
-
-def reseal(path):
-    """The seal of src/checkpoint.h: sum over the little-endian 8-byte words
-    w_i past the 512-byte user block (i from 1, zero-padded) of
-    splitmix64's finaliser of w_i + i * golden, mod 2^64; with the size."""
-    with open(path, "r+b") as f:
-        data = f.read()
-        body = data[512:] + b"\0" * (-(len(data) - 512) % 8)
-        w = np.frombuffer(body, dtype="<u8")
-        with np.errstate(over="ignore"):
-            i = np.arange(1, len(w) + 1, dtype=np.uint64)
-            z = w + i * np.uint64(0x9E3779B97F4A7C15)
-            z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-            z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-            z = z ^ (z >> np.uint64(31))
-            h = int(z.sum(dtype=np.uint64))
-        f.seek(16)
-        f.write(len(data).to_bytes(8, "little") + h.to_bytes(8, "little"))
 
 
 def refused(res, what, limit=60):
