@@ -367,10 +367,10 @@ static void test_part_alloc(void **state)
     part_alloc(&p, 3, 0); /* empty store is valid */
     assert_non_null(p.id);
     part_free(&p);
-    /* 54 real arrays (x, X0, v, nrm, x_n, v_n, acc: 3 each; vol, C, C_n,
-     * dCdt, gdot, psi, segV, segQ, segD; L, sig, sig_n, dsig: 6 each), id
-     * (8 B), kind and bclass (1 B each). */
-    assert_int_equal(part_bytes_per_particle(), 54 * sizeof(real) + 8 + 2);
+    /* 55 real arrays (x, X0, v, nrm, x_n, v_n, acc: 3 each; vol, C, C_n,
+     * dCdt, gdot, gsum, psi, segV, segQ, segD; L, sig, sig_n, dsig: 6 each),
+     * id (8 B), kind and bclass (1 B each). */
+    assert_int_equal(part_bytes_per_particle(), 55 * sizeof(real) + 8 + 2);
 }
 
 /* Value of array a (0..53) for a particle originally at index k. */
