@@ -3,9 +3,13 @@
 #   make         build build/sphseg with $(MPICC)
 #   make run     deps, build, and the default scene inputs/shearbox_2d.yml -> out/shearbox_2d/
 #   make test    unit, validation and bad-input tests; ends with "N passed, N failed"
+<<<<<<< HEAD
 #                (REQUIRE_GPU=1: a GPU test that skips, exit 77, fails; FAIL_FAST=1: stop at the first failure)
 #   make test-mutants  plant one bug at a time in a scratch copy and run the suite on it
 #                (tools/mutants.py; not part of CI: half an hour to an hour on 2 cores)
+=======
+#   make test-slurm  a one-node SLURM (installed and started when root): real sbatch/srun jobs (tests/test_slurm.sh)
+>>>>>>> issue19
 #   make bench   particle-steps per second, CPU (tools/bench.sh) and, where a GPU is visible, GPU (tools/bench_gpu.sh)
 # Variables a cluster user may set (e.g. from modules):
 #   CC, MPICC            C compiler and MPI wrapper (mpicc)
@@ -86,14 +90,19 @@ override CFLAGS += $(HDF5_CFLAGS) $(CYAML_CFLAGS) $(METIS_CFLAGS)
 LIBS   := $(HDF5_LIBS) $(CYAML_LIBS) $(METIS_LIBS) $(LDLIBS)
 
 CORE_SRC := src/error.c src/scene.c src/particles.c src/nbr.c src/bound.c src/setup.c \
-            src/backend_cpu.c src/integrate.c src/diag.c src/io.c src/checkpoint.c mpi/comm.c mpi/halo.c
+            src/backend_cpu.c src/integrate.c src/diag.c src/io.c src/checkpoint.c \
+            src/checkpoint_read.c src/checkpoint_keys.c src/outdir.c mpi/comm.c mpi/halo.c
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
 HEADERS  := $(wildcard src/*.h src/physics/*.h mpi/*.h)
 
 UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
 
+<<<<<<< HEAD
 .PHONY: all deps run test unit bench clean format test-mutants
+=======
+.PHONY: all deps run test test-slurm unit bench clean format
+>>>>>>> issue19
 all: $(BUILD)/sphseg
 
 $(BUILD)/obj/%.o: %.c $(HEADERS)
@@ -115,7 +124,7 @@ deps:
 	@bash tools/deps.sh
 
 run: deps all
-	$(BUILD)/sphseg inputs/shearbox_2d.yml -o out/shearbox_2d
+	$(BUILD)/sphseg inputs/shearbox_2d.yml -o out/shearbox_2d --overwrite
 	$(PYTHON) tools/shearbox_compare.py out/shearbox_2d
 
 unit: $(UNIT_BINS)
@@ -125,6 +134,9 @@ test: all unit
 
 test-mutants:
 	$(PYTHON) tools/mutants.py $(MUTANTS_ARGS)
+
+test-slurm: all
+	@PYTHON=$(PYTHON) bash tests/test_slurm.sh $(BUILD)/sphseg
 
 bench: all
 	@PYTHON=$(PYTHON) bash tools/bench.sh $(BUILD)/sphseg

@@ -18,8 +18,10 @@ sphseg_threads() { # ranks on this machine
 }
 
 # launch=(...): the command prefix that starts NRANKS ranks, one GPU each.
-# Under SLURM: srun with one GPU per task and CPU/GPU binding (SRUN_FLAGS
-# adds to it). Without: $MPIRUN (default "mpirun --oversubscribe --bind-to
+# Under SLURM: srun --mpi=$SRUN_MPI (default pmix: Debian's and most Open
+# MPI builds need it under srun; SRUN_MPI= leaves the site's MpiDefault)
+# with one GPU per task (GPUS=0: none) and CPU/GPU binding (SRUN_FLAGS adds
+# to it). Without: $MPIRUN (default "mpirun --oversubscribe --bind-to
 # none", plus --allow-run-as-root for root) -np NRANKS. --bind-to none: Open
 # MPI binds each of one or two ranks to a single core by default, which puts
 # all of a rank's OpenMP threads on that core (measured: a 16-thread rank ran
@@ -28,17 +30,41 @@ sphseg_launcher() { # nranks
     local np=$1
     if [ -n "${SLURM_JOB_ID:-}" ]; then
         launch=(srun --ntasks="$np" --cpus-per-task="${SLURM_CPUS_PER_TASK:-1}")
+        local mpi=${SRUN_MPI-pmix}
+        if [ -n "$mpi" ]; then launch+=(--mpi="$mpi"); fi
         if [ "${GPUS:-1}" = 1 ]; then
             launch+=(--gpus-per-task=1 --gpu-bind="${GPU_BIND:-closest}")
         fi
         launch+=(--cpu-bind="${CPU_BIND:-cores}")
-        [ -n "${SRUN_FLAGS:-}" ] && read -r -a extra <<<"$SRUN_FLAGS" && launch+=("${extra[@]}")
+        if [ -n "${SRUN_FLAGS:-}" ]; then
+            read -r -a extra <<<"$SRUN_FLAGS"
+            launch+=("${extra[@]}")
+        fi
     else
         local mpirun=${MPIRUN:-mpirun --oversubscribe --bind-to none}
         [ "$(id -u)" = 0 ] && [ -z "${MPIRUN:-}" ] && mpirun="$mpirun --allow-run-as-root"
         read -r -a launch <<<"$mpirun"
         launch+=(-np "$np")
     fi
+}
+
+# Run a command (the launcher and sphseg) in the background and pass the
+# stop signals the batch shell receives on to it as SIGUSR1: sphseg then
+# finishes its step, writes a checkpoint and exits 0. SIGUSR1 because
+# "#SBATCH --signal=B:USR1@120" sends it to this shell alone, srun and
+# mpirun both forward it to every rank, and mpirun ends a job it is sent
+# SIGTERM for with status 1. Returns the command's exit status.
+sphseg_run() { # command...
+    "$@" &
+    local pid=$! rc=0 again
+    trap 'kill -USR1 '"$pid"' 2>/dev/null' USR1 TERM INT
+    while kill -0 "$pid" 2>/dev/null; do
+        wait "$pid" && rc=0 || rc=$?
+    done
+    wait "$pid" 2>/dev/null && again=0 || again=$?
+    [ "$again" -ne 127 ] && rc=$again
+    trap - USR1 TERM INT
+    return "$rc"
 }
 
 sphseg_check_binary() {
@@ -90,7 +116,7 @@ sphseg_scaling_sweep() { # mode (weak|strong), sphseg args...
     mkdir -p "$(dirname "$CSV")" "$OUTROOT"
     [ -s "$CSV" ] || echo "$SCALING_COLUMNS" >"$CSV"
     for P in $(sphseg_rank_list); do
-        local args=(-P Output:snapshots=off -P "Run:max_steps=$MAX_STEPS")
+        local args=(--overwrite -P Output:snapshots=off -P "Run:max_steps=$MAX_STEPS")
         key="" value=""
         if [ "$mode" = weak ]; then
             key=$SCALE_KEY
@@ -102,7 +128,7 @@ sphseg_scaling_sweep() { # mode (weak|strong), sphseg args...
         sphseg_launcher "$P"
         echo "$mode scaling: $P rank(s), $OMP_NUM_THREADS thread(s)/rank${key:+, $key=$value} -> $out"
         local rc=0
-        "${launch[@]}" "$SPHSEG" "$SCENE" -o "$out" "$@" "${args[@]}" >"$out.log" 2>&1 || rc=$?
+        sphseg_run "${launch[@]}" "$SPHSEG" "$SCENE" -o "$out" "$@" "${args[@]}" >"$out.log" 2>&1 || rc=$?
         if [ $rc -ne 0 ]; then
             echo "  run failed (exit status $rc): $out.log" >&2; grep -m1 'error' "$out.log" >&2; failed=1; continue
         fi

@@ -1,25 +1,31 @@
 #!/usr/bin/env bash
 # ---- edit these for your cluster -------------------------------------------
 # The #SBATCH lines apply to every job of the chain (each job runs this same
-# script with --step). TIME must equal --time (it sets Run:max_wall_time).
+# script with --step). The submission passes --time=TIME and, with GPUS=1
+# (the default), --gpus-per-task=1 (GPUS=0 for a CPU partition, with
+# SRUN: no GPU flags either); TIME sets Run:max_wall_time.
 #SBATCH --job-name=sphseg_chain
 #SBATCH --nodes=1
 #SBATCH --ntasks=1
-#SBATCH --gpus-per-task=1
 #SBATCH --cpus-per-task=8
 #SBATCH --mem=16G
 #SBATCH --time=24:00:00
 #SBATCH --output=%x-%j.out
+#SBATCH --signal=B:USR1@120
 ##SBATCH --partition=CHANGE_ME
 ##SBATCH --account=CHANGE_ME
 # -----------------------------------------------------------------------------
 #
 # restart_chain.sh — a long run as K jobs in a row. Each job runs
-#   sphseg SCENE -o OUTDIR [--restart OUTDIR/checkpoint.h5] -P Run:max_wall_time=W ARGS...
-# with --restart only if OUTDIR/checkpoint.h5 exists (else a fresh start), and
+#   sphseg SCENE -o OUTDIR [--restart OUTDIR] -P Run:max_wall_time=W ARGS...
+# with --restart only if OUTDIR holds a checkpoint (sphseg takes the newest
+# valid one, checkpoint.h5 or checkpoint_prev.h5; else a fresh start), and
 # W = the job's time limit minus MARGIN seconds, so that sphseg writes its
-# checkpoint and exits 0 before SLURM kills the job. Job k+1 starts only if
-# job k succeeded (sbatch --dependency=afterok:<job k>).
+# checkpoint and exits 0 before SLURM kills the job; SIGUSR1 120 s before
+# the limit (--signal) or a SIGTERM (scancel, preemption) also make it
+# checkpoint and exit 0. Job k+1 starts only if job k succeeded (sbatch
+# --dependency=afterok:<job k>). TIME - MARGIN > 0 is checked before any
+# job is submitted; the script may be started from any directory.
 #
 #   bash jobs/restart_chain.sh [SPHSEG_ARGS...]     (login node: submits K jobs)
 #   bash jobs/restart_chain.sh [SPHSEG_ARGS...]     (no sbatch: K steps in a loop here)
@@ -39,6 +45,7 @@ OUTDIR=${OUTDIR:-}          # default out/<scene>_chain_<date-time>; the same fo
 # OMP_NUM_THREADS as in jobs/README.md.
 # -----------------------------------------------------------------------------
 set -euo pipefail
+self=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)/$(basename "${BASH_SOURCE[0]}") # before any cd
 
 if [ -n "${SLURM_JOB_ID:-}" ]; then
     root=${SLURM_SUBMIT_DIR:-$PWD} # sbatch runs a copy of this script
@@ -64,18 +71,22 @@ to_seconds() {
     echo $((10#$d * 86400 + 10#$h * 3600 + 10#$m * 60 + 10#$s))
 }
 
-run() { if [ "${DRYRUN:-0}" = 1 ]; then echo "+ $*"; else "$@"; fi; }
+wall=${MAX_WALL:-$(($(to_seconds "$TIME") - MARGIN))}
+if [ "$wall" -le 0 ]; then
+    echo "restart_chain: TIME $TIME leaves no time after MARGIN $MARGIN s: nothing submitted" >&2
+    exit 2
+fi
 
 # One link of the chain: fresh start or restart, stopping W seconds in.
 chain_step() { # sphseg args...
-    local wall=${MAX_WALL:-$(($(to_seconds "$TIME") - MARGIN))} np=${SLURM_NTASKS:-${NP:-1}}
-    [ "$wall" -gt 0 ] || { echo "restart_chain: TIME $TIME leaves no time after MARGIN $MARGIN s" >&2; exit 2; }
+    local np=${SLURM_NTASKS:-${NP:-1}}
     local restart=()
-    [ -f "$OUTDIR/checkpoint.h5" ] && restart=(--restart "$OUTDIR/checkpoint.h5")
+    if [ -f "$OUTDIR/checkpoint.h5" ] || [ -f "$OUTDIR/checkpoint_prev.h5" ]; then restart=(--restart "$OUTDIR"); fi
     sphseg_threads "$np"
     sphseg_launcher "$np"
     echo "restart_chain: ${restart[*]:-fresh start}, Run:max_wall_time=$wall s, $np rank(s) -> $OUTDIR"
-    run "${launch[@]}" "$SPHSEG" "$SCENE" -o "$OUTDIR" ${restart[@]+"${restart[@]}"} -P "Run:max_wall_time=$wall" "$@"
+    local cmd=("${launch[@]}" "$SPHSEG" "$SCENE" -o "$OUTDIR" ${restart[@]+"${restart[@]}"} -P "Run:max_wall_time=$wall" "$@")
+    if [ "${DRYRUN:-0}" = 1 ]; then echo "+ ${cmd[*]}"; else sphseg_run "${cmd[@]}"; fi
 }
 
 sphseg_check_binary
@@ -85,10 +96,12 @@ if [ "${1:-}" = --step ]; then # a job of the chain
 elif command -v sbatch >/dev/null && [ -z "${NO_SLURM:-}" ]; then # submit the chain
     OUTDIR=$(mkdir -p "$(dirname "$OUTDIR")" && cd "$(dirname "$OUTDIR")" && pwd)/$(basename "$OUTDIR")
     read -r -a flags <<<"${SBATCH_FLAGS:-}"
+    if [ "${GPUS:-1}" = 1 ]; then flags+=(--gpus-per-task=1); fi
     dep=()
     for k in $(seq 1 "$K"); do
-        cmd=(sbatch --parsable --time="$TIME" --export="ALL,SCENE=$SCENE,OUTDIR=$OUTDIR,TIME=$TIME,MARGIN=$MARGIN"
-            ${dep[@]+"${dep[@]}"} ${flags[@]+"${flags[@]}"} "$0" --step "$@")
+        cmd=(sbatch --parsable --time="$TIME" --chdir="$root"
+            --export="ALL,SCENE=$SCENE,OUTDIR=$OUTDIR,TIME=$TIME,MARGIN=$MARGIN,GPUS=${GPUS:-1}"
+            ${dep[@]+"${dep[@]}"} ${flags[@]+"${flags[@]}"} "$self" --step "$@")
         if [ "${DRYRUN:-0}" = 1 ]; then echo "+ ${cmd[*]}"; jid=DRYRUN$k; else jid=$("${cmd[@]}"); jid=${jid%%;*}; fi
         echo "restart_chain: job $k/$K: $jid${dep[*]:+ (${dep[*]})}"
         dep=(--dependency="afterok:$jid")

@@ -4,8 +4,16 @@
  *
  * OUTDIR/checkpoint.h5 (the latest; the one before is kept as
  * OUTDIR/checkpoint_prev.h5), written collectively by all ranks with
- * parallel HDF5 (MPI-IO) to checkpoint.h5.tmp, then renamed:
- *   /Header       attributes Code ("sphseg"), Version, Checkpoint (1),
+ * parallel HDF5 (MPI-IO) to checkpoint.h5.tmp, sealed, then renamed:
+ *   user block    the first CKPT_USERBLOCK bytes, which HDF5 skips: the seal,
+ *                 "SPHSEGCK", then little-endian uint64 format (CKPT_FORMAT),
+ *                 file size, checksum, step, and the bits of the double time.
+ *                 The checksum is sum over the 8-byte little-endian words w_i
+ *                 (i = 1, 2, ...; the last zero-padded) of the bytes past the
+ *                 user block of mix(w_i + i * 0x9E3779B97F4A7C15) mod 2^64,
+ *                 mix being splitmix64's finaliser: a reader refuses a changed,
+ *                 cut or extended file before HDF5 reads any of it;
+ *   /Header       attributes Code ("sphseg"), Version, Checkpoint (CKPT_FORMAT),
  *                 Precision ("double" | "single"), RealBytes, Dimension,
  *                 NumRanks, NumPart_Total, NumArrays, Time, Step, Dt, Amax,
  *                 WindowSteps, WindowTarget, WindowLength (the open
@@ -35,6 +43,8 @@
 #define SPHSEG_CHECKPOINT_H
 #include "sim.h"
 
+enum { CKPT_FORMAT = 2, CKPT_USERBLOCK = 512 };
+
 /* The run state beside sim_t that a checkpoint carries. */
 typedef struct ckpt_run {
     double small0, max_drift; /* diag: sum C_i V_i at t = 0, largest |drift| so far */
@@ -53,17 +63,40 @@ typedef struct ckpt_run {
 
 /* Collective: write OUTDIR/checkpoint.h5 from s (host copy: call to_host
  * first), r and scene_text; the previous checkpoint.h5 becomes
- * checkpoint_prev.h5. Any failure ends the run with status 1. Returns the
- * wall seconds it took. */
+ * checkpoint_prev.h5 (hard link, then rename: checkpoint.h5 always names a
+ * complete checkpoint). A failed write (disk full) ends the run with status
+ * 4, the earlier checkpoints intact. Returns the wall seconds it took. */
 double ckpt_write(const char *outdir, const sim_t *s, const ckpt_run *r, const char *scene_text);
 
-/* Collective: load the particles (s->p, allocated here) and s->t, step, dt,
- * amax, n_material from file, and r. A missing file, one that is not a sphseg
- * checkpoint, or one of another precision, dimension or store layout stops
- * every rank with status 2 and one line naming the file and the problem. A
- * scene that differs from the stored one is a warning (a longer t_end is the
- * usual reason). */
-void ckpt_read(const char *file, sim_t *s, ckpt_run *r);
+/* The seal of a checkpoint file (user block). */
+typedef struct ckpt_seal {
+    long long step;
+    double time;
+    unsigned long long size, sum;
+} ckpt_seal;
+/* Collective: 0 when path is a sealed checkpoint of this format whose
+ * checksum matches its bytes (seal filled in); -1 when it cannot be read, 1
+ * when it is not a checkpoint or damaged; why says so (every rank). */
+int ckpt_verify(const char *path, ckpt_seal *seal, char *why, size_t n);
+
+/* Collective (src/checkpoint_read.c): load the particles (s->p, allocated
+ * here) and s->t, step, dt, amax, n_material from file, and r. file may be
+ * a directory: its newest valid checkpoint (checkpoint.h5 or
+ * checkpoint_prev.h5) is taken, and its name written to chosen. A file that
+ * is missing, damaged (checksum), not a sphseg checkpoint, of another
+ * precision, dimension, store layout, of a scene whose state-defining keys
+ * differ (each named), or whose contents are out of range stops every rank
+ * with status 2 and one line from rank 0. Run-control keys that differ are
+ * listed. */
+void ckpt_read(const char *file, sim_t *s, ckpt_run *r, char *chosen, size_t n);
+/* Compare the checkpoint's used-parameters text (stored) with this run's
+ * scene, key by key (src/checkpoint_keys.c). Keys that define the state
+ * (Geometry, Material, Physics, Initial, Kinematics, Walls, and the modules
+ * Segregation:enabled, scheme and renormalize) must match: otherwise exit
+ * 2 naming each one that differs. Model keys (the other Segregation keys,
+ * Flow) that differ are a warning naming each; run-control keys (Run,
+ * Output, Parallel) may differ and are listed. */
+void ckpt_check_scene(const char *file, const char *stored, const struct scene *sc);
 void ckpt_run_free(ckpt_run *r);
 
 /* When to stop a run early (Run:max_wall_time, OUTDIR/STOP). */
@@ -73,18 +106,29 @@ typedef struct ckpt_clock {
     double last_check; /* last look for the STOP file (rank 0) */
     double write_s;    /* wall seconds of the last checkpoint write */
     double max_wall;   /* Run:max_wall_time, 0 = none */
+    int signal;        /* the signal that asked for the stop (CKPT_SIGNAL) */
     char stop[4200];   /* OUTDIR/STOP */
 } ckpt_clock;
 
-enum ckpt_stop { CKPT_GO = 0, CKPT_WALL = 1, CKPT_STOPFILE = 2 };
+enum ckpt_stop { CKPT_GO = 0, CKPT_WALL = 1, CKPT_STOPFILE = 2, CKPT_SIGNAL = 3 };
 enum { CKPT_STOP_EVERY_S = 5 }; /* wall seconds between looks for OUTDIR/STOP */
+#define CKPT_SIGNAL_ECHO_S 0.25    /* a second signal this soon after the first is a copy of it */
 
+/* SIGTERM, SIGUSR1, SIGINT and SIGHUP ask for a stop: the step ends, a
+ * checkpoint is written and the run exits 0 (ckpt_poll); a second SIGTERM,
+ * SIGINT or SIGHUP ends the process at once (one within CKPT_SIGNAL_ECHO_S
+ * of the first is taken for a copy of it: SLURM signals each task and srun
+ * forwards the same signal), and so does one before ckpt_signals_stepping
+ * (set-up: nothing to save); a SIGUSR1 then waits for the first step. */
+void ckpt_signals_install(void);
+void ckpt_signals_stepping(void);
 void ckpt_clock_start(ckpt_clock *c, double wall0, double max_wall, const char *outdir);
-/* Collective, once per step: rank 0 decides, every rank gets the answer.
+/* Collective, once per step: every rank gets the same answer.
+ * CKPT_SIGNAL when any rank received a stop signal (c->signal);
  * CKPT_WALL when the next step (the mean step time of this session so far,
  * plus the last checkpoint's write time) would likely pass Run:max_wall_time;
  * CKPT_STOPFILE when OUTDIR/STOP exists (looked for at the first step and
- * then every CKPT_STOP_EVERY_S wall seconds). */
+ * then every CKPT_STOP_EVERY_S wall seconds); rank 0 decides these two. */
 enum ckpt_stop ckpt_poll(ckpt_clock *c, long steps_done);
 /* Rank 0 removes OUTDIR/STOP (after the checkpoint it asked for is written). */
 void ckpt_clear_stop(const ckpt_clock *c);

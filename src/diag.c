@@ -1,12 +1,26 @@
 /* diag.c — see diag.h. */
 #include "diag.h"
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 #include "error.h"
+#include "io.h"
 #include "mpi/comm.h"
+
+/* Rank 0's rows: a failed write (disk full, quota) ends the run with status
+ * 4, never a diagnostics.csv cut mid-row that says the run went well. */
+static void diag_check(diag *d, int failed, const char *what)
+{
+    if (!failed) return;
+    int err = errno;
+    char part[4200];
+    snprintf(part, sizeof part, "%s.part", d->path);
+    errno = err;
+    error_exit(EXIT_WRITE, "cannot write %s (%s): %s", part, what, strerror(err));
+}
 
 double diag_wall(void)
 {
@@ -58,15 +72,17 @@ static char *diag_slurp(const char *path)
 }
 
 /* Copy the header line and the rows with step <= last from text to f. */
-static void diag_keep_rows(FILE *f, const char *text, long last)
+static int diag_keep_rows(FILE *f, const char *text, long last)
 {
+    int bad = 0;
     for (int first = 1; *text; first = 0) {
         size_t len = strcspn(text, "\n");
         char *end;
         long step = strtol(text, &end, 10);
-        if (first || (end != text && *end == ',' && step <= last)) fprintf(f, "%.*s\n", (int)len, text);
+        if (first || (end != text && *end == ',' && step <= last)) bad |= fprintf(f, "%.*s\n", (int)len, text) < 0;
         text += len + (text[len] != 0);
     }
+    return bad;
 }
 
 /* The state of a run's diagnostics from (small0, max_drift, warned), and on
@@ -93,12 +109,11 @@ static void diag_start(diag *d, const char *outdir, const sim_t *s, double small
         if (!old) warning("restart: no %s or %s to continue: rows start afresh", d->path, part);
     }
     d->f = fopen(part, "w");
-    if (!d->f) error_exit(1, "cannot write %s", part);
-    if (old) diag_keep_rows(d->f, old, s->step);
-    else
-        fprintf(d->f, "step,time,dt,n_material,small_volume,small_volume_drift,kinetic_energy,"
-                      "max_speed,wall_s,C_min,C_max\n");
-    fflush(d->f);
+    diag_check(d, !d->f, "open");
+    int bad = old ? diag_keep_rows(d->f, old, s->step)
+                  : fprintf(d->f, "step,time,dt,n_material,small_volume,small_volume_drift,kinetic_energy,"
+                                  "max_speed,wall_s,C_min,C_max\n") < 0;
+    diag_check(d, bad || fflush(d->f) != 0, "header");
     free(old);
 }
 
@@ -124,14 +139,20 @@ void diag_row(diag *d, const sim_t *s)
                     "Segregation:drift_tol = %.3g", s->step, s->t, v.drift, s->sc->segregation.drift_tol);
     }
     if (!d->f) return;
-    fprintf(d->f, "%ld,%.17g,%.17g,%lld,%.17g,%.17g,%.17g,%.17g,%.6f,%.17g,%.17g\n", s->step, s->t,
-            s->dt, v.n_material, v.small_volume, v.drift, v.kinetic_energy, v.max_speed,
-            diag_wall() - d->wall0, v.C_min, v.C_max);
-    fflush(d->f);
+    int bad = fprintf(d->f, "%ld,%.17g,%.17g,%lld,%.17g,%.17g,%.17g,%.17g,%.6f,%.17g,%.17g\n", s->step, s->t,
+                      s->dt, v.n_material, v.small_volume, v.drift, v.kinetic_energy, v.max_speed,
+                      diag_wall() - d->wall0, v.C_min, v.C_max) < 0;
+    diag_check(d, bad || fflush(d->f) != 0, "a row");
 }
 
+/* h:mm:ss; an estimate past 10^8 h (or not finite) is shown as such,
+ * never cast to an integer it does not fit. */
 static void diag_hms(double sec, char *buf, size_t n)
 {
+    if (!(sec >= 0 && sec < 3.6e11)) {
+        snprintf(buf, n, "> 1e8 h");
+        return;
+    }
     long t = (long)(sec + 0.5);
     snprintf(buf, n, "%02ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
 }
@@ -152,8 +173,9 @@ void diag_progress(diag *d, const sim_t *s, int force)
 void diag_close(diag *d)
 {
     if (!d->f) return;
-    fclose(d->f);
+    FILE *f = d->f;
     d->f = NULL;
+    if (fclose(f) != 0) diag_check(d, 1, "close");
     char part[4200];
     snprintf(part, sizeof part, "%s.part", d->path);
     if (rename(part, d->path) != 0) warning("cannot rename %s", part);

@@ -3,13 +3,29 @@
 #include <mpi.h>
 #include <stdarg.h>
 #include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static int (*error_cleanup)(void);
+
+void error_on_exit(int (*fn)(void)) { error_cleanup = fn; }
 
 static int error_rank(void)
 {
-    int init = 0, rank = 0;
+    int init = 0, fin = 0, rank = 0;
     MPI_Initialized(&init);
-    if (init) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Finalized(&fin);
+    if (init && !fin) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     return rank;
+}
+
+static int error_size(void)
+{
+    int init = 0, fin = 0, size = 1;
+    MPI_Initialized(&init);
+    MPI_Finalized(&fin);
+    if (init && !fin) MPI_Comm_size(MPI_COMM_WORLD, &size);
+    return size;
 }
 
 void message(const char *fmt, ...)
@@ -35,46 +51,88 @@ void warning(const char *fmt, ...)
     fflush(stderr);
 }
 
+/* The cleanup hook runs first (an open HDF5 file closed before MPI_Finalize,
+ * whose HDF5 shutdown would otherwise flush it and crash); several ranks
+ * abort together, one rank finalizes. */
+static void finish(int code) __attribute__((noreturn));
 static void finish(int code)
 {
-    int init = 0, fin = 0, size = 1;
+    int (*fn)(void) = error_cleanup, skip = 0;
+    error_cleanup = NULL;
+    if (fn) skip = fn();
+    int init = 0, fin = 0;
     MPI_Initialized(&init);
     MPI_Finalized(&fin);
-    if (init && !fin) {
-        MPI_Comm_size(MPI_COMM_WORLD, &size);
-        if (size > 1) MPI_Abort(MPI_COMM_WORLD, code);
+    if (init && !fin && !skip) {
+        if (error_size() > 1) MPI_Abort(MPI_COMM_WORLD, code);
         MPI_Finalize();
     }
     exit(code);
+}
+
+static void error_vprint(const char *prefix, const char *fmt, va_list ap)
+{
+    fprintf(stderr, "sphseg: error: %s", prefix);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    fflush(stderr);
 }
 
 void error_exit(int code, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    fprintf(stderr, "sphseg: error: ");
-    vfprintf(stderr, fmt, ap);
+    error_vprint("", fmt, ap);
     va_end(ap);
-    fputc('\n', stderr);
-    fflush(stderr);
     finish(code);
-    exit(code);
+}
+
+/* Every rank reached the barrier within ERROR_AGREE_S seconds. */
+static int error_all_here(void)
+{
+    MPI_Request req;
+    int done = 0;
+    if (MPI_Ibarrier(MPI_COMM_WORLD, &req) != MPI_SUCCESS) return 0;
+    struct timespec nap = {0, 2000000};
+    for (int k = 0; k < ERROR_AGREE_S * 500 && !done; ++k) {
+        MPI_Test(&req, &done, MPI_STATUS_IGNORE);
+        if (!done) nanosleep(&nap, NULL);
+    }
+    return done;
 }
 
 void input_error(const char *fmt, ...)
 {
-    if (error_rank() == 0) {
-        va_list ap;
-        va_start(ap, fmt);
-        fprintf(stderr, "sphseg: error: ");
-        vfprintf(stderr, fmt, ap);
-        va_end(ap);
-        fputc('\n', stderr);
-        fflush(stderr);
-    }
-    int init = 0, fin = 0;
+    int init = 0, fin = 0, rank = error_rank();
     MPI_Initialized(&init);
     MPI_Finalized(&fin);
-    if (init && !fin) MPI_Finalize();
+    int live = init && !fin, alone = !live || error_size() == 1;
+    int all = alone || error_all_here(); /* every rank found it: rank 0 speaks for all */
+    if (rank == 0 || !all) {
+        char pre[32] = "";
+        if (rank > 0) snprintf(pre, sizeof pre, "rank %d: ", rank);
+        va_list ap;
+        va_start(ap, fmt);
+        error_vprint(pre, fmt, ap);
+        va_end(ap);
+    }
+    if (!all) MPI_Abort(MPI_COMM_WORLD, EXIT_BAD_INPUT);
+    if (live) MPI_Finalize();
     exit(EXIT_BAD_INPUT);
+}
+
+void input_error_agree(const char *why)
+{
+    int rank = error_rank(), first = why ? rank : 1 << 30;
+    if (error_size() > 1) MPI_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    if (first == 1 << 30) return;
+    char line[1200] = "";
+    if (rank == first) snprintf(line, sizeof line, "%s", why);
+    if (error_size() > 1) MPI_Bcast(line, (int)sizeof line, MPI_CHAR, first, MPI_COMM_WORLD);
+    if (first > 0) {
+        char tmp[1200];
+        snprintf(tmp, sizeof tmp, "%s", line);
+        snprintf(line, sizeof line, "rank %d: %.1150s", first, tmp);
+    }
+    input_error("%s", line);
 }

@@ -1,11 +1,14 @@
 /* error.h — rank-aware messages and located errors (DESIGN.md "Errors").
+ * Exit status 1: system failure (out of memory, a failed MPI or HDF5 call).
  * Exit status 2: bad input (before any step, nothing written).
- * Exit status 3: numerical failure (names step, time, particle). */
+ * Exit status 3: numerical failure (names step, time, particle).
+ * Exit status 4: an output file could not be written (disk full, quota, I/O
+ *                error): the last complete snapshot and checkpoint stay. */
 #ifndef SPHSEG_ERROR_H
 #define SPHSEG_ERROR_H
 #include <stdio.h>
 
-enum { EXIT_BAD_INPUT = 2, EXIT_NUMERICAL = 3 };
+enum { EXIT_SYSTEM = 1, EXIT_BAD_INPUT = 2, EXIT_NUMERICAL = 3, EXIT_WRITE = 4 };
 
 /* Printed on rank 0 only: messages, and warnings (every warning is about
  * state all ranks share: the scene, global sums). */
@@ -13,9 +16,21 @@ void message(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 void warning(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /* Print "sphseg: error: ..." once and end every rank with status code. */
 void error_exit(int code, const char *fmt, ...) __attribute__((format(printf, 2, 3), noreturn));
-/* Collective-safe variant for input errors found identically on all ranks:
- * rank 0 prints, all ranks exit with EXIT_BAD_INPUT. */
+/* Input errors found identically on all ranks: rank 0 prints, all ranks
+ * exit with EXIT_BAD_INPUT. A rank whose peers do not all call it within
+ * ERROR_AGREE_S seconds (an error only it found) prints the line itself
+ * with its rank and aborts the job (status 2): never a hang. */
 void input_error(const char *fmt, ...) __attribute__((format(printf, 1, 2), noreturn));
+/* Collective: every rank passes NULL (no problem here) or the line it would
+ * print; if any rank has one, rank 0 prints the lowest such rank's line
+ * ("rank r: ..." when r > 0) and every rank exits with EXIT_BAD_INPUT. */
+void input_error_agree(const char *why);
+/* A function error_exit runs (once) before it ends the process, e.g. to
+ * close an open HDF5 file and remove a half-written temporary (src/io.c);
+ * it returns nonzero when MPI_Finalize must be skipped (a file HDF5 could
+ * not close, which HDF5's shutdown inside MPI_Finalize would crash on). */
+void error_on_exit(int (*fn)(void));
+enum { ERROR_AGREE_S = 10 };
 
 /* Check an HDF5 call (negative = failure). hdf5.h defines an H5CHECK of
  * its own (a version check inside the H5F_ACC_* flags) and #undefs any

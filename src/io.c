@@ -9,10 +9,69 @@
  * error.h first, hdf5.h's H5CHECK replaced ours and no call was checked). */
 static unsigned io_acc_trunc(void) { return H5F_ACC_TRUNC; }
 #include "error.h"
+#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
 
 #define IO_PATH_MAX 4096
+
+/* ---- failed writes ---------------------------------------------------------- */
+
+/* The file being written (one at a time) and its temporary name: a failed
+ * write closes it and removes the temporary before the run ends, so that
+ * MPI_Finalize never meets an open HDF5 file and the disk gets its space
+ * back; the final names keep the last complete files. */
+static struct {
+    hid_t file;
+    char tmp[IO_PATH_MAX];
+} io_open = {-1, ""};
+
+static int io_abandon(void)
+{
+    int stuck = 0, size = 1;
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    if (io_open.tmp[0]) (void)truncate(io_open.tmp, 0); /* gives the space back, so HDF5 can close it */
+    if (io_open.file >= 0 && size == 1) { /* closing is collective; several ranks abort instead */
+        H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+        stuck = H5Fclose(io_open.file) < 0;
+        io_open.file = -1;
+    }
+    if (io_open.tmp[0]) unlink(io_open.tmp);
+    io_open.tmp[0] = 0;
+    return stuck;
+}
+
+void io_write_failed(const char *fmt, ...)
+{
+    int err = errno == ENOSPC || errno == EDQUOT || errno == EFBIG || errno == EIO ? errno : 0;
+    char what[600], space[160] = "";
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(what, sizeof what, fmt, ap);
+    va_end(ap);
+    char dir[IO_PATH_MAX];
+    snprintf(dir, sizeof dir, "%s", io_open.tmp[0] ? io_open.tmp : ".");
+    char *slash = strrchr(dir, '/');
+    if (slash) *slash = 0;
+    struct statvfs v;
+    if (statvfs(slash ? dir : ".", &v) == 0) {
+        double mb = 1e-6 * (double)v.f_bavail * (double)v.f_frsize;
+        snprintf(space, sizeof space, "; %.4g MB free on its file system%s", mb, mb < 1 ? ": the disk is full" : "");
+    }
+    error_on_exit(io_abandon);
+    error_exit(EXIT_WRITE, "cannot write %s: %s (%s%s); the last complete snapshot and checkpoint are kept",
+               io_open.tmp[0] ? io_open.tmp : "output", what, err ? strerror(err) : "write failed", space);
+}
+
+/* In this file every HDF5 call writes an output file: a failure is a failed
+ * write (exit status 4), not a system failure. */
+#undef H5CHECK
+#define H5CHECK(call)                                                                                        \
+    do {                                                                                                     \
+        if ((call) < 0) io_write_failed("%s at %s:%d", #call, __FILE__, __LINE__);                           \
+    } while (0)
 
 /* ---- the field table ---------------------------------------------------- */
 
@@ -88,8 +147,7 @@ static int io_rank(void)
 static void io_commit(const char *tmp, const char *path, int collective)
 {
     if (collective) MPICHECK(MPI_Barrier(MPI_COMM_WORLD));
-    if (io_rank() == 0 && rename(tmp, path) != 0)
-        error_exit(1, "cannot rename %s to %s: %s", tmp, path, strerror(errno));
+    if (io_rank() == 0 && rename(tmp, path) != 0) io_write_failed("cannot rename it to %s", path);
     if (collective) MPICHECK(MPI_Barrier(MPI_COMM_WORLD));
 }
 
@@ -406,18 +464,32 @@ static void io_write_header(hid_t file, int dim, double time, long step, long lo
     H5CHECK(H5Gclose(g));
 }
 
-hid_t io_create_file(const char *path)
+hid_t io_create_file(const char *path, size_t userblock)
 {
-    hid_t fapl, file;
+    hid_t fapl, fcpl, file;
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* a failed write is one line (io_write_failed), not HDF5's stack */
+    H5CHECK(fcpl = H5Pcreate(H5P_FILE_CREATE));
+    if (userblock) H5CHECK(H5Pset_userblock(fcpl, (hsize_t)userblock));
     H5CHECK(fapl = H5Pcreate(H5P_FILE_ACCESS));
     H5CHECK(H5Pset_fapl_mpio(fapl, MPI_COMM_WORLD, MPI_INFO_NULL));
     H5CHECK(H5Pset_coll_metadata_write(fapl, 1));
     H5CHECK(H5Pset_all_coll_metadata_ops(fapl, 1));
-    file = H5Fcreate(path, io_acc_trunc(), H5P_DEFAULT, fapl);
-    if (file < 0) error_exit(1, "cannot create %s (does the output directory exist?)", path);
+    snprintf(io_open.tmp, sizeof io_open.tmp, "%s", path);
+    file = H5Fcreate(path, io_acc_trunc(), fcpl, fapl);
+    if (file < 0) io_write_failed("cannot create it (does the output directory exist?)");
+    io_open.file = file;
     H5CHECK(H5Pclose(fapl));
+    H5CHECK(H5Pclose(fcpl));
     return file;
 }
+
+void io_close_file(hid_t file)
+{
+    H5CHECK(H5Fclose(file));
+    io_open.file = -1;
+}
+
+void io_forget_tmp(void) { io_open.tmp[0] = 0; }
 
 int io_write_snapshot(const char *outdir, int index, const particles_t *p, double time, long step,
                       const char *scene_text, const char *code_version)
@@ -430,11 +502,12 @@ int io_write_snapshot(const char *outdir, int index, const particles_t *p, doubl
     long long n = (long long)p->n, ntot = 0;
     MPICHECK(MPI_Allreduce(&n, &ntot, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD));
 
-    hid_t file = io_create_file(tmp);
+    hid_t file = io_create_file(tmp, 0);
     io_write_header(file, p->dim, time, step, ntot, scene_text, code_version);
     io_write_particles(file, p, ntot);
-    H5CHECK(H5Fclose(file));
+    io_close_file(file);
     io_commit(tmp, path, 1);
+    io_forget_tmp();
     return 0;
 }
 
@@ -476,24 +549,27 @@ static void io_xdmf_grid(FILE *fp, int index, double time, long long n)
     fprintf(fp, "      </Grid>\n");
 }
 
-int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long long *npart, int dim)
+int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long long *npart,
+                  const unsigned char *present, int dim)
 {
     if (io_rank() != 0) return 0;
     char path[IO_PATH_MAX], tmp[IO_PATH_MAX];
     io_join(path, outdir, "snapshots.xmf", "");
     io_join(tmp, outdir, "snapshots.xmf", ".tmp");
+    snprintf(io_open.tmp, sizeof io_open.tmp, "%s", tmp);
     FILE *fp = fopen(tmp, "w");
-    if (!fp) error_exit(1, "cannot write %s: %s", tmp, strerror(errno));
+    if (!fp) io_write_failed("cannot open it");
     fprintf(fp, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
                 "<Xdmf Version=\"2.0\">\n  <Domain>\n");
     fprintf(fp, "    <Information Name=\"Dimension\" Value=\"%d\"/>\n", dim);
     fprintf(fp, "    <Grid Name=\"snapshots\" GridType=\"Collection\""
                 " CollectionType=\"Temporal\">\n");
     for (int i = 0; i < nsnap; i++)
-        io_xdmf_grid(fp, i, times[i], npart[i]);
+        if (!present || present[i]) io_xdmf_grid(fp, i, times[i], npart[i]);
     fprintf(fp, "    </Grid>\n  </Domain>\n</Xdmf>\n");
-    int bad = ferror(fp);
-    if (fclose(fp) != 0 || bad) error_exit(1, "cannot write %s: %s", tmp, strerror(errno));
+    int bad = fflush(fp) != 0 || ferror(fp);
+    if (fclose(fp) != 0 || bad) io_write_failed("fclose");
     io_commit(tmp, path, 0);
+    io_forget_tmp();
     return 0;
 }

@@ -15,8 +15,9 @@
  *   topology, XYZ geometry from Coordinates, every other field an attribute).
  *
  * Both writers go to "<name>.tmp" and rename, so no half-written file ever
- * exists under a final name. Any failure ends the run (error_exit, status 1);
- * the functions return 0. */
+ * exists under a final name. A failed write (disk full, quota) ends the run
+ * with status 4 (EXIT_WRITE) after closing the file and removing the
+ * temporary; the functions return 0. */
 #ifndef SPHSEG_IO_H
 #define SPHSEG_IO_H
 #include "particles.h"
@@ -48,18 +49,29 @@ int io_write_snapshot(const char *outdir, int index, const particles_t *p, doubl
                       const char *scene_text, const char *code_version);
 
 /* Write OUTDIR/snapshots.xmf indexing snapshots 0 .. nsnap-1 (times[i],
- * npart[i] particles each) for dimension dim (2 or 3). Only rank 0 writes;
- * other ranks return at once, so it may be called by all ranks or rank 0. */
-int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long long *npart, int dim);
+ * npart[i] particles each; only those with present[i] != 0 when present is
+ * not NULL: a restart into a new OUTDIR lists only the snapshots there) for
+ * dimension dim (2 or 3). Only rank 0 writes; other ranks return at once,
+ * so it may be called by all ranks or rank 0. */
+int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long long *npart,
+                  const unsigned char *present, int dim);
 
 /* HDF5 helpers shared with the checkpoint writer (src/checkpoint.c); every
  * call is checked (H5CHECK). Variable-length UTF-8 string attribute (value
  * NULL is stored as ""); scalar attribute of file type ftype from a value of
  * memory type mtype; collective create (truncate) of path with the MPI-IO
- * driver and collective metadata, exit status 1 if it cannot be created.
+ * driver and collective metadata (userblock: bytes reserved at the start of
+ * the file, 0 or a power of two >= 512), exit status 4 if it cannot be
+ * created; io_close_file closes it (a failed close is a failed write);
+ * io_forget_tmp once the temporary is renamed; io_write_failed ends the run
+ * with status 4 naming the file being written, what failed and the space
+ * left, after closing that file and removing its temporary.
  * hid_t is int64_t (HDF5 >= 1.10), so hdf5.h is not needed here. */
 void io_attr_string(int64_t loc, const char *name, const char *value);
 void io_attr_scalar(int64_t loc, const char *name, int64_t ftype, int64_t mtype, const void *val);
-int64_t io_create_file(const char *path);
+int64_t io_create_file(const char *path, size_t userblock);
+void io_close_file(int64_t file);
+void io_forget_tmp(void);
+void io_write_failed(const char *fmt, ...) __attribute__((format(printf, 1, 2), noreturn));
 
 #endif

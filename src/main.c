@@ -1,5 +1,6 @@
 /* main.c — the sphseg driver:
- *   mpirun -np N build/sphseg SCENE.yml [-o OUTDIR] [-P Section:key=value ...] [--restart FILE]
+ *   mpirun -np N build/sphseg SCENE.yml [-o OUTDIR] [-P Section:key=value ...] [--restart FILE|DIR]
+ *                             [--overwrite]
  * Loads and validates the scene (exit 2 on bad input, before anything is
  * written), builds the particles (or loads them and the run state from a
  * checkpoint, src/checkpoint.h), then steps to Run:t_end writing snapshots
@@ -8,15 +9,18 @@
 #include <errno.h>
 #include <math.h>
 #include <mpi.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 #include "checkpoint.h"
 #include "diag.h"
 #include "error.h"
 #include "io.h"
 #include "mpi/comm.h"
+#include "outdir.h"
 #include "sim.h"
 #include "version.h"
 
@@ -24,27 +28,31 @@ typedef struct cli {
     const char *scene, *outdir, *backend;
     int n_over;
     char **over;
-    const char *restart; /* --restart FILE, or NULL */
+    const char *restart; /* --restart FILE|DIR, or NULL */
     double wall0;        /* wall clock at start-up, for Run:max_wall_time */
+    int overwrite;       /* --overwrite: a fresh run may replace another run's files in OUTDIR */
 } cli;
 
 static void usage(void)
 {
     message("usage: sphseg SCENE.yml [-o OUTDIR] [-P Section:key=value ...] [--backend auto|cpu|gpu]\n"
-            "              [--restart FILE]\n"
+            "              [--restart FILE|DIR] [--overwrite]\n"
             "  -o OUTDIR   output folder (default out/<scene name>)\n"
             "  -P ...      override one scene parameter, e.g. -P Geometry:dr=0.00087\n"
             "  --backend   auto (default: gpu when built with CUDA and a device is present), cpu or gpu;\n"
             "              overrides Run:backend\n"
-            "  --restart FILE  continue the run saved in the checkpoint FILE (e.g. OUTDIR/checkpoint.h5):\n"
-            "              the particles and run state come from FILE, the parameters from SCENE.yml and -P\n"
+            "  --restart FILE|DIR  continue the run saved in the checkpoint FILE, or the newest valid one in DIR\n"
+            "              (checkpoint.h5 or checkpoint_prev.h5): the particles and run state come from it, the\n"
+            "              parameters from SCENE.yml and -P, whose state-defining keys must match the checkpoint's\n"
             "              (a longer Run:t_end extends a run); snapshots and diagnostics.csv continue in OUTDIR\n"
+            "  --overwrite a fresh run may replace the files of an earlier run in OUTDIR (else: exit 2)\n"
+            "  SIGTERM, SIGUSR1, SIGINT: finish the step, write a checkpoint, exit 0; a second SIGTERM ends at once\n"
             "  --version   print the version");
 }
 
 static cli parse_cli(int argc, char **argv)
 {
-    cli c = {NULL, NULL, NULL, 0, calloc((size_t)argc, sizeof(char *)), NULL, diag_wall()};
+    cli c = {NULL, NULL, NULL, 0, calloc((size_t)argc, sizeof(char *)), NULL, diag_wall(), 0};
     for (int a = 1; a < argc; ++a) {
         if (!strcmp(argv[a], "-h") || !strcmp(argv[a], "--help")) {
             usage();
@@ -57,9 +65,13 @@ static cli parse_cli(int argc, char **argv)
         } else if (!strcmp(argv[a], "--restart")) {
             if (a + 1 >= argc) input_error("command line: --restart needs a FILE (see sphseg --help)");
             c.restart = argv[++a];
+            if (!c.restart[0]) input_error("command line: --restart needs a FILE or DIR, not an empty name");
+        } else if (!strcmp(argv[a], "--overwrite")) {
+            c.overwrite = 1;
         } else if ((!strcmp(argv[a], "-o") || !strcmp(argv[a], "-P") || !strcmp(argv[a], "--backend")) &&
                    a + 1 < argc) {
             const char *v = argv[++a];
+            if (argv[a - 1][1] == 'o' && !v[0]) input_error("command line: -o needs a directory name, not an empty one");
             if (argv[a - 1][1] == 'o') c.outdir = v;
             else if (argv[a - 1][1] == 'P') c.over[c.n_over++] = (char *)v;
             else c.backend = v;
@@ -91,10 +103,10 @@ static void make_dirs(const char *path)
     for (char *q = buf + 1; *q; ++q)
         if (*q == '/') {
             *q = 0;
-            if (mkdir(buf, 0777) && errno != EEXIST) error_exit(1, "cannot create %s", buf);
+            if (mkdir(buf, 0777) && errno != EEXIST) error_exit(EXIT_WRITE, "cannot create %s: %s", buf, strerror(errno));
             *q = '/';
         }
-    if (mkdir(buf, 0777) && errno != EEXIST) error_exit(1, "cannot create %s", buf);
+    if (mkdir(buf, 0777) && errno != EEXIST) error_exit(EXIT_WRITE, "cannot create %s: %s", buf, strerror(errno));
 }
 
 typedef struct outputs {
@@ -106,6 +118,8 @@ typedef struct outputs {
     double wall0;          /* wall clock at start-up (Run:max_wall_time) */
     const char *restart;   /* the checkpoint this run continues, or NULL */
     const char *scene;     /* the scene file, for the how-to-continue message */
+    const cli *c;          /* the command line, for the how-to-continue message */
+    unsigned char *present; /* per snapshot: it is in dir (a restart into a new OUTDIR lacks the earlier ones) */
 } outputs;
 
 static void write_snapshot(outputs *o, sim_t *s)
@@ -116,10 +130,13 @@ static void write_snapshot(outputs *o, sim_t *s)
     io_write_snapshot(o->dir, o->n, &s->p, s->t, s->step, o->text, SPHSEG_VERSION);
     o->times = realloc(o->times, (size_t)(o->n + 1) * sizeof(double));
     o->npart = realloc(o->npart, (size_t)(o->n + 1) * sizeof(long long));
+    o->present = realloc(o->present, (size_t)(o->n + 1));
+    if (!o->times || !o->npart || !o->present) error_exit(EXIT_SYSTEM, "out of memory");
     o->times[o->n] = s->t;
     o->npart[o->n] = comm_sum_ll((long long)s->p.n);
+    o->present[o->n] = 1;
     o->n++;
-    if (comm_rank() == 0) io_write_xdmf(o->dir, o->n, o->times, o->npart, s->p.dim);
+    if (comm_rank() == 0) io_write_xdmf(o->dir, o->n, o->times, o->npart, o->present, s->p.dim);
 }
 
 /* A blow-up stops the run with exit status 3 (DESIGN.md "Errors"), naming
@@ -270,6 +287,26 @@ static void flow_warn_settings(const struct scene *sc)
                 "at 0.4, docs/granular.md)", sc->run.cfl_flow);
 }
 
+/* Snapshots, diagnostics rows and checkpoints that Run:t_end asks for: a
+ * count beyond a sane bound (Output:dt = 1e-300 with t_end = 1e300) is bad
+ * input, not a run that writes every step forever. */
+static void check_output_counts(const struct scene *sc)
+{
+    const struct {
+        const char *key;
+        double every, most;
+    } o[] = {{"dt", sc->output.dt, 1e5}, {"diag_dt", sc->output.diag_dt, 1e8},
+             {"checkpoint_dt", sc->output.checkpoint_dt, 1e6}};
+    for (size_t k = 0; k < sizeof o / sizeof o[0]; ++k) {
+        double count = sc->run.t_end / o[k].every;
+        if (o[k].every <= 0 || (sc->output.snapshots == 0 && k == 0) || count <= o[k].most) continue;
+        char where[512];
+        input_error("%s: Output:%s = %.3g s asks for %.3g outputs up to Run:t_end = %.3g s, more than %.0e: "
+                    "raise Output:%s or lower Run:t_end", scene_key_where(sc, "Output", o[k].key, where, sizeof where),
+                    o[k].key, o[k].every, count, sc->run.t_end, o[k].most, o[k].key);
+    }
+}
+
 /* Next event time (output, diagnostics, end), rounded onto its grid. */
 static double next_event(double t, double every, double t_end)
 {
@@ -305,6 +342,25 @@ static void write_checkpoint(outputs *o, sim_t *s, const diag *d, ckpt_clock *ck
     ck->write_s = ckpt_write(o->dir, s, &r, o->text);
 }
 
+/* Which of a restart's earlier snapshots are in OUTDIR (rank 0 looks; the
+ * XDMF index lists only those): all of them when the run continues in its
+ * own OUTDIR, none when it continues into a new one. */
+static void snapshots_present(outputs *o)
+{
+    o->present = malloc((size_t)(o->n > 0 ? o->n : 1));
+    if (!o->present) error_exit(EXIT_SYSTEM, "out of memory");
+    int missing = 0;
+    for (int i = 0; i < o->n; ++i) {
+        char path[4200];
+        snprintf(path, sizeof path, "%s/snapshot_%05d.h5", o->dir, i);
+        o->present[i] = comm_rank() != 0 || access(path, F_OK) == 0;
+        missing += !o->present[i];
+    }
+    if (missing)
+        message("restart: %d of the %d earlier snapshots are not in %s; snapshots.xmf lists those that are", missing,
+                o->n, o->dir);
+}
+
 /* A fresh run writes the diagnostics row and snapshot of t = 0. A restart
  * (rs) has both from the earlier run: it takes the diagnostics state and the
  * snapshot list from the checkpoint, so rows, snapshot numbers and the XDMF
@@ -326,21 +382,48 @@ static void run_start(sim_t *s, outputs *o, diag *d, ckpt_run *rs)
     diag_reopen(d, o->dir, s, rs->small0, rs->max_drift, rs->warned);
     o->n = rs->nsnap, o->times = rs->times, o->npart = rs->npart; /* o takes them over */
     rs->times = NULL, rs->npart = NULL;
+    snapshots_present(o);
     message("restart from %s: step %ld, t = %.9g s, %d snapshot(s) so far", o->restart, s->step, s->t, o->n);
     if (s->t >= s->sc->run.t_end)
         message("nothing to do: t = %.9g s >= Run:t_end = %.9g s (raise Run:t_end to go on)", s->t,
                 s->sc->run.t_end);
 }
 
-/* Stopped early by Run:max_wall_time or OUTDIR/STOP, the checkpoint written. */
+/* arg, single-quoted for a POSIX shell when it holds anything but plain
+ * characters, appended to b. */
+static void shell_word(char *b, size_t n, const char *arg)
+{
+    size_t used = strlen(b);
+    if (arg[0] && strspn(arg, "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_./:=+-,@%") ==
+                      strlen(arg)) {
+        snprintf(b + used, n - used, " %s", arg);
+        return;
+    }
+    snprintf(b + used, n - used, " '");
+    for (const char *q = arg; *q && (used = strlen(b)) + 8 < n; ++q)
+        snprintf(b + used, n - used, *q == '\'' ? "'\\''" : "%c", *q);
+    used = strlen(b);
+    snprintf(b + used, n - used, "'");
+}
+
+/* Stopped early by a signal, Run:max_wall_time or OUTDIR/STOP, the
+ * checkpoint written: the command that continues, with this run's -P
+ * options (a different Run:t_end is allowed). */
 static void run_stopped(const outputs *o, const sim_t *s, const ckpt_clock *ck, enum ckpt_stop why)
 {
     if (why == CKPT_STOPFILE) ckpt_clear_stop(ck);
-    message("stopping at step %ld, t = %.9g s: %s; wrote %s/checkpoint.h5. Continue with\n"
-            "  sphseg %s -o %s --restart %s/checkpoint.h5\n"
-            "(and the same -P options; a different Run:t_end is allowed)", s->step, s->t,
-            why == CKPT_WALL ? "the next step would pass Run:max_wall_time" : "found the STOP file", o->dir,
-            o->scene, o->dir, o->dir);
+    char cmd[8192] = "sphseg", cause[64];
+    shell_word(cmd, sizeof cmd, o->scene);
+    shell_word(cmd, sizeof cmd, "-o"), shell_word(cmd, sizeof cmd, o->dir);
+    shell_word(cmd, sizeof cmd, "--restart"), shell_word(cmd, sizeof cmd, o->dir);
+    for (int k = 0; k < o->c->n_over; ++k) shell_word(cmd, sizeof cmd, "-P"), shell_word(cmd, sizeof cmd, o->c->over[k]);
+    if (o->c->backend) shell_word(cmd, sizeof cmd, "--backend"), shell_word(cmd, sizeof cmd, o->c->backend);
+    int sig = ck->signal;
+    snprintf(cause, sizeof cause, "received %s", sig == SIGTERM ? "SIGTERM" : sig == SIGUSR1 ? "SIGUSR1"
+                                                 : sig == SIGINT ? "SIGINT" : sig == SIGHUP ? "SIGHUP" : "a signal");
+    message("stopping at step %ld, t = %.9g s: %s; wrote %s/checkpoint.h5. Continue with\n  %s", s->step, s->t,
+            why == CKPT_WALL ? "the next step would pass Run:max_wall_time"
+            : why == CKPT_SIGNAL ? cause : "found the STOP file", o->dir, cmd);
 }
 
 static void run(sim_t *s, outputs *o, ckpt_run *rs)
@@ -358,6 +441,7 @@ static void run(sim_t *s, outputs *o, ckpt_run *rs)
     int ck_end = ck_every > 0 || sc->run.max_wall_time > 0;
     ckpt_clock ck;
     ckpt_clock_start(&ck, o->wall0, sc->run.max_wall_time, o->dir);
+    ckpt_signals_stepping(); /* from here SIGTERM, SIGINT ask for a checkpoint; before, they end the run */
     while (s->t < sc->run.t_end) {
         double t_next = fmin(t_out, t_diag), dt = integrate_dt(s);
         if (s->t + dt >= t_next * (1 - 1e-12)) dt = t_next - s->t;
@@ -428,9 +512,11 @@ static void run(sim_t *s, outputs *o, ckpt_run *rs)
 int main(int argc, char **argv)
 {
     MPI_Init(&argc, &argv);
+    ckpt_signals_install();
     cli c = parse_cli(argc, argv);
     struct scene sc;
     scene_load(&sc, c.scene, c.n_over, c.over);
+    check_output_counts(&sc);
     const char *backend = c.backend ? c.backend : sc.run.backend;
     if (strcmp(backend, "cpu") != 0 && strcmp(backend, "gpu") != 0 && strcmp(backend, "auto") != 0)
         input_error("--backend %s: expected auto, cpu or gpu", backend);
@@ -457,16 +543,20 @@ int main(int argc, char **argv)
     setup_contexts(&s);
     integrate_conc_init(&s);
     ckpt_run rs = {0};
+    char chosen[4200] = "";
     if (c.restart)
-        ckpt_read(c.restart, &s, &rs); /* exits 2 on a bad checkpoint */
+        ckpt_read(c.restart, &s, &rs, chosen, sizeof chosen); /* exits 2 on a bad checkpoint */
     else
         setup_particles(&s); /* exits 2 if it would not fit */
     parallel_start(&s, c.restart ? &rs : NULL);
-    outputs o = {0, NULL, NULL, NULL, c.outdir ? c.outdir : default_outdir(c.scene), c.wall0, c.restart, c.scene};
+    outputs o = {0, NULL, NULL, NULL, c.outdir ? c.outdir : default_outdir(c.scene), c.wall0,
+                 c.restart ? chosen : NULL, c.scene, &c, NULL};
     make_dirs(o.dir);
+    outdir_claim(o.dir, c.overwrite, o.restart); /* exits 2 if OUTDIR is in use or holds another run */
     char used[4200];
     snprintf(used, sizeof used, "%s/used_params.yml", o.dir);
-    if (comm_rank() == 0 && scene_write_used(&sc, used) != 0) error_exit(1, "cannot write %s", used);
+    if (comm_rank() == 0 && scene_write_used(&sc, used) != 0)
+        error_exit(EXIT_WRITE, "cannot write %s: %s", used, strerror(errno));
     o.text = scene_used_text(&sc);
     const char *scheme = !s.seg_on ? "off"
                          : sc.segregation.scheme == SEG_SCHEME_CONSERVATIVE ? "conservative"
@@ -490,6 +580,7 @@ int main(int argc, char **argv)
                     "Segregation:every other than 1", c.restart, s.win.k);
     run(&s, &o, c.restart ? &rs : NULL);
     ckpt_run_free(&rs);
+    free(o.present);
     s.be->finish(&s);
     if (s.halo) halo_free(s.halo), free(s.halo);
     part_free(&s.p);

@@ -555,6 +555,36 @@ static int node_copy(yaml_document_t *dst, yaml_document_t *src, int id, int dep
     return out;
 }
 
+/* Scene files are a few kB of shallow YAML; libyaml takes quadratic time
+ * over deep flow nesting ([[[...]]] 200 000 levels: minutes), so deeper
+ * nesting or a larger file is refused before it parses. */
+enum { SCENE_MAX_NEST = 64, SCENE_MAX_BYTES = 1 << 20 };
+
+/* The line where flow nesting ([ and { outside quotes and comments) first
+ * passes SCENE_MAX_NEST, or 0. */
+static int text_too_deep(const char *t, size_t n)
+{
+    int depth = 0, line = 1, quote = 0, comment = 0;
+    for (size_t i = 0; i < n; ++i) {
+        char ch = t[i];
+        if (ch == '\n') line++, comment = 0;
+        if (comment) continue;
+        if (quote) {
+            if (quote == '"' && ch == '\\' && i + 1 < n) ++i;
+            else if (ch == quote) quote = 0;
+        } else if (ch == '\'' || ch == '"') {
+            quote = ch;
+        } else if (ch == '#' && (i == 0 || t[i - 1] == ' ' || t[i - 1] == '\t' || t[i - 1] == '\n')) {
+            comment = 1;
+        } else if ((ch == '[' || ch == '{') && ++depth > SCENE_MAX_NEST) {
+            return line;
+        } else if ((ch == ']' || ch == '}') && depth > 0) {
+            depth--;
+        }
+    }
+    return 0;
+}
+
 /* Parse `text` as YAML and add its root to the scene document; returns the
  * node id, or 0 with the reason in why. Empty text gives an empty scalar. */
 static int doc_add_text(struct scene_ctx *c, const char *text, char *why, size_t n)
@@ -562,6 +592,8 @@ static int doc_add_text(struct scene_ctx *c, const char *text, char *why, size_t
     yaml_parser_t p;
     yaml_document_t v;
     int id = 0;
+    if (text_too_deep(text, strlen(text)))
+        return snprintf(why, n, "is nested more than %d levels deep", SCENE_MAX_NEST), 0;
     snprintf(why, n, "cannot be stored: out of memory");
     if (!yaml_parser_initialize(&p)) return 0;
     yaml_parser_set_input_string(&p, (const unsigned char *)text, strlen(text));
@@ -630,6 +662,10 @@ static int read_text(struct scene_ctx *c)
     t[n] = '\0';
     c->text = t;
     c->len = n;
+    if (n > SCENE_MAX_BYTES)
+        return fail(c, -1, 0, NULL, "%zu bytes: larger than any scene file (at most %d)", n, SCENE_MAX_BYTES);
+    int deep = text_too_deep(t, n);
+    if (deep) return fail(c, -1, deep, NULL, "not a scene: nested more than %d levels deep", SCENE_MAX_NEST);
     return 0;
 }
 

@@ -269,9 +269,38 @@ void setup_particles(sim_t *s)
     if (s->flow_on) setup_stress(s);
 }
 
+/* The particle count of the scene in O(1), from areas and volumes (within a
+ * few per cent), before any lattice index is computed: a tiny dr is refused
+ * in no time, and no lround overflows. Exit 2 when it would clearly not fit
+ * (setup_alloc checks the exact count later). */
+static void setup_check_size(const struct scene *sc)
+{
+    const struct scene_geometry *g = &sc->geometry;
+    double dr = g->dr, nl = ceil(2.0 * g->h_factor - 1e-9), n;
+    if (g->type == GEOM_DRUM) {
+        double r = g->radius - 0.5 * dr, H = (2 * g->fill - 1) * g->radius, hr = fmax(-1.0, fmin(1.0, H / r));
+        double plane = r * r * (M_PI - acos(hr)) + H * sqrt(fmax(0.0, r * r - H * H)); /* material area */
+        double rings = 2 * M_PI * nl * (g->radius + 0.5 * nl * dr) * dr, disc = M_PI * pow(g->radius + nl * dr, 2);
+        double nz = g->dim == 3 ? g->length / dr : 1;
+        n = nz * (plane + rings) / (dr * dr) + (g->dim == 3 ? 2 * nl * disc / (dr * dr) : 0);
+    } else if (g->dim == 3) {
+        n = (g->width / dr + 2 * nl) * (g->height / dr + 2 * nl) * (g->depth / dr + 2 * nl);
+    } else {
+        n = (g->width / dr + 2 * nl) * (g->height / dr + nl);
+    }
+    double need = n / comm_size() * (double)(part_bytes_per_particle() + 64);
+    double have = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
+    char where[512];
+    if (!(need <= 0.9 * have) || !(n < 1e15))
+        input_error("%s: Geometry:dr: %.3g m gives about %.3g particles, %.3g GiB on each of %d rank(s); this "
+                    "machine has %.1f GiB", scene_key_where(sc, "Geometry", "dr", where, sizeof where), dr, n,
+                    need / 1073741824.0, comm_size(), have / 1073741824.0);
+}
+
 void setup_contexts(sim_t *s)
 {
     const struct scene *sc = s->sc;
+    setup_check_size(sc);
     const struct scene_segregation *g = &sc->segregation;
     s->seg.k = sph_make((int)sc->geometry.dim, (real)(sc->geometry.h_factor * sc->geometry.dr),
                         (real)sc->geometry.dr);

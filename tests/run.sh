@@ -56,6 +56,12 @@ run_one single_build make -s -j2 PRECISION=single GPU=0 BUILD="$BUILD-single" al
 # the validations, shortest first (FAIL_FAST stops sooner), then any others
 vals=()
 for n in restart column steady drum drum3d mpi; do [ -f "tests/validate_$n.py" ] && vals+=("tests/validate_$n.py"); done
+# issue 19: what a cluster does to a job
+run_one signals bash tests/test_signals.sh "$BUILD/sphseg"
+run_one fulldisk bash tests/test_fulldisk.sh "$BUILD/sphseg"
+run_one outdir bash tests/test_outdir.sh "$BUILD/sphseg"
+run_one extremes bash tests/test_extremes.sh "$BUILD/sphseg"
+run_one restart_guard "$PYTHON" tests/test_restart_guard.py --sphseg "$BUILD/sphseg" --work "$tmp/restart_guard"
 for v in tests/validate_*.py; do
     case " ${vals[*]} " in *" $v "*) ;; *) vals+=("$v") ;; esac
 done

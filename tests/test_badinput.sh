@@ -102,7 +102,7 @@ check ckpt_dt_range "-P Output:checkpoint_dt=-1: Output:checkpoint_dt: must be >
 check wall_time_type "-P Run:max_wall_time=1h: Run:max_wall_time: expected a number" \
     "$good" -P Run:max_wall_time=1h
 check restart_missing "--restart $tmp/none.h5: cannot read it" "$good" --restart "$tmp/none.h5"
-check restart_not_hdf5 "--restart $good: not an HDF5 file" "$good" --restart "$good"
+check restart_not_sealed "--restart $good: not a sphseg checkpoint (no checksum block" "$good" --restart "$good"
 check restart_no_file "command line: --restart needs a FILE" "$good" --restart
 
 echo "test_badinput: $n_pass passed, $n_fail failed"

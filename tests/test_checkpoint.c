@@ -5,7 +5,8 @@
  * own block (same rank count); a second write keeps the first as
  * checkpoint_prev.h5. A checkpoint whose NumRanks differs gives each rank an
  * even contiguous share of the global rows (the restart on another rank
- * count, before the distribution step). Runs on any rank count:
+ * count, before the distribution step); the directory gives its newest
+ * checkpoint. Runs on any rank count:
  *   mpirun -np 2 ./test_checkpoint */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
@@ -45,7 +46,59 @@ static void fill_store(particles_t *p, size_t n)
         for (size_t i = 0; i < n; ++i)
             for (size_t b = 0; b < es; ++b) a[i * es + b] = ref_byte(k, g_rank, i, b);
     }
-    for (size_t i = 0; i < n; ++i) p->kind[i] = (uint8_t)(i % 3 == 0); /* valid kinds */
+    for (size_t i = 0; i < n; ++i) { /* the arrays ckpt_read checks for range hold valid values */
+        p->kind[i] = (uint8_t)(i % 3 == 0);
+        p->bclass[i] = (uint8_t)(i % 6);
+        p->id[i] = (int64_t)(1000 * g_rank + (int)i);
+        p->vol[i] = (real)(1e-6 * (1 + (double)i));
+        p->C[i] = (real)((double)(i % 11) / 10);
+        for (int d = 0; d < 3; ++d) p->x[d][i] = p->X0[d][i] = p->v[d][i] = (real)(0.01 * (double)(i + d) - g_rank);
+        for (int q = 0; q < 6; ++q) p->sig[q][i] = (real)(-100.0 * (double)(i + q));
+    }
+}
+
+/* Array k is one fill_store sets to valid values (not ref_byte's pattern). */
+static int is_checked(const particles_t *p, size_t k)
+{
+    const void *a = part_array_get(p, k);
+    if (a == p->kind || a == p->bclass || a == p->id || a == p->vol || a == p->C) return 1;
+    for (int d = 0; d < 3; ++d)
+        if (a == p->x[d] || a == p->X0[d] || a == p->v[d]) return 1;
+    for (int q = 0; q < 6; ++q)
+        if (a == p->sig[q]) return 1;
+    return 0;
+}
+
+/* The seal of a sphseg checkpoint (src/checkpoint.h): sum of
+ * mix(w_i + i * golden) over the little-endian words past the user block,
+ * written again after the file was changed on purpose. */
+static uint64_t mix64(uint64_t z)
+{
+    z = (z ^ (z >> 30)) * UINT64_C(0xBF58476D1CE4E5B9);
+    z = (z ^ (z >> 27)) * UINT64_C(0x94D049BB133111EB);
+    return z ^ (z >> 31);
+}
+
+static void reseal(const char *path)
+{
+    FILE *f = fopen(path, "r+b");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long size = ftell(f);
+    uint64_t h = 0, i = 0;
+    unsigned char w[8], le[8];
+    fseek(f, CKPT_USERBLOCK, SEEK_SET);
+    for (size_t got; memset(w, 0, 8), (got = fread(w, 1, 8, f)) > 0;) {
+        uint64_t v = 0;
+        for (int b = 7; b >= 0; --b) v = v << 8 | w[b];
+        h += mix64(v + ++i * UINT64_C(0x9E3779B97F4A7C15));
+    }
+    for (int b = 0; b < 8; ++b) le[b] = (unsigned char)((uint64_t)size >> (8 * b));
+    fseek(f, 16, SEEK_SET);
+    fwrite(le, 1, 8, f);
+    for (int b = 0; b < 8; ++b) le[b] = (unsigned char)(h >> (8 * b));
+    fwrite(le, 1, 8, f);
+    fclose(f);
 }
 
 static void load_scene(struct scene *sc)
@@ -86,7 +139,8 @@ static void test_round_trip(void **state)
     snprintf(cur, sizeof cur, "%s/checkpoint.h5", g_dir);
     assert_int_equal(access(prev, R_OK), 0);
 
-    ckpt_read(cur, &b, &rb);
+    char chosen[256];
+    ckpt_read(cur, &b, &rb, chosen, sizeof chosen);
     assert_int_equal(b.p.n, n);
     for (size_t k = 0; k < part_narrays(); ++k)
         assert_memory_equal(part_array_get(&b.p, k), part_array_get(&a.p, k), n * part_array_esize(k));
@@ -106,8 +160,16 @@ static void test_round_trip(void **state)
     sim_t c = {0};
     ckpt_run rc = {0};
     c.sc = &sc;
-    ckpt_read(prev, &c, &rc);
+    ckpt_read(prev, &c, &rc, chosen, sizeof chosen);
     assert_int_equal(c.step, 4242);
+    sim_t e = {0}; /* the directory: its newest valid checkpoint */
+    ckpt_run re = {0};
+    e.sc = &sc;
+    ckpt_read(g_dir, &e, &re, chosen, sizeof chosen);
+    assert_int_equal(e.step, 4243);
+    assert_string_equal(chosen, cur);
+    ckpt_run_free(&re);
+    part_free(&e.p);
     ckpt_run_free(&rb);
     ckpt_run_free(&rc);
     part_free(&a.p);
@@ -117,7 +179,9 @@ static void test_round_trip(void **state)
     scene_free(&sc);
 }
 
-/* Rank 0 sets the Header attribute NumRanks of path to nranks. */
+/* Rank 0 sets the Header attribute NumRanks of path to nranks, gives
+ * /Particles/RankCounts nranks entries (the blocks of 20 + 7 r particles
+ * this test writes, then empty ones) and seals the file again. */
 static void set_nranks(const char *path, long long nranks)
 {
     if (g_rank == 0) {
@@ -131,7 +195,20 @@ static void set_nranks(const char *path, long long nranks)
         H5Aclose(a);
         H5Sclose(sp);
         H5Gclose(g);
+        g = H5Gopen2(f, "Particles", H5P_DEFAULT);
+        assert_true(H5Ldelete(g, "RankCounts", H5P_DEFAULT) >= 0);
+        hsize_t len = (hsize_t)nranks;
+        int64_t *counts = calloc(len, sizeof *counts);
+        for (int r = 0; r < g_size && r < nranks; ++r) counts[r] = 20 + 7 * r;
+        hid_t sp1 = H5Screate_simple(1, &len, NULL);
+        hid_t d = H5Dcreate2(g, "RankCounts", H5T_STD_I64LE, sp1, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+        assert_true(H5Dwrite(d, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, counts) >= 0);
+        free(counts);
+        H5Dclose(d);
+        H5Sclose(sp1);
+        H5Gclose(g);
         H5Fclose(f);
+        reseal(path);
     }
     MPI_Barrier(MPI_COMM_WORLD);
 }
@@ -149,7 +226,8 @@ static void test_other_rank_count(void **state)
     ckpt_write(g_dir, &a, &ra, text);
     snprintf(path, sizeof path, "%s/checkpoint.h5", g_dir);
     set_nranks(path, g_size + 1);
-    ckpt_read(path, &b, &rb);
+    char chosen[256];
+    ckpt_read(path, &b, &rb, chosen, sizeof chosen);
     long long ntot = 0, share = 0;
     for (int r = 0; r < g_size; ++r) ntot += 20 + 7 * r;
     long long q = ntot / g_size, rem = ntot % g_size, first = g_rank * q + (g_rank < rem ? g_rank : rem);
@@ -162,7 +240,7 @@ static void test_other_rank_count(void **state)
         for (size_t k = 0; k < part_narrays(); ++k) {
             size_t es = part_array_esize(k);
             const uint8_t *got = (const uint8_t *)part_array_get(&b.p, k) + (size_t)j * es;
-            if (part_array_get(&b.p, k) == (void *)b.p.kind) continue; /* set apart by fill_store */
+            if (is_checked(&b.p, k)) continue; /* set apart by fill_store */
             for (size_t by = 0; by < es; ++by) assert_int_equal(got[by], ref_byte(k, r, (size_t)row, by));
         }
     }

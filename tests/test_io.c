@@ -318,7 +318,7 @@ static void test_xdmf(void **state)
     (void)state;
     double times[4] = {0.25, 1.0 / 3.0, 2.5, 8.0};
     long long npart[4] = {50LL * g_size, 30, 0, 20LL * g_size};
-    assert_int_equal(io_write_xdmf(g_dir, 4, times, npart, 2), 0);
+    assert_int_equal(io_write_xdmf(g_dir, 4, times, npart, NULL, 2), 0);
     if (g_rank != 0) return;
     check_no_tmp();
     char path[512];

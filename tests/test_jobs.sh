@@ -4,7 +4,11 @@
 # positive rate; tools/scaling_plot.py reads it (1-rank rows only) and writes
 # its PNG and table; the done: parser reads halo_s when present and leaves it
 # empty when not; restart_chain.sh submits K jobs chained by afterok (a stub
-# sbatch) and passes --restart only when OUTDIR/checkpoint.h5 exists.
+# sbatch) and passes --restart OUTDIR only when OUTDIR holds a checkpoint;
+# issue 19: the chain checks TIME - MARGIN before submitting, resubmits
+# itself by its full path from any directory, drops GPU flags with GPUS=0;
+# the launcher returns 0 with SRUN_FLAGS empty and passes --mpi=pmix;
+# sphseg_run passes the batch shell's signals on to sphseg.
 set -u
 bin=${1:?usage: test_jobs.sh build/sphseg}
 PY=${PYTHON:-/usr/bin/python3}
@@ -51,5 +55,28 @@ NO_SLURM=1 DRYRUN=1 K=1 TIME=1:00:00 OUTDIR="$tmp/chain" SPHSEG="$bin" bash jobs
 check "restart_chain fresh start, max_wall_time = TIME - MARGIN" "grep -q -- '-o $tmp/chain -P Run:max_wall_time=3000\$' '$tmp/d1.log'" || cat "$tmp/d1.log"
 touch "$tmp/chain/checkpoint.h5"
 NO_SLURM=1 DRYRUN=1 K=1 TIME=1:00:00 OUTDIR="$tmp/chain" SPHSEG="$bin" bash jobs/restart_chain.sh >"$tmp/d2.log" 2>&1
-check "restart_chain restarts from OUTDIR/checkpoint.h5" "grep -q -- '--restart $tmp/chain/checkpoint.h5 -P Run:max_wall_time=3000\$' '$tmp/d2.log'" || cat "$tmp/d2.log"
+check "restart_chain restarts from OUTDIR (its newest valid checkpoint)" "grep -q -- '--restart $tmp/chain -P Run:max_wall_time=3000\$' '$tmp/d2.log'" || cat "$tmp/d2.log"
+rm "$tmp/chain/checkpoint.h5"; touch "$tmp/chain/checkpoint_prev.h5"
+NO_SLURM=1 DRYRUN=1 K=1 TIME=1:00:00 OUTDIR="$tmp/chain" SPHSEG="$bin" bash jobs/restart_chain.sh >"$tmp/d3.log" 2>&1
+check "restart_chain restarts when only checkpoint_prev.h5 is left" "grep -q -- '--restart $tmp/chain -P' '$tmp/d3.log'" || cat "$tmp/d3.log"
+
+# issue 19, defect 10: what a real SLURM showed
+rm -f "$tmp/calls"
+(cd /tmp && PATH="$tmp/bin:$PATH" K=2 TIME=5:00 MARGIN=600 OUTDIR="$tmp/chain2" SPHSEG="$bin" bash "$OLDPWD/jobs/restart_chain.sh" >"$tmp/early.log" 2>&1)
+check "restart_chain: TIME - MARGIN <= 0 refused before any submission" "[ $? -eq 2 ] && [ ! -e '$tmp/calls' ] && grep -q 'nothing submitted' '$tmp/early.log'" || cat "$tmp/early.log"
+(cd /tmp && PATH="$tmp/bin:$PATH" K=1 TIME=1:00:00 GPUS=0 OUTDIR="$tmp/chain2" SPHSEG="$bin" bash "$OLDPWD/jobs/restart_chain.sh" >"$tmp/cpu.log" 2>&1)
+check "restart_chain from another directory, GPUS=0: the script by its full path, --chdir, no GPU flag" "grep -q -- '--chdir=$PWD .*$PWD/jobs/restart_chain.sh --step' '$tmp/calls' && ! grep -q gpus '$tmp/calls'" || cat "$tmp/calls" "$tmp/cpu.log"
+launcher_is() { # expected, env assignments...: sphseg_launcher under SLURM (set -e) gives expected
+    (set -e; export SLURM_JOB_ID=1 GPUS=0 "${@:2}"; sphseg_launcher 2; [ "${launch[*]}" = "$1" ])
+}
+check "sphseg_launcher under SLURM, SRUN_FLAGS empty: status 0 (set -e), --mpi=pmix" \
+    "launcher_is 'srun --ntasks=2 --cpus-per-task=1 --mpi=pmix --cpu-bind=cores' SRUN_FLAGS="
+check "sphseg_launcher: SRUN_MPI= leaves the site's default, SRUN_FLAGS appended" \
+    "launcher_is 'srun --ntasks=2 --cpus-per-task=1 --cpu-bind=cores --exclusive -l' SRUN_MPI= 'SRUN_FLAGS=--exclusive -l'"
+# the batch shell gets the signal (--signal=B:USR1, scancel): sphseg_run passes it on as SIGUSR1
+bash -c "source jobs/common.sh; OMP_NUM_THREADS=1 sphseg_run '$bin' inputs/shearbox_2d.yml -o '$tmp/fwd' -P Run:t_end=5000 -P Output:dt=100 -P Run:progress_s=0.01" >"$tmp/fwd.log" 2>&1 &
+pid=$!
+for _ in $(seq 200); do grep -q '^step ' "$tmp/fwd.log" && break; sleep 0.05; done
+kill -TERM $pid; wait $pid; rc=$?
+check "sphseg_run: SIGTERM to the batch shell -> sphseg checkpoints, the shell exits 0" "[ $rc -eq 0 ] && grep -q 'received SIGUSR1' '$tmp/fwd.log' && [ -f '$tmp/fwd/checkpoint.h5' ]" || { echo "rc $rc"; tail -3 "$tmp/fwd.log"; }
 exit $fail

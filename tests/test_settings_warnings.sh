@@ -13,7 +13,7 @@ probe() { # name, expect (yes|no), pattern, -P overrides...
     local name=$1 want=$2 pat=$3; shift 3
     local args=() o
     for o in "$@"; do args+=(-P "$o"); done
-    OMP_NUM_THREADS=1 "$bin" "$here/../inputs/drum_2d_EV.yml" -o "$tmp/o" --backend cpu -P Geometry:dr=0.0025 \
+    OMP_NUM_THREADS=1 "$bin" "$here/../inputs/drum_2d_EV.yml" -o "$tmp/o" --overwrite --backend cpu -P Geometry:dr=0.0025 \
         -P Run:max_steps=1 -P Run:progress_s=1e9 "${args[@]}" >"$tmp/log" 2>&1 || { echo "FAIL $name: exit $?"; fail=1; return; }
     local got=no
     grep -q "warning: .*$pat" "$tmp/log" && got=yes

@@ -44,7 +44,7 @@ def check(name, good, detail):
 
 
 def run(binary, out, every):
-    cmd = [binary, DRUM, "-o", out, "--backend", "cpu"] + sum([["-P", o] for o in OVER + ["Segregation:every=" + every]], [])
+    cmd = [binary, DRUM, "-o", out, "--overwrite", "--backend", "cpu"] + sum([["-P", o] for o in OVER + ["Segregation:every=" + every]], [])
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit("%s failed (%d): %s" % (binary, r.returncode, r.stderr.strip()[-300:]))

@@ -15,7 +15,7 @@ for res in 0.04 0.02 0.01 0.005; do
     # about 200 steps: dt = h / |u|_max with h = 1.5 dr, |u|_max = 0.0243 m/s
     tend=$(python3 -c "print(200*1.5*$dr/0.0243)")
     for scheme in conservative paper direct; do
-        OMP_NUM_THREADS=$threads "$bin" inputs/shearbox_2d.yml -o "$tmp/$scheme$res" -P Geometry:dr=$dr \
+        OMP_NUM_THREADS=$threads "$bin" inputs/shearbox_2d.yml -o "$tmp/$scheme$res" --overwrite -P Geometry:dr=$dr \
             -P Segregation:scheme=$scheme -P Run:t_end=$tend -P Output:dt=$tend -P Run:progress_s=1e9 \
             > "$tmp/log" 2>&1 || true
         n=$(sed -n 's/.*, \([0-9]*\) material + \([0-9]*\) dummy.*/\1 \2/p' "$tmp/log" | awk '{print $1+$2}')
@@ -39,7 +39,7 @@ printf "%-13s %8s %10s %7s %9s %16s\n" granular dr_mm particles steps wall_s par
 gran() { # dim dr width height depth [every]
     local dim=$1 dr=$2 W=$3 H=$4 D=$5 every=${6:-1}
     local tend; tend=$(python3 -c "print(100*0.1*1.5*$dr/29.96)")
-    OMP_NUM_THREADS=$threads "$bin" inputs/column_2d.yml -o "$tmp/g$dim$dr" -P Geometry:dim=$dim -P Geometry:dr=$dr \
+    OMP_NUM_THREADS=$threads "$bin" inputs/column_2d.yml -o "$tmp/g$dim$dr" --overwrite -P Geometry:dim=$dim -P Geometry:dr=$dr \
         -P Geometry:width=$W -P Geometry:height=$H -P Geometry:depth=$D -P Initial:stress=geostatic \
         -P Segregation:enabled=on -P Segregation:model=shear_rate -P Segregation:d_small=0.00025 \
         -P Segregation:d_large=0.0005 -P Initial:C_below=0.5 -P Initial:C_above=0.5 -P Flow:damping_until=0 \

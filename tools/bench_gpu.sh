@@ -35,7 +35,7 @@ one() { # case precision binary steps scene overrides...
     local case=$1 prec=$2 bin=$3 steps=$4 scene=$5; shift 5
     local args=() o
     for o in "$@"; do args+=(-P "$o"); done
-    "$bin" "$scene" -o "$tmp/run" --backend gpu -P Run:max_steps="$steps" -P Run:progress_s=1e9 \
+    "$bin" "$scene" -o "$tmp/run" --overwrite --backend gpu -P Run:max_steps="$steps" -P Run:progress_s=1e9 \
         -P Output:snapshots=off -P Output:diag_dt=1e9 "${args[@]}" > "$tmp/log" 2>&1
     local rc=$?
     local n line wall rate

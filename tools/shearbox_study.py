@@ -50,7 +50,7 @@ def run_one(sphseg, out, case, scheme, res, threads=1, extra=()):
                  "Run:t_end": repr(max(TAUS) * T), "Output:dt": repr(min(TAUS) * T),
                  "Output:diag_dt": repr(T), "Run:progress_s": "1e9"})
     over.update(dict(kv.split("=", 1) for kv in extra))
-    cmd = [sphseg, SCENE, "-o", d] + sum([["-P", f"{k}={v}"] for k, v in over.items()], [])
+    cmd = [sphseg, SCENE, "-o", d, "--overwrite"] + sum([["-P", f"{k}={v}"] for k, v in over.items()], [])
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
     t0 = time.perf_counter()
     r = subprocess.run(cmd, capture_output=True, text=True, env=env)

@@ -45,7 +45,7 @@ def run_case(sphseg, outdir, case, scheme, dr_over_H, taus=(20, 40, 80), extra=N
                  "Run:t_end": repr(max(taus) * T), "Output:dt": repr(min(taus) * T),
                  "Output:diag_dt": repr(T), "Run:progress_s": "1e9"})
     over.update(extra or {})
-    cmd = [sphseg, SCENE, "-o", outdir]
+    cmd = [sphseg, SCENE, "-o", outdir, "--overwrite"]
     for k, v in over.items():
         cmd += ["-P", f"{k}={v}"]
     t0 = time.perf_counter()

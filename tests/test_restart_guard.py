@@ -1,0 +1,241 @@
+#!/usr/bin/env python3
+"""What a restart refuses (issue 19, defects 5, 6, 7): every refusal is
+exit status 2 and one "sphseg: error: --restart ..." line, in bounded time,
+on 1, 2 and 3 ranks; never exit 0 on a damaged file, 1, a crash or a hang.
+
+- foreign scenes: a checkpoint restarted with another dr, or the drum's
+  with the shear box scene and the reverse, is refused naming each
+  state-defining key that differs; run-control keys may differ and are
+  listed; model keys are a warning;
+- damaged files: a few hundred byte-fuzzed mutants of a checkpoint (bytes
+  changed, cut short, extended) are refused by the checksum before HDF5
+  reads them;
+- crafted files (changed with h5py, then sealed again with the documented
+  checksum, so that only the reader's checks stand between them and the
+  run): NaN time, NumRanks 0, Kind 255, missing, retyped and reshaped
+  datasets, absurd counts... each refused with a located reason;
+- several ranks: a bad row that only the last rank reads (Kind 255 in the
+  last particle), and a byte-damaged file, end every rank with one line
+  from rank 0 within the time limit, on 2 and 3 ranks.
+
+    /usr/bin/python3 tests/test_restart_guard.py --sphseg build/sphseg --work DIR [--mutants 300]
+"""
+import argparse
+import concurrent.futures
+import os
+import random
+import shutil
+import subprocess
+import sys
+import time
+
+import h5py
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from ckpt_seal import reseal  # noqa: E402
+
+MPI = ["mpirun", "--oversubscribe", "--allow-run-as-root"]
+SHEAR, DRUM = "inputs/shearbox_2d.yml", "inputs/drum_2d_EV.yml"
+FAILS = []
+
+
+def check(name, ok, detail=""):
+    print(("PASS " if ok else "FAIL ") + name)
+    if not ok:
+        FAILS.append(name)
+        if detail:
+            print("    " + detail.strip().replace("\n", "\n    ")[-1500:])
+
+
+def run(cmd, timeout=120):
+    t0 = time.time()
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
+        return p.returncode, p.stdout, p.stderr, time.time() - t0
+    except subprocess.TimeoutExpired as e:
+        return "timeout", e.stdout or "", e.stderr or "", time.time() - t0
+
+
+def refused(res, what, limit=60):
+    rc, out, err, dt = res
+    lines = [l for l in err.splitlines() if l.startswith("sphseg: error")]
+    ok = rc == 2 and len(lines) == 1 and "--restart" in lines[0] and dt < limit
+    return ok, f"{what}: rc {rc}, {dt:.1f} s, stderr:\n{err}\n{out[-300:]}"
+
+
+def make_checkpoint(sp, work, name, scene, np_, extra):
+    out = os.path.join(work, name)
+    cmd = ([] if np_ == 1 else MPI + ["-np", str(np_)]) + [sp, scene, "-o", out] + extra
+    rc, o, e, _ = run(cmd)
+    if rc != 0 or not os.path.exists(out + "/checkpoint.h5"):
+        sys.exit(f"cannot make {name}: rc {rc}\n{e}")
+    return out + "/checkpoint.h5"
+
+
+def restart(sp, work, ck, scene=SHEAR, np_=1, extra=(), timeout=120):
+    out = os.path.join(work, "r_%d" % random.randrange(1 << 30))
+    cmd = ([] if np_ == 1 else MPI + ["-np", str(np_)]) + [sp, scene, "-o", out, "--restart", ck]
+    return run(cmd + list(extra), timeout)
+
+
+# ---- crafted mutants: (name, function(h5py.File), expected words) ----------
+
+def set_attr(path, value, dtype=None):
+    grp, _, name = path.rpartition("/")
+
+    def f(h):
+        g = h[grp] if grp else h
+        del g.attrs[name]
+        if dtype is None:
+            g.attrs[name] = value
+        else:
+            g.attrs.create(name, value, dtype=dtype)
+    return f
+
+
+def replace_dataset(path, make):
+    def f(h):
+        old = h[path][()]
+        del h[path]
+        h[path] = make(old)
+    return f
+
+
+def set_row(path, row, value):
+    def f(h):
+        d = h[path]
+        a = d[()]
+        a[row] = value
+        d[...] = a
+    return f
+
+
+def kind_name(h):
+    return [k for k in sorted(h["Particles"]) if k != "RankCounts" and h["Particles"][k].dtype.itemsize == 1][0]
+
+
+def crafted():
+    nan_bits = np.uint64(0x7FF8000000000000)
+    return [
+        ("Time = NaN", set_attr("Header/Time", np.float64("nan")), "Time = nan is out of range"),
+        ("Time < 0", set_attr("Header/Time", -1.0), "Time = -1 is out of range"),
+        ("Dt = inf", set_attr("Header/Dt", np.float64("inf")), "Dt = inf"),
+        ("Step < 0", set_attr("Header/Step", np.int64(-5)), "Step = -5"),
+        ("NumRanks = 0", set_attr("Header/NumRanks", np.int64(0)), "NumRanks = 0"),
+        ("NumPart_Total = 1e15", set_attr("Header/NumPart_Total", np.int64(10**15)), "NumPart_Total"),
+        ("Dimension = 7", set_attr("Header/Dimension", np.int64(7)), "Dimension = 7"),
+        ("Checkpoint format 1", set_attr("Header/Checkpoint", np.int64(1)), "Checkpoint = 1"),
+        ("Time as a string", set_attr("Header/Time", "0.5"), "attribute Time is not a scalar"),
+        ("Time as int32", set_attr("Header/Time", 1, dtype="<i4"), "attribute Time is not a scalar"),
+        ("Code other", set_attr("Header/Code", "other"), "Code is 'other'"),
+        ("Precision single", set_attr("Header/Precision", "single"), "single-precision build"),
+        ("no /Header", lambda h: h.__delitem__("Header"), "no group /Header"),
+        ("/Particles a dataset", lambda h: (h.__delitem__("Particles"), h.create_dataset("Particles", data=[1])),
+         "/Particles is not a group"),
+        ("dataset 05 missing", lambda h: h["Particles"].__delitem__("05"), "dataset 05 missing"),
+        ("dataset 05 as floats", replace_dataset("Particles/05", lambda a: a.view("<f8")), "dataset 05 does not hold"),
+        ("dataset 05 short", replace_dataset("Particles/05", lambda a: a[:-1]), "dataset 05 has the wrong shape"),
+        ("dataset 05 2D", replace_dataset("Particles/05", lambda a: a.reshape(-1, 1)), "dataset 05 has the wrong shape"),
+        ("RankCounts sum", set_row("Particles/RankCounts", 0, 7), "RankCounts sum to"),
+        ("Kind 255", lambda h: set_row("Particles/" + kind_name(h), 3, 255)(h), "is out of range (kind 255"),
+        ("x NaN", set_row("Particles/00", 5, nan_bits), "non-finite position"),
+        ("Outputs Count 1e9", set_attr("Outputs/Count", np.int64(10**9)), "Count = 1000000000"),
+        ("Outputs Times NaN", set_row("Outputs/Times", 0, np.nan), "/Outputs row 0"),
+        ("Warned 7", set_attr("Diagnostics/Warned", np.int64(7)), "Warned = 7"),
+        ("Scene dr changed", lambda h: set_attr("Header/Scene", h["Header"].attrs["Scene"].replace(
+            "  dr: 0.00348", "  dr: 0.005"))(h), "Geometry:dr (0.005 in the checkpoint, 0.00348 now)"),
+    ]
+
+
+def mutate_bytes(src, dst, rng):
+    data = bytearray(open(src, "rb").read())
+    kind = rng.random()
+    if kind < 0.08:
+        data = data[: rng.randrange(len(data))]
+    elif kind < 0.12:
+        data += bytes(rng.randrange(256) for _ in range(rng.randrange(1, 64)))
+    else:
+        for _ in range(rng.randrange(1, 5)):
+            data[rng.randrange(len(data))] ^= rng.randrange(1, 256)
+    open(dst, "wb").write(data)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sphseg", required=True)
+    ap.add_argument("--work", required=True)
+    ap.add_argument("--mutants", type=int, default=300)
+    a = ap.parse_args()
+    sp, work = os.path.abspath(a.sphseg), a.work
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    random.seed(19)
+    small = ["-P", "Geometry:dr=0.00348", "-P", "Run:t_end=1", "-P", "Output:dt=0.5", "-P", "Output:checkpoint_dt=0.5"]
+    ck = {n: make_checkpoint(sp, work, f"shear{n}", SHEAR, n, small) for n in (1, 2, 3)}
+    drum = make_checkpoint(sp, work, "drum", DRUM, 1, ["-P", "Geometry:dr=0.004", "-P", "Run:max_steps=2",
+                                                       "-P", "Output:checkpoint_dt=1"])
+    base = ["-P", "Geometry:dr=0.00348", "-P", "Output:dt=0.5", "-P", "Output:checkpoint_dt=0.5"]
+
+    # defect 5: another scene's state
+    ok, why = refused(restart(sp, work, ck[1], extra=["-P", "Geometry:dr=0.003", "-P", "Run:t_end=2"]), "dr")
+    check("another dr: refused naming Geometry:dr", ok and "Geometry:dr (0.00348 in the checkpoint, 0.003 now)"
+          in why and "1 state-defining key(s)" in why, why)
+    ok, why = refused(restart(sp, work, drum, SHEAR, extra=["-P", "Run:t_end=2"]), "drum -> shear box")
+    check("the drum's checkpoint with the shear-box scene: refused naming each key",
+          ok and "Geometry:type (drum in the checkpoint, shearbox now)" in why and "Kinematics:velocity" in why, why)
+    ok, why = refused(restart(sp, work, ck[1], DRUM, extra=base), "shear box -> drum")
+    check("the shear box's checkpoint with the drum scene: refused", ok and "Geometry:type" in why, why)
+    rc, out, err, _ = restart(sp, work, ck[1], extra=base + ["-P", "Run:t_end=1.5", "-P", "Segregation:D=2e-7"])
+    check("run-control keys listed, model keys a warning, the run goes on",
+          rc == 0 and "run-control key(s) differ" in out and "Run:t_end (1 in the checkpoint, 1.5 now)" in out
+          and "Segregation:D" in err and "model key(s) differ" in err, out[-800:] + err)
+
+    # defect 6: crafted, resealed
+    for name, fn, words in crafted():
+        path = os.path.join(work, "crafted.h5")
+        shutil.copy(ck[1], path)
+        with h5py.File(path, "r+") as h:
+            fn(h)
+        reseal(path)
+        ok, why = refused(restart(sp, work, path, extra=base + ["-P", "Run:t_end=1.5"]), name)
+        check(f"crafted: {name}: exit 2, one line", ok and words in why, why + f"\n(expected: {words})")
+
+    # defect 6: byte fuzz, two at a time
+    rng = random.Random(1919)
+    paths = []
+    for k in range(a.mutants):
+        p = os.path.join(work, f"mutant_{k:04d}.h5")
+        mutate_bytes(ck[1], p, rng)
+        paths.append(p)
+    t0 = time.time()
+    with concurrent.futures.ThreadPoolExecutor(2) as ex:
+        res = list(ex.map(lambda p: refused(restart(sp, work, p, extra=base + ["-P", "Run:t_end=1.5"], timeout=60),
+                                            p), paths))
+    bad = [why for ok, why in res if not ok]
+    check(f"byte fuzz: {a.mutants} mutants, each exit 2 with one line ({time.time() - t0:.0f} s)", not bad,
+          "\n".join(bad[:3]))
+
+    # defect 7: several ranks, an error only one rank sees, and a damaged file
+    for n in (2, 3):
+        path = os.path.join(work, f"lastrow{n}.h5")
+        shutil.copy(ck[n], path)
+        with h5py.File(path, "r+") as h:
+            set_row("Particles/" + kind_name(h), -1, 255)(h)
+        reseal(path)
+        ok, why = refused(restart(sp, work, path, np_=n, extra=base + ["-P", "Run:t_end=1.5"], timeout=90),
+                          f"{n} ranks", limit=30)
+        check(f"{n} ranks: Kind 255 in the last rank's rows: every rank ends, one line from rank 0, < 30 s",
+              ok and f"rank {n - 1}: --restart" in why, why)
+        path = os.path.join(work, f"bytes{n}.h5")
+        mutate_bytes(ck[n], path, random.Random(n))
+        ok, why = refused(restart(sp, work, path, np_=n, extra=base + ["-P", "Run:t_end=1.5"], timeout=90),
+                          f"{n} ranks damaged", limit=30)
+        check(f"{n} ranks: a byte-damaged checkpoint: exit 2, one line, < 30 s", ok, why)
+    print(f"{len(FAILS)} failed")
+    return 1 if FAILS else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
