@@ -3,13 +3,10 @@
 #   make         build build/sphseg with $(MPICC)
 #   make run     deps, build, and the default scene inputs/shearbox_2d.yml -> out/shearbox_2d/
 #   make test    unit, validation and bad-input tests; ends with "N passed, N failed"
-<<<<<<< HEAD
 #                (REQUIRE_GPU=1: a GPU test that skips, exit 77, fails; FAIL_FAST=1: stop at the first failure)
 #   make test-mutants  plant one bug at a time in a scratch copy and run the suite on it
 #                (tools/mutants.py; not part of CI: half an hour to an hour on 2 cores)
-=======
 #   make test-slurm  a one-node SLURM (installed and started when root): real sbatch/srun jobs (tests/test_slurm.sh)
->>>>>>> issue19
 #   make bench   particle-steps per second, CPU (tools/bench.sh) and, where a GPU is visible, GPU (tools/bench_gpu.sh)
 # Variables a cluster user may set (e.g. from modules):
 #   CC, MPICC            C compiler and MPI wrapper (mpicc)
@@ -98,11 +95,7 @@ HEADERS  := $(wildcard src/*.h src/physics/*.h mpi/*.h)
 UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
 
-<<<<<<< HEAD
-.PHONY: all deps run test unit bench clean format test-mutants
-=======
-.PHONY: all deps run test test-slurm unit bench clean format
->>>>>>> issue19
+.PHONY: all deps run test test-slurm unit bench clean format test-mutants
 all: $(BUILD)/sphseg
 
 $(BUILD)/obj/%.o: %.c $(HEADERS)
