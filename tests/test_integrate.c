@@ -45,7 +45,7 @@ static void m_prepare(sim_t *s, double t, int classify)
     M.nprep++;
 }
 static void m_rates(sim_t *s) { (void)s, M.r = cos(M.t_stage) * M.y; }
-static void m_advance(sim_t *s, double a) { (void)s, M.y = M.y_n + a * M.r; }
+static void m_advance(sim_t *s, double a, double w) { (void)s, (void)w, M.y = M.y_n + a * M.r; }
 static void m_save(sim_t *s) { (void)s, M.y_n = M.y; }
 static void m_filter(sim_t *s) { (void)s, M.filters++; }
 
@@ -139,10 +139,10 @@ static void test_stage_update(void **st)
     part_alloc(&p, 2, 1);
     p.n = 1, p.kind[0] = KIND_MATERIAL, p.C[0] = (real)0.25, p.dCdt[0] = 2;
     step_save(0, &p, 0);
-    step_advance(0, &p, (real)0.05, &c, 0, 1); /* predictor, dt = 0.1 */
+    step_advance(0, &p, (real)0.05, &c, 0, 1, R(0.0)); /* predictor, dt = 0.1 */
     assert_true(fabs(p.C[0] - 0.35) < RT(1e-14));
     p.dCdt[0] = 3; /* the midpoint rate */
-    step_advance(0, &p, (real)0.1, &c, 0, 1);
+    step_advance(0, &p, (real)0.1, &c, 0, 1, R(0.0));
     assert_true(fabs(p.C[0] - 0.55) < RT(1e-14));
     part_free(&p);
 }
