@@ -51,33 +51,24 @@ typedef double creal;
  * two up to 32), summed by a butterfly in a fixed order, so that every lane
  * holds the same bits and runs stay bit-identical; on the host nlanes is 1
  * and team_sum does nothing. */
-HD_INLINE void team_sum(real *v, int n, int nlanes)
-{
+/* One body for both element types: team_sum (real) and team_sum_c (creal,
+ * the concentration rates, double in the single build too). */
 #ifdef __CUDA_ARCH__
-    if (nlanes > 1) {
-        const unsigned lane = threadIdx.x & 31u, base = lane & ~(unsigned)(nlanes - 1);
-        const unsigned mask = nlanes == 32 ? 0xffffffffu : ((1u << nlanes) - 1u) << base;
-        for (int k = 0; k < n; ++k)
-            for (int o = nlanes >> 1; o > 0; o >>= 1) v[k] += __shfl_xor_sync(mask, v[k], o, nlanes);
+#define TEAM_SUM_DEF(name, type)                                                                           \
+    HD_INLINE void name(type *v, int n, int nlanes)                                                        \
+    {                                                                                                      \
+        if (nlanes <= 1) return;                                                                           \
+        const unsigned lane = threadIdx.x & 31u, base = lane & ~(unsigned)(nlanes - 1);                     \
+        const unsigned mask = nlanes == 32 ? 0xffffffffu : ((1u << nlanes) - 1u) << base;                  \
+        for (int k = 0; k < n; ++k)                                                                        \
+            for (int o = nlanes >> 1; o > 0; o >>= 1) v[k] += __shfl_xor_sync(mask, v[k], o, nlanes);       \
     }
 #else
-    (void)v, (void)n, (void)nlanes;
+#define TEAM_SUM_DEF(name, type)                                                                           \
+    HD_INLINE void name(type *v, int n, int nlanes) { (void)v, (void)n, (void)nlanes; }
 #endif
-}
-
-/* team_sum of double sums (the concentration rates in the single build). */
-HD_INLINE void team_sum_c(creal *v, int n, int nlanes)
-{
-#ifdef __CUDA_ARCH__
-    if (nlanes > 1) {
-        const unsigned lane = threadIdx.x & 31u, base = lane & ~(unsigned)(nlanes - 1);
-        const unsigned mask = nlanes == 32 ? 0xffffffffu : ((1u << nlanes) - 1u) << base;
-        for (int k = 0; k < n; ++k)
-            for (int o = nlanes >> 1; o > 0; o >>= 1) v[k] += __shfl_xor_sync(mask, v[k], o, nlanes);
-    }
-#else
-    (void)v, (void)n, (void)nlanes;
-#endif
-}
+TEAM_SUM_DEF(team_sum, real)
+TEAM_SUM_DEF(team_sum_c, creal)
+#undef TEAM_SUM_DEF
 
 #endif
