@@ -35,6 +35,48 @@ typedef struct flow_ctx {
     wall_geom w;
 } flow_ctx;
 
+/* Dummy d's velocity and stress from the sums over the material in its
+ * support (ws.w = 0: none in reach, the wall's velocity and zero stress). */
+HD_INLINE void flow_wall_set(size_t d, particles_t *p, const flow_ctx *c, const wall_sums *wsp)
+{
+    const wall_sums ws = *wsp;
+    real xd[3] = {p->x[0][d], p->x[1][d], p->x[2][d]};
+    /* the wall velocity at d: drum rotation omega e_z x (x_d - centre), or the
+     * box's translation; the normal from d's reference position (the box
+     * translates rigidly, so X0 is d in the box frame) */
+    real uw[3] = {c->w.u[0], c->w.u[1], c->w.u[2]}, n[3], ud[3], sd[6];
+    if (c->w.type == WALL_DRUM) {
+        uw[0] = (real)(-c->w.omega * (double)(xd[1] - c->w.centre[1]));
+        uw[1] = (real)(c->w.omega * (double)(xd[0] - c->w.centre[0]));
+    }
+    real X0[3] = {p->X0[0][d], p->X0[1][d], p->X0[2][d]};
+    int free_slip = wall_normal(&c->w, c->w.type == WALL_DRUM ? xd : X0, n);
+    if (ws.w > 0) {
+        wall_velocity(&ws, uw, n, free_slip, ud);
+        wall_stress(&ws, sd);
+        /* (4.3) extrapolates with the hydrostatic term, which turns tensile
+         * for a dummy above the material it sees (a wall that reaches past
+         * a free surface); grains carry no tension: the cut-off of the
+         * return mapping applies to the wall stress too */
+        if (stress_pressure(sd) <= 0)
+            for (int q = 0; q < 6; ++q) sd[q] = 0;
+    } else {
+        for (int a = 0; a < 3; ++a) ud[a] = uw[a];
+        for (int q = 0; q < 6; ++q) sd[q] = 0;
+    }
+    for (int a = 0; a < 3; ++a) p->v[a][d] = ud[a];
+    for (int q = 0; q < 6; ++q) p->sig[q][d] = sd[q];
+}
+
+/* A dummy that no material particle can reach (none in its neighbour list
+ * with a Verlet skin): flow_wall_team's result without the neighbour loop,
+ * the same code path, so the same bits. */
+HD_INLINE void flow_wall_none(size_t d, particles_t *p, const flow_ctx *c)
+{
+    const wall_sums ws = {0, {0, 0, 0}, {0, 0, 0, 0, 0, 0}, {0, 0, 0}};
+    flow_wall_set(d, p, c, &ws);
+}
+
 /* Dummy particle d: velocity and stress extrapolated from the material in
  * its support (paper §4.1). A dummy with no material in reach takes the
  * wall velocity and zero stress. Lane `lane` of a team of nlanes (hd.h);
@@ -61,32 +103,7 @@ HD_INLINE void flow_wall_team(size_t d, particles_t *p, const grid_view *g, cons
     team_sum(ws.u, 3, nlanes);
     team_sum(ws.s, 6, nlanes);
     team_sum(ws.gr, 3, nlanes);
-    if (lane != 0) return;
-    /* the wall velocity at d: drum rotation omega e_z x (x_d - centre), or the
-     * box's translation; the normal from d's reference position (the box
-     * translates rigidly, so X0 is d in the box frame) */
-    real uw[3] = {c->w.u[0], c->w.u[1], c->w.u[2]}, n[3], ud[3], sd[6];
-    if (c->w.type == WALL_DRUM) {
-        uw[0] = (real)(-c->w.omega * (double)(xd[1] - c->w.centre[1]));
-        uw[1] = (real)(c->w.omega * (double)(xd[0] - c->w.centre[0]));
-    }
-    real X0[3] = {p->X0[0][d], p->X0[1][d], p->X0[2][d]};
-    int free_slip = wall_normal(&c->w, c->w.type == WALL_DRUM ? xd : X0, n);
-    if (ws.w > 0) {
-        wall_velocity(&ws, uw, n, free_slip, ud);
-        wall_stress(&ws, sd);
-        /* (4.3) extrapolates with the hydrostatic term, which turns tensile
-         * for a dummy above the material it sees (a wall that reaches past
-         * a free surface); grains carry no tension: the cut-off of the
-         * return mapping applies to the wall stress too */
-        if (stress_pressure(sd) <= 0)
-            for (int q = 0; q < 6; ++q) sd[q] = 0;
-    } else {
-        for (int a = 0; a < 3; ++a) ud[a] = uw[a];
-        for (int q = 0; q < 6; ++q) sd[q] = 0;
-    }
-    for (int a = 0; a < 3; ++a) p->v[a][d] = ud[a];
-    for (int q = 0; q < 6; ++q) p->sig[q][d] = sd[q];
+    if (lane == 0) flow_wall_set(d, p, c, &ws);
 }
 
 HD_INLINE void flow_wall(size_t d, particles_t *p, const grid_view *g, const flow_ctx *c)
