@@ -7,6 +7,11 @@
 #include "error.h"
 #include <stdlib.h>
 
+/* Particles per dynamic chunk of the two sweeps: their cost depends on the
+ * cell type (only outer cells run the umbrella test), so static slices of
+ * the cell-sorted store would not balance. */
+#define BOUND_CHUNK 32
+
 static void *bound_grow(void *ptr, size_t n, size_t size)
 {
     void *q = realloc(ptr, (n ? n : 1) * size);
@@ -14,12 +19,22 @@ static void *bound_grow(void *ptr, size_t n, size_t size)
     return q;
 }
 
+/* Stage 1, each sweep parallel over cells (pass 1 reads only CELL_OUTER,
+ * which it never writes: bound_cell_type). */
 static void bound_cell_types(bound_work *w, const particles_t *p, const nbr_grid *g)
 {
     const grid_view *v = &g->view;
-    for (size_t c = 0; c < g->ncell; ++c) w->cell_mat[c] = bound_cell_material(v, p, c);
-    for (int pass = 0; pass < 2; ++pass)
-        for (size_t c = 0; c < g->ncell; ++c) w->cell_type[c] = bound_cell_type(v, w->cell_type, w->cell_mat, c, pass);
+    const long nc = (long)g->ncell;
+#pragma omp parallel
+    {
+#pragma omp for schedule(static)
+        for (long c = 0; c < nc; ++c) w->cell_mat[c] = bound_cell_material(v, p, (size_t)c);
+        for (int pass = 0; pass < 2; ++pass) {
+#pragma omp for schedule(static)
+            for (long c = 0; c < nc; ++c)
+                w->cell_type[c] = bound_cell_type(v, w->cell_type, w->cell_mat, (size_t)c, pass);
+        }
+    }
 }
 
 static void bound_reserve(bound_work *w, const particles_t *p, const nbr_grid *g)
@@ -40,18 +55,23 @@ void bound_classify(bound_work *w, particles_t *p, const nbr_grid *g, const sph_
 {
     bound_reserve(w, p, g);
     bound_cell_types(w, p, g);
-    const long n = (long)(p->n + p->ng); /* ghosts too: owned particles read their classes */
-#pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i)
-        p->bclass[i] = (uint8_t)bound_class_first((size_t)i, p, &g->view, k, w->cell_type, &w->sums[i]);
-#pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) /* p->bclass is still read by neighbours */
-        w->cls[i] = (uint8_t)bound_class_second((size_t)i, p, &g->view, k, w->cell_type, &w->sums[i]);
-    for (int c = 0; c < 6; ++c) w->count[c] = 0;
-    for (long i = 0; i < n; ++i) {
-        p->bclass[i] = w->cls[i];
-        if (i < (long)p->n) w->count[w->cls[i]]++;
+    const long n = (long)(p->n + p->ng), no = (long)p->n; /* ghosts too: owned particles read their classes */
+    size_t count[6] = {0};
+#pragma omp parallel
+    {
+#pragma omp for schedule(dynamic, BOUND_CHUNK)
+        for (long i = 0; i < n; ++i)
+            p->bclass[i] = (uint8_t)bound_class_first((size_t)i, p, &g->view, k, w->cell_type, &w->sums[i]);
+#pragma omp for schedule(dynamic, BOUND_CHUNK)
+        for (long i = 0; i < n; ++i) /* p->bclass is still read by neighbours */
+            w->cls[i] = (uint8_t)bound_class_second((size_t)i, p, &g->view, k, w->cell_type, &w->sums[i]);
+#pragma omp for schedule(static) reduction(+ : count[:6])
+        for (long i = 0; i < n; ++i) {
+            p->bclass[i] = w->cls[i];
+            if (i < no) count[w->cls[i]]++;
+        }
     }
+    for (int c = 0; c < 6; ++c) w->count[c] = count[c];
 }
 
 void bound_free(bound_work *w)

@@ -365,8 +365,10 @@ static void snapshots_present(outputs *o)
  * (rs) has both from the earlier run: it takes the diagnostics state and the
  * snapshot list from the checkpoint, so rows, snapshot numbers and the XDMF
  * index continue. Either way the state is prepared at t (after a step it
- * already is; prepare is idempotent, so a restart continues bit-identically). */
-static void run_start(sim_t *s, outputs *o, diag *d, ckpt_run *rs)
+ * already is; prepare is idempotent, so a restart continues bit-identically).
+ * Returns the wall seconds of the first diagnostics row and snapshot, which
+ * the done: line's wall includes but its rate does not (0 on a restart). */
+static double run_start(sim_t *s, outputs *o, diag *d, ckpt_run *rs)
 {
     s->be->prepare(s, s->t, 1);
     if (s->halo) /* the halo figures of the done: line cover the steps only */
@@ -377,7 +379,7 @@ static void run_start(sim_t *s, outputs *o, diag *d, ckpt_run *rs)
         diag_open(d, o->dir, s);
         diag_row(d, s);
         write_snapshot(o, s);
-        return;
+        return diag_wall() - d->wall0;
     }
     diag_reopen(d, o->dir, s, rs->small0, rs->max_drift, rs->warned);
     o->n = rs->nsnap, o->times = rs->times, o->npart = rs->npart; /* o takes them over */
@@ -387,6 +389,7 @@ static void run_start(sim_t *s, outputs *o, diag *d, ckpt_run *rs)
     if (s->t >= s->sc->run.t_end)
         message("nothing to do: t = %.9g s >= Run:t_end = %.9g s (raise Run:t_end to go on)", s->t,
                 s->sc->run.t_end);
+    return 0;
 }
 
 /* arg, single-quoted for a POSIX shell when it holds anything but plain
@@ -430,9 +433,9 @@ static void run(sim_t *s, outputs *o, ckpt_run *rs)
 {
     const struct scene *sc = s->sc;
     diag d;
-    double io = 0;   /* wall seconds in snapshots, diagnostics rows and checkpoints after the start */
+    double io;       /* wall seconds in snapshots, diagnostics rows and checkpoints, the first ones included */
     double cost = 0; /* this rank's compute seconds since the last load-balance check */
-    run_start(s, o, &d, rs);
+    io = run_start(s, o, &d, rs);
     double t_out = next_event(s->t, sc->output.dt, sc->run.t_end);
     double t_diag = next_event(s->t, sc->output.diag_dt, sc->run.t_end);
     /* checkpoints never shorten a step: a run with them is the run without */

@@ -10,8 +10,10 @@ typedef struct nbr_grid {
     size_t *start, *end;   /* ncell each: owned particles of each cell */
     size_t *gstart, *gend; /* ncell each: ghosts of each cell (p->ng > 0) */
     size_t ncell, cap_cell;
-    size_t *key, *perm, *count; /* scratch: n, n, ncell+1 */
-    size_t cap_part;
+    size_t *key, *perm;    /* scratch: n each */
+    size_t *hist;          /* scratch: a row of ncell per thread (the parallel counting sort) */
+    size_t cap_part, cap_hist;
+    int nthread;           /* threads the last build sized hist for */
 } nbr_grid;
 
 /* Bin all particles of p into cells of edge `support` (2h) covering their

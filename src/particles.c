@@ -7,6 +7,12 @@
 #include "error.h"
 #include <stdlib.h>
 #include <string.h>
+#ifdef _OPENMP
+#include <omp.h>
+#else
+static int omp_get_num_threads(void) { return 1; }
+static int omp_get_thread_num(void) { return 0; }
+#endif
 
 struct part_array {
     size_t offset; /* offsetof(particles_t, <pointer member>) */
@@ -79,6 +85,26 @@ static void part_set(particles_t *p, const struct part_array *a, void *ptr)
     memcpy((char *)p + a->offset, &ptr, sizeof ptr);
 }
 
+/* Below this many particles the store's loops run on one thread. */
+#define PART_PAR_MIN 4096
+
+/* Zero elements [a, b) of every array on all threads, in the static slices
+ * the particle loops use: the first touch of a fresh page places it on the
+ * NUMA node of the thread that will work on it. */
+static void part_touch(particles_t *p, size_t a, size_t b)
+{
+    const long n = (long)(b - a);
+#pragma omp parallel if (n >= PART_PAR_MIN)
+    {
+        const size_t T = (size_t)omp_get_num_threads(), t = (size_t)omp_get_thread_num();
+        const size_t k0 = a + (b - a) * t / T, k1 = a + (b - a) * (t + 1) / T;
+        for (size_t k = 0; k < PART_NARRAYS; k++) {
+            size_t es = part_arrays[k].size;
+            memset((char *)part_get(p, &part_arrays[k]) + k0 * es, 0, (k1 - k0) * es);
+        }
+    }
+}
+
 void part_alloc(particles_t *p, int dim, size_t cap)
 {
     memset(p, 0, sizeof *p);
@@ -87,12 +113,13 @@ void part_alloc(particles_t *p, int dim, size_t cap)
     p->cap = cap;
     size_t nalloc = cap > 0 ? cap : 1; /* calloc(0) may return NULL */
     for (size_t k = 0; k < PART_NARRAYS; k++) {
-        void *buf = calloc(nalloc, part_arrays[k].size);
+        void *buf = calloc(nalloc, part_arrays[k].size); /* fresh large blocks: pages untouched */
         if (!buf)
             error_exit(1, "out of memory allocating %zu particles (%zu bytes each)", cap,
                        part_bytes_per_particle());
         part_set(p, &part_arrays[k], buf);
     }
+    part_touch(p, 0, nalloc);
 }
 
 void part_free(particles_t *p)
@@ -102,60 +129,68 @@ void part_free(particles_t *p)
     memset(p, 0, sizeof *p);
 }
 
-/* dst[k] = src[perm[k]], k < n, for elements of esize bytes. */
-static void part_gather(void *dst, const void *src, const size_t *perm, size_t n, size_t esize)
+/* dst[k] = src[perm[k]], k in [k0, k1), for elements of esize bytes. */
+static void part_gather(void *dst, const void *src, const size_t *perm, size_t k0, size_t k1, size_t esize)
 {
     switch (esize) {
     case 8: {
         uint64_t *d = dst;
         const uint64_t *s = src;
-        for (size_t k = 0; k < n; k++)
+        for (size_t k = k0; k < k1; k++)
             d[k] = s[perm[k]];
         break;
     }
     case 4: {
         uint32_t *d = dst;
         const uint32_t *s = src;
-        for (size_t k = 0; k < n; k++)
+        for (size_t k = k0; k < k1; k++)
             d[k] = s[perm[k]];
         break;
     }
     case 1: {
         uint8_t *d = dst;
         const uint8_t *s = src;
-        for (size_t k = 0; k < n; k++)
+        for (size_t k = k0; k < k1; k++)
             d[k] = s[perm[k]];
         break;
     }
     default:
-        for (size_t k = 0; k < n; k++)
+        for (size_t k = k0; k < k1; k++)
             memcpy((char *)dst + k * esize, (const char *)src + perm[k] * esize, esize);
     }
 }
 
-/* Gather every array through perm into its first m entries. */
+/* Gather every array through perm into its first m entries. Parallel over
+ * particles: thread t gathers and stores back the same static slice of every
+ * array, so each page stays with the thread that first touched it
+ * (part_alloc). Two scratch buffers alternate, so that storing array k-1
+ * back and gathering array k share one barrier: the gather reads array k,
+ * which no thread writes in that phase. */
 static void part_gather_all(particles_t *p, const size_t *perm, size_t m)
 {
     if (m == 0) return;
     size_t emax = 1;
     for (size_t k = 0; k < PART_NARRAYS; k++)
         if (part_arrays[k].size > emax) emax = part_arrays[k].size;
-    int fail = 0;
-    /* the arrays are independent: one scratch buffer per thread, reused */
-#pragma omp parallel reduction(| : fail)
+    char *buf = malloc(2 * m * emax);
+    if (!buf) error_exit(1, "out of memory permuting %zu particles", m);
+    char *scr[2] = {buf, buf + m * emax};
+#pragma omp parallel if (m >= PART_PAR_MIN)
     {
-        void *scratch = malloc(m * emax);
-        if (!scratch) fail = 1;
-#pragma omp for schedule(dynamic, 1)
-        for (size_t k = 0; k < PART_NARRAYS; k++) {
-            if (!scratch) continue;
-            void *a = part_get(p, &part_arrays[k]);
-            part_gather(scratch, a, perm, m, part_arrays[k].size);
-            memcpy(a, scratch, m * part_arrays[k].size);
+        const size_t T = (size_t)omp_get_num_threads(), t = (size_t)omp_get_thread_num();
+        const size_t k0 = m * t / T, k1 = m * (t + 1) / T;
+        for (size_t k = 0; k <= PART_NARRAYS; k++) {
+            if (k > 0) { /* array k-1 back from its buffer */
+                size_t es = part_arrays[k - 1].size;
+                memcpy((char *)part_get(p, &part_arrays[k - 1]) + k0 * es, scr[(k - 1) % 2] + k0 * es,
+                       (k1 - k0) * es);
+            }
+            if (k < PART_NARRAYS)
+                part_gather(scr[k % 2], part_get(p, &part_arrays[k]), perm, k0, k1, part_arrays[k].size);
+#pragma omp barrier
         }
-        free(scratch);
     }
-    if (fail) error_exit(1, "out of memory permuting %zu particles", m);
+    free(buf);
 }
 
 void part_permute(particles_t *p, const size_t *perm) { part_gather_all(p, perm, p->n + p->ng); }
@@ -173,9 +208,9 @@ void part_reserve(particles_t *p, size_t cap)
     for (size_t k = 0; k < PART_NARRAYS; k++) {
         void *buf = realloc(part_get(p, &part_arrays[k]), cap * part_arrays[k].size);
         if (!buf) error_exit(1, "out of memory growing the particle store to %zu particles", cap);
-        memset((char *)buf + p->cap * part_arrays[k].size, 0, (cap - p->cap) * part_arrays[k].size);
         part_set(p, &part_arrays[k], buf);
     }
+    part_touch(p, p->cap, cap);
     p->cap = cap;
 }
 

@@ -2,7 +2,11 @@
  * neighbours that an all-pairs brute-force search finds (r < 2h), in 2D and
  * 3D, and sorts the store by cell. Reference: O(N^2) brute force. */
 #include <stdlib.h>
+#include <string.h>
 #include "testutil.h"
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 static void check_against_brute_force(int dim, size_t n, double L, double h)
 {
@@ -146,10 +150,69 @@ static void check_list(int dim, unsigned cap)
 static void test_list_2d(void **st) { (void)st; check_list(2, grid_list_cap(2, 1.5)); check_list(2, 4); }
 static void test_list_3d(void **st) { (void)st; check_list(3, grid_list_cap(3, 1.5)); check_list(3, 4); }
 
+/* The parallel sort (per-thread histograms over index chunks) gives the
+ * serial stable counting sort's order on any thread count, owned and ghost
+ * ranges apart, and part_permute carries every field along. Reference: a
+ * stable insertion of each range's indices by cell, here. Large enough
+ * (2e4) for nbr_build and part_permute to run threaded. */
+static void test_nbr_parallel_order(void **st)
+{
+    (void)st;
+    const size_t n = 20000, no = 14000;
+    particles_t q = {0}; /* the positions in their original order */
+    part_alloc(&q, 3, n);
+    srand(2024);
+    for (size_t k = 0; k < n; ++k)
+        tu_put(&q, rand() / (double)RAND_MAX, rand() / (double)RAND_MAX, rand() / (double)RAND_MAX, KIND_MATERIAL, 1.0);
+    size_t *key = malloc(n * sizeof *key), *ref = malloc(n * sizeof *ref), *cnt = NULL;
+    for (int nt = 1; nt <= 4; ++nt) {
+#ifdef _OPENMP
+        omp_set_num_threads(nt);
+#endif
+        particles_t r = {0};
+        part_alloc(&r, 3, n);
+        for (size_t k = 0; k < n; ++k) {
+            tu_put(&r, q.x[0][k], q.x[1][k], q.x[2][k], k % 3 ? KIND_MATERIAL : KIND_DUMMY, 1.0);
+            r.sig[5][k] = (real)k;
+        }
+        r.n = no, r.ng = n - no;
+        nbr_grid g = {0};
+        nbr_build(&g, &r, R(0.1), NULL);
+        cnt = realloc(cnt, (g.ncell + 1) * sizeof *cnt);
+        for (size_t k = 0; k < n; ++k) {
+            int c[3];
+            grid_cell_coords(&g.view, q.x[0], q.x[1], q.x[2], k, c);
+            key[k] = grid_cell_index(&g.view, c[0], c[1], c[2]);
+        }
+        for (int rg = 0; rg < 2; ++rg) { /* serial stable counting sort of each range */
+            size_t a = rg ? no : 0, b = rg ? n : no;
+            memset(cnt, 0, (g.ncell + 1) * sizeof *cnt);
+            for (size_t k = a; k < b; ++k) cnt[key[k] + 1]++;
+            cnt[0] = a;
+            for (size_t c = 0; c < g.ncell; ++c) cnt[c + 1] += cnt[c];
+            for (size_t c = 0; c < g.ncell; ++c) {
+                assert_int_equal((rg ? g.gstart : g.start)[c], cnt[c]);
+                assert_int_equal((rg ? g.gend : g.end)[c], cnt[c + 1]);
+            }
+            for (size_t k = a; k < b; ++k) ref[cnt[key[k]]++] = k;
+        }
+        for (size_t k = 0; k < n; ++k) {
+            assert_int_equal(g.perm[k], ref[k]);
+            assert_int_equal(r.id[k], (int64_t)ref[k]);
+            assert_true(r.sig[5][k] == (real)ref[k] && r.x[1][k] == q.x[1][ref[k]]);
+            assert_int_equal(r.kind[k], ref[k] % 3 ? KIND_MATERIAL : KIND_DUMMY);
+        }
+        nbr_free(&g);
+        part_free(&r);
+    }
+    free(key), free(ref), free(cnt);
+    part_free(&q);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_nbr_2d), cmocka_unit_test(test_nbr_3d),
                                        cmocka_unit_test(test_nbr_permutes_fields), cmocka_unit_test(test_list_2d),
-                                       cmocka_unit_test(test_list_3d)};
+                                       cmocka_unit_test(test_list_3d), cmocka_unit_test(test_nbr_parallel_order)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
