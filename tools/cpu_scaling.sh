@@ -5,7 +5,7 @@
 # MPI launcher, the same run on each thread count. Prints a CSV:
 #   threads,particles,steps,wall_s,particle_steps_per_s,speedup,efficiency
 # speed-up and efficiency against the first thread count of the list.
-# Usage: tools/cpu_scaling.sh [binary]; environment:
+# Usage: tools/cpu_scaling.sh [binary] (the CPU backend also of a GPU build); environment:
 #   THREADS  thread counts (default "1 2 4 8 16")
 #   DR       particle spacing in m (default 0.001: about 1.1e5 particles)
 #   STEPS    steps per run (default 100; dt = 0.1 h / c_s, as bench.sh)
@@ -28,7 +28,7 @@ base=""
 for t in $threads; do
     best=0 n=0 nsteps=0 wall=0
     for ((r = 0; r < repeat; ++r)); do
-        OMP_NUM_THREADS=$t "$bin" inputs/column_2d.yml -o "$tmp/out" --overwrite -P Geometry:dim=3 -P Geometry:dr=$dr \
+        OMP_NUM_THREADS=$t "$bin" inputs/column_2d.yml -o "$tmp/out" --overwrite --backend cpu -P Geometry:dim=3 -P Geometry:dr=$dr \
             -P Geometry:width=0.04 -P Geometry:height=0.05 -P Geometry:depth=0.04 -P Initial:stress=geostatic \
             -P Segregation:enabled=on -P Segregation:model=shear_rate -P Segregation:d_small=0.00025 \
             -P Segregation:d_large=0.0005 -P Initial:C_below=0.5 -P Initial:C_above=0.5 -P Flow:damping_until=0 \
