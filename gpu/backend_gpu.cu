@@ -142,6 +142,9 @@ typedef struct gpu {
     particles_t d, alt; /* device arrays: current and the permutation's spare set */
     size_t n, ng, cap;  /* owned particles, ghosts (at [n, n + ng)), allocated */
     uint8_t *lvl;       /* halo level of each particle (several ranks), else NULL */
+    uint8_t *wact;      /* a dummy with material in its list (gpu_build); NULL: every dummy
+                         * runs its loop (SPHSEG_GPU_WALLSKIP=0, for measuring the skip) */
+    int wskip;
     struct dhalo *hx;   /* several ranks, else NULL */
     grid_view view;     /* start/end point to device memory */
     size_t *start, *end, ncell, cap_cell;
@@ -433,7 +436,7 @@ static void gpu_reserve(gpu_t *g, size_t need)
             CK(cudaFree(part_array_get(&g->alt, k)));
         }
         void *bufs[] = {g->key, g->key2, g->idx, g->idx2, g->cls, g->sums, g->nl, g->ncnt, g->amag,
-                        g->xb[0], g->xb[1], g->xb[2], g->lvl};
+                        g->xb[0], g->xb[1], g->xb[2], g->lvl, g->wact};
         for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k)
             if (bufs[k]) CK(cudaFree(bufs[k]));
     }
@@ -457,6 +460,7 @@ static void gpu_reserve(gpu_t *g, size_t need)
     g->amag = (real *)dev_alloc(cap * sizeof(real));
     CK(cudaMemset(g->amag, 0, cap * sizeof(real)));
     g->lvl = g->hx ? (uint8_t *)dev_alloc(cap) : NULL;
+    g->wact = g->wskip ? (uint8_t *)dev_alloc(cap) : NULL;
     g->cap = cap;
     g->built = 0;
 }
@@ -513,6 +517,8 @@ static gpu_t *gpu_get(sim_t *s)
     CK(cudaStreamCreateWithFlags(&g->st, cudaStreamNonBlocking));
     const char *pe = getenv("SPHSEG_GPU_PROFILE");
     prof.on = pe && *pe && strcmp(pe, "0") != 0;
+    const char *ws = getenv("SPHSEG_GPU_WALLSKIP");
+    g->wskip = !(ws && strcmp(ws, "0") == 0);
     if (prof.on) {
         CK(cudaEventCreate(&prof.a));
         CK(cudaEventCreate(&prof.b));
@@ -697,6 +703,19 @@ static void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, c
     g->view.ncnt = cnt;
     g->view.nl_stride = n;
     g->view.nl_cap = cap;
+    if (g->wact) { /* dummies that no material reaches until the next build (the list's skin) */
+        uint8_t *wa = g->wact;
+        grid_view vw = g->view;
+        each(g, n, [=] __device__(size_t i) {
+            int r = q.kind[i] == KIND_DUMMY && cnt[i] > cap; /* a cell scan at use: keep the loop */
+            if (q.kind[i] == KIND_DUMMY && !r) {
+                NBR_BEGIN(&vw, q.x, i, j)
+                    r |= q.kind[j] == KIND_MATERIAL;
+                NBR_END
+            }
+            wa[i] = (uint8_t)r;
+        });
+    }
     if (g->lvl) { /* halo levels (see the top) from the new list */
         uint8_t *lvl = g->lvl;
         grid_view vl = g->view;
@@ -758,6 +777,17 @@ static sel sel_bd(const gpu_t *g, int lo) { return sel{g->lvl, 0, (uint8_t)(lo -
  * particle, latency-bound) runs them as one kernel, a large one as two (the
  * merged kernel would run both at the larger register count: 2 % slower on
  * the 3D drum, docs/gpu.md). */
+/* Dummy i's wall state: its loop when material may be in reach (wa[i]),
+ * else flow_wall_none, the same result without the loop (the list holds no
+ * material, so the loop's sums would be zero): about half the dummies of a
+ * drum lie above the bed or deep in an end wall. */
+__device__ __forceinline__ void wall_one(size_t i, particles_t *q, const grid_view *v, const flow_ctx *c,
+                                         const uint8_t *wa, int lane, int T)
+{
+    if (!wa || wa[i]) flow_wall_team(i, q, v, c, lane, T);
+    else if (lane == 0) flow_wall_none(i, q, c);
+}
+
 static void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl)
 {
     particles_t p = g->d;
@@ -766,6 +796,7 @@ static void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl)
     seg_ctx sc = s->seg;
     const size_t n = g->n + g->ng;
     const size_t rlo = s->renorm_due ? g->n : 0; /* the owned L due in the flow rates: the ghosts' here */
+    const uint8_t *wa = g->wact;
     if (rlo >= n) renorm = 0;
     if (!walls && !renorm) return;
     prof_begin(g->st);
@@ -773,14 +804,14 @@ static void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl)
         team(g, n, [=] __device__(size_t i, int lane, int T) {
             if (!sel_on(sl, i)) return;
             particles_t q = p;
-            if (q.kind[i] == KIND_DUMMY) flow_wall_team(i, &q, &v, &c, lane, T);
+            if (q.kind[i] == KIND_DUMMY) wall_one(i, &q, &v, &c, wa, lane, T);
             else if (q.kind[i] == KIND_MATERIAL && i >= rlo) seg_renorm_team(i, &q, &v, &sc, lane, T);
         });
     } else {
         if (walls)
             team(g, n, [=] __device__(size_t i, int lane, int T) {
                 particles_t q = p;
-                if (q.kind[i] == KIND_DUMMY && sel_on(sl, i)) flow_wall_team(i, &q, &v, &c, lane, T);
+                if (q.kind[i] == KIND_DUMMY && sel_on(sl, i)) wall_one(i, &q, &v, &c, wa, lane, T);
             });
         if (renorm) /* particles rlo.. only: with the owned L due later, just the ghosts */
             team(g, n - rlo, [=] __device__(size_t k, int lane, int T) {
@@ -1431,7 +1462,7 @@ static void gpu_finish(sim_t *s)
     }
     void *bufs[] = {g->start, g->end, g->cell_mat, g->cell_type, g->key, g->key2, g->idx, g->idx2,
                     g->cls, g->sums, g->nl, g->ncnt, g->amag, g->tmp, g->dbox, g->dres, g->dfirst,
-                    g->dchk, g->xb[0], g->xb[1], g->xb[2], g->lvl};
+                    g->dchk, g->xb[0], g->xb[1], g->xb[2], g->lvl, g->wact};
     for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k)
         if (bufs[k]) CK(cudaFree(bufs[k]));
     CK(cudaFreeHost(g->hbox));
