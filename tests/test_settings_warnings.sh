@@ -2,7 +2,7 @@
 # The warnings for flow settings outside the measured range (src/main.c,
 # flow_warn_settings; docs/gpu.md "Stiffness, artificial viscosity and CFL"):
 # alpha_av sqrt(E) more than 2x off Table 1's (0.1 at 10 MPa), and
-# Run:cfl_flow > 0.2. Each probe is a 1-step CPU drum; the warning must be
+# Run:cfl_flow > 0.2, and E below the softest measured accurate (10 kPa). Each probe is a 1-step CPU drum; the warning must be
 # there when the setting is off and absent when it is in range.
 set -u
 bin=${1:?usage: test_settings_warnings.sh BUILD/sphseg}
@@ -23,6 +23,8 @@ probe "Table 1 settings: no AV warning" no "alpha_av"
 probe "E 0.1 MPa, alpha 0.1: AV warning" yes "alpha_av \* sqrt(Material:E) is 0.1 times" Material:E=1e5
 probe "E 0.1 MPa, alpha 1.0: no AV warning" no "alpha_av" Material:E=1e5 Flow:alpha_av=1.0
 probe "E 10 MPa, alpha 0.5: AV warning" yes "alpha_av" Flow:alpha_av=0.5
+probe "E 10 kPa, alpha 3.162: no warning at all" no "" Material:E=1e4 Flow:alpha_av=3.162
+probe "E 5 kPa, alpha 4.47: softness warning" yes "Material:E = 5e+03 Pa is softer" Material:E=5e3 Flow:alpha_av=4.472
 probe "cfl_flow 0.2: no CFL warning" no "cfl_flow" Run:cfl_flow=0.2
 probe "cfl_flow 0.3: CFL warning" yes "Run:cfl_flow = 0.3 > 0.2" Run:cfl_flow=0.3
 exit $fail
