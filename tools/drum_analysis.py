@@ -39,8 +39,24 @@ Concentration-rate contributions: SPH gradients with a renormalised kernel
 gradient (first-order consistent), grad_g = (g/|g|) . grad, and the
 diffusion term in the form of eq. (3.8); V, D from eq. (2.7) with the run's
 chi_V, chi_D, d^S, d^L and the snapshot's shear rate.
+
+3D drums also get the axial analysis (class Axial; --zbins N, default 8;
+--endslab W, default 3 dr; --csv FILE, one row per time): per time, the
+dynamic angle, surface speed on the mid-chord and segregation index of the
+whole bed, of the slab of width W at mid-length and of the slabs next to
+each end wall (z < W, z > L - W); per z-bin the angle, the segregation
+index, the mean C and the distance of the small grains' centroid (weights
+V C) from the bed's (weights V) in x-y; the axial banding (the share of C's
+variance that lies between the z-bins: 0 for a z-uniform bed, 1 when C is
+uniform within each bin); the mean C in five shells about the bed's
+centroid, inner to outer (a core of small grains: falling); and with --png
+PREFIX_axial.png (angle and segregation index against z, the mid-chord
+speed and C at mid-length and next to the z = 0 end wall, C in the
+mid-length slab and over (z, r)). tests/validate_drum3d_analysis.py checks
+it on snapshots built with known answers.
 """
 import argparse
+import csv
 import os
 import sys
 
@@ -60,18 +76,23 @@ def used_params(outdir):
 class Drum:
     """One snapshot of a drum run with the derived quantities."""
 
-    def __init__(self, path, par, slab=None):
-        s = snap.read_snapshot(path)
+    def __init__(self, path, par, slab=None, zwin=None, snapshot=None):
+        s = snapshot if snapshot is not None else snap.read_snapshot(path)
         g = par["Geometry"]
         self.t = float(s["Time"])
         m = np.asarray(s["Kind"]) == snap.MATERIAL
         width = 1.0
-        if int(s.get("Dimension", 2)) == 3:  # the cross-section: a mid-length slab or all, projected
+        if int(s.get("Dimension", 2)) == 3:  # the cross-section: a slab (mid-length, or zwin) or all, projected
             L = round(g["length"] / g["dr"]) * g["dr"]
             width = slab if slab else L
-            if slab:
-                m &= np.abs(np.asarray(s["Coordinates"])[:, 2] - 0.5 * L) < 0.5 * slab
+            z = np.asarray(s["Coordinates"])[:, 2]
+            if zwin is not None:  # z0 <= z < z1
+                width = zwin[1] - zwin[0]
+                m &= (z >= zwin[0]) & (z < zwin[1])
+            elif slab:
+                m &= np.abs(z - 0.5 * L) < 0.5 * slab
         self.x = np.asarray(s["Coordinates"])[m, :2]
+        self.z = np.asarray(s["Coordinates"])[m, 2]  # 0 in 2D
         self.v = np.asarray(s["Velocities"])[m, :2]
         self.C = np.asarray(s["Concentration"])[m]
         self.gdot = np.asarray(s["ShearRate"])[m]
@@ -184,6 +205,130 @@ class Drum:
         return -F * grad_g(V), -V * dF * grad_g(C), c3
 
 
+
+def drum_length(par):
+    """The 3D drum's length between its end walls, rounded to whole dr as setup.c does."""
+    g = par["Geometry"]
+    return round(g["length"] / g["dr"]) * g["dr"]
+
+
+class Axial:
+    """One snapshot of a 3D drum along its axis (z): the whole bed, nz equal
+    z-bins, a slab of width W at mid-length and one next to each end wall
+    (z < W and z > L - W), each analysed as a 2D cross-section (Drum)."""
+
+    NSHELL = 5
+
+    def __init__(self, path, par, nz=8, endslab=None, snapshot=None):
+        s = snapshot if snapshot is not None else snap.read_snapshot(path)
+        if int(s.get("Dimension", 2)) != 3:
+            raise ValueError("%s: not a 3D drum snapshot" % path)
+        dr, L = par["Geometry"]["dr"], drum_length(par)
+        W = endslab if endslab else 3 * dr
+        if not 0 < W <= 0.5 * L:
+            raise ValueError("end slab width %g m: expected 0 < W <= L/2 = %g m" % (W, 0.5 * L))
+        self.t, self.L, self.W, self.dr = float(s["Time"]), L, W, dr
+        self.whole = Drum(path, par, snapshot=s)
+        self.mid = Drum(path, par, zwin=(0.5 * (L - W), 0.5 * (L + W)), snapshot=s)
+        self.end0 = Drum(path, par, zwin=(-0.5 * dr, W), snapshot=s)
+        self.end1 = Drum(path, par, zwin=(L - W, L + 0.5 * dr), snapshot=s)
+        edges = np.linspace(0.0, L, nz + 1)
+        edges[0], edges[-1] = -0.5 * dr, L + 0.5 * dr
+        self.zc = 0.5 * (np.linspace(0.0, L, nz + 1)[1:] + np.linspace(0.0, L, nz + 1)[:-1])
+        self.bins = [Drum(path, par, zwin=(edges[k], edges[k + 1]), snapshot=s) for k in range(nz)]
+        w = self.whole
+        self.meanC = float(np.average(w.C, weights=w.vol))
+        # axial banding: the share of C's variance that lies between the z-bins
+        binC = np.array([np.average(b.C, weights=b.vol) for b in self.bins])
+        binV = np.array([b.vol.sum() * b.width for b in self.bins])  # Drum divides by its slab's width
+        varC = float(np.average((w.C - self.meanC) ** 2, weights=w.vol))
+        self.binC = binC
+        self.banding = float(np.average((binC - self.meanC) ** 2, weights=binV) / varC) if varC > 0 else 0.0
+        # where the small grains gather: the small-grain centroid (weights V C) from the bed's (weights V), per bin
+        self.offset = np.array([np.average(b.x, axis=0, weights=b.vol * b.C) - np.average(b.x, axis=0, weights=b.vol)
+                                if np.sum(b.vol * b.C) > 0 else [np.nan, np.nan] for b in self.bins])
+        # mean C in shells of equal width about the bed's centroid, inner to outer
+        c = np.average(w.x, axis=0, weights=w.vol)
+        r = np.hypot(*(w.x - c).T)
+        k = np.minimum((r / r.max() * self.NSHELL).astype(int), self.NSHELL - 1)
+        self.shellC = np.array([np.average(w.C[k == q], weights=w.vol[k == q]) if np.any(k == q) else np.nan
+                                for q in range(self.NSHELL)])
+
+    @staticmethod
+    def surface_speed(d):
+        _, pts = d.midchord()
+        return float(np.nanmax(d.interp(pts, d.speed)))
+
+    def row(self):
+        """The numbers of one time, for the table and --csv."""
+        r = {"t": self.t, "angle": self.whole.angle, "seg": self.whole.segregation_index()}
+        for tag, d in (("mid", self.mid), ("end0", self.end0), ("end1", self.end1)):
+            r["angle_" + tag] = d.angle
+            r["speed_" + tag] = self.surface_speed(d)
+            r["seg_" + tag] = d.segregation_index()
+        r["banding"] = self.banding
+        r["offset_mm"] = 1e3 * float(np.mean(np.hypot(*self.offset.T)))
+        for q in range(self.NSHELL):
+            r["C_shell%d" % q] = float(self.shellC[q])
+        return r
+
+    def report(self):
+        r = self.row()
+        lines = ["t = %.3f s  (L = %.1f mm, end slabs W = %.1f mm, %d z-bins)" % (self.t, 1e3 * self.L, 1e3 * self.W,
+                                                                                 len(self.bins)),
+                 "  %-22s %8s %12s %10s" % ("", "angle", "surface u", "seg index"),
+                 "  %-22s %7.2f° %12s %10.4f" % ("whole bed", r["angle"], "", r["seg"])]
+        for tag, name in (("mid", "mid-length slab"), ("end0", "end slab z < W"), ("end1", "end slab z > L - W")):
+            lines.append("  %-22s %7.2f° %7.2f cm/s %10.4f" % (name, r["angle_" + tag], 100 * r["speed_" + tag],
+                                                                  r["seg_" + tag]))
+        lines.append("  z (mm)        " + " ".join("%7.1f" % (1e3 * z) for z in self.zc))
+        lines.append("  angle (°)     " + " ".join("%7.2f" % b.angle for b in self.bins))
+        lines.append("  seg index     " + " ".join("%7.4f" % b.segregation_index() for b in self.bins))
+        lines.append("  mean C        " + " ".join("%7.4f" % c for c in self.binC))
+        lines.append("  small off (mm)" + " ".join("%7.2f" % (1e3 * np.hypot(*o)) for o in self.offset))
+        lines.append("  axial banding (share of C's variance between z-bins) %.4f; mean C by shell about the bed's "
+                     "centroid, inner to outer: %s" % (r["banding"], " ".join("%.3f" % c for c in self.shellC)))
+        return "\n".join(lines)
+
+
+def plot_axial(axs, png):
+    """Angle and segregation index against z per time; the mid-chord speed and C
+    at mid-length and next to the z = 0 end wall; C over (z, r) at the last time."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(2, 3, figsize=(15, 8))
+    for a in axs:
+        ax[0, 0].plot(1e3 * a.zc, [b.angle for b in a.bins], "o-", label="t = %.0f s" % a.t)
+        ax[0, 1].plot(1e3 * a.zc, [b.segregation_index() for b in a.bins], "o-", label="t = %.0f s" % a.t)
+    ax[0, 0].set_xlabel("z (mm)"), ax[0, 0].set_ylabel("dynamic angle (°)"), ax[0, 0].legend(fontsize=7)
+    ax[0, 1].set_xlabel("z (mm)"), ax[0, 1].set_ylabel("segregation index"), ax[0, 1].legend(fontsize=7)
+    last = axs[-1]
+    for d, lab in ((last.mid, "mid-length"), (last.end0, "next to the end wall z = 0")):
+        dm, pts = d.midchord()
+        ax[1, 0].plot(100 * d.interp(pts, d.speed), dm, label=lab)
+        ax[1, 1].plot(d.interp(pts, d.C), dm, label=lab)
+    for k, xl in ((0, "speed (cm/s)"), (1, "C")):
+        ax[1, k].invert_yaxis(), ax[1, k].set_xlabel(xl), ax[1, k].set_ylabel("depth along the mid-chord / R")
+        ax[1, k].legend(fontsize=7), ax[1, k].set_title("t = %.0f s" % last.t, fontsize=9)
+    w = last.whole
+    m = last.mid
+    sc = ax[0, 2].scatter(1e3 * m.x[:, 0], 1e3 * m.x[:, 1], c=m.C, s=2, cmap="coolwarm", vmin=0, vmax=1)
+    ax[0, 2].set_aspect("equal"), ax[0, 2].set_title("C, mid-length slab, t = %.0f s" % last.t, fontsize=9)
+    fig.colorbar(sc, ax=ax[0, 2])
+    c = np.average(w.x, axis=0, weights=w.vol)
+    zs, rs = w.z, np.hypot(*(w.x - c).T)
+    H, xe, ye = np.histogram2d(zs, rs, bins=(len(last.bins) * 3, 12), weights=w.vol * w.C)
+    V, _, _ = np.histogram2d(zs, rs, bins=(xe, ye), weights=w.vol)
+    im = ax[1, 2].pcolormesh(1e3 * xe, 1e3 * ye, np.where(V > 0, H / np.maximum(V, 1e-300), np.nan).T, cmap="coolwarm",
+                             vmin=0, vmax=1)
+    ax[1, 2].set_xlabel("z (mm)"), ax[1, 2].set_ylabel("distance from the bed's centroid (mm)")
+    ax[1, 2].set_title("mean C over (z, r), t = %.0f s" % last.t, fontsize=9)
+    fig.colorbar(im, ax=ax[1, 2])
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+
 def pick(paths, times):
     ts = np.array([snap.snapshot_time(p) for p in paths])
     return [paths[int(np.argmin(np.abs(ts - t)))] for t in times]
@@ -284,6 +429,10 @@ def main():
     ap.add_argument("--png", help="plot file prefix")
     ap.add_argument("--slab", type=float, help="3D drum: analyse only |z - L/2| < SLAB/2 (m); default: "
                     "the whole length projected onto x-y")
+    ap.add_argument("--zbins", type=int, default=8, help="3D drum: z-bins of the axial analysis (default 8)")
+    ap.add_argument("--endslab", type=float, help="3D drum: width W (m) of the slabs next to the end walls and at "
+                    "mid-length in the axial analysis (default 3 dr)")
+    ap.add_argument("--csv", help="3D drum: write the axial analysis, one row per time, to this CSV file")
     a = ap.parse_args()
     par = used_params(a.outdir)
     paths = snap.list_snapshots(a.outdir)
@@ -296,6 +445,19 @@ def main():
         print("%8.3f %8.2f° %8.2f dr %9.2f cm/s %12.4f %5.3f-%5.3f"
               % (d.t, d.angle, d.flatness, 100 * np.nanmax(d.interp(pts, d.speed)), d.segregation_index(),
                  d.C.min(), d.C.max()))
+    axs = []
+    if paths and int(snap.read_snapshot(paths[0]).get("Dimension", 2)) == 3:
+        axs = [Axial(p, par, a.zbins, a.endslab) for p in paths]
+        print("\naxial analysis (3D drum):")
+        for x in axs:
+            print(x.report())
+        if a.csv:
+            rows = [x.row() for x in axs]
+            with open(a.csv, "w", newline="") as f:
+                w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
+                w.writeheader()
+                w.writerows(rows)
+            print("wrote %s" % a.csv)
     dg = snap.read_diagnostics(a.outdir, partial=True)
     print("max |relative drift of sum C_i V_i|: %.3e" % np.abs(dg["small_volume_drift"]).max())
     if a.png:
@@ -306,6 +468,9 @@ def main():
         plot_maps(drums[-1], a.png + "_maps.png")
         plot_global(a.outdir, a.png + "_global.png")
         print("wrote %s_{midchord,rates,maps,global}.png" % a.png)
+        if axs:
+            plot_axial(axs, a.png + "_axial.png")
+            print("wrote %s_axial.png" % a.png)
 
 
 if __name__ == "__main__":
