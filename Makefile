@@ -102,7 +102,7 @@ $(BUILD)/obj/%.o: %.c $(HEADERS)
 	@mkdir -p $(dir $@)
 	$(MPICC) $(CFLAGS) -c $< -o $@
 
-$(BUILD)/obj/gpu/%.o: gpu/%.cu $(HEADERS)
+$(BUILD)/obj/gpu/%.o: gpu/%.cu $(wildcard gpu/*.cuh) $(HEADERS)
 	@mkdir -p $(dir $@)
 	$(NVCC) $(NVFLAGS) -c $< -o $@
 

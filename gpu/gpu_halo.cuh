@@ -1,0 +1,257 @@
+/* gpu/gpu_halo.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
+ * compiled in (included in order; not a header of its own).
+ * Ghosts on several ranks: packing the refreshed fields, the exchanges at
+ * list builds and the refreshes between them, synchronous or overlapped with
+ * the interior's passes. */
+
+/* ---- ghost refreshes (several ranks) ------------------------------------------ */
+
+static size_t r8(size_t b) { return (b + 7) / 8 * 8; }
+
+/* Bytes of cnt records of t: field-major, each field's block 8-aligned. */
+static size_t ft_bytes(const ftab &t, size_t cnt)
+{
+    size_t b = 0;
+    for (int f = 0; f < t.n; ++f) b += r8(cnt * t.es[f]);
+    return b;
+}
+
+template <int UNPACK> __global__ void k_pack(ftab t, const unsigned *idx, size_t cnt, char *buf)
+{
+    size_t e = (size_t)blockIdx.x * blockDim.x + threadIdx.x;
+    if (e >= cnt) return;
+    size_t i = idx[e], off = 0;
+    for (int f = 0; f < t.n; ++f) {
+        char *b = buf + off;
+        switch (t.es[f]) {
+        case 8:
+            if (UNPACK) ((uint64_t *)t.p[f])[i] = ((const uint64_t *)b)[e];
+            else ((uint64_t *)b)[e] = ((const uint64_t *)t.p[f])[i];
+            break;
+        case 4:
+            if (UNPACK) ((uint32_t *)t.p[f])[i] = ((const uint32_t *)b)[e];
+            else ((uint32_t *)b)[e] = ((const uint32_t *)t.p[f])[i];
+            break;
+        default:
+            if (UNPACK) ((uint8_t *)t.p[f])[i] = ((const uint8_t *)b)[e];
+            else ((uint8_t *)b)[e] = ((const uint8_t *)t.p[f])[i];
+        }
+        off += (cnt * t.es[f] + 7) / 8 * 8;
+    }
+}
+
+static void ft_add(ftab *t, void *p, size_t es)
+{
+    if (t->n >= FT_MAX) error_exit(1, "backend_gpu: more than %d refresh fields", FT_MAX);
+    t->p[t->n] = p, t->es[t->n] = (unsigned char)es, t->n++;
+}
+
+static void *grow_dev(void *p, size_t *cap, size_t need)
+{
+    if (need <= *cap && p) return p;
+    if (p) CK(cudaFree(p));
+    *cap = need + need / 4 + 64;
+    return dev_alloc(*cap);
+}
+
+static void *grow_pinned(void *p, size_t *cap, size_t need)
+{
+    if (need <= *cap && p) return p;
+    if (p) CK(cudaFreeHost(p));
+    *cap = need + need / 4 + 64;
+    void *q = NULL;
+    CK(cudaMallocHost(&q, *cap));
+    return q;
+}
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* GPU time spent on the halo: an event pair around each piece of halo work
+ * on the stream (pack and copy out; wait, copy in and unpack), summed into
+ * halo_t.wall_exposed once both have completed (at the next check, or when
+ * the ring is full). */
+static void hx_resolve(gpu_t *g, halo_t *h)
+{
+    dhalo *x = g->hx;
+    if (!x) return;
+    for (int k = 0; k + 1 < x->nev; k += 2) {
+        float ms = 0;
+        CK(cudaEventSynchronize(x->ev[k + 1]));
+        CK(cudaEventElapsedTime(&ms, x->ev[k], x->ev[k + 1]));
+        h->wall_exposed += 1e-3 * ms;
+    }
+    x->nev = 0;
+}
+static void hx_mark(gpu_t *g, halo_t *h, int end)
+{
+    dhalo *x = g->hx;
+    if (!end && x->nev + 2 > HX_EV) hx_resolve(g, h); /* pairs are recorded whole */
+    CK(cudaEventRecord(x->ev[x->nev++], g->st));
+}
+
+/* Start a refresh of fields t of the ghosts: pack the send lists on the
+ * device, stage (or hand the device buffer to a CUDA-aware MPI), post. */
+static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
+{
+    halo_t *h = s->halo;
+    dhalo *x = g->hx;
+    int m = h->nnb;
+    if (x->pending) error_exit(1, "backend_gpu: a refresh is already in flight");
+    double t0 = now();
+    x->sb[0] = x->rb[0] = 0;
+    for (int k = 0; k < m; ++k) {
+        x->sb[k + 1] = x->sb[k] + ft_bytes(t, x->soff[k + 1] - x->soff[k]);
+        x->rb[k + 1] = x->rb[k] + ft_bytes(t, x->roff[k + 1] - x->roff[k]);
+    }
+    x->dsend = (char *)grow_dev(x->dsend, &x->cap_dsend, x->sb[m]);
+    x->drecv = (char *)grow_dev(x->drecv, &x->cap_drecv, x->rb[m]);
+    hx_mark(g, h, 0);
+    for (int k = 0; k < m; ++k) {
+        size_t cnt = x->soff[k + 1] - x->soff[k];
+        if (cnt)
+            k_pack<0><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(t, x->sidx + x->soff[k], cnt,
+                                                                                   x->dsend + x->sb[k]);
+    }
+    CK(cudaGetLastError());
+    char *sbuf = x->dsend, *rbuf = x->drecv;
+    if (!x->cuda_aware) {
+        x->hsend = (char *)grow_pinned(x->hsend, &x->cap_hsend, x->sb[m]);
+        x->hrecv = (char *)grow_pinned(x->hrecv, &x->cap_hrecv, x->rb[m]);
+        CK(cudaMemcpyAsync(x->hsend, x->dsend, x->sb[m], cudaMemcpyDeviceToHost, g->st));
+        sbuf = x->hsend, rbuf = x->hrecv;
+    }
+    hx_mark(g, h, 1);
+    CK(cudaStreamSynchronize(g->st));
+    h->wall_comm += now() - t0;
+    halo_post_bytes(h, sbuf, x->sb, rbuf, x->rb);
+    x->pend = t;
+    x->pending = 1;
+    x->refresh++;
+}
+
+/* Complete the refresh in flight: wait for the messages, unpack into the
+ * ghost slots. The GPU's wait for them (idle) plus the copy and unpack
+ * count as exposed halo time. */
+static void gpu_refresh_finish(sim_t *s, gpu_t *g)
+{
+    halo_t *h = s->halo;
+    dhalo *x = g->hx;
+    if (!x || !x->pending) return;
+    int m = h->nnb;
+    hx_mark(g, h, 0);
+    halo_wait_bytes(h);
+    double t0 = now();
+    if (!x->cuda_aware) CK(cudaMemcpyAsync(x->drecv, x->hrecv, x->rb[m], cudaMemcpyHostToDevice, g->st));
+    for (int k = 0; k < m; ++k) {
+        size_t cnt = x->roff[k + 1] - x->roff[k];
+        if (cnt)
+            k_pack<1><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(x->pend, x->ridx + x->roff[k], cnt,
+                                                                                   x->drecv + x->rb[k]);
+    }
+    CK(cudaGetLastError());
+    hx_mark(g, h, 1);
+    x->pending = 0;
+    h->wall_comm += now() - t0;
+}
+
+/* Refresh fields t of the ghosts now (no overlap). */
+static void gpu_refresh(sim_t *s, gpu_t *g, const ftab &t)
+{
+    gpu_refresh_start(s, g, t);
+    gpu_refresh_finish(s, g);
+}
+
+/* The refresh in flight lands; then the boundary passes it held back. */
+static void gpu_settle(sim_t *s, gpu_t *g)
+{
+    dhalo *x = g->hx;
+    if (!x || !x->pending) return;
+    gpu_refresh_finish(s, g);
+    gpu_walls_renorm(s, g, x->pend_walls, x->pend_renorm, sel_bd(g, 2));
+    x->pend_renorm = x->pend_walls = 0;
+}
+
+/* Every array of the owned particles into the host copy s->p (its ghosts
+ * are not kept there). */
+static void gpu_download(sim_t *s, gpu_t *g)
+{
+    CK(cudaStreamSynchronize(g->st));
+    for (size_t k = 0; k < part_narrays(); ++k)
+        CK(cudaMemcpy(part_array_get(&s->p, k), part_array_get(&g->d, k), g->n * part_array_esize(k),
+                      cudaMemcpyDeviceToHost));
+    s->p.n = g->n, s->p.ng = 0;
+}
+
+/* At a list build on several ranks: the owned particles to the host, where
+ * mpi/halo.c migrates them and makes fresh ghosts; everything back. */
+static void gpu_full_exchange(sim_t *s, gpu_t *g)
+{
+    double t0 = now();
+    particles_t *hp = &s->p;
+    gpu_download(s, g);
+    halo_exchange(s->halo, hp);
+    gpu_reserve(g, hp->n + hp->ng);
+    gpu_counts(g, hp->n, hp->ng);
+    gpu_upload(g, hp, 0, hp->n + hp->ng);
+    double dt = now() - t0;
+    g->hx->full++, g->hx->full_s += dt;
+    s->halo->wall_exposed += dt;
+}
+
+/* After the build's sort: the send lists and ghost slots to the device. */
+static void gpu_halo_lists(sim_t *s, gpu_t *g)
+{
+    halo_t *h = s->halo;
+    dhalo *x = g->hx;
+    int m = h->nnb;
+    if (m + 1 > x->cap_nb) {
+        free(x->soff), free(x->roff), free(x->sb), free(x->rb);
+        x->cap_nb = m + 1;
+        x->soff = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+        x->roff = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+        x->sb = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+        x->rb = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+        if (!x->soff || !x->roff || !x->sb || !x->rb) error_exit(1, "out of memory");
+    }
+    x->soff[0] = x->roff[0] = 0;
+    for (int k = 0; k < m; ++k) {
+        x->soff[k + 1] = x->soff[k] + h->nsend[k];
+        x->roff[k + 1] = x->roff[k] + h->nrecv[k];
+    }
+    size_t ns = x->soff[m], nr = x->roff[m];
+    unsigned *hs = (unsigned *)malloc((ns + nr + 1) * sizeof(unsigned));
+    if (!hs) error_exit(1, "out of memory");
+    for (int k = 0; k < m; ++k)
+        for (size_t q = 0; q < h->nsend[k]; ++q) hs[x->soff[k] + q] = (unsigned)h->send[k][q];
+    for (size_t q = 0; q < nr; ++q) hs[ns + q] = (unsigned)h->recv[q];
+    x->sidx = (unsigned *)grow_dev(x->sidx, &x->cap_s, ns * sizeof(unsigned));
+    x->ridx = (unsigned *)grow_dev(x->ridx, &x->cap_r, nr * sizeof(unsigned));
+    CK(cudaMemcpyAsync(x->sidx, hs, ns * sizeof(unsigned), cudaMemcpyHostToDevice, g->st));
+    CK(cudaMemcpyAsync(x->ridx, hs + ns, nr * sizeof(unsigned), cudaMemcpyHostToDevice, g->st));
+    CK(cudaStreamSynchronize(g->st)); /* hs is pageable and freed next */
+    free(hs);
+}
+
+/* What neighbours read of a ghost that moves between builds: positions,
+ * and with computed flow velocity and stress (prescribed motion: velocity
+ * and shear rate; it rebuilds every stage, so this is a fallback), and C. */
+static ftab moving_fields(const sim_t *s, const gpu_t *g)
+{
+    ftab t;
+    t.n = 0;
+    const particles_t &p = g->d;
+    int dim = s->p.dim;
+    for (int d = 0; d < dim; ++d) ft_add(&t, p.x[d], sizeof(real));
+    for (int d = 0; d < dim; ++d) ft_add(&t, p.v[d], sizeof(real));
+    if (s->flow_on)
+        for (int q = 0; q < (dim == 3 ? 6 : 4); ++q) ft_add(&t, p.sig[q], sizeof(real));
+    else
+        ft_add(&t, p.gdot, sizeof(real));
+    if (s->seg_on && !s->win.on) ft_add(&t, p.C, sizeof(creal)); /* windows: refreshed by conc_step */
+    return t;
+}

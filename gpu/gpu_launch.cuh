@@ -1,0 +1,207 @@
+/* gpu/gpu_launch.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
+ * compiled in (included in order; not a header of its own).
+ * Launching: one thread per particle (each), teams of T threads per particle
+ * for the neighbour loops (team, the launch bounds), the permutation kernel;
+ * and the CUB reductions with their functors (bounding box, bounds, the
+ * blow-up check). */
+
+/* ---- launching ----------------------------------------------------------- */
+
+template <class F> __global__ void k_each(size_t n, F f)
+{
+    size_t i = (size_t)blockIdx.x * blockDim.x + threadIdx.x;
+    if (i < n) f(i);
+}
+
+template <class F> static void each(const gpu_t *g, size_t n, F f)
+{
+    if (n == 0) return;
+    k_each<<<(unsigned)((n + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(n, f);
+    CK(cudaGetLastError());
+}
+
+/* At least SPHSEG_TEAM_MINB blocks of BLOCK threads per SM: at most 128
+ * registers a thread on sm_90 (65536 / (128 * 4)). The flow rates want 144
+ * and spill a little at 128, yet the fourth block's warps hide more of the
+ * neighbour-gather latency: 1.20x on the 3D drum at 1.1e7 particles with the
+ * fused L, neutral on the 2D drums (docs/gpu.md, H100). 0 lets nvcc choose. */
+#ifndef SPHSEG_TEAM_MINB
+#define SPHSEG_TEAM_MINB 4
+#endif
+#if SPHSEG_TEAM_MINB > 0
+#define TEAM_LB __launch_bounds__(BLOCK, SPHSEG_TEAM_MINB)
+#else
+#define TEAM_LB
+#endif
+/* Teams (src/physics/hd.h): T consecutive threads per particle, f(i, lane,
+ * T), T a power of two dividing the warp, so that a team never straddles a
+ * warp and a team past n is out as a whole. */
+template <int T, class F> __global__ void TEAM_LB k_team(size_t n, F f)
+{
+    size_t t = (size_t)blockIdx.x * blockDim.x + threadIdx.x, i = t / T;
+    if (i < n) f(i, (int)(t % T), T);
+}
+
+template <int T, class F> static void team_launch(const gpu_t *g, size_t n, F f)
+{
+    size_t nt = n * T;
+    k_team<T><<<(unsigned)((nt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(n, f);
+    CK(cudaGetLastError());
+}
+
+/* The neighbour-loop kernels, g->team threads per particle. */
+template <class F> static void team(const gpu_t *g, size_t n, F f)
+{
+    if (n == 0) return;
+    switch (g->team) {
+    case 1: team_launch<1>(g, n, f); break;
+    case 2: team_launch<2>(g, n, f); break;
+    case 4: team_launch<4>(g, n, f); break;
+    case 8: team_launch<8>(g, n, f); break;
+    default: team_launch<16>(g, n, f); break;
+    }
+}
+
+__global__ void k_permute(perm_tab t, const unsigned *perm, size_t n)
+{
+    size_t k = (size_t)blockIdx.x * blockDim.x + threadIdx.x;
+    if (k >= n) return;
+    int a = blockIdx.y;
+    size_t s = perm[k];
+    switch (t.es[a]) {
+    case 8: ((uint64_t *)t.dst[a])[k] = ((const uint64_t *)t.src[a])[s]; break;
+    case 4: ((uint32_t *)t.dst[a])[k] = ((const uint32_t *)t.src[a])[s]; break;
+    default: ((uint8_t *)t.dst[a])[k] = ((const uint8_t *)t.src[a])[s]; break;
+    }
+}
+
+static void *dev_alloc(size_t bytes)
+{
+    void *p = NULL;
+    cudaError_t e = cudaMalloc(&p, bytes ? bytes : 1);
+    if (e != cudaSuccess)
+        error_exit(1, "GPU out of memory: %zu bytes (%s); use fewer particles per GPU (a larger Geometry:dr "
+                   "or more ranks)", bytes, cudaGetErrorString(e));
+    return p;
+}
+
+/* Grow the CUB scratch to at least bytes. */
+static void *scratch(gpu_t *g, size_t bytes)
+{
+    if (bytes > g->tmp_bytes) {
+        if (g->tmp) CK(cudaFree(g->tmp));
+        g->tmp = dev_alloc(bytes);
+        g->tmp_bytes = bytes;
+    }
+    return g->tmp;
+}
+
+/* ---- reductions (functors for CUB) -------------------------------------- */
+
+struct box_of {
+    particles_t p;
+    __device__ box operator()(size_t i) const
+    {
+        box b;
+        for (int d = 0; d < 3; ++d) b.lo[d] = b.hi[d] = p.x[d][i];
+        return b;
+    }
+};
+struct box_merge {
+    __device__ box operator()(const box &a, const box &b) const
+    {
+        box c;
+        for (int d = 0; d < 3; ++d) {
+            c.lo[d] = b.lo[d] < a.lo[d] ? b.lo[d] : a.lo[d];
+            c.hi[d] = b.hi[d] > a.hi[d] ? b.hi[d] : a.hi[d];
+        }
+        return c;
+    }
+};
+
+struct bnd3 {
+    double v[3];
+};
+struct bnd_of {
+    particles_t p;
+    step_ctx c;
+    __device__ bnd3 operator()(size_t i) const
+    {
+        bnd3 b = {{0, 0, 0}};
+        if (p.kind[i] == KIND_MATERIAL) step_bounds_of(i, &p, &c, b.v);
+        return b;
+    }
+};
+struct bnd_max {
+    __device__ bnd3 operator()(const bnd3 &a, const bnd3 &b) const
+    {
+        bnd3 c;
+        for (int k = 0; k < 3; ++k) c.v[k] = a.v[k] > b.v[k] ? a.v[k] : b.v[k];
+        return c;
+    }
+};
+
+/* The blow-up guard (lowest bad index) and the displacements of the Verlet
+ * test, squared: since the list build (xb) and in the last step (x_n). */
+struct chk {
+    long long first;
+    real build2, step2;
+};
+struct chk_of {
+    particles_t p;
+    step_ctx c;
+    double t;
+    const real *xb0, *xb1, *xb2;
+    __device__ chk operator()(size_t i) const
+    {
+        chk r;
+        r.first = p.kind[i] == KIND_MATERIAL && step_guard(i, &p, &c, t) ? (long long)i : (long long)p.n;
+        real b0 = p.x[0][i] - xb0[i], b1 = p.x[1][i] - xb1[i], b2 = p.x[2][i] - xb2[i];
+        real s0 = p.x[0][i] - p.x_n[0][i], s1 = p.x[1][i] - p.x_n[1][i], s2 = p.x[2][i] - p.x_n[2][i];
+        r.build2 = b0 * b0 + b1 * b1 + b2 * b2;
+        r.step2 = s0 * s0 + s1 * s1 + s2 * s2;
+        if (!(r.build2 < R(1e30))) r.build2 = R(1e30); /* non-finite: the guard reports it */
+        if (!(r.step2 < R(1e30))) r.step2 = R(1e30);
+        return r;
+    }
+};
+struct chk_merge {
+    __device__ chk operator()(const chk &a, const chk &b) const
+    {
+        chk r;
+        r.first = b.first < a.first ? b.first : a.first;
+        r.build2 = b.build2 > a.build2 ? b.build2 : a.build2;
+        r.step2 = b.step2 > a.step2 ? b.step2 : a.step2;
+        return r;
+    }
+};
+/* The check and the next step's time-step bounds in one pass (gpu_check):
+ * nothing changes the store between them, and a host synchronisation per
+ * step is saved. */
+struct chkb {
+    chk c;
+    bnd3 b;
+    real amax; /* the largest |acc| (amag, when given) */
+};
+struct chkb_of {
+    chk_of c;
+    bnd_of b;
+    const real *amag;
+    __device__ chkb operator()(size_t i) const { return chkb{c(i), b(i), amag ? amag[i] : R(0.0)}; }
+};
+struct chkb_merge {
+    __device__ chkb operator()(const chkb &a, const chkb &b) const
+    {
+        return chkb{chk_merge()(a.c, b.c), bnd_max()(a.b, b.b), b.amax > a.amax ? b.amax : a.amax};
+    }
+};
+struct max_real {
+    __device__ real operator()(real a, real b) const { return b > a ? b : a; }
+};
+
+template <class It, class T, class Op> static void reduce(gpu_t *g, It in, T *out, size_t n, Op op, T init)
+{
+    size_t bytes = 0;
+    CK(cub::DeviceReduce::Reduce(NULL, bytes, in, out, (int64_t)n, op, init, g->st));
+    CK(cub::DeviceReduce::Reduce(scratch(g, bytes), bytes, in, out, (int64_t)n, op, init, g->st));
+}

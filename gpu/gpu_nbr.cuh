@@ -1,0 +1,250 @@
+/* gpu/gpu_nbr.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
+ * compiled in (included in order; not a header of its own).
+ * The neighbour build (cells by CUB radix sort, the permutation of the
+ * store, the Verlet lists with their skin, the dummies out of reach, the
+ * halo levels), the HCSR classification, and the boundary passes (dummy
+ * walls and the renormalisation L). */
+
+/* ---- the neighbour build ------------------------------------------------- */
+
+struct max_uint {
+    __device__ unsigned operator()(unsigned a, unsigned b) const { return b > a ? b : a; }
+};
+
+/* Cells of edge `support` over owned particles and ghosts, each range
+ * sorted apart (a ghost bit above the cell index), on the global lattice
+ * when origin is given (multi-rank exact builds: HCSR cell types as on one
+ * rank); the list of the particles within sqrt(list2). With ghosts, the
+ * permutation goes back to the halo lists (halo_sorted). */
+static void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, const real *origin)
+{
+    g->builds++;
+    const size_t n = g->n + g->ng, nown = g->n;
+    particles_t p = g->d;
+    box init;
+    for (int d = 0; d < 3; ++d) init.lo[d] = R(INFINITY), init.hi[d] = -R(INFINITY);
+    prof_begin(g->st);
+    auto bx = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), box_of{p});
+    reduce(g, bx, g->dbox, n, box_merge(), init);
+    CK(cudaMemcpyAsync(g->hbox, g->dbox, sizeof(box), cudaMemcpyDeviceToHost, g->st));
+    CK(cudaStreamSynchronize(g->st));
+    prof_end(g->st, P_BBOX);
+    g->ncell = origin ? grid_fit_lattice(&g->view, dim, n, origin, g->hbox->lo, g->hbox->hi, support)
+                      : grid_fit(&g->view, dim, n, g->hbox->lo, g->hbox->hi, support);
+    if (2 * g->ncell >= 0xffffffffu)
+        error_exit(EXIT_NUMERICAL, "the particles spread over %zu cells of edge 2h (more than 2^31): a particle "
+                   "flew far from the rest", g->ncell);
+    if (g->ncell > g->cap_cell) {
+        if (g->start) {
+            CK(cudaFree(g->start));
+            CK(cudaFree(g->end));
+            CK(cudaFree(g->cell_mat));
+            CK(cudaFree(g->cell_type));
+        }
+        g->cap_cell = g->ncell + g->ncell / 4;
+        g->start = (size_t *)dev_alloc(2 * g->cap_cell * sizeof(size_t)); /* owned, then ghost cells */
+        g->end = (size_t *)dev_alloc(2 * g->cap_cell * sizeof(size_t));
+        g->cell_mat = (size_t *)dev_alloc(g->cap_cell * sizeof(size_t));
+        g->cell_type = (unsigned char *)dev_alloc(g->cap_cell);
+    }
+    grid_view v = g->view;
+    unsigned *key = g->key, *idx = g->idx;
+    const unsigned gbit = (unsigned)g->ncell;
+    prof_begin(g->st);
+    each(g, n, [=] __device__(size_t i) {
+        int c[3];
+        grid_cell_coords(&v, p.x[0], p.x[1], p.x[2], i, c);
+        key[i] = (unsigned)grid_cell_index(&v, c[0], c[1], c[2]) + (i >= nown ? gbit : 0u);
+        idx[i] = (unsigned)i;
+    });
+    const size_t nkey = g->ng ? 2 * g->ncell : g->ncell;
+    int bits = 1;
+    while (bits < 32 && ((size_t)1 << bits) < nkey) ++bits;
+    cub::DoubleBuffer<unsigned> kb(g->key, g->key2), vb(g->idx, g->idx2);
+    size_t bytes = 0;
+    CK(cub::DeviceRadixSort::SortPairs(NULL, bytes, kb, vb, (int64_t)n, 0, bits, g->st));
+    CK(cub::DeviceRadixSort::SortPairs(scratch(g, bytes), bytes, kb, vb, (int64_t)n, 0, bits, g->st));
+    const unsigned *sk = kb.Current(), *perm = vb.Current();
+    size_t *start = g->start, *end = g->end;
+    CK(cudaMemsetAsync(start, 0, nkey * sizeof(size_t), g->st));
+    CK(cudaMemsetAsync(end, 0, nkey * sizeof(size_t), g->st));
+    each(g, n, [=] __device__(size_t k) {
+        unsigned c = sk[k];
+        if (k == 0 || sk[k - 1] != c) start[c] = k;
+        if (k == n - 1 || sk[k + 1] != c) end[c] = k + 1;
+    });
+    prof_end(g->st, P_SORT);
+    if (hl) { /* the halo lists follow the particles through the sort */
+        unsigned *hp = (unsigned *)malloc((n ? n : 1) * sizeof(unsigned));
+        size_t *pz = (size_t *)malloc((n ? n : 1) * sizeof(size_t));
+        if (!hp || !pz) error_exit(1, "out of memory (%zu particles)", n);
+        CK(cudaMemcpyAsync(hp, perm, n * sizeof(unsigned), cudaMemcpyDeviceToHost, g->st));
+        CK(cudaStreamSynchronize(g->st));
+        for (size_t k = 0; k < n; ++k) pz[k] = hp[k];
+        halo_sorted(hl, pz, n);
+        free(hp), free(pz);
+    }
+    prof_begin(g->st);
+    perm_tab t;
+    t.n = (int)part_narrays();
+    for (int a = 0; a < t.n; ++a) {
+        t.es[a] = (unsigned char)part_array_esize((size_t)a);
+        t.src[a] = part_array_get(&g->d, (size_t)a);
+        t.dst[a] = part_array_get(&g->alt, (size_t)a);
+    }
+    dim3 grid((unsigned)((n + 255) / 256), (unsigned)t.n);
+    if (n) k_permute<<<grid, 256, 0, g->st>>>(t, perm, n);
+    CK(cudaGetLastError());
+    prof_end(g->st, P_PERMUTE);
+    particles_t tmp = g->d;
+    g->d = g->alt;
+    g->alt = tmp;
+    g->view.start = g->start;
+    g->view.end = g->end;
+    g->view.gstart = g->ng ? g->start + g->ncell : NULL;
+    g->view.gend = g->ng ? g->end + g->ncell : NULL;
+    /* the neighbour list, from the cell scan in its order (grid_list_fill) */
+    grid_view vc = g->view;
+    vc.nl = vc.ncnt = NULL;
+    particles_t q = g->d;
+    unsigned *cnt = g->ncnt;
+    prof_begin(g->st);
+    for (;;) { /* a list too short for the densest particle grows, once in a while */
+        unsigned *nl = g->nl, cap = g->nl_cap;
+        each(g, n, [=] __device__(size_t i) { cnt[i] = grid_list_fill(&vc, q.x, i, list2, nl, n, cap); });
+        reduce(g, cnt, (unsigned *)g->dfirst, n, max_uint(), 0u);
+        CK(cudaMemcpyAsync(g->hfirst, g->dfirst, sizeof(long long), cudaMemcpyDeviceToHost, g->st));
+        CK(cudaStreamSynchronize(g->st));
+        unsigned most;
+        memcpy(&most, g->hfirst, sizeof most);
+        if (most <= cap) break;
+        CK(cudaFree(g->nl));
+        g->nl_cap = (most + most / 4 + 7) / 8 * 8;
+        g->nl = (unsigned *)dev_alloc(g->cap * g->nl_cap * sizeof(unsigned));
+    }
+    for (int d = 0; d < dim; ++d)
+        CK(cudaMemcpyAsync(g->xb[d], q.x[d], n * sizeof(real), cudaMemcpyDeviceToDevice, g->st));
+    unsigned *nl = g->nl, cap = g->nl_cap;
+    prof_end(g->st, P_LIST);
+    g->view.nl = nl;
+    g->view.ncnt = cnt;
+    g->view.nl_stride = n;
+    g->view.nl_cap = cap;
+    if (g->wact) { /* dummies that no material reaches until the next build (the list's skin) */
+        uint8_t *wa = g->wact;
+        grid_view vw = g->view;
+        each(g, n, [=] __device__(size_t i) {
+            int r = q.kind[i] == KIND_DUMMY && cnt[i] > cap; /* a cell scan at use: keep the loop */
+            if (q.kind[i] == KIND_DUMMY && !r) {
+                NBR_BEGIN(&vw, q.x, i, j)
+                    r |= q.kind[j] == KIND_MATERIAL;
+                NBR_END
+            }
+            wa[i] = (uint8_t)r;
+        });
+    }
+    if (g->lvl) { /* halo levels (see the top) from the new list */
+        uint8_t *lvl = g->lvl;
+        grid_view vl = g->view;
+        each(g, n, [=] __device__(size_t i) { lvl[i] = i >= nown ? 0 : 3; });
+        each(g, nown, [=] __device__(size_t i) {
+            int ghost = 0;
+            NBR_BEGIN(&vl, q.x, i, j)
+                ghost |= j >= nown;
+            NBR_END
+            if (ghost) lvl[i] = 1;
+        });
+        each(g, nown, [=] __device__(size_t i) {
+            if (lvl[i] != 3) return;
+            int near = 0;
+            NBR_BEGIN(&vl, q.x, i, j)
+                near |= lvl[j] == 1;
+            NBR_END
+            if (near) lvl[i] = 2;
+        });
+    }
+}
+
+/* HCSR classification (bound.c on the CPU): cell types, then the two sweeps,
+ * over owned particles and ghosts. */
+static void gpu_classify(gpu_t *g, const sph_ctx *kc)
+{
+    particles_t p = g->d;
+    grid_view v = g->view;
+    sph_ctx k = *kc;
+    size_t *mat = g->cell_mat, n = g->n + g->ng;
+    unsigned char *type = g->cell_type, *cls = g->cls;
+    bound_sums *sums = g->sums;
+    prof_begin(g->st);
+    each(g, g->ncell, [=] __device__(size_t c) {
+        mat[c] = bound_cell_material(&v, &p, c);
+    });
+    for (int pass = 0; pass < 2; ++pass)
+        each(g, g->ncell, [=] __device__(size_t c) { type[c] = bound_cell_type(&v, type, mat, c, pass); });
+    each(g, n, [=] __device__(size_t i) {
+        p.bclass[i] = (uint8_t)bound_class_first(i, &p, &v, &k, type, &sums[i]);
+    });
+    each(g, n, [=] __device__(size_t i) {
+        particles_t q = p;
+        cls[i] = (unsigned char)bound_class_second(i, &q, &v, &k, type, &sums[i]);
+    });
+    CK(cudaMemcpyAsync(p.bclass, cls, n, cudaMemcpyDeviceToDevice, g->st));
+    prof_end(g->st, P_CLASSIFY);
+}
+
+/* Pass selections: everything (one rank, or right after a build), the
+ * particles whose support reads no ghost data (level >= lo), the rest. */
+static sel sel_all(void) { return sel{NULL, 0, 0}; }
+static sel sel_in(const gpu_t *g, int lo) { return g->lvl ? sel{g->lvl, (uint8_t)lo, 3} : sel_all(); }
+static sel sel_bd(const gpu_t *g, int lo) { return sel{g->lvl, 0, (uint8_t)(lo - 1)}; }
+
+/* Over owned particles and ghosts in sl: the dummy walls (paper §4.1;
+ * walls) and the conservative scheme's L of the material (renorm). Neither
+ * reads what the other writes: a small store (several threads per
+ * particle, latency-bound) runs them as one kernel, a large one as two (the
+ * merged kernel would run both at the larger register count: 2 % slower on
+ * the 3D drum, docs/gpu.md). */
+/* Dummy i's wall state: its loop when material may be in reach (wa[i]),
+ * else flow_wall_none, the same result without the loop (the list holds no
+ * material, so the loop's sums would be zero): about half the dummies of a
+ * drum lie above the bed or deep in an end wall. */
+__device__ __forceinline__ void wall_one(size_t i, particles_t *q, const grid_view *v, const flow_ctx *c,
+                                         const uint8_t *wa, int lane, int T)
+{
+    if (!wa || wa[i]) flow_wall_team(i, q, v, c, lane, T);
+    else if (lane == 0) flow_wall_none(i, q, c);
+}
+
+static void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl)
+{
+    particles_t p = g->d;
+    grid_view v = g->view;
+    flow_ctx c = s->flow;
+    seg_ctx sc = s->seg;
+    const size_t n = g->n + g->ng;
+    const size_t rlo = s->renorm_due ? g->n : 0; /* the owned L due in the flow rates: the ghosts' here */
+    const uint8_t *wa = g->wact;
+    if (rlo >= n) renorm = 0;
+    if (!walls && !renorm) return;
+    prof_begin(g->st);
+    if (walls && renorm && g->team > 1) {
+        team(g, n, [=] __device__(size_t i, int lane, int T) {
+            if (!sel_on(sl, i)) return;
+            particles_t q = p;
+            if (q.kind[i] == KIND_DUMMY) wall_one(i, &q, &v, &c, wa, lane, T);
+            else if (q.kind[i] == KIND_MATERIAL && i >= rlo) seg_renorm_team(i, &q, &v, &sc, lane, T);
+        });
+    } else {
+        if (walls)
+            team(g, n, [=] __device__(size_t i, int lane, int T) {
+                particles_t q = p;
+                if (q.kind[i] == KIND_DUMMY && sel_on(sl, i)) wall_one(i, &q, &v, &c, wa, lane, T);
+            });
+        if (renorm) /* particles rlo.. only: with the owned L due later, just the ghosts */
+            team(g, n - rlo, [=] __device__(size_t k, int lane, int T) {
+                const size_t i = rlo + k;
+                if (p.kind[i] == KIND_MATERIAL && sel_on(sl, i)) seg_renorm_team(i, &p, &v, &sc, lane, T);
+            });
+    }
+    prof_end(g->st, P_WALLS);
+}

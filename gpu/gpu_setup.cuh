@@ -1,0 +1,173 @@
+/* gpu/gpu_setup.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
+ * compiled in (included in order; not a header of its own).
+ * Set-up: device selection, the store's allocation and growth (gpu_reserve),
+ * host-device copies, the team size rule, gpu_get (the backend's state,
+ * created on first use) and gpu_hook. */
+
+/* ---- set-up -------------------------------------------------------------- */
+
+extern "C" int gpu_devices(void)
+{
+    int n = 0;
+    if (cudaGetDeviceCount(&n) != cudaSuccess) {
+        (void)cudaGetLastError();
+        return 0;
+    }
+    return n;
+}
+
+/* Per-particle device arrays for at least need particles (contents are not
+ * kept: callers upload after). */
+static void gpu_reserve(gpu_t *g, size_t need)
+{
+    if (need <= g->cap && g->key) return;
+    size_t cap = g->key ? need + need / 8 + 1024 : need; /* one rank: exactly n, as before */
+    if (cap >= 0xffffffffu) error_exit(1, "backend_gpu: %zu particles on one rank: more than 2^32 - 1", cap);
+    size_t na = part_narrays();
+    if (g->key) {
+        for (size_t k = 0; k < na; ++k) {
+            CK(cudaFree(part_array_get(&g->d, k)));
+            CK(cudaFree(part_array_get(&g->alt, k)));
+        }
+        void *bufs[] = {g->key, g->key2, g->idx, g->idx2, g->cls, g->sums, g->nl, g->ncnt, g->amag,
+                        g->xb[0], g->xb[1], g->xb[2], g->lvl, g->wact};
+        for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k)
+            if (bufs[k]) CK(cudaFree(bufs[k]));
+    }
+    for (size_t k = 0; k < na; ++k) {
+        size_t bytes = cap * part_array_esize(k);
+        part_array_set(&g->d, k, dev_alloc(bytes));
+        part_array_set(&g->alt, k, dev_alloc(bytes));
+    }
+    g->key = (unsigned *)dev_alloc(cap * sizeof(unsigned));
+    g->key2 = (unsigned *)dev_alloc(cap * sizeof(unsigned));
+    g->idx = (unsigned *)dev_alloc(cap * sizeof(unsigned));
+    g->idx2 = (unsigned *)dev_alloc(cap * sizeof(unsigned));
+    g->cls = (unsigned char *)dev_alloc(cap);
+    g->sums = (bound_sums *)dev_alloc(cap * sizeof(bound_sums));
+    for (int d = 0; d < 3; ++d) {
+        g->xb[d] = (real *)dev_alloc(cap * sizeof(real));
+        CK(cudaMemset(g->xb[d], 0, cap * sizeof(real)));
+    }
+    g->nl = (unsigned *)dev_alloc(cap * g->nl_cap * sizeof(unsigned));
+    g->ncnt = (unsigned *)dev_alloc(cap * sizeof(unsigned));
+    g->amag = (real *)dev_alloc(cap * sizeof(real));
+    CK(cudaMemset(g->amag, 0, cap * sizeof(real)));
+    g->lvl = g->hx ? (uint8_t *)dev_alloc(cap) : NULL;
+    g->wact = g->wskip ? (uint8_t *)dev_alloc(cap) : NULL;
+    g->cap = cap;
+    g->built = 0;
+}
+
+/* Host arrays [a, b) of every particle array to the device. */
+static void gpu_upload(gpu_t *g, const particles_t *h, size_t a, size_t b)
+{
+    for (size_t k = 0; k < part_narrays(); ++k) {
+        size_t es = part_array_esize(k);
+        CK(cudaMemcpyAsync((char *)part_array_get(&g->d, k) + a * es, (const char *)part_array_get(h, k) + a * es,
+                           (b - a) * es, cudaMemcpyHostToDevice, g->st));
+    }
+    CK(cudaStreamSynchronize(g->st));
+}
+
+/* The counts in the device structs (kernels read p.n, p.ng). */
+static void gpu_counts(gpu_t *g, size_t n, size_t ng)
+{
+    g->n = n, g->ng = ng;
+    g->d.n = g->alt.n = n;
+    g->d.ng = g->alt.ng = ng;
+    g->d.cap = g->alt.cap = g->cap;
+}
+
+/* Threads per particle in the neighbour loops: SPHSEG_GPU_TEAM (1, 2, 4, 8
+ * or 16), else GPU_TEAM_MAX of the dimension (by the length of the list:
+ * 4 in 2D, about 30 neighbours; 8 in 3D, about 140), halved while n T
+ * exceeds GPU_TEAM_THREADS: a small store runs more threads per particle
+ * (latency), a large one fills the device with one (the rule is measured in
+ * docs/gpu.md, "Teams"). */
+static int gpu_team_size(int dim, size_t n)
+{
+    const char *e = getenv("SPHSEG_GPU_TEAM");
+    if (e && *e) {
+        char *end;
+        long t = strtol(e, &end, 10);
+        if (*end || (t != 1 && t != 2 && t != 4 && t != 8 && t != 16))
+            error_exit(2, "SPHSEG_GPU_TEAM=%s: expected 1, 2, 4, 8 or 16 threads per particle", e);
+        return (int)t;
+    }
+    int t = dim == 3 ? GPU_TEAM_MAX_3D : GPU_TEAM_MAX_2D;
+    while (t > 1 && (double)n * t > GPU_TEAM_THREADS) t /= 2;
+    return t;
+}
+
+static gpu_t *gpu_get(sim_t *s)
+{
+    if (s->be_data) return (gpu_t *)s->be_data;
+    gpu_t *g = (gpu_t *)calloc(1, sizeof *g);
+    if (!g) error_exit(1, "out of memory");
+    int ndev = gpu_devices();
+    g->dev = g_local_rank % (ndev > 0 ? ndev : 1);
+    CK(cudaSetDevice(g->dev));
+    CK(cudaStreamCreateWithFlags(&g->st, cudaStreamNonBlocking));
+    const char *pe = getenv("SPHSEG_GPU_PROFILE");
+    prof.on = pe && *pe && strcmp(pe, "0") != 0;
+    const char *ws = getenv("SPHSEG_GPU_WALLSKIP");
+    g->wskip = !(ws && strcmp(ws, "0") == 0);
+    if (prof.on) {
+        CK(cudaEventCreate(&prof.a));
+        CK(cudaEventCreate(&prof.b));
+    }
+    cudaDeviceProp prop;
+    CK(cudaGetDeviceProperties(&prop, g->dev));
+    const particles_t *h = &s->p;
+    size_t n = h->n, na = part_narrays();
+    if (na > PERM_MAX) error_exit(1, "backend_gpu: %zu particle arrays > PERM_MAX", na);
+    g->nl_cap = grid_list_cap(h->dim, (1 + 0.5 * GPU_SKIN) * (double)(s->seg.k.h / s->seg.k.dr));
+    if (s->halo) {
+        g->hx = (dhalo *)calloc(1, sizeof *g->hx);
+        if (!g->hx) error_exit(1, "out of memory");
+        g->hx->cuda_aware = halo_cuda_aware();
+        const char *ov = getenv("SPHSEG_GPU_OVERLAP");
+        g->hx->overlap = !(ov && !strcmp(ov, "0"));
+        s->halo->exposed_measured = 1;
+        for (int k = 0; k < HX_EV; ++k) CK(cudaEventCreate(&g->hx->ev[k]));
+    }
+    g->team = gpu_team_size(h->dim, n);
+    message("gpu: device %d of %d, %s, %.1f GiB; %zu MiB of particle arrays (two sets), %zu MiB of neighbour "
+            "list (%u per particle), %d threads per particle in neighbour loops%s", g->dev, ndev, prop.name,
+            (double)prop.totalGlobalMem / (1u << 30), 2 * n * part_bytes_per_particle() >> 20,
+            (n * g->nl_cap * sizeof(unsigned)) >> 20, g->nl_cap, g->team,
+            !g->hx ? "" : g->hx->cuda_aware ? "; halo: CUDA-aware MPI on device buffers"
+                                            : "; halo: packed on the device, staged through pinned host memory");
+    g->d = *h;
+    g->alt = *h;
+    gpu_reserve(g, n);
+    gpu_counts(g, n, 0);
+    gpu_upload(g, h, 0, n);
+    g->skin = (real)(GPU_SKIN * s->seg.k.h);
+    g->every = !s->flow_on; /* prescribed motion moves up to h a stage: from the first step on */
+    g->dbox = (box *)dev_alloc(sizeof(box));
+    g->dres = (double *)dev_alloc(STEP_NBOUNDS * sizeof(double));
+    CK(cudaMemset(g->dres, 0, STEP_NBOUNDS * sizeof(double)));
+    g->dfirst = (long long *)dev_alloc(sizeof(long long));
+    g->dchk = (chkb *)dev_alloc(sizeof(chkb));
+    CK(cudaMallocHost((void **)&g->hchk, sizeof(chkb)));
+    CK(cudaMallocHost((void **)&g->hbox, sizeof(box)));
+    CK(cudaMallocHost((void **)&g->hres, STEP_NBOUNDS * sizeof(double)));
+    CK(cudaMallocHost((void **)&g->hfirst, sizeof(long long)));
+    s->be_data = g;
+    return g;
+}
+
+static void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t);
+
+/* gpu_get for a hook: the held-back save and advance run first; for a hook
+ * that changes the store (mut), the bounds taken by the last check no
+ * longer hold. */
+static gpu_t *gpu_hook(sim_t *s, int mut)
+{
+    gpu_t *g = gpu_get(s);
+    gpu_step_kernel(s, g, 0, 0.0);
+    if (mut) g->bnd_fresh = 0;
+    return g;
+}

@@ -1,0 +1,288 @@
+/* gpu/gpu_step.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
+ * compiled in (included in order; not a header of its own).
+ * The step's hooks: prepare (motion, list build or refresh, walls, L), rates
+ * (flow pass, concentration coefficients and dC/dt), the held-back save and
+ * advance, the concentration windows (conc_begin, conc_step) and the Shepard
+ * filter. */
+
+/* ---- the hooks ----------------------------------------------------------- */
+
+/* The largest |acc| of the last flow-rate evaluation into dres[STEP_ACC] (a
+ * real, widened on read), if not reduced yet: the check folds it into its
+ * own pass; a build or a load balance, which reorder the store, take it
+ * first. */
+static void gpu_acc_reduce(gpu_t *g)
+{
+    if (!g->acc_pending) return;
+    reduce(g, g->amag, (real *)(g->dres + STEP_ACC), g->n, max_real(), R(0.0));
+    g->acc_pending = 0;
+}
+
+static void gpu_prepare(sim_t *s, double t, int classify)
+{
+    gpu_t *g = gpu_get(s);
+    g->bnd_fresh = 0;
+    gpu_settle(s, g);
+    gpu_step_kernel(s, g, 1, t); /* with the held-back save and advance */
+    int exact = classify == 2 || (s->hcsr && classify);
+    int renorm = s->seg_on && classify && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm;
+    if (renorm) s->renorm_due = s->flow_on; /* the owned L: with the next flow rates (sim.h) */
+    int build = !g->built || g->stale || g->every || exact;
+    if (s->halo) build = comm_max((double)build) > 0; /* a build exchanges: every rank or none */
+    if (build) {
+        gpu_acc_reduce(g); /* before the store is re-sorted */
+        if (s->halo) gpu_full_exchange(s, g);
+        real skin = exact ? R(0.0) : g->skin, sup = R(2.0) * s->seg.k.h + skin;
+        gpu_build(g, s->halo, s->p.dim, sup, exact ? s->seg.k.support2 : sup * sup,
+                  s->halo && exact ? s->halo->origin : NULL);
+        if (s->halo) gpu_halo_lists(s, g);
+        g->built = 1;
+        g->stale = exact; /* a list without skin is stale as soon as anything moves */
+        if (exact) {
+            gpu_classify(g, &s->seg.k);
+            if (s->halo) { /* deep ghosts lack part of their support: the owners' classes */
+                ftab c;
+                c.n = 0;
+                ft_add(&c, g->d.bclass, 1);
+                for (int d = 0; d < 3; ++d) ft_add(&c, g->d.nrm[d], sizeof(real));
+                ft_add(&c, g->d.psi, sizeof(real));
+                gpu_refresh(s, g, c);
+            }
+        }
+        gpu_walls_renorm(s, g, s->flow_on, renorm, sel_all());
+        return;
+    }
+    if (s->halo && !g->hx->overlap) gpu_refresh(s, g, moving_fields(s, g));
+    if (s->halo && g->hx->overlap) { /* ghosts moved: refresh them while the interior goes on */
+        gpu_refresh_start(s, g, moving_fields(s, g));
+        g->hx->pend_renorm = renorm;
+        g->hx->pend_walls = s->flow_on;
+        gpu_walls_renorm(s, g, s->flow_on, renorm, sel_in(g, 2));
+        return;
+    }
+    gpu_walls_renorm(s, g, s->flow_on, renorm, sel_all());
+}
+
+/* The flow rates of the owned particles in sl, and with segregation their
+ * concentration coefficients (seg_coeffs reads only i's C and the shear
+ * rate just computed). */
+template <int RENORM> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
+{
+    particles_t p = g->d;
+    grid_view v = g->view;
+    flow_ctx c = s->flow;
+    seg_ctx sc = s->seg;
+    const int seg = s->seg_on && !s->win.on; /* in windows: the coefficients at their close */
+    real *amag = g->amag;
+    team(g, g->n, [=] __device__(size_t i, int lane, int T) {
+        if (!sel_on(sl, i)) return;
+        particles_t q = p;
+        const int mat = q.kind[i] == KIND_MATERIAL;
+        real a = mat ? flow_rates_team(i, &q, &v, &c, lane, T, RENORM) : R(0.0);
+        if (lane != 0) return;
+        amag[i] = a;
+        if (seg && mat) seg_coeffs(i, &q, &sc);
+    });
+}
+
+/* (and the owned particles' L when prepare left them due: a kernel of its
+ * own, so that the other passes keep the smaller register count) */
+static void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl)
+{
+    prof_begin(g->st);
+    if (s->renorm_due) gpu_flow_pass<1>(s, g, sl);
+    else gpu_flow_pass<0>(s, g, sl);
+    g->acc_pending = 1;
+    prof_end(g->st, P_FLOW);
+}
+
+/* (p: g->d, or g->d reading the window's mean shear rate as gdot) */
+static void gpu_seg_coeffs(sim_t *s, gpu_t *g, particles_t p, size_t a, size_t b)
+{
+    seg_ctx c = s->seg;
+    each(g, b - a, [=] __device__(size_t k) {
+        size_t i = a + k;
+        if (p.kind[i] == KIND_MATERIAL) seg_coeffs(i, &p, &c);
+    });
+}
+
+static void gpu_dcdt(sim_t *s, gpu_t *g, particles_t p, sel sl)
+{
+    grid_view v = g->view;
+    seg_ctx c = s->seg;
+    team(g, g->n, [=] __device__(size_t i, int lane, int T) {
+        if (sel_on(sl, i)) seg_dCdt_team(i, &p, &v, &c, lane, T);
+    });
+}
+
+static void gpu_rates(sim_t *s)
+{
+    gpu_t *g = gpu_hook(s, 1);
+    const int overlap = g->hx && g->hx->pending;
+    if (s->flow_on) {
+        if (overlap) { /* level 3 reads nothing the refresh in flight brings */
+            gpu_flow_rates(s, g, sel_in(g, 3));
+            gpu_settle(s, g);
+            gpu_flow_rates(s, g, sel_bd(g, 3));
+        } else {
+            gpu_settle(s, g);
+            gpu_flow_rates(s, g, sel_all());
+        }
+        s->renorm_due = 0;
+    }
+    gpu_settle(s, g);
+    if (s->seg_on && !s->win.on) {
+        prof_begin(g->st);
+        if (s->halo && s->flow_on && !g->hx->overlap) {
+            ftab t;
+            t.n = 0;
+            ft_add(&t, g->d.gdot, sizeof(real));
+            gpu_refresh(s, g, t);
+            gpu_seg_coeffs(s, g, g->d, g->n, g->n + g->ng); /* the owned: with the flow rates */
+            gpu_dcdt(s, g, g->d, sel_all());
+        } else if (s->halo && s->flow_on) { /* the ghosts' shear rate, while the interior goes on */
+            ftab t;
+            t.n = 0;
+            ft_add(&t, g->d.gdot, sizeof(real));
+            gpu_refresh_start(s, g, t);
+            gpu_dcdt(s, g, g->d, sel_in(g, 2));
+            gpu_refresh_finish(s, g);
+            gpu_seg_coeffs(s, g, g->d, g->n, g->n + g->ng);
+            gpu_dcdt(s, g, g->d, sel_bd(g, 2));
+        } else {
+            if (!s->flow_on) gpu_seg_coeffs(s, g, g->d, 0, g->n + g->ng);
+            gpu_dcdt(s, g, g->d, sel_all());
+        }
+        prof_end(g->st, P_SEG);
+    }
+}
+
+/* save_start and advance only note what to do: the per-particle updates
+ * run in one kernel with the next prepare's wall or kinematic motion
+ * (integrate_step calls save_start, advance, prepare in a row), or alone
+ * when another hook comes first (gpu_hook). Each particle's updates are its
+ * own, so running them together changes nothing. */
+static void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t)
+{
+    const int sv = g->pend_save, ad = g->pend_adv;
+    if (!sv && !ad && !place) return;
+    g->pend_save = g->pend_adv = 0;
+    particles_t p = g->d;
+    flow_ctx c = g->pend_fc;
+    const int flow = s->flow_on, seg = s->seg_on && !s->win.on;
+    const real a = g->pend_a, w8 = g->pend_w;
+    wall_geom w = s->flow.w;
+    kin_params kin = s->kin;
+    prof_begin(g->st);
+    each(g, g->n, [=] __device__(size_t i) {
+        particles_t q = p;
+        if (sv) step_save(i, &q, flow);
+        if (ad) step_advance(i, &q, a, &c, flow, seg, w8);
+        if (place) step_place(i, &q, flow, &w, &kin, t);
+    });
+    prof_end(g->st, P_MOTION);
+}
+
+static void gpu_save_start(sim_t *s)
+{
+    gpu_t *g = gpu_hook(s, 1);
+    g->pend_save = 1;
+}
+
+static void gpu_advance(sim_t *s, double a, double w)
+{
+    gpu_t *g = gpu_get(s); /* a save_start just before stays held */
+    if (g->pend_adv) gpu_step_kernel(s, g, 0, 0.0);
+    g->bnd_fresh = 0;
+    g->pend_adv = 1;
+    g->pend_a = (real)a;
+    g->pend_w = (real)w;
+    g->pend_fc = s->flow;
+}
+
+/* Concentration windows (sim.h): the mean shear rate over the window, here
+ * and in the ghosts; L of every material particle at the window's end; the
+ * bounds at that rate (into dres[0..2]: the next gpu_bounds takes its own). */
+static void gpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS])
+{
+    gpu_t *g = gpu_hook(s, 1);
+    gpu_settle(s, g);
+    particles_t p = g->d;
+    const real inv = (real)(1.0 / T);
+    prof_begin(g->st);
+    each(g, g->n, [=] __device__(size_t i) {
+        particles_t q = p;
+        step_shear_mean(i, &q, inv);
+    });
+    if (s->halo) {
+        ftab t;
+        t.n = 0;
+        ft_add(&t, p.gsum, sizeof(real));
+        gpu_refresh(s, g, t);
+    }
+    if (s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) {
+        grid_view v = g->view;
+        seg_ctx sc = s->seg;
+        team(g, g->n + g->ng, [=] __device__(size_t i, int lane, int T) {
+            if (p.kind[i] == KIND_MATERIAL) seg_renorm_team(i, &p, &v, &sc, lane, T);
+        });
+    }
+    particles_t q = p;
+    q.gdot = p.gsum;
+    bnd3 init = {{0, 0, 0}};
+    auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{q, s->step_c});
+    reduce(g, it, (bnd3 *)g->dres, g->n, bnd_max(), init);
+    CK(cudaMemcpyAsync(g->hres, g->dres, 3 * sizeof(double), cudaMemcpyDeviceToHost, g->st));
+    CK(cudaStreamSynchronize(g->st));
+    prof_end(g->st, P_SEG);
+    out[STEP_D] = g->hres[0], out[STEP_WAVE] = g->hres[1], out[STEP_SPEED] = 0, out[STEP_ACC] = 0;
+}
+
+/* One midpoint step of C alone (length a) at the window's mean shear rate;
+ * the ghosts' C refreshed after each stage. */
+static void gpu_conc_step(sim_t *s, double a, int last)
+{
+    gpu_t *g = gpu_hook(s, 1);
+    gpu_settle(s, g);
+    particles_t p = g->d, q = g->d;
+    q.gdot = p.gsum;
+    ftab c;
+    c.n = 0;
+    ft_add(&c, p.C, sizeof(creal));
+    prof_begin(g->st);
+    for (int stage = 0; stage < 2; ++stage) {
+        gpu_seg_coeffs(s, g, q, 0, g->n + g->ng);
+        gpu_dcdt(s, g, q, sel_all());
+        const real as = (real)(stage ? a : 0.5 * a);
+        each(g, g->n, [=] __device__(size_t i) {
+            particles_t r = p;
+            step_conc_advance(i, &r, as, stage);
+        });
+        if (s->halo) gpu_refresh(s, g, c);
+    }
+    if (last) CK(cudaMemsetAsync(p.gsum, 0, (g->n + g->ng) * sizeof(real), g->st));
+    prof_end(g->st, P_SEG);
+}
+
+static void gpu_filter(sim_t *s)
+{
+    gpu_t *g = gpu_hook(s, 1);
+    gpu_settle(s, g);
+    particles_t p = g->d;
+    grid_view v = g->view;
+    flow_ctx c = s->flow;
+    prof_begin(g->st);
+    team(g, g->n, [=] __device__(size_t i, int lane, int T) {
+        particles_t q = p;
+        if (q.kind[i] == KIND_MATERIAL) flow_shepard_team(i, &q, &v, &c, lane, T);
+    });
+    each(g, g->n, [=] __device__(size_t i) { flow_shepard_store(i, &p); });
+    prof_end(g->st, P_FILTER);
+    if (s->halo) {
+        ftab t;
+        t.n = 0;
+        for (int q = 0; q < (s->p.dim == 3 ? 6 : 4); ++q) ft_add(&t, g->d.sig[q], sizeof(real));
+        gpu_refresh(s, g, t);
+    }
+    gpu_walls_renorm(s, g, 1, 0, sel_all());
+}

@@ -1,0 +1,144 @@
+/* gpu/gpu_store.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
+ * compiled in (included in order; not a header of its own).
+ * The CUDA backend's types: the CK error check, sizes and limits, the
+ * permutation and refresh tables, the pass selections, the device halo
+ * state, gpu_t (the device store, the cell and neighbour lists, the pending
+ * stages), and the per-stage profiler (SPHSEG_GPU_PROFILE). */
+
+#define CK(call)                                                                                     \
+    do {                                                                                             \
+        cudaError_t e_ = (call);                                                                     \
+        if (e_ != cudaSuccess)                                                                       \
+            error_exit(1, "CUDA error at %s:%d: %s (%s)", __FILE__, __LINE__, cudaGetErrorString(e_), \
+                       #call);                                                                       \
+    } while (0)
+
+enum { PERM_MAX = 64, BLOCK = 128 };
+#define GPU_SKIN 0.1 /* Verlet skin, in units of h */
+#define GPU_TEAM_MAX_2D 4 /* threads per particle in the neighbour loops (gpu_team_size) */
+#define GPU_TEAM_MAX_3D 8
+#define GPU_TEAM_THREADS 2097152.0
+
+/* Source and destination of every per-particle array (the permutation). */
+struct perm_tab {
+    int n;
+    unsigned char es[PERM_MAX];
+    void *src[PERM_MAX], *dst[PERM_MAX];
+};
+
+struct box {
+    real lo[3], hi[3];
+};
+
+/* Fields of a ghost refresh: device array and element size. */
+enum { FT_MAX = 16 };
+struct ftab {
+    int n;
+    unsigned char es[FT_MAX];
+    void *p[FT_MAX];
+};
+
+/* Which particles a kernel pass runs on: all (lvl NULL), or those whose
+ * halo level (0 ghost, 1..3 owned, see the top) lies in [lo, hi]. */
+struct sel {
+    const uint8_t *lvl;
+    uint8_t lo, hi;
+};
+__device__ __forceinline__ bool sel_on(const sel &s, size_t i)
+{
+    return !s.lvl || (s.lvl[i] >= s.lo && s.lvl[i] <= s.hi);
+}
+
+/* Halo state of a multi-rank run on the device. */
+enum { HX_EV = 64 };
+struct dhalo {
+    unsigned *sidx, *ridx;       /* send lists (neighbour order), ghost slots of the received */
+    size_t cap_s, cap_r;
+    size_t *soff, *roff;         /* entry offsets per neighbour (host, nnb + 1) */
+    size_t *sb, *rb;             /* byte offsets of the current refresh (host, nnb + 1) */
+    int cap_nb;
+    char *dsend, *drecv, *hsend, *hrecv; /* device and pinned host buffers */
+    size_t cap_dsend, cap_drecv, cap_hsend, cap_hrecv;
+    int cuda_aware;
+    int overlap;                 /* SPHSEG_GPU_OVERLAP=0 turns the overlap off (for measuring it) */
+    int pending;                 /* a refresh is in flight (gpu_settle completes it) */
+    int pend_walls, pend_renorm; /* boundary passes to run when it lands */
+    ftab pend;
+    cudaEvent_t ev[HX_EV];       /* pairs (start, end) of GPU time spent on the halo */
+    int nev;
+    long full, refresh;          /* exchanges at builds; refreshes */
+    double full_s;               /* host seconds in the exchanges at builds */
+};
+
+typedef struct gpu {
+    int dev;
+    cudaStream_t st;
+    particles_t d, alt; /* device arrays: current and the permutation's spare set */
+    size_t n, ng, cap;  /* owned particles, ghosts (at [n, n + ng)), allocated */
+    uint8_t *lvl;       /* halo level of each particle (several ranks), else NULL */
+    uint8_t *wact;      /* a dummy with material in its list (gpu_build); NULL: every dummy
+                         * runs its loop (SPHSEG_GPU_WALLSKIP=0, for measuring the skip) */
+    int wskip;
+    struct dhalo *hx;   /* several ranks, else NULL */
+    grid_view view;     /* start/end point to device memory */
+    size_t *start, *end, ncell, cap_cell;
+    unsigned *key, *key2, *idx, *idx2;
+    unsigned char *cell_type, *cls;
+    size_t *cell_mat;
+    bound_sums *sums;
+    unsigned *nl, *ncnt, nl_cap; /* neighbour list (grid_view), rebuilt with the cells */
+    real *xb[3];        /* positions at the last build */
+    real skin;          /* m */
+    int built, stale, every; /* the list: exists; must be rebuilt; rebuild every stage */
+    long builds;
+    real *amag;         /* |acc| of the last flow rate evaluation */
+    int acc_pending;    /* amag not yet reduced into dres[STEP_ACC] (gpu_acc_reduce, gpu_check) */
+    int pend_save, pend_adv; /* save_start and advance held back for the next kernel (gpu_step_kernel) */
+    real pend_a, pend_w;
+    flow_ctx pend_fc;
+    int team;           /* threads per particle in the neighbour loops: 1, 2, 4, 8 or 16 */
+    void *tmp;          /* CUB scratch */
+    size_t tmp_bytes;
+    struct box *dbox;   /* device results */
+    double *dres;       /* [STEP_NBOUNDS]: D, wave, speed, acc */
+    long long *dfirst;  /* also the list-length maximum */
+    struct chkb *dchk, *hchk;
+    int bnd_fresh;      /* hres[0..2] hold the bounds of the current store (gpu_check) */
+    struct box *hbox;   /* pinned host copies */
+    double *hres;
+    long long *hfirst;
+} gpu_t;
+
+static int g_local_rank;
+
+/* Stage timing (SPHSEG_GPU_PROFILE=1 in the environment): events around each
+ * stage with a synchronisation after it, so the stages do not overlap and
+ * the total runs slower than without; a table at the end of the run. */
+enum { P_MOTION, P_BBOX, P_SORT, P_PERMUTE, P_LIST, P_CLASSIFY, P_WALLS, P_FLOW, P_SEG, P_FILTER, P_BOUNDS_CHECK,
+       P_NPROF };
+static const char *prof_name[P_NPROF] = {"save start, advance, motion", "bounding box (+sync)",
+                                          "cell keys, radix sort, start/end", "permute arrays", "neighbour list",
+                                          "HCSR classification", "dummy walls, renormalisation L",
+                                          "flow rates (+seg. coefficients)", "concentration rates", "Shepard filter",
+                                          "dt bounds, blow-up check (+sync)"};
+static struct {
+    int on;
+    cudaEvent_t a, b;
+    double ms[P_NPROF];
+    long calls[P_NPROF];
+} prof;
+
+static void prof_begin(cudaStream_t st)
+{
+    if (prof.on) CK(cudaEventRecord(prof.a, st));
+}
+static void prof_end(cudaStream_t st, int k)
+{
+    if (!prof.on) return;
+    CK(cudaEventRecord(prof.b, st));
+    CK(cudaEventSynchronize(prof.b));
+    float ms;
+    CK(cudaEventElapsedTime(&ms, prof.a, prof.b));
+    prof.ms[k] += ms;
+    prof.calls[k]++;
+}
