@@ -27,9 +27,10 @@ spaced dr is within about atan(dr / chord) of the plane):
     about (3, -2) mm within 0.2 dr (lattice);
   - solid-body rotation u = omega z^ x (x, y), omega = 1 rad/s, but 0.5 rad/s
     in the planes z < W: the speed profile on the mid-chord is omega |p| at
-    its points p (exact for the field; Shepard interpolation of a linear field
-    (of the norm |p|, curved on the scale h) is within 0.1 omega dr where its support is whole, more than 2h from
-    the surface and the wall, and within omega 2h elsewhere), at mid-length
+    its points p (exact for the field; its Shepard interpolation, of a norm
+    curved on the scale h, is within 0.1 omega dr where the kernel's support
+    is whole, more than 2h from the surface and the wall, measured 0.043, and
+    within omega 2h elsewhere), at mid-length
     and at z > L - W with omega = 1, at z < W with omega = 0.5;
   - the command line with --csv writes one row per time with the per-z-bin
     columns, and its numbers are Axial's;
