@@ -21,6 +21,19 @@ spaced dr is within about atan(dr / chord) of the plane):
   - C = 1 for z < 9 mm only: the banding is 1 (all of C's variance lies
     between the z-bins, one of whose edges is 9 mm) to 1e-12, and the bins
     without small grains have no offset (NaN, not an error);
+  - a core of C = 1 displaced by (dx, dy) = (3, -2) mm from the bed's
+    centroid: every z-bin's small-grain offset is the disc's lattice centroid
+    less the bed's (the construction's numbers, computed here) to 1e-9 m, and
+    about (3, -2) mm within 0.2 dr (lattice);
+  - solid-body rotation u = omega z^ x (x, y), omega = 1 rad/s, but 0.5 rad/s
+    in the planes z < W: the speed profile on the mid-chord is omega |p| at
+    its points p (exact for the field; its Shepard interpolation, of a norm
+    curved on the scale h, is within 0.1 omega dr where the kernel's support
+    is whole, more than 2h from the surface and the wall, measured 0.043, and
+    within omega 2h elsewhere), at mid-length
+    and at z > L - W with omega = 1, at z < W with omega = 0.5;
+  - the command line with --csv writes one row per time with the per-z-bin
+    columns, and its numbers are Axial's;
   - a 2D snapshot is refused.
 """
 import argparse
@@ -53,7 +66,7 @@ def bed(theta_deg, theta_end_deg, W, b=-0.004):
     return np.array(pts)
 
 
-def write(path, X, C, dim=3):
+def write(path, X, C, dim=3, V=None):
     n = len(X)
     with h5py.File(path, "w") as f:
         h = f.create_group("Header")
@@ -62,7 +75,7 @@ def write(path, X, C, dim=3):
         h.attrs["NumPart_Total"] = n
         p = f.create_group("Particles")
         p["Coordinates"] = X
-        p["Velocities"] = np.zeros_like(X)
+        p["Velocities"] = np.zeros_like(X) if V is None else V
         p["Concentration"] = C
         p["ShearRate"] = np.zeros(n)
         p["Volume"] = np.full(n, DR ** 3)
@@ -119,6 +132,49 @@ def main():
     check("C = 1 for z < 9 mm: banding 1", abs(ax3.banding - 1) < 1e-12, "%.12f" % ax3.banding)
     check("bins without small grains: offset NaN", np.isnan(ax3.offset[3:]).all() and not np.isnan(ax3.offset[:3]).any(),
           " ".join("%.2g" % o for o in np.hypot(*ax3.offset.T)))
+    # a displaced core: the offset's reference is the construction's own centroids
+    d = np.array([0.003, -0.002])
+    disc = (np.hypot(*(X2[:, :2] - c2 - d).T) < 0.25 * r.max()).astype(float)
+    ref = X2[disc > 0, :2].mean(axis=0) - X2[:, :2].mean(axis=0)  # the same in every z-plane (z-uniform lattice)
+    # solid-body rotation, omega = 1 rad/s, 0.5 in the planes z < W of the 30-degree bed
+    om = np.where(X[:, 2] < W, 0.5, 1.0)
+    Vel = np.stack([-om * X[:, 1], om * X[:, 0], np.zeros(len(X))], axis=1)
+    p5 = os.path.join(a.work, "disc.h5")
+    write(p5, X2, disc)
+    ax5 = da.Axial(p5, par2, nz=7)
+    err = np.abs(ax5.offset - ref).max()
+    check("displaced core: offset per z-bin", err < 1e-9 and np.abs(ax5.offset - d).max() < 0.2 * DR,
+          "max |offset - lattice ref| %.1e m, offset %s mm (built: 3, -2)" % (err, 1e3 * ax5.offset[0]))
+    p6 = os.path.join(a.work, "rot.h5")
+    write(p6, X, core, V=Vel)
+    ax6 = da.Axial(p6, PAR, nz=8)
+    h = PAR["Geometry"]["h_factor"] * DR
+    for tag, dd, omg in (("mid", ax6.mid, 1.0), ("end z < W", ax6.end0, 0.5), ("end z > L - W", ax6.end1, 1.0)):
+        dm, pts = dd.midchord()
+        u, ref_u = dd.interp(pts, dd.speed), omg * np.hypot(*pts.T)
+        dep = dm * R
+        inner = (dep > 2 * h) & (dep < dep.max() - 2 * h - DR)
+        e_in, e_all = np.nanmax(np.abs(u - ref_u)[inner]), np.nanmax(np.abs(u - ref_u))
+        check("solid rotation: mid-chord speed, %s" % tag, e_in < 0.1 * omg * DR and e_all < omg * 2 * h,
+              "max error %.2e (inside) %.2e (all) m/s, omega %.1f" % (e_in, e_all, omg))
+    # the command line: --csv, one row per time, the per-z-bin columns
+    rd = os.path.join(a.work, "run")
+    os.makedirs(rd, exist_ok=True)
+    write(os.path.join(rd, "snapshot_00000.h5"), X, core, V=Vel)
+    with open(os.path.join(rd, "used_params.yml"), "w") as f:
+        import yaml
+        yaml.safe_dump(PAR, f)
+    with open(os.path.join(rd, "diagnostics.csv"), "w") as f:
+        f.write("step,time,small_volume,small_volume_drift\n0,1.0,0,0\n")
+    import csv
+    import subprocess
+    cf = os.path.join(a.work, "axial.csv")
+    pr = subprocess.run([sys.executable, os.path.join(HERE, "..", "tools", "drum_analysis.py"), rd, "--zbins", "8",
+                         "--csv", cf], capture_output=True, text=True)
+    rows = list(csv.DictReader(open(cf))) if pr.returncode == 0 and os.path.exists(cf) else []
+    ok = len(rows) == 1 and all(abs(float(rows[0]["angle_z%d" % k]) - ax6.bins[k].angle) < 1e-9 for k in range(8)) \
+        and abs(float(rows[0]["speed_end0"]) - ax6.surface_speed(ax6.end0)) < 1e-12
+    check("command line --csv", ok, "rc %d, %d row(s) %s" % (pr.returncode, len(rows), pr.stderr[-300:]))
     p4 = os.path.join(a.work, "flat.h5")
     write(p4, X2, half, dim=2)
     try:

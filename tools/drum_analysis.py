@@ -20,7 +20,10 @@ with --slab W (m), only the mid-length slab |z - L/2| < W/2 (L = the drum
 length), away from the end walls (W = 1.5 dr keeps the middle plane, or the
 middle two when the drum is an even number of dr long).
 Volumes are divided by the slab width (W, or L), so Shepard weights and the
-rate terms see a cross-section's area per particle.
+rate terms see a cross-section's area per particle. Without --slab the
+PNGs of a 3D drum (midchord, rates, maps) are of the axial analysis's
+mid-length slab (--endslab W): the rate terms of the whole length
+projected would pair every particle with ~L/dr planes of neighbours.
 
 Definitions.
 Free surface: the highest material particle in vertical bins of width 2 dr;
@@ -41,17 +44,21 @@ diffusion term in the form of eq. (3.8); V, D from eq. (2.7) with the run's
 chi_V, chi_D, d^S, d^L and the snapshot's shear rate.
 
 3D drums also get the axial analysis (class Axial; --zbins N, default 8;
---endslab W, default 3 dr; --csv FILE, one row per time): per time, the
+--endslab W, default 3 dr; --csv FILE, one row per time: the whole-bed,
+mid and end numbers, the banding, the shells, then angle_zK, seg_zK, C_zK
+per z-bin K): per time, the
 dynamic angle, surface speed on the mid-chord and segregation index of the
 whole bed, of the slab of width W at mid-length and of the slabs next to
 each end wall (z < W, z > L - W); per z-bin the angle, the segregation
-index, the mean C and the distance of the small grains' centroid (weights
-V C) from the bed's (weights V) in x-y; the axial banding (the share of C's
+index, the mean C and the x-y offset of the small grains' centroid
+(weights V C) from the bed's (weights V), i.e. the first moment of the
+small-grain excess, sum V (C - <C>) x / sum V C (distance, x and y); the axial banding (the share of C's
 variance that lies between the z-bins: 0 for a z-uniform bed, 1 when C is
 uniform within each bin); the mean C in five shells about the bed's
 centroid, inner to outer (a core of small grains: falling); and with --png
 PREFIX_axial.png (angle and segregation index against z, the mid-chord
-speed and C at mid-length and next to the z = 0 end wall, C in the
+speed and C at mid-length and next to the z = 0 end wall at every time
+asked, C in the
 mid-length slab and over (z, r)). tests/validate_drum3d_analysis.py checks
 it on snapshots built with known answers.
 """
@@ -245,14 +252,22 @@ class Axial:
         self.binC = binC
         self.banding = float(np.average((binC - self.meanC) ** 2, weights=binV) / varC) if varC > 0 else 0.0
         # where the small grains gather: the small-grain centroid (weights V C) from the bed's (weights V), per bin
-        self.offset = np.array([np.average(b.x, axis=0, weights=b.vol * b.C) - np.average(b.x, axis=0, weights=b.vol)
-                                if np.sum(b.vol * b.C) > 0 else [np.nan, np.nan] for b in self.bins])
+        self.offset = np.array([self.small_offset(b) for b in self.bins])
+        self.offset_whole = self.small_offset(w)
         # mean C in shells of equal width about the bed's centroid, inner to outer
         c = np.average(w.x, axis=0, weights=w.vol)
         r = np.hypot(*(w.x - c).T)
         k = np.minimum((r / r.max() * self.NSHELL).astype(int), self.NSHELL - 1)
         self.shellC = np.array([np.average(w.C[k == q], weights=w.vol[k == q]) if np.any(k == q) else np.nan
                                 for q in range(self.NSHELL)])
+
+    @staticmethod
+    def small_offset(d):
+        """x-y centroid of the small grains (weights V C) less the bed's (weights V), m; equal to
+        sum V (C - <C>) x / sum V C, the first moment of the small-grain excess. NaN without small grains."""
+        if not np.sum(d.vol * d.C) > 0:
+            return np.array([np.nan, np.nan])
+        return np.average(d.x, axis=0, weights=d.vol * d.C) - np.average(d.x, axis=0, weights=d.vol)
 
     @staticmethod
     def surface_speed(d):
@@ -268,8 +283,11 @@ class Axial:
             r["seg_" + tag] = d.segregation_index()
         r["banding"] = self.banding
         r["offset_mm"] = 1e3 * float(np.mean(np.hypot(*self.offset.T)))
+        r["offset_x_mm"], r["offset_y_mm"] = (1e3 * float(v) for v in self.offset_whole)
         for q in range(self.NSHELL):
             r["C_shell%d" % q] = float(self.shellC[q])
+        for k, b in enumerate(self.bins):  # per z-bin, bin k centred at zc[k]
+            r["angle_z%d" % k], r["seg_z%d" % k], r["C_z%d" % k] = b.angle, b.segregation_index(), float(self.binC[k])
         return r
 
     def report(self):
@@ -286,6 +304,8 @@ class Axial:
         lines.append("  seg index     " + " ".join("%7.4f" % b.segregation_index() for b in self.bins))
         lines.append("  mean C        " + " ".join("%7.4f" % c for c in self.binC))
         lines.append("  small off (mm)" + " ".join("%7.2f" % (1e3 * np.hypot(*o)) for o in self.offset))
+        lines.append("   its x (mm)   " + " ".join("%7.2f" % (1e3 * o[0]) for o in self.offset))
+        lines.append("   its y (mm)   " + " ".join("%7.2f" % (1e3 * o[1]) for o in self.offset))
         lines.append("  axial banding (share of C's variance between z-bins) %.4f; mean C by shell about the bed's "
                      "centroid, inner to outer: %s" % (r["banding"], " ".join("%.3f" % c for c in self.shellC)))
         return "\n".join(lines)
@@ -304,13 +324,15 @@ def plot_axial(axs, png):
     ax[0, 0].set_xlabel("z (mm)"), ax[0, 0].set_ylabel("dynamic angle (°)"), ax[0, 0].legend(fontsize=7)
     ax[0, 1].set_xlabel("z (mm)"), ax[0, 1].set_ylabel("segregation index"), ax[0, 1].legend(fontsize=7)
     last = axs[-1]
-    for d, lab in ((last.mid, "mid-length"), (last.end0, "next to the end wall z = 0")):
-        dm, pts = d.midchord()
-        ax[1, 0].plot(100 * d.interp(pts, d.speed), dm, label=lab)
-        ax[1, 1].plot(d.interp(pts, d.C), dm, label=lab)
+    for q, a in enumerate(axs):  # mid-length solid, next to the z = 0 end wall dashed, one colour per time
+        for d, ls, lab in ((a.mid, "-", "mid-length"), (a.end0, "--", "end wall z = 0")):
+            dm, pts = d.midchord()
+            kw = dict(color="C%d" % q, ls=ls, label="%s, t = %.0f s" % (lab, a.t))
+            ax[1, 0].plot(100 * d.interp(pts, d.speed), dm, **kw)
+            ax[1, 1].plot(d.interp(pts, d.C), dm, **kw)
     for k, xl in ((0, "speed (cm/s)"), (1, "C")):
         ax[1, k].invert_yaxis(), ax[1, k].set_xlabel(xl), ax[1, k].set_ylabel("depth along the mid-chord / R")
-        ax[1, k].legend(fontsize=7), ax[1, k].set_title("t = %.0f s" % last.t, fontsize=9)
+        ax[1, k].legend(fontsize=6), ax[1, k].set_title("mid-chord: mid-length slab and end slab", fontsize=9)
     w = last.whole
     m = last.mid
     sc = ax[0, 2].scatter(1e3 * m.x[:, 0], 1e3 * m.x[:, 1], c=m.C, s=2, cmap="coolwarm", vmin=0, vmax=1)
@@ -461,6 +483,9 @@ def main():
     dg = snap.read_diagnostics(a.outdir, partial=True)
     print("max |relative drift of sum C_i V_i|: %.3e" % np.abs(dg["small_volume_drift"]).max())
     if a.png:
+        if axs and not a.slab:  # the rate terms of all planes projected need O(planes^2) pairs: plot the mid slab
+            drums = [x.mid for x in axs]
+            print("3D drum without --slab: the plots below are of the mid-length slab, W = %.1f mm" % (1e3 * axs[0].W))
         sel = drums[1:] if len(drums) > 3 and not a.times else drums
         sel = sel[-3:] if not a.times else sel
         plot_midchord(sel, a.png + "_midchord.png")
