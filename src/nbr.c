@@ -9,13 +9,7 @@
 #include <float.h>
 #include <stdlib.h>
 #include <string.h>
-#ifdef _OPENMP
-#include <omp.h>
-#else
-static int omp_get_max_threads(void) { return 1; }
-static int omp_get_num_threads(void) { return 1; }
-static int omp_get_thread_num(void) { return 0; }
-#endif
+#include "omp_shim.h"
 
 /* Below this many particles a build runs on one thread (the fork costs
  * more than the work); the result is the same. */

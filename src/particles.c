@@ -7,12 +7,7 @@
 #include "error.h"
 #include <stdlib.h>
 #include <string.h>
-#ifdef _OPENMP
-#include <omp.h>
-#else
-static int omp_get_num_threads(void) { return 1; }
-static int omp_get_thread_num(void) { return 0; }
-#endif
+#include "omp_shim.h"
 
 struct part_array {
     size_t offset; /* offsetof(particles_t, <pointer member>) */
@@ -93,8 +88,7 @@ static void part_set(particles_t *p, const struct part_array *a, void *ptr)
  * NUMA node of the thread that will work on it. */
 static void part_touch(particles_t *p, size_t a, size_t b)
 {
-    const long n = (long)(b - a);
-#pragma omp parallel if (n >= PART_PAR_MIN)
+#pragma omp parallel if (b - a >= PART_PAR_MIN)
     {
         const size_t T = (size_t)omp_get_num_threads(), t = (size_t)omp_get_thread_num();
         const size_t k0 = a + (b - a) * t / T, k1 = a + (b - a) * (t + 1) / T;

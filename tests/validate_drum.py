@@ -74,8 +74,7 @@ def main():
     check("containment", rmax < R, "max r = %.5f m, R = %.5f m" % (rmax, R))
     paths = snap.list_snapshots(out)
     d15, d2 = [drum_analysis.Drum(p, par) for p in drum_analysis.pick(paths, [1.5, 2.0])]
-    dm, pts = d2.midchord()
-    us = np.nanmax(d2.interp(pts, d2.speed))
+    us = d2.surface_speed()
     check("rolling", 15 <= d2.angle <= 35 and d2.flatness < 1 and 0.01 <= us <= 0.2,
           "angle %.1f deg, flatness %.2f dr, surface speed %.1f cm/s" % (d2.angle, d2.flatness, 100 * us))
     w = drum_omega(par)

@@ -173,7 +173,7 @@ def main():
                          "--csv", cf], capture_output=True, text=True)
     rows = list(csv.DictReader(open(cf))) if pr.returncode == 0 and os.path.exists(cf) else []
     ok = len(rows) == 1 and all(abs(float(rows[0]["angle_z%d" % k]) - ax6.bins[k].angle) < 1e-9 for k in range(8)) \
-        and abs(float(rows[0]["speed_end0"]) - ax6.surface_speed(ax6.end0)) < 1e-12
+        and abs(float(rows[0]["speed_end0"]) - ax6.end0.surface_speed()) < 1e-12
     check("command line --csv", ok, "rc %d, %d row(s) %s" % (pr.returncode, len(rows), pr.stderr[-300:]))
     p4 = os.path.join(a.work, "flat.h5")
     write(p4, X2, half, dim=2)

@@ -157,6 +157,11 @@ class Drum:
         d = np.linspace(0, dmax, npts)
         return d / self.R, self.M[None, :] + d[:, None] * self.n[None, :]
 
+    def surface_speed(self):
+        """The largest speed on the mid-chord, m/s."""
+        _, pts = self.midchord()
+        return float(np.nanmax(self.interp(pts, self.speed)))
+
     def segregation_index(self):
         c = np.average(self.x, axis=0, weights=self.vol)
         r = np.hypot(*(self.x - c).T)
@@ -269,17 +274,12 @@ class Axial:
             return np.array([np.nan, np.nan])
         return np.average(d.x, axis=0, weights=d.vol * d.C) - np.average(d.x, axis=0, weights=d.vol)
 
-    @staticmethod
-    def surface_speed(d):
-        _, pts = d.midchord()
-        return float(np.nanmax(d.interp(pts, d.speed)))
-
     def row(self):
         """The numbers of one time, for the table and --csv."""
         r = {"t": self.t, "angle": self.whole.angle, "seg": self.whole.segregation_index()}
         for tag, d in (("mid", self.mid), ("end0", self.end0), ("end1", self.end1)):
             r["angle_" + tag] = d.angle
-            r["speed_" + tag] = self.surface_speed(d)
+            r["speed_" + tag] = d.surface_speed()
             r["seg_" + tag] = d.segregation_index()
         r["banding"] = self.banding
         r["offset_mm"] = 1e3 * float(np.mean(np.hypot(*self.offset.T)))
@@ -463,9 +463,8 @@ def main():
     drums = [Drum(p, par, a.slab) for p in paths]
     print("%8s %9s %10s %12s %12s %10s" % ("t (s)", "angle", "flatness", "max |u| mc", "seg index", "C range"))
     for d in drums:
-        dm, pts = d.midchord()
         print("%8.3f %8.2f° %8.2f dr %9.2f cm/s %12.4f %5.3f-%5.3f"
-              % (d.t, d.angle, d.flatness, 100 * np.nanmax(d.interp(pts, d.speed)), d.segregation_index(),
+              % (d.t, d.angle, d.flatness, 100 * d.surface_speed(), d.segregation_index(),
                  d.C.min(), d.C.max()))
     axs = []
     if paths and int(snap.read_snapshot(paths[0]).get("Dimension", 2)) == 3:

@@ -153,8 +153,7 @@ def cmd_analyze(args):
             else:
                 d = drum_analysis.Drum(snap.list_snapshots(o)[-1], par)
                 drums[name] = d
-                dm, pts = d.midchord()
-                row.update(angle=d.angle, surface_speed=float(np.nanmax(d.interp(pts, d.speed))),
+                row.update(angle=d.angle, surface_speed=d.surface_speed(),
                            seg_index=d.segregation_index(), t=d.t)
         res[name] = row
     refs = {"res_": "res_1", "mod_": "mod_10", "prec_": "cfl_0.1", "cfl_": "cfl_0.1", "lam_": "lam_0.001"}
