@@ -88,11 +88,11 @@ LIBS   := $(HDF5_LIBS) $(CYAML_LIBS) $(METIS_LIBS) $(LDLIBS)
 
 CORE_SRC := src/error.c src/scene.c src/particles.c src/nbr.c src/bound.c src/setup.c \
             src/backend_cpu.c src/integrate.c src/diag.c src/io.c src/checkpoint.c \
-            src/checkpoint_read.c src/checkpoint_keys.c src/outdir.c mpi/comm.c mpi/halo.c
+            src/checkpoint_read.c src/checkpoint_keys.c src/outdir.c src/stages.c mpi/comm.c mpi/halo.c
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
 HEADERS  := $(wildcard src/*.h src/physics/*.h mpi/*.h)
 
-UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint
+UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint test_stages
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
 
 .PHONY: all deps run test test-slurm unit bench clean format test-mutants

@@ -69,6 +69,7 @@ extern "C" {
 #include "error.h"
 #include "mpi/comm.h"
 #include "sim.h"
+#include "stages.h"
 }
 
 /* The backend is one translation unit (no relocatable device code): its parts,

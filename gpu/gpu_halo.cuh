@@ -237,21 +237,24 @@ static void gpu_halo_lists(sim_t *s, gpu_t *g)
     free(hs);
 }
 
-/* What neighbours read of a ghost that moves between builds: positions,
- * and with computed flow velocity and stress (prescribed motion: velocity
- * and shear rate; it rebuilds every stage, so this is a fallback), and C. */
-static ftab moving_fields(const sim_t *s, const gpu_t *g)
+/* The fields f (src/stages.h) of the device store as a refresh table;
+ * trim2d: a 2D store's z components and xz, yz stresses left out. */
+static ftab fields_tab(const gpu_t *g, uint32_t f, int trim2d)
 {
     ftab t;
     t.n = 0;
-    const particles_t &p = g->d;
-    int dim = s->p.dim;
-    for (int d = 0; d < dim; ++d) ft_add(&t, p.x[d], sizeof(real));
-    for (int d = 0; d < dim; ++d) ft_add(&t, p.v[d], sizeof(real));
-    if (s->flow_on)
-        for (int q = 0; q < (dim == 3 ? 6 : 4); ++q) ft_add(&t, p.sig[q], sizeof(real));
-    else
-        ft_add(&t, p.gdot, sizeof(real));
-    if (s->seg_on && !s->win.on) ft_add(&t, p.C, sizeof(creal)); /* windows: refreshed by conc_step */
+    void *ptrs[64];
+    int n = stage_arrays(&g->d, f, trim2d, ptrs);
+    for (int k = 0; k < n; ++k) ft_add(&t, ptrs[k], part_array_esize((size_t)part_array_find(&g->d, ptrs[k])));
     return t;
+}
+
+/* What the ghosts need when the particles moved between list builds (the
+ * GPU keeps its ghosts between builds): the stage table's moving fields
+ * (stage_moving_fields; windows: C is refreshed by conc_step). */
+static const stage_sched *gpu_sched(const sim_t *s) { return stage_schedule(stage_flags(s)); }
+
+static ftab moving_fields(const sim_t *s, const gpu_t *g)
+{
+    return fields_tab(g, gpu_sched(s)->moving, 1);
 }

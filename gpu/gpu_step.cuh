@@ -40,14 +40,8 @@ static void gpu_prepare(sim_t *s, double t, int classify)
         g->stale = exact; /* a list without skin is stale as soon as anything moves */
         if (exact) {
             gpu_classify(g, &s->seg.k);
-            if (s->halo) { /* deep ghosts lack part of their support: the owners' classes */
-                ftab c;
-                c.n = 0;
-                ft_add(&c, g->d.bclass, 1);
-                for (int d = 0; d < 3; ++d) ft_add(&c, g->d.nrm[d], sizeof(real));
-                ft_add(&c, g->d.psi, sizeof(real));
-                gpu_refresh(s, g, c);
-            }
+            if (s->halo) /* deep ghosts lack part of their support: the owners' classes */
+                gpu_refresh(s, g, fields_tab(g, gpu_sched(s)->refresh[1][ST_CLASSIFY], 0));
         }
         gpu_walls_renorm(s, g, s->flow_on, renorm, sel_all());
         return;
@@ -133,17 +127,12 @@ static void gpu_rates(sim_t *s)
     gpu_settle(s, g);
     if (s->seg_on && !s->win.on) {
         prof_begin(g->st);
+        const ftab t = fields_tab(g, gpu_sched(s)->refresh[1][ST_FLOW], 1); /* the shear rate */
         if (s->halo && s->flow_on && !g->hx->overlap) {
-            ftab t;
-            t.n = 0;
-            ft_add(&t, g->d.gdot, sizeof(real));
             gpu_refresh(s, g, t);
             gpu_seg_coeffs(s, g, g->d, g->n, g->n + g->ng); /* the owned: with the flow rates */
             gpu_dcdt(s, g, g->d, sel_all());
         } else if (s->halo && s->flow_on) { /* the ghosts' shear rate, while the interior goes on */
-            ftab t;
-            t.n = 0;
-            ft_add(&t, g->d.gdot, sizeof(real));
             gpu_refresh_start(s, g, t);
             gpu_dcdt(s, g, g->d, sel_in(g, 2));
             gpu_refresh_finish(s, g);
@@ -214,12 +203,7 @@ static void gpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS])
         particles_t q = p;
         step_shear_mean(i, &q, inv);
     });
-    if (s->halo) {
-        ftab t;
-        t.n = 0;
-        ft_add(&t, p.gsum, sizeof(real));
-        gpu_refresh(s, g, t);
-    }
+    if (s->halo) gpu_refresh(s, g, fields_tab(g, gpu_sched(s)->refresh[1][ST_SHEAR_MEAN], 1));
     if (s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) {
         grid_view v = g->view;
         seg_ctx sc = s->seg;
@@ -246,9 +230,7 @@ static void gpu_conc_step(sim_t *s, double a, int last)
     gpu_settle(s, g);
     particles_t p = g->d, q = g->d;
     q.gdot = p.gsum;
-    ftab c;
-    c.n = 0;
-    ft_add(&c, p.C, sizeof(creal));
+    const ftab c = fields_tab(g, gpu_sched(s)->refresh[1][ST_WIN_ADVANCE], 1);
     prof_begin(g->st);
     for (int stage = 0; stage < 2; ++stage) {
         gpu_seg_coeffs(s, g, q, 0, g->n + g->ng);
@@ -278,11 +260,6 @@ static void gpu_filter(sim_t *s)
     });
     each(g, g->n, [=] __device__(size_t i) { flow_shepard_store(i, &p); });
     prof_end(g->st, P_FILTER);
-    if (s->halo) {
-        ftab t;
-        t.n = 0;
-        for (int q = 0; q < (s->p.dim == 3 ? 6 : 4); ++q) ft_add(&t, g->d.sig[q], sizeof(real));
-        gpu_refresh(s, g, t);
-    }
+    if (s->halo) gpu_refresh(s, g, fields_tab(g, gpu_sched(s)->refresh[1][ST_SHEPARD_STORE], 1));
     gpu_walls_renorm(s, g, 1, 0, sel_all());
 }

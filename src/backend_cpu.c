@@ -8,30 +8,174 @@
  * dummies). Each index's result is its own, so any schedule gives the same bits. */
 #include "error.h"
 #include "sim.h"
+#include "stages.h"
 
 /* Indices per dynamic chunk: a 3D material particle's flow rates cost about
  * 10 us, so a chunk is far above the cost of taking it. */
 #define CPU_CHUNK 32
 
-/* Copy the arrays at ptrs[0..n-1] (members of s->p) from their owners into
- * the ghosts (multi-rank runs; nothing on one rank). */
-static void cpu_refresh(sim_t *s, void *const *ptrs, int n)
+/* Copy the fields (src/stages.h) from their owners into the ghosts
+ * (multi-rank runs; nothing on one rank). */
+static void cpu_refresh(sim_t *s, uint32_t fields)
 {
-    if (!s->halo) return;
-    int arr[16];
+    if (!s->halo || !fields) return;
+    void *ptrs[64];
+    int arr[64], n = stage_arrays(&s->p, fields, 0, ptrs);
     for (int k = 0; k < n; ++k) arr[k] = part_array_find(&s->p, ptrs[k]);
     halo_refresh(s->halo, &s->p, arr, n);
 }
 
-/* Dummy velocities and stresses from the material (paper §4.1), ghosts
- * included: a ghost dummy next to the slab has its whole support here. */
-static void cpu_walls(sim_t *s)
+/* What a hook's call brings to its stages. */
+typedef struct cpu_call {
+    double t;       /* prepare: the time */
+    int classify;   /* prepare: 1 classify (HCSR schemes), 2 classify whatever the scheme, 0 not */
+    double a, w;    /* advance: step and window weight; a window's midpoint stage: its length */
+    int half;       /* a window's midpoint stage: 0 the half step, 1 the full one */
+    double T;       /* conc_begin: the window's length */
+    double *out;    /* conc_begin: the bounds */
+} cpu_call;
+
+/* V, Q, D of ghosts too (neighbours read them), from the shear rate of q. */
+static void cpu_seg_coeffs(sim_t *s, particles_t *q)
+{
+    const long ng = (long)(q->n + q->ng);
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < ng; ++i)
+        if (q->kind[i] == KIND_MATERIAL) seg_coeffs((size_t)i, q, &s->seg);
+}
+
+static void cpu_dcdt(sim_t *s, particles_t *q)
+{
+    const long n = (long)q->n;
+#pragma omp parallel for schedule(dynamic, CPU_CHUNK)
+    for (long i = 0; i < n; ++i) seg_dCdt((size_t)i, q, &s->grid.view, &s->seg);
+}
+
+/* L of material particles [lo, n + ng). */
+static void cpu_renorm(sim_t *s, long lo)
 {
     particles_t *p = &s->p;
     const long n = (long)(p->n + p->ng);
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK)
-    for (long i = 0; i < n; ++i)
-        if (p->kind[i] == KIND_DUMMY) flow_wall((size_t)i, p, &s->grid.view, &s->flow);
+    for (long i = lo; i < n; ++i)
+        if (p->kind[i] == KIND_MATERIAL) seg_renorm((size_t)i, p, &s->grid.view, &s->seg);
+}
+
+/* Run stage id of the table (src/stages.h) for call c; returns 0 when the
+ * call leaves it out (prepare without classification, say). The loops:
+ * streaming ones schedule(static), neighbour loops dynamic (top). */
+static int cpu_stage(sim_t *s, int id, cpu_call *c)
+{
+    particles_t *p = &s->p, q = *p;
+    const long n = (long)p->n, ng = (long)(p->n + p->ng);
+    q.gdot = p->gsum; /* the window stages read the window's mean shear rate */
+    switch (id) {
+    case ST_PLACE:
+#pragma omp parallel for schedule(static)
+        for (long i = 0; i < n; ++i) step_place((size_t)i, p, s->flow_on, &s->flow.w, &s->kin, c->t);
+        return 1;
+    case ST_EXCHANGE:
+        if (s->halo) halo_exchange(s->halo, p);
+        nbr_build(&s->grid, p, R(2.0) * s->seg.k.h, s->halo ? s->halo->origin : NULL);
+        if (s->halo) halo_sorted(s->halo, s->grid.perm, p->n + p->ng);
+        return 1;
+    case ST_CLASSIFY: /* the ghosts an owned particle reads hold their whole support here and
+                       * classify themselves alike; the refresh (from_owner) makes them the
+                       * owner's values bit for bit whatever the summation order. Without psi in
+                       * it the paper-scheme shear box and EN drum on 2 and 3 ranks were
+                       * bit-identical (issue 20, tools/mutants.py ghost_psi_stale) */
+        if (!((s->hcsr && c->classify) || c->classify == 2)) return 0;
+        bound_classify(&s->bw, p, &s->grid, &s->seg.k);
+        return 1;
+    case ST_RENORM: /* with computed flow the owned L come with the next flow rates (same
+                     * pairs, no pass of their own); here the ghosts' */
+        if (!c->classify) return 0;
+        s->renorm_due = s->flow_on;
+        cpu_renorm(s, s->flow_on ? n : 0);
+        return 1;
+    case ST_WALLS: /* ghosts included: a ghost dummy next to the slab has its whole support here */
+#pragma omp parallel for schedule(dynamic, CPU_CHUNK)
+        for (long i = 0; i < ng; ++i)
+            if (p->kind[i] == KIND_DUMMY) flow_wall((size_t)i, p, &s->grid.view, &s->flow);
+        return 1;
+    case ST_FLOW: {
+        const int renorm = s->renorm_due;
+        double amax = 0;
+#pragma omp parallel for schedule(dynamic, CPU_CHUNK) reduction(max : amax)
+        for (long i = 0; i < n; ++i) {
+            if (p->kind[i] != KIND_MATERIAL) continue;
+            double a = flow_rates_team((size_t)i, p, &s->grid.view, &s->flow, 0, 1, renorm);
+            amax = a > amax ? a : amax;
+        }
+        s->amax = amax;
+        s->renorm_due = 0;
+        return 1;
+    }
+    case ST_SEG_COEFFS: cpu_seg_coeffs(s, p); return 1;
+    case ST_DCDT: cpu_dcdt(s, p); return 1;
+    case ST_SAVE:
+#pragma omp parallel for schedule(static)
+        for (long i = 0; i < n; ++i) step_save((size_t)i, p, s->flow_on);
+        return 1;
+    case ST_ADVANCE: { /* step_advance does x, u, sigma, C and gsum in one pass: ST_ADVANCE_C, _GSUM */
+        const int seg = s->seg_on && !s->win.on;
+#pragma omp parallel for schedule(static)
+        for (long i = 0; i < n; ++i)
+            step_advance((size_t)i, p, (real)c->a, &s->flow, s->flow_on, seg, (real)c->w);
+        return 1;
+    }
+    case ST_ADVANCE_C:
+    case ST_ADVANCE_GSUM: return !s->flow_on ? cpu_stage(s, ST_ADVANCE, c) : 1; /* with ST_ADVANCE's pass */
+    case ST_SHEAR_MEAN: {
+        const real inv = (real)(1.0 / c->T);
+#pragma omp parallel for schedule(static)
+        for (long i = 0; i < n; ++i) step_shear_mean((size_t)i, p, inv);
+        return 1;
+    }
+    case ST_WIN_RENORM: cpu_renorm(s, 0); return 1;
+    case ST_WIN_BOUNDS: {
+        double dmax = 0, wmax = 0;
+#pragma omp parallel for schedule(static) reduction(max : dmax, wmax)
+        for (long i = 0; i < n; ++i) {
+            if (p->kind[i] != KIND_MATERIAL) continue;
+            double b[3];
+            step_bounds_of((size_t)i, &q, &s->step_c, b);
+            dmax = b[0] > dmax ? b[0] : dmax;
+            wmax = b[1] > wmax ? b[1] : wmax;
+        }
+        c->out[STEP_D] = dmax, c->out[STEP_WAVE] = wmax, c->out[STEP_SPEED] = 0, c->out[STEP_ACC] = 0;
+        return 1;
+    }
+    case ST_WIN_COEFFS: cpu_seg_coeffs(s, &q); return 1;
+    case ST_WIN_DCDT: cpu_dcdt(s, &q); return 1;
+    case ST_WIN_ADVANCE: {
+        const real as = (real)(c->half ? c->a : 0.5 * c->a);
+#pragma omp parallel for schedule(static)
+        for (long i = 0; i < n; ++i) step_conc_advance((size_t)i, p, as, c->half);
+        return 1;
+    }
+    case ST_SHEPARD:
+#pragma omp parallel for schedule(dynamic, CPU_CHUNK)
+        for (long i = 0; i < n; ++i)
+            if (p->kind[i] == KIND_MATERIAL) flow_shepard((size_t)i, p, &s->grid.view, &s->flow);
+        return 1;
+    case ST_SHEPARD_STORE:
+#pragma omp parallel for schedule(static)
+        for (long i = 0; i < n; ++i) flow_shepard_store((size_t)i, p);
+        return 1;
+    default: error_exit(1, "backend_cpu: stage %d has no body", id);
+    }
+    return 0;
+}
+
+/* A hook: its stages in the table's order, each stage's refresh after it. */
+static void cpu_hook(sim_t *s, int hook, cpu_call *c)
+{
+    const stage_sched *m = stage_schedule(stage_flags(s));
+    for (int k = 0; k < m->n[hook]; ++k) {
+        const int id = m->ids[hook][k];
+        if (cpu_stage(s, id, c)) cpu_refresh(s, m->refresh[0][id]);
+    }
 }
 
 /* Place the owned particles; on several ranks migrate them and make the
@@ -40,120 +184,33 @@ static void cpu_walls(sim_t *s)
  * its whole support here: mpi/halo.h). */
 static void cpu_prepare(sim_t *s, double t, int classify)
 {
-    particles_t *p = &s->p;
-    long n = (long)p->n;
-#pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) step_place((size_t)i, p, s->flow_on, &s->flow.w, &s->kin, t);
-    if (s->halo) halo_exchange(s->halo, p);
-    nbr_build(&s->grid, p, R(2.0) * s->seg.k.h, s->halo ? s->halo->origin : NULL);
-    if (s->halo) halo_sorted(s->halo, s->grid.perm, p->n + p->ng);
-    n = (long)(p->n + p->ng);
-    if ((s->hcsr && classify) || classify == 2) {
-        bound_classify(&s->bw, p, &s->grid, &s->seg.k);
-        /* the ghosts an owned particle reads hold their whole support here
-         * and classify themselves alike; the refresh makes them the owner's
-         * values bit for bit whatever the summation order. Without psi in
-         * it the paper-scheme shear box and EN drum on 2 and 3 ranks were
-         * bit-identical (issue 20, tools/mutants.py ghost_psi_stale) */
-        void *cls[] = {p->bclass, p->nrm[0], p->nrm[1], p->nrm[2], p->psi};
-        cpu_refresh(s, cls, 5);
-    }
-    if (s->seg_on && classify && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) {
-        /* with computed flow the owned particles' L come with the next flow
-         * rates (same pairs, no pass of their own); here the ghosts' */
-        const long lo = s->flow_on ? (long)p->n : 0;
-        s->renorm_due = s->flow_on;
-#pragma omp parallel for schedule(dynamic, CPU_CHUNK)
-        for (long i = lo; i < n; ++i)
-            if (p->kind[i] == KIND_MATERIAL) seg_renorm((size_t)i, p, &s->grid.view, &s->seg);
-    }
-    if (s->flow_on) cpu_walls(s);
-}
-
-static void cpu_flow_rates(sim_t *s)
-{
-    particles_t *p = &s->p;
-    const long n = (long)p->n;
-    const int renorm = s->renorm_due;
-    double amax = 0;
-#pragma omp parallel for schedule(dynamic, CPU_CHUNK) reduction(max : amax)
-    for (long i = 0; i < n; ++i) {
-        if (p->kind[i] != KIND_MATERIAL) continue;
-        double a = flow_rates_team((size_t)i, p, &s->grid.view, &s->flow, 0, 1, renorm);
-        amax = a > amax ? a : amax;
-    }
-    s->amax = amax;
-    s->renorm_due = 0;
-}
-
-/* V, Q, D of ghosts too (neighbours read them), dC/dt of owned particles;
- * from the shear rate p->gdot (the window's mean, gsum, in a window). */
-static void cpu_conc_rates(sim_t *s, particles_t *p)
-{
-    const long n = (long)p->n, ng = (long)(p->n + p->ng);
-#pragma omp parallel
-    {
-#pragma omp for schedule(static)
-        for (long i = 0; i < ng; ++i)
-            if (p->kind[i] == KIND_MATERIAL) seg_coeffs((size_t)i, p, &s->seg);
-#pragma omp for schedule(dynamic, CPU_CHUNK)
-        for (long i = 0; i < n; ++i) seg_dCdt((size_t)i, p, &s->grid.view, &s->seg);
-    }
+    cpu_call c = {.t = t, .classify = classify};
+    cpu_hook(s, HOOK_PREPARE, &c);
 }
 
 /* The flow first: it sets the shear rate the segregation coefficients use. */
 static void cpu_rates(sim_t *s)
 {
-    if (s->flow_on) cpu_flow_rates(s);
-    if (s->flow_on && s->seg_on && !s->win.on) {
-        void *g[] = {s->p.gdot};
-        cpu_refresh(s, g, 1);
-    }
-    if (s->seg_on && !s->win.on) cpu_conc_rates(s, &s->p);
+    cpu_call c = {0};
+    cpu_hook(s, HOOK_RATES, &c);
 }
 
 /* Concentration windows (sim.h): the mean shear rate over the window, here
  * and in the ghosts; L at the window's end; the bounds at that rate. */
 static void cpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS])
 {
-    particles_t *p = &s->p, q = *p;
-    const long n = (long)p->n, ng = (long)(p->n + p->ng);
-    const real inv = (real)(1.0 / T);
-#pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) step_shear_mean((size_t)i, p, inv);
-    void *g[] = {p->gsum};
-    cpu_refresh(s, g, 1);
-    if (s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) {
-#pragma omp parallel for schedule(dynamic, CPU_CHUNK)
-        for (long i = 0; i < ng; ++i)
-            if (p->kind[i] == KIND_MATERIAL) seg_renorm((size_t)i, p, &s->grid.view, &s->seg);
-    }
-    q.gdot = p->gsum;
-    double dmax = 0, wmax = 0;
-#pragma omp parallel for schedule(static) reduction(max : dmax, wmax)
-    for (long i = 0; i < n; ++i) {
-        if (p->kind[i] != KIND_MATERIAL) continue;
-        double b[3];
-        step_bounds_of((size_t)i, &q, &s->step_c, b);
-        dmax = b[0] > dmax ? b[0] : dmax;
-        wmax = b[1] > wmax ? b[1] : wmax;
-    }
-    out[STEP_D] = dmax, out[STEP_WAVE] = wmax, out[STEP_SPEED] = 0, out[STEP_ACC] = 0;
+    cpu_call c = {.T = T, .out = out};
+    cpu_hook(s, HOOK_CONC_BEGIN, &c);
 }
 
 /* One midpoint step of C alone (length a) at the window's mean shear rate. */
 static void cpu_conc_step(sim_t *s, double a, int last)
 {
-    particles_t *p = &s->p, q = *p;
-    const long n = (long)p->n, ng = (long)(p->n + p->ng);
-    q.gdot = p->gsum;
-    void *c[] = {p->C};
-    for (int stage = 0; stage < 2; ++stage) {
-        cpu_conc_rates(s, &q);
-        const real as = (real)(stage ? a : 0.5 * a);
-#pragma omp parallel for schedule(static)
-        for (long i = 0; i < n; ++i) step_conc_advance((size_t)i, p, as, stage);
-        cpu_refresh(s, c, 1);
+    particles_t *p = &s->p;
+    const long ng = (long)(p->n + p->ng);
+    for (int half = 0; half < 2; ++half) {
+        cpu_call c = {.a = a, .half = half};
+        cpu_hook(s, HOOK_CONC_STEP, &c);
     }
     if (!last) return;
 #pragma omp parallel for schedule(static)
@@ -162,37 +219,21 @@ static void cpu_conc_step(sim_t *s, double a, int last)
 
 static void cpu_save_start(sim_t *s)
 {
-    particles_t *p = &s->p;
-    const long n = (long)p->n;
-#pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) step_save((size_t)i, p, s->flow_on);
+    cpu_call c = {0};
+    cpu_hook(s, HOOK_SAVE, &c);
 }
 
 static void cpu_advance(sim_t *s, double a, double w)
 {
-    particles_t *p = &s->p;
-    const long n = (long)p->n;
-    const int seg = s->seg_on && !s->win.on;
-#pragma omp parallel for schedule(static)
-    for (long i = 0; i < n; ++i) step_advance((size_t)i, p, (real)a, &s->flow, s->flow_on, seg, (real)w);
+    cpu_call c = {.a = a, .w = w};
+    cpu_hook(s, HOOK_ADVANCE, &c);
 }
 
 /* Shepard filter (3.12) of the material stress, then the dummies again. */
 static void cpu_filter(sim_t *s)
 {
-    particles_t *p = &s->p;
-    const long n = (long)p->n;
-#pragma omp parallel
-    {
-#pragma omp for schedule(dynamic, CPU_CHUNK)
-        for (long i = 0; i < n; ++i)
-            if (p->kind[i] == KIND_MATERIAL) flow_shepard((size_t)i, p, &s->grid.view, &s->flow);
-#pragma omp for schedule(static)
-        for (long i = 0; i < n; ++i) flow_shepard_store((size_t)i, p);
-    }
-    void *sig[] = {p->sig[0], p->sig[1], p->sig[2], p->sig[3], p->sig[4], p->sig[5]};
-    cpu_refresh(s, sig, 6);
-    cpu_walls(s);
+    cpu_call c = {0};
+    cpu_hook(s, HOOK_FILTER, &c);
 }
 
 static void cpu_bounds(sim_t *s, double out[STEP_NBOUNDS])

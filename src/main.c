@@ -22,6 +22,7 @@
 #include "mpi/comm.h"
 #include "outdir.h"
 #include "sim.h"
+#include "stages.h"
 #include "version.h"
 
 typedef struct cli {
@@ -192,28 +193,13 @@ static void check_finite(sim_t *s, diag *d)
     }
 }
 
-/* The arrays a ghost must carry for the stages that read neighbours
- * (src/physics/: positions, volume, kind always; velocity and stress with
- * computed flow; C and the shear rate with segregation; classes, normals
- * and psi~ for the HCSR schemes; L for the renormalised conservative
- * scheme). X0 places dummies and gives a box wall's normal. */
+/* The arrays a ghost carries: what the run's stages read of ghosts
+ * (src/stages.h). */
 static int parallel_ghost_arrays(const sim_t *s, int *arr)
 {
-    const particles_t *p = &s->p;
-    const void *a[64];
-    int n = 0;
-    for (int d = 0; d < 3; ++d) a[n++] = p->x[d], a[n++] = p->X0[d];
-    a[n++] = p->vol, a[n++] = p->id, a[n++] = p->kind, a[n++] = p->bclass;
-    if (s->flow_on) {
-        for (int d = 0; d < 3; ++d) a[n++] = p->v[d];
-        for (int q = 0; q < 6; ++q) a[n++] = p->sig[q];
-    }
-    if (s->seg_on) a[n++] = p->C, a[n++] = p->gdot;
-    for (int d = 0; d < 3; ++d) a[n++] = p->nrm[d];
-    a[n++] = p->psi;
-    if (s->seg_on && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm)
-        for (int q = 0; q < 6; ++q) a[n++] = p->L[q];
-    for (int k = 0; k < n; ++k) arr[k] = part_array_find(p, a[k]);
+    void *a[64];
+    int n = stage_arrays(&s->p, stage_ghost_fields(stage_flags(s)), 0, a);
+    for (int k = 0; k < n; ++k) arr[k] = part_array_find(&s->p, a[k]);
     return n;
 }
 

@@ -1,0 +1,237 @@
+/* stages.c — the step's stages as data, and what follows from them
+ * (stages.h). */
+#include "stages.h"
+#include <stdio.h>
+#include <string.h>
+#include "sim.h"
+
+/* Neighbour reads of the bodies in src/physics/ (bound_gather; seg_renorm;
+ * flow_wall, flow_rates_team; seg_dCdt: seg_kern.h; flow_shepard). */
+#define NB_GEOM (FLD_X | FLD_VOL | FLD_KIND)
+#define NB_FLOW (NB_GEOM | FLD_V | FLD_SIG)
+#define NB_CONC (NB_GEOM | FLD_C | FLD_BCLASS | FLD_NRM | FLD_PSI)
+
+/* Rows of one id share it: a stage whose reads or writes depend on the
+ * run has a row per case. A row may serve several hooks (ST_WALLS). */
+#define H(h) (1u << (h))
+const stage stage_table[] = {
+    /* id, hooks, body, when, unless, range, halo, writes, from_owner */
+    {ST_PLACE, H(HOOK_PREPARE), "step_place", SF_FLOW, 0, RANGE_OWNED, 0, FLD_X | FLD_V, 0},
+    {ST_PLACE, H(HOOK_PREPARE), "step_place", 0, SF_FLOW, RANGE_OWNED, 0, FLD_X | FLD_V | FLD_GDOT, 0},
+    {ST_EXCHANGE, H(HOOK_PREPARE), "halo_exchange, nbr_build", 0, 0, RANGE_ALL, 0, 0, 0},
+    /* classes are decisions: the owners' bits, whatever a ghost's summation order */
+    {ST_CLASSIFY, H(HOOK_PREPARE), "bound_classify", 0, 0, RANGE_ALL, NB_GEOM, FLD_BCLASS | FLD_NRM | FLD_PSI, 1},
+    {ST_RENORM, H(HOOK_PREPARE), "seg_renorm", SF_SEG | SF_RENORM, 0, RANGE_ALL, NB_GEOM, FLD_L, 0},
+    {ST_SHEPARD, H(HOOK_FILTER), "flow_shepard", SF_FLOW, 0, RANGE_OWNED, FLD_X | FLD_KIND | FLD_SIG, FLD_DSIG, 0},
+    {ST_SHEPARD_STORE, H(HOOK_FILTER), "flow_shepard_store", SF_FLOW, 0, RANGE_OWNED, 0, FLD_SIG, 0},
+    /* a dummy's own X0 gives a box wall's normal */
+    {ST_WALLS, H(HOOK_PREPARE) | H(HOOK_FILTER), "flow_wall", SF_FLOW, 0, RANGE_ALL, NB_FLOW | FLD_X0,
+     FLD_V | FLD_SIG, 0},
+    /* with SF_RENORM the owned L come with it when prepare classified: ST_RENORM's, fused */
+    {ST_FLOW, H(HOOK_RATES), "flow_rates_team", SF_FLOW, 0, RANGE_OWNED, NB_FLOW, FLD_ACC | FLD_DSIG | FLD_GDOT, 0},
+    {ST_SEG_COEFFS, H(HOOK_RATES), "seg_coeffs", SF_SEG, SF_WIN, RANGE_ALL, FLD_C | FLD_GDOT, FLD_SEGC, 0},
+    {ST_DCDT, H(HOOK_RATES), "seg_dCdt", SF_SEG, SF_WIN, RANGE_OWNED, NB_CONC, FLD_DCDT, 0},
+    {ST_DCDT, H(HOOK_RATES), "seg_dCdt", SF_SEG | SF_RENORM, SF_WIN, RANGE_OWNED, FLD_L, 0, 0},
+    {ST_SAVE, H(HOOK_SAVE), "step_save", 0, 0, RANGE_OWNED, 0, FLD_XN | FLD_VN | FLD_SIGN | FLD_CN, 0},
+    {ST_ADVANCE, H(HOOK_ADVANCE), "step_advance", SF_FLOW, 0, RANGE_OWNED, 0, FLD_X | FLD_V | FLD_SIG, 0},
+    {ST_ADVANCE_C, H(HOOK_ADVANCE), "step_advance", SF_SEG, SF_WIN, RANGE_OWNED, 0, FLD_C, 0},
+    {ST_ADVANCE_GSUM, H(HOOK_ADVANCE), "step_advance", SF_WIN, 0, RANGE_OWNED, 0, FLD_GSUM, 0},
+    {ST_SHEAR_MEAN, H(HOOK_CONC_BEGIN), "step_shear_mean", SF_WIN, 0, RANGE_OWNED, 0, FLD_GSUM, 0},
+    {ST_WIN_RENORM, H(HOOK_CONC_BEGIN), "seg_renorm", SF_WIN | SF_RENORM, 0, RANGE_ALL, NB_GEOM, FLD_L, 0},
+    {ST_WIN_BOUNDS, H(HOOK_CONC_BEGIN), "step_bounds_of", SF_WIN, 0, RANGE_OWNED, 0, 0, 0},
+    {ST_WIN_COEFFS, H(HOOK_CONC_STEP), "seg_coeffs", SF_WIN, 0, RANGE_ALL, FLD_C | FLD_GSUM, FLD_SEGC, 0},
+    {ST_WIN_DCDT, H(HOOK_CONC_STEP), "seg_dCdt", SF_WIN, 0, RANGE_OWNED, NB_CONC, FLD_DCDT, 0},
+    {ST_WIN_DCDT, H(HOOK_CONC_STEP), "seg_dCdt", SF_WIN | SF_RENORM, 0, RANGE_OWNED, FLD_L, 0, 0},
+    {ST_WIN_ADVANCE, H(HOOK_CONC_STEP), "step_conc_advance", SF_WIN, 0, RANGE_OWNED, 0, FLD_C | FLD_CN, 0},
+};
+const int stage_table_n = (int)(sizeof stage_table / sizeof stage_table[0]);
+
+/* The hooks in the order a run can call them: two half steps, the filter,
+ * a window's close with its two midpoint stages; then round again. A
+ * superset of any run's order, so the refreshes derived from it are never
+ * fewer than a run needs. */
+static const int cycle[] = {HOOK_RATES,   HOOK_SAVE,   HOOK_ADVANCE,    HOOK_PREPARE,   HOOK_RATES,
+                            HOOK_ADVANCE, HOOK_PREPARE, HOOK_FILTER,    HOOK_PREPARE,   HOOK_CONC_BEGIN,
+                            HOOK_CONC_STEP, HOOK_CONC_STEP};
+enum { NCYCLE = (int)(sizeof cycle / sizeof cycle[0]) };
+
+unsigned stage_flags(const struct sim *s)
+{
+    unsigned f = 0;
+    if (s->flow_on) f |= SF_FLOW;
+    if (s->seg_on) f |= SF_SEG;
+    if (s->win.on) f |= SF_WIN;
+    if (s->seg_on && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) f |= SF_RENORM;
+    if (s->hcsr) f |= SF_HCSR;
+    return f;
+}
+
+static int row_on(const stage *r, unsigned flags)
+{
+    return (r->when & flags) == r->when && !(r->unless & flags);
+}
+
+int stage_plan(int hook, unsigned flags, const stage **rows)
+{
+    int n = 0;
+    for (int k = 0; k < stage_table_n; ++k) {
+        const stage *r = &stage_table[k];
+        if (!(r->hooks & H(hook)) || !row_on(r, flags)) continue;
+        int seen = 0;
+        for (int q = 0; q < n; ++q) seen |= rows[q]->id == r->id;
+        if (!seen) rows[n++] = r;
+    }
+    return n;
+}
+
+/* What stage id reads of ghosts, and writes, under flags (all its rows). */
+static uint32_t id_halo(int id, unsigned flags)
+{
+    uint32_t m = 0;
+    for (int k = 0; k < stage_table_n; ++k)
+        if (stage_table[k].id == id && row_on(&stage_table[k], flags)) m |= stage_table[k].halo;
+    return m;
+}
+
+static uint32_t id_writes(int id, unsigned flags, int *range, int *from_owner)
+{
+    uint32_t m = 0;
+    for (int k = 0; k < stage_table_n; ++k) {
+        const stage *r = &stage_table[k];
+        if (r->id != id || !row_on(r, flags)) continue;
+        m |= r->writes;
+        if (range) *range = r->range;
+        if (from_owner) *from_owner = r->from_owner;
+    }
+    return m;
+}
+
+uint32_t stage_ghost_fields(unsigned flags)
+{
+    uint32_t m = FLD_X | FLD_ID | FLD_KIND;
+    for (int k = 0; k < stage_table_n; ++k) {
+        const stage *r = &stage_table[k];
+        if (!row_on(r, flags)) continue;
+        m |= r->halo;
+        if (r->from_owner) m |= r->writes;
+    }
+    return m;
+}
+
+/* The cycle unrolled into stage ids: seq[0..n-1]. */
+static int unroll(unsigned flags, int *seq)
+{
+    int n = 0;
+    for (int c = 0; c < NCYCLE; ++c) {
+        const stage *rows[ST_N];
+        int m = stage_plan(cycle[c], flags, rows);
+        for (int q = 0; q < m; ++q) seq[n++] = rows[q]->id;
+    }
+    return n;
+}
+
+/* Walk on from position at of seq (once round): the fields of `want` that
+ * a stage reads of a ghost before a stage writes them again (a later
+ * writer that leaves them stale in the ghosts owes its own refresh) or the
+ * ghosts are made afresh (ST_EXCHANGE, unless keep). */
+static uint32_t needed_after(const int *seq, int n, int at, uint32_t want, unsigned flags, int keep)
+{
+    uint32_t need = 0, open = want;
+    for (int q = 1; q <= n && open; ++q) {
+        int id = seq[(at + q) % n];
+        if (id == ST_EXCHANGE && !keep) break;
+        uint32_t r = id_halo(id, flags) & open;
+        need |= r;
+        open &= ~(r | id_writes(id, flags, NULL, NULL));
+    }
+    return need;
+}
+
+uint32_t stage_refresh_after(int id, unsigned flags, int keep)
+{
+    int range = RANGE_OWNED, fo = 0;
+    uint32_t w = id_writes(id, flags, &range, &fo), m = 0;
+    if (fo) return w;
+    if (!w || range == RANGE_ALL) return 0;
+    int seq[ST_N * NCYCLE], n = unroll(flags, seq);
+    for (int at = 0; at < n; ++at) /* every place the cycle runs it */
+        if (seq[at] == id) m |= needed_after(seq, n, at, w, flags, keep);
+    return m;
+}
+
+uint32_t stage_moving_fields(unsigned flags)
+{
+    int seq[ST_N * NCYCLE], n = unroll(flags, seq);
+    uint32_t m = 0;
+    for (int at = 0; at < n; ++at) {
+        int id = seq[at];
+        if (id != ST_PLACE && id != ST_ADVANCE && id != ST_ADVANCE_C && id != ST_ADVANCE_GSUM) continue;
+        m |= needed_after(seq, n, at, id_writes(id, flags, NULL, NULL), flags, 1);
+    }
+    return m;
+}
+
+const stage_sched *stage_schedule(unsigned flags)
+{
+    enum { NF = 32 }; /* five flags */
+    static stage_sched memo[NF];
+    static int done[NF];
+    flags &= NF - 1;
+    stage_sched *m = &memo[flags];
+    if (done[flags]) return m;
+    for (int h = 0; h < HOOK_N; ++h) {
+        const stage *rows[ST_N];
+        m->n[h] = stage_plan(h, flags, rows);
+        for (int k = 0; k < m->n[h]; ++k) m->ids[h][k] = rows[k]->id;
+    }
+    for (int keep = 0; keep < 2; ++keep)
+        for (int id = 0; id < ST_N; ++id) m->refresh[keep][id] = stage_refresh_after(id, flags, keep);
+    m->moving = stage_moving_fields(flags);
+    m->ghost = stage_ghost_fields(flags);
+    done[flags] = 1;
+    return m;
+}
+
+int stage_arrays(const particles_t *p, uint32_t f, int trim2d, void **ptrs)
+{
+    int n = 0;
+    const int nd = trim2d && p->dim == 2 ? 2 : 3, ns = trim2d && p->dim == 2 ? 4 : 6;
+#define ADD3(a, k)                                                                                                 \
+    for (int d_ = 0; d_ < (k); ++d_) ptrs[n++] = (void *)(a)[d_]
+    if (f & FLD_X) ADD3(p->x, nd);
+    if (f & FLD_X0) ADD3(p->X0, 3);
+    if (f & FLD_V) ADD3(p->v, nd);
+    if (f & FLD_VOL) ptrs[n++] = p->vol;
+    if (f & FLD_C) ptrs[n++] = p->C;
+    if (f & FLD_CN) ptrs[n++] = p->C_n;
+    if (f & FLD_DCDT) ptrs[n++] = p->dCdt;
+    if (f & FLD_GDOT) ptrs[n++] = p->gdot;
+    if (f & FLD_GSUM) ptrs[n++] = p->gsum;
+    if (f & FLD_NRM) ADD3(p->nrm, nd);
+    if (f & FLD_PSI) ptrs[n++] = p->psi;
+    if (f & FLD_SEGC) ptrs[n++] = p->segV, ptrs[n++] = p->segQ, ptrs[n++] = p->segD;
+    if (f & FLD_SIG) ADD3(p->sig, ns);
+    if (f & FLD_SIGN) ADD3(p->sig_n, ns);
+    if (f & FLD_DSIG) ADD3(p->dsig, ns);
+    if (f & FLD_XN) ADD3(p->x_n, nd);
+    if (f & FLD_VN) ADD3(p->v_n, nd);
+    if (f & FLD_ACC) ADD3(p->acc, nd);
+    if (f & FLD_L) ADD3(p->L, 6);
+    if (f & FLD_ID) ptrs[n++] = p->id;
+    if (f & FLD_KIND) ptrs[n++] = p->kind;
+    if (f & FLD_BCLASS) ptrs[n++] = p->bclass;
+#undef ADD3
+    return n;
+}
+
+const char *stage_fields_str(uint32_t f, char *buf, size_t len)
+{
+    static const char *name[FLD_NFIELDS] = {"x",   "X0",   "v",    "vol", "C",   "C_n", "dCdt", "gdot",
+                                            "gsum", "nrm", "psi",  "seg", "sig", "sig_n", "dsig", "x_n",
+                                            "v_n", "acc", "L",    "id",  "kind", "bclass"};
+    size_t o = 0;
+    buf[0] = 0;
+    for (int k = 0; k < FLD_NFIELDS; ++k)
+        if (f & (1u << k)) o += (size_t)snprintf(buf + o, o < len ? len - o : 0, "%s%s", o ? ", " : "", name[k]);
+    return buf;
+}

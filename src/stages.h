@@ -1,0 +1,131 @@
+/* stages.h — the step's stages, declared once as data (docs/architecture.md,
+ * "One step"): for each stage the hook that runs it, the body, when it runs,
+ * the particles it runs on, what it reads of other ranks' particles (ghosts)
+ * and what it writes. From this one table come
+ *  - the order in which a backend's hook runs its stages (stage_plan; the CPU
+ *    backend runs its hooks from it, the GPU backend fuses and overlaps some
+ *    of them and checks its order against it: gpu/README.md);
+ *  - the arrays a ghost carries (stage_ghost_fields, halo_init's list);
+ *  - the halo refresh after a stage (stage_refresh_after), and the fields a
+ *    backend that keeps its ghosts between list builds refreshes when the
+ *    particles move (stage_moving_fields: the GPU's).
+ * A new term in the step is one row here, and its body in each backend. */
+#ifndef SPHSEG_STAGES_H
+#define SPHSEG_STAGES_H
+#include <stdint.h>
+#include "particles.h"
+
+/* Fields of the store, as bits (a field may be several arrays: x is 3). */
+enum stage_field {
+    FLD_X = 1u << 0, FLD_X0 = 1u << 1, FLD_V = 1u << 2, FLD_VOL = 1u << 3, FLD_C = 1u << 4, FLD_CN = 1u << 5,
+    FLD_DCDT = 1u << 6, FLD_GDOT = 1u << 7, FLD_GSUM = 1u << 8, FLD_NRM = 1u << 9, FLD_PSI = 1u << 10,
+    FLD_SEGC = 1u << 11, /* segV, segQ, segD */
+    FLD_SIG = 1u << 12, FLD_SIGN = 1u << 13, FLD_DSIG = 1u << 14, FLD_XN = 1u << 15, FLD_VN = 1u << 16,
+    FLD_ACC = 1u << 17, FLD_L = 1u << 18, FLD_ID = 1u << 19, FLD_KIND = 1u << 20, FLD_BCLASS = 1u << 21,
+    FLD_NFIELDS = 22
+};
+
+/* What the run solves, as bits: a stage runs when all of its `when` bits
+ * are set and none of its `unless` bits. */
+enum stage_flag {
+    SF_FLOW = 1u << 0,   /* computed flow (Kinematics:velocity computed) */
+    SF_SEG = 1u << 1,    /* the concentration equation */
+    SF_WIN = 1u << 2,    /* concentration windows (Segregation:every > 1 or auto) */
+    SF_RENORM = 1u << 3, /* the conservative scheme with renormalisation */
+    SF_HCSR = 1u << 4    /* a scheme that classifies every step (paper, direct) */
+};
+
+enum stage_hook { HOOK_PREPARE, HOOK_RATES, HOOK_SAVE, HOOK_ADVANCE, HOOK_CONC_BEGIN, HOOK_CONC_STEP, HOOK_FILTER,
+                  HOOK_N };
+
+/* The particles a stage runs on: the owned ones, or the owned and the
+ * ghosts (each ghost from its own support here). */
+enum stage_range { RANGE_OWNED, RANGE_ALL };
+
+enum stage_id {
+    ST_PLACE,        /* step_place: dummies by wall_motion / prescribed x, u, shear rate */
+    ST_EXCHANGE,     /* migration, ghosts, sort (a CPU prepare; a GPU list build) */
+    ST_CLASSIFY,     /* bound_classify: HCSR classes, normals, psi~ */
+    ST_RENORM,       /* seg_renorm: L (the ghosts'; the owned come with the flow rates) */
+    ST_WALLS,        /* flow_wall: dummy velocity and stress from the material */
+    ST_FLOW,         /* flow_rates_team: acc, dsig, shear rate (+ the owned L when due) */
+    ST_SEG_COEFFS,   /* seg_coeffs: V, Q, D */
+    ST_DCDT,         /* seg_dCdt: dC/dt */
+    ST_SAVE,         /* step_save */
+    ST_ADVANCE,      /* step_advance: x, u, sigma (flow_advance) */
+    ST_ADVANCE_C,    /* step_advance: C = C_n + a dC/dt */
+    ST_ADVANCE_GSUM, /* step_advance: gsum += w gdot (windows) */
+    ST_SHEAR_MEAN,   /* step_shear_mean: gsum / T */
+    ST_WIN_RENORM,   /* seg_renorm of every material particle at the window's close */
+    ST_WIN_BOUNDS,   /* step_bounds_of at the window's mean shear rate */
+    ST_WIN_COEFFS,   /* seg_coeffs at the mean shear rate */
+    ST_WIN_DCDT,     /* seg_dCdt at the mean shear rate */
+    ST_WIN_ADVANCE,  /* step_conc_advance */
+    ST_SHEPARD,      /* flow_shepard: the filtered stress into dsig */
+    ST_SHEPARD_STORE, /* flow_shepard_store */
+    ST_N
+};
+
+typedef struct stage {
+    int id;
+    unsigned hooks;        /* bits 1 << enum stage_hook */
+    const char *body;
+    unsigned when, unless; /* enum stage_flag */
+    int range;             /* enum stage_range */
+    uint32_t halo;   /* what it reads of a ghost that the ghost's owner must supply (enum stage_field) */
+    uint32_t writes; /* what it writes */
+    int from_owner;  /* the ghosts' results are replaced by their owners' (a refresh after it) */
+} stage;
+
+/* The table, in step order within each hook. */
+extern const stage stage_table[];
+extern const int stage_table_n;
+
+/* The flags of a run. */
+struct sim;
+unsigned stage_flags(const struct sim *s);
+
+/* The stages hook h runs under flags, in order, one row per stage (the
+ * first), into rows[] (at most ST_N); returns how many. */
+int stage_plan(int hook, unsigned flags, const stage **rows);
+
+/* The fields a ghost carries: those some running stage reads of a ghost,
+ * those refreshed from the owners, and x, id, kind (the halo's own). */
+uint32_t stage_ghost_fields(unsigned flags);
+
+/* The fields to refresh in the ghosts after stage id (of RANGE_OWNED): its
+ * writes that a later stage reads of a ghost before any stage writes them
+ * again or the ghosts are made afresh (ST_EXCHANGE; keep = 1: a backend
+ * that keeps its ghosts between list builds, whose exchanges this leaves
+ * out); all its writes with from_owner; none for RANGE_ALL. The later
+ * stages are those of a cycle of hooks that holds every order a run can
+ * call them in (two half steps, the filter, a window's close and two of its
+ * midpoint stages), so that no run needs more. */
+uint32_t stage_refresh_after(int id, unsigned flags, int keep);
+
+/* For a backend that keeps its ghosts (keep = 1): the fields that the
+ * stages from ST_SAVE to ST_PLACE change and that the ghosts need before
+ * anything refreshes them; refreshed when the particles have moved. */
+uint32_t stage_moving_fields(unsigned flags);
+
+/* All of the above for one run's flags, worked out once (the hooks run
+ * from it every step): each hook's stage ids in order, the refresh after
+ * each stage ([keep][id]), the moving and the ghost fields. */
+typedef struct stage_sched {
+    int n[HOOK_N];
+    int ids[HOOK_N][ST_N];
+    uint32_t refresh[2][ST_N];
+    uint32_t moving, ghost;
+} stage_sched;
+const stage_sched *stage_schedule(unsigned flags);
+
+/* The arrays of the fields as pointers of p (host or device: the same
+ * members), in the order of particles.h; trim2d leaves out the z
+ * components (x, v, normal) and the xz, yz stresses of a 2D store.
+ * Returns how many (at most 64). */
+int stage_arrays(const particles_t *p, uint32_t fields, int trim2d, void **ptrs);
+
+/* "x, v, sig" for messages and tests. */
+const char *stage_fields_str(uint32_t fields, char *buf, size_t len);
+
+#endif

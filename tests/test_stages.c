@@ -1,0 +1,156 @@
+/* test_stages.c — what src/stages.c derives from the stage table, against
+ * the lists the backends carried by hand before it (issue 15, "Shape":
+ * parallel_ghost_arrays in src/main.c, the refreshes of backend_cpu.c,
+ * moving_fields in gpu/gpu_halo.cuh), worked out from the bodies' reads:
+ *  - the hooks' stage order (prepare: place, exchange, classify, renorm,
+ *    walls; rates: flow, coefficients, dC/dt; filter: Shepard, store,
+ *    walls), with the stages a run does not solve left out;
+ *  - the ghosts' fields for the drum (flow, conservative renormalised C),
+ *    the drum in windows (the window's mean shear rate gsum instead of
+ *    gdot), the shear box (prescribed flow, paper scheme: no v, sig, X0, L)
+ *    and the column (flow only: no C, gdot, L);
+ *  - the refresh after each stage: classes, normals and psi after the
+ *    classification (from the owners), gdot after the flow rates only
+ *    when the coefficients read it in the same step (not in windows), sig
+ *    after the Shepard store, gsum after the window mean, C after a
+ *    window's midpoint stage; nothing after advance on a backend that
+ *    makes its ghosts afresh in every prepare;
+ *  - the GPU's moving fields (ghosts kept between list builds): x, v, sig
+ *    and C for the drum, x, v, sig in windows, x, gdot and C for the
+ *    shear box (its GPU list carried v too, which no stage reads of a ghost
+ *    without computed flow);
+ *  - stage_arrays: the z components and the xz, yz stresses left out of a
+ *    trimmed 2D list;
+ *  - every field refreshed is one the ghosts carry. */
+#include "testutil.h"
+#include "stages.h"
+
+#define DRUM (SF_FLOW | SF_SEG | SF_RENORM)
+#define SHEARBOX (SF_SEG | SF_HCSR)
+#define COLUMN (SF_FLOW)
+
+static void expect_plan(int hook, unsigned f, const int *ids, int n)
+{
+    const stage *rows[ST_N];
+    int m = stage_plan(hook, f, rows);
+    assert_int_equal(m, n);
+    for (int k = 0; k < n; ++k) assert_int_equal(rows[k]->id, ids[k]);
+}
+
+static void test_plans(void **st)
+{
+    (void)st;
+    int prep[] = {ST_PLACE, ST_EXCHANGE, ST_CLASSIFY, ST_RENORM, ST_WALLS};
+    expect_plan(HOOK_PREPARE, DRUM, prep, 5);
+    int prep_col[] = {ST_PLACE, ST_EXCHANGE, ST_CLASSIFY, ST_WALLS};
+    expect_plan(HOOK_PREPARE, COLUMN, prep_col, 4);
+    int prep_box[] = {ST_PLACE, ST_EXCHANGE, ST_CLASSIFY};
+    expect_plan(HOOK_PREPARE, SHEARBOX, prep_box, 3);
+    int rates[] = {ST_FLOW, ST_SEG_COEFFS, ST_DCDT};
+    expect_plan(HOOK_RATES, DRUM, rates, 3);
+    expect_plan(HOOK_RATES, DRUM | SF_WIN, rates, 1);
+    expect_plan(HOOK_RATES, SHEARBOX, rates + 1, 2);
+    int filt[] = {ST_SHEPARD, ST_SHEPARD_STORE, ST_WALLS};
+    expect_plan(HOOK_FILTER, DRUM, filt, 3);
+    int adv[] = {ST_ADVANCE, ST_ADVANCE_C};
+    expect_plan(HOOK_ADVANCE, DRUM, adv, 2);
+    int advw[] = {ST_ADVANCE, ST_ADVANCE_GSUM};
+    expect_plan(HOOK_ADVANCE, DRUM | SF_WIN, advw, 2);
+    int cb[] = {ST_SHEAR_MEAN, ST_WIN_RENORM, ST_WIN_BOUNDS};
+    expect_plan(HOOK_CONC_BEGIN, DRUM | SF_WIN, cb, 3);
+    expect_plan(HOOK_CONC_BEGIN, DRUM, cb, 0);
+    int cs[] = {ST_WIN_COEFFS, ST_WIN_DCDT, ST_WIN_ADVANCE};
+    expect_plan(HOOK_CONC_STEP, DRUM | SF_WIN, cs, 3);
+}
+
+static void test_ghost_fields(void **st)
+{
+    (void)st;
+    const uint32_t base = FLD_X | FLD_VOL | FLD_ID | FLD_KIND | FLD_BCLASS | FLD_NRM | FLD_PSI;
+    assert_int_equal(stage_ghost_fields(DRUM), base | FLD_X0 | FLD_V | FLD_SIG | FLD_C | FLD_GDOT | FLD_L);
+    assert_int_equal(stage_ghost_fields(DRUM | SF_WIN), base | FLD_X0 | FLD_V | FLD_SIG | FLD_C | FLD_GSUM | FLD_L);
+    assert_int_equal(stage_ghost_fields(SHEARBOX), base | FLD_C | FLD_GDOT);
+    assert_int_equal(stage_ghost_fields(COLUMN), base | FLD_X0 | FLD_V | FLD_SIG);
+}
+
+static void test_refreshes(void **st)
+{
+    (void)st;
+    for (int keep = 0; keep < 2; ++keep) {
+        assert_int_equal(stage_refresh_after(ST_CLASSIFY, DRUM, keep), FLD_BCLASS | FLD_NRM | FLD_PSI);
+        assert_int_equal(stage_refresh_after(ST_FLOW, DRUM, keep), FLD_GDOT);
+        assert_int_equal(stage_refresh_after(ST_FLOW, DRUM | SF_WIN, keep), 0);
+        assert_int_equal(stage_refresh_after(ST_SHEPARD_STORE, DRUM, keep), FLD_SIG);
+        assert_int_equal(stage_refresh_after(ST_SHEPARD, DRUM, keep), 0); /* dsig: read of i only */
+        assert_int_equal(stage_refresh_after(ST_SHEAR_MEAN, DRUM | SF_WIN, keep), FLD_GSUM);
+        assert_int_equal(stage_refresh_after(ST_WIN_ADVANCE, DRUM | SF_WIN, keep), FLD_C);
+        assert_int_equal(stage_refresh_after(ST_WALLS, DRUM, keep), 0);       /* each ghost its own */
+        assert_int_equal(stage_refresh_after(ST_SEG_COEFFS, DRUM, keep), 0);
+        assert_int_equal(stage_refresh_after(ST_SAVE, DRUM, keep), 0);
+    }
+    /* made afresh in the next prepare: no refresh after advance or place */
+    assert_int_equal(stage_refresh_after(ST_ADVANCE, DRUM, 0), 0);
+    assert_int_equal(stage_refresh_after(ST_ADVANCE_C, DRUM, 0), 0);
+    assert_int_equal(stage_refresh_after(ST_PLACE, SHEARBOX, 0), 0);
+    /* kept: the place writes x, v again, so advance owes only sig (and C) */
+    assert_int_equal(stage_refresh_after(ST_ADVANCE, DRUM, 1), FLD_SIG);
+    assert_int_equal(stage_refresh_after(ST_PLACE, DRUM, 1), FLD_X | FLD_V);
+    assert_int_equal(stage_moving_fields(DRUM), FLD_X | FLD_V | FLD_SIG | FLD_C);
+    assert_int_equal(stage_moving_fields(DRUM | SF_WIN), FLD_X | FLD_V | FLD_SIG);
+    assert_int_equal(stage_moving_fields(SHEARBOX), FLD_X | FLD_GDOT | FLD_C); /* nothing reads a ghost's v */
+    assert_int_equal(stage_moving_fields(COLUMN), FLD_X | FLD_V | FLD_SIG);
+    /* whatever is refreshed, the ghosts carry */
+    const unsigned runs[] = {DRUM, DRUM | SF_WIN, SHEARBOX, COLUMN, SF_SEG | SF_RENORM, DRUM | SF_HCSR};
+    for (size_t r = 0; r < sizeof runs / sizeof runs[0]; ++r) {
+        uint32_t g = stage_ghost_fields(runs[r]);
+        assert_int_equal(stage_moving_fields(runs[r]) & ~g, 0);
+        for (int id = 0; id < ST_N; ++id)
+            for (int keep = 0; keep < 2; ++keep) assert_int_equal(stage_refresh_after(id, runs[r], keep) & ~g, 0);
+    }
+}
+
+/* The schedule holds the same as the functions it memoises. */
+static void test_schedule(void **st)
+{
+    (void)st;
+    const unsigned runs[] = {DRUM, DRUM | SF_WIN, SHEARBOX, COLUMN};
+    for (size_t r = 0; r < sizeof runs / sizeof runs[0]; ++r) {
+        const stage_sched *m = stage_schedule(runs[r]);
+        assert_ptr_equal(m, stage_schedule(runs[r]));
+        for (int h = 0; h < HOOK_N; ++h) {
+            const stage *rows[ST_N];
+            assert_int_equal(m->n[h], stage_plan(h, runs[r], rows));
+            for (int k = 0; k < m->n[h]; ++k) assert_int_equal(m->ids[h][k], rows[k]->id);
+        }
+        for (int id = 0; id < ST_N; ++id)
+            for (int keep = 0; keep < 2; ++keep)
+                assert_int_equal(m->refresh[keep][id], stage_refresh_after(id, runs[r], keep));
+        assert_int_equal(m->moving, stage_moving_fields(runs[r]));
+        assert_int_equal(m->ghost, stage_ghost_fields(runs[r]));
+    }
+}
+
+static void test_arrays(void **st)
+{
+    (void)st;
+    particles_t p;
+    part_alloc(&p, 2, 4);
+    void *a[64];
+    assert_int_equal(stage_arrays(&p, FLD_X | FLD_SIG, 1, a), 2 + 4);
+    assert_ptr_equal(a[1], p.x[1]);
+    assert_ptr_equal(a[2 + 3], p.sig[3]);
+    assert_int_equal(stage_arrays(&p, FLD_X | FLD_SIG, 0, a), 3 + 6);
+    assert_int_equal(stage_arrays(&p, FLD_SEGC | FLD_L | FLD_KIND, 0, a), 3 + 6 + 1);
+    assert_ptr_equal(a[9], p.kind);
+    char buf[128];
+    assert_string_equal(stage_fields_str(FLD_X | FLD_GDOT | FLD_BCLASS, buf, sizeof buf), "x, gdot, bclass");
+    part_free(&p);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_plans), cmocka_unit_test(test_ghost_fields),
+                                       cmocka_unit_test(test_refreshes), cmocka_unit_test(test_schedule),
+                                       cmocka_unit_test(test_arrays)};
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
