@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 static int (*error_cleanup)(void);
 
@@ -70,12 +71,25 @@ static void finish(int code)
     exit(code);
 }
 
+/* The line in one write(2): when several ranks fail at once (a collective
+ * write to a full disk) their lines do not interleave mid-line, as
+ * separate fprintf calls on unbuffered stderr did (test_fulldisk.sh on 2
+ * ranks read "sphseg: error: sphseg: error: cannot write ..."). Atomic for
+ * lines up to PIPE_BUF (4096 bytes); a longer one is cut. */
 static void error_vprint(const char *prefix, const char *fmt, va_list ap)
 {
-    fprintf(stderr, "sphseg: error: %s", prefix);
-    vfprintf(stderr, fmt, ap);
-    fputc('\n', stderr);
+    char buf[4096];
+    int o = snprintf(buf, sizeof buf - 1, "sphseg: error: %s", prefix);
+    if (o < 0) o = 0;
+    if (o < (int)sizeof buf - 1) {
+        int k = vsnprintf(buf + o, sizeof buf - 1 - (size_t)o, fmt, ap);
+        o += k < 0 ? 0 : k;
+    }
+    if (o > (int)sizeof buf - 2) o = (int)sizeof buf - 2;
+    buf[o++] = '\n';
     fflush(stderr);
+    ssize_t w = write(STDERR_FILENO, buf, (size_t)o);
+    (void)w;
 }
 
 void error_exit(int code, const char *fmt, ...)

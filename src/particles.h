@@ -46,7 +46,9 @@ typedef struct particles {
     real *sig_n[6]; /* stress at the start of the step */
     real *dsig[6];  /* stress rate (Jaumann elastic trial rate, C1), Pa/s;
                      * also the Shepard filter's scratch */
-    real *x_n[3];   /* position at the start of the step, m */
+    preal *x_n[3];  /* position at the start of the step, m (double in both builds: hd.h) */
+    real *xr[3];    /* the single build's rounding remainder of x: the position is x + xr
+                     * to double precision (hd.h); 0 in the double build, m */
     real *v_n[3];   /* velocity at the start of the step, m/s */
     real *acc[3];   /* acceleration (3.9) with gravity, m/s^2 */
     real *L[6];   /* renormalisation (-sum_j V_j w_ij x_ij x_ij)^-1, symmetric:

@@ -367,13 +367,14 @@ static void test_part_alloc(void **state)
     part_alloc(&p, 3, 0); /* empty store is valid */
     assert_non_null(p.id);
     part_free(&p);
-    /* 52 real arrays (x, X0, v, nrm, x_n, v_n, acc: 3 each; vol, gdot, gsum,
+    /* 52 real arrays (x, X0, v, nrm, xr, v_n, acc: 3 each; vol, gdot, gsum,
      * psi, segV, segQ, segD; L, sig, sig_n, dsig: 6 each), 3 creal (C, C_n,
-     * dCdt: double in both precisions), id (8 B), kind and bclass (1 B each). */
-    assert_int_equal(part_bytes_per_particle(), 52 * sizeof(real) + 3 * sizeof(creal) + 8 + 2);
+     * dCdt) and 3 preal (x_n): double in both precisions, id (8 B), kind and
+     * bclass (1 B each). */
+    assert_int_equal(part_bytes_per_particle(), 52 * sizeof(real) + 3 * sizeof(creal) + 3 * sizeof(preal) + 8 + 2);
 }
 
-/* Value of array a (0..53) for a particle originally at index k. */
+/* Value of array a (0..56) for a particle originally at index k. */
 static double perm_val(int a, size_t k) { return 1000.0 * a + (double)k; }
 
 static void test_part_permute(void **state)
@@ -390,7 +391,7 @@ static void test_part_permute(void **state)
                   &p.sig_n[0], &p.sig_n[1], &p.sig_n[2], &p.sig_n[3], &p.sig_n[4], &p.sig_n[5],
                   &p.dsig[0], &p.dsig[1], &p.dsig[2], &p.dsig[3], &p.dsig[4], &p.dsig[5],
                   &p.x_n[0], &p.x_n[1], &p.x_n[2], &p.v_n[0], &p.v_n[1], &p.v_n[2],
-                  &p.acc[0], &p.acc[1], &p.acc[2]};
+                  &p.acc[0], &p.acc[1], &p.acc[2], &p.xr[0], &p.xr[1],  &p.xr[2]};
     int nr = (int)(sizeof r / sizeof r[0]);
     for (size_t k = 0; k < N; k++) {
         for (int a = 0; a < nr; a++)

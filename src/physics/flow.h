@@ -171,7 +171,8 @@ HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const fl
     return flow_rates_team(i, p, g, c, 0, 1, 0);
 }
 
-/* Material particle i, a in seconds: x = x_n + a u, u = u_n + a acc,
+/* Material particle i, a in seconds: x = x_n + a u (in double, x + xr in
+ * the single build: hd.h), u = u_n + a acc,
  * sigma = return_map(sigma_n + a dsig) with k_mu from mu(I) at the current
  * shear rate, the trial pressure and d_avg(C). The position uses the
  * velocity of the rate evaluation (read before u is overwritten). Returns
@@ -180,7 +181,9 @@ HD_INLINE int flow_advance(size_t i, particles_t *p, real a, const flow_ctx *c)
 {
     for (int d = 0; d < 3; ++d) { /* a fixed trip count: unrolled, the arrays indexed statically */
         if (d >= c->k.dim) break;
-        p->x[d][i] = p->x_n[d][i] + a * p->v[d][i];
+        const preal xd = p->x_n[d][i] + (preal)a * (preal)p->v[d][i]; /* in double: hd.h */
+        p->x[d][i] = (real)xd;
+        if (POS_REMAINDER) p->xr[d][i] = (real)(xd - (preal)p->x[d][i]);
         p->v[d][i] = p->v_n[d][i] + a * p->acc[d][i];
     }
     real s[6];

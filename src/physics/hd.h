@@ -27,6 +27,21 @@ typedef double real;
  * single build conserves it as the double build does. */
 typedef double creal;
 
+/* Positions are held to double precision in both builds: the start-of-step
+ * position x_n is double (preal), and the single build keeps beside each
+ * float x its rounding remainder xr (particles.h), so that x + xr is the
+ * integrated position. A float position alone rounds every step's
+ * displacement to its ulp, 3.7e-9 to 7.5e-9 m at 0.05 to 0.1 m from the
+ * origin, and so leaves a particle slower than ulp / (2 dt), 0.07 to 0.15
+ * mm/s at dt = 2.5e-5 s, where it is: the slow axial drift of a 3D drum
+ * (docs/gpu.md, "Mixed precision"). The neighbour loops read x alone. */
+typedef double preal;
+#ifdef SPHSEG_SINGLE
+#define POS_REMAINDER 1
+#else
+#define POS_REMAINDER 0 /* x is the double position itself; xr stays 0 */
+#endif
+
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif

@@ -111,7 +111,10 @@ HD_INLINE void step_save(size_t i, const particles_t *p, int flow_on)
 {
     p->C_n[i] = p->C[i];
     if (!flow_on) return;
-    for (int d = 0; d < 3; ++d) p->x_n[d][i] = p->x[d][i], p->v_n[d][i] = p->v[d][i];
+    for (int d = 0; d < 3; ++d) {
+        p->x_n[d][i] = POS_REMAINDER ? (preal)p->x[d][i] + (preal)p->xr[d][i] : (preal)p->x[d][i];
+        p->v_n[d][i] = p->v[d][i];
+    }
     for (int q = 0; q < 6; ++q) p->sig_n[q][i] = p->sig[q][i];
 }
 
