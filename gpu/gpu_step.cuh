@@ -18,43 +18,78 @@ static void gpu_acc_reduce(gpu_t *g)
     g->acc_pending = 0;
 }
 
+/* The stage table's ST_EXCHANGE on the GPU: a list build (the store
+ * migrated and sorted, the ghosts made afresh) when the list is stale or the
+ * classification needs an exact one; otherwise the ghosts kept and their
+ * moving fields refreshed (started only, with the overlap). Returns 1 after
+ * a build. */
+static int gpu_exchange(sim_t *s, gpu_t *g, int exact)
+{
+    int build = !g->built || g->stale || g->every || exact;
+    if (s->halo) build = comm_max((double)build) > 0; /* a build exchanges: every rank or none */
+    if (!build) {
+        if (s->halo && !g->hx->overlap) gpu_refresh(s, g, moving_fields(s, g));
+        if (s->halo && g->hx->overlap) gpu_refresh_start(s, g, moving_fields(s, g)); /* while the interior goes on */
+        return 0;
+    }
+    gpu_acc_reduce(g); /* before the store is re-sorted */
+    if (s->halo) gpu_full_exchange(s, g);
+    real skin = exact ? R(0.0) : g->skin, sup = R(2.0) * s->seg.k.h + skin;
+    gpu_build(g, s->halo, s->p.dim, sup, exact ? s->seg.k.support2 : sup * sup,
+              s->halo && exact ? s->halo->origin : NULL);
+    if (s->halo) gpu_halo_lists(s, g);
+    g->built = 1;
+    g->stale = exact; /* a list without skin is stale as soon as anything moves */
+    return 1;
+}
+
+/* The hooks run the stage table's plan (src/stages.h) for their hook, each
+ * stage's kernels in a case of their own. Where the GPU departs from one
+ * kernel per stage in the plan's order, the case says so: ST_PLACE takes
+ * the held-back save and advance with it; ST_WALLS and ST_RENORM are one
+ * pass; the owned particles' ST_SEG_COEFFS ride in the ST_FLOW pass; a stage
+ * that reads ghosts whose refresh is in flight runs its interior first. */
 static void gpu_prepare(sim_t *s, double t, int classify)
 {
     gpu_t *g = gpu_get(s);
     g->bnd_fresh = 0;
     gpu_settle(s, g);
-    gpu_step_kernel(s, g, 1, t); /* with the held-back save and advance */
-    int exact = classify == 2 || (s->hcsr && classify);
-    int renorm = s->seg_on && classify && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm;
-    if (renorm) s->renorm_due = s->flow_on; /* the owned L: with the next flow rates (sim.h) */
-    int build = !g->built || g->stale || g->every || exact;
-    if (s->halo) build = comm_max((double)build) > 0; /* a build exchanges: every rank or none */
-    if (build) {
-        gpu_acc_reduce(g); /* before the store is re-sorted */
-        if (s->halo) gpu_full_exchange(s, g);
-        real skin = exact ? R(0.0) : g->skin, sup = R(2.0) * s->seg.k.h + skin;
-        gpu_build(g, s->halo, s->p.dim, sup, exact ? s->seg.k.support2 : sup * sup,
-                  s->halo && exact ? s->halo->origin : NULL);
-        if (s->halo) gpu_halo_lists(s, g);
-        g->built = 1;
-        g->stale = exact; /* a list without skin is stale as soon as anything moves */
-        if (exact) {
+    const stage_sched *m = gpu_sched(s);
+    const int exact = classify == 2 || (s->hcsr && classify);
+    int build = 0, walls = 0, renorm = 0;
+    for (int k = 0; k < m->n[HOOK_PREPARE]; ++k) switch (m->ids[HOOK_PREPARE][k]) {
+        case ST_PLACE: gpu_step_kernel(s, g, 1, t); break; /* with the held-back save and advance */
+        case ST_EXCHANGE: build = gpu_exchange(s, g, exact); break;
+        case ST_CLASSIFY:
+            if (!exact) break; /* exact forced a build */
             gpu_classify(g, &s->seg.k);
             if (s->halo) /* deep ghosts lack part of their support: the owners' classes */
-                gpu_refresh(s, g, fields_tab(g, gpu_sched(s)->refresh[1][ST_CLASSIFY], 0));
+                gpu_refresh(s, g, fields_tab(g, m->refresh[1][ST_CLASSIFY], 0));
+            break;
+        case ST_RENORM: /* the ghosts' L here, the owned ones' with the next flow rates (sim.h) */
+            renorm = classify != 0;
+            if (renorm) s->renorm_due = s->flow_on;
+            break;
+        case ST_WALLS: walls = 1; break;
+        default: error_exit(1, "backend_gpu: stage %d has no body in prepare", m->ids[HOOK_PREPARE][k]);
         }
-        gpu_walls_renorm(s, g, s->flow_on, renorm, sel_all());
-        return;
-    }
-    if (s->halo && !g->hx->overlap) gpu_refresh(s, g, moving_fields(s, g));
-    if (s->halo && g->hx->overlap) { /* ghosts moved: refresh them while the interior goes on */
-        gpu_refresh_start(s, g, moving_fields(s, g));
+    /* ST_WALLS and ST_RENORM: one pass, its boundary after the refresh in flight */
+    if (!build && s->halo && g->hx->overlap) {
         g->hx->pend_renorm = renorm;
-        g->hx->pend_walls = s->flow_on;
-        gpu_walls_renorm(s, g, s->flow_on, renorm, sel_in(g, 2));
+        g->hx->pend_walls = walls;
+        gpu_walls_renorm(s, g, walls, renorm, sel_in(g, 2));
         return;
     }
-    gpu_walls_renorm(s, g, s->flow_on, renorm, sel_all());
+    gpu_walls_renorm(s, g, walls, renorm, sel_all());
+}
+
+/* Whether hook h runs stage id in this run. */
+static int gpu_plans(const sim_t *s, int h, int id)
+{
+    const stage_sched *m = gpu_sched(s);
+    for (int k = 0; k < m->n[h]; ++k)
+        if (m->ids[h][k] == id) return 1;
+    return 0;
 }
 
 /* The flow rates of the owned particles in sl, and with segregation their
@@ -66,7 +101,7 @@ template <int RENORM> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
     grid_view v = g->view;
     flow_ctx c = s->flow;
     seg_ctx sc = s->seg;
-    const int seg = s->seg_on && !s->win.on; /* in windows: the coefficients at their close */
+    const int seg = gpu_plans(s, HOOK_RATES, ST_SEG_COEFFS); /* not in windows: at their close */
     real *amag = g->amag;
     team(g, g->n, [=] __device__(size_t i, int lane, int T) {
         if (!sel_on(sl, i)) return;
@@ -109,41 +144,53 @@ static void gpu_dcdt(sim_t *s, gpu_t *g, particles_t p, sel sl)
     });
 }
 
+/* ST_DCDT, with ST_SEG_COEFFS of the particles the flow pass did not take
+ * (the ghosts, after their shear rate's refresh; all without computed flow). */
+static void gpu_conc_rates(sim_t *s, gpu_t *g)
+{
+    prof_begin(g->st);
+    const ftab t = fields_tab(g, gpu_sched(s)->refresh[1][ST_FLOW], 1); /* the shear rate */
+    if (s->halo && s->flow_on && !g->hx->overlap) {
+        gpu_refresh(s, g, t);
+        gpu_seg_coeffs(s, g, g->d, g->n, g->n + g->ng); /* the owned: with the flow rates */
+        gpu_dcdt(s, g, g->d, sel_all());
+    } else if (s->halo && s->flow_on) { /* the ghosts' shear rate, while the interior goes on */
+        gpu_refresh_start(s, g, t);
+        gpu_dcdt(s, g, g->d, sel_in(g, 2));
+        gpu_refresh_finish(s, g);
+        gpu_seg_coeffs(s, g, g->d, g->n, g->n + g->ng);
+        gpu_dcdt(s, g, g->d, sel_bd(g, 2));
+    } else {
+        if (!s->flow_on) gpu_seg_coeffs(s, g, g->d, 0, g->n + g->ng);
+        gpu_dcdt(s, g, g->d, sel_all());
+    }
+    prof_end(g->st, P_SEG);
+}
+
 static void gpu_rates(sim_t *s)
 {
     gpu_t *g = gpu_hook(s, 1);
-    const int overlap = g->hx && g->hx->pending;
-    if (s->flow_on) {
-        if (overlap) { /* level 3 reads nothing the refresh in flight brings */
-            gpu_flow_rates(s, g, sel_in(g, 3));
+    const stage_sched *m = gpu_sched(s);
+    for (int k = 0; k < m->n[HOOK_RATES]; ++k) switch (m->ids[HOOK_RATES][k]) {
+        case ST_FLOW:
+            if (g->hx && g->hx->pending) { /* level 3 reads nothing the refresh in flight brings */
+                gpu_flow_rates(s, g, sel_in(g, 3));
+                gpu_settle(s, g);
+                gpu_flow_rates(s, g, sel_bd(g, 3));
+            } else {
+                gpu_settle(s, g);
+                gpu_flow_rates(s, g, sel_all());
+            }
+            s->renorm_due = 0;
+            break;
+        case ST_SEG_COEFFS: break; /* in the flow pass, and the rest with dC/dt */
+        case ST_DCDT:
             gpu_settle(s, g);
-            gpu_flow_rates(s, g, sel_bd(g, 3));
-        } else {
-            gpu_settle(s, g);
-            gpu_flow_rates(s, g, sel_all());
+            gpu_conc_rates(s, g);
+            break;
+        default: error_exit(1, "backend_gpu: stage %d has no body in rates", m->ids[HOOK_RATES][k]);
         }
-        s->renorm_due = 0;
-    }
     gpu_settle(s, g);
-    if (s->seg_on && !s->win.on) {
-        prof_begin(g->st);
-        const ftab t = fields_tab(g, gpu_sched(s)->refresh[1][ST_FLOW], 1); /* the shear rate */
-        if (s->halo && s->flow_on && !g->hx->overlap) {
-            gpu_refresh(s, g, t);
-            gpu_seg_coeffs(s, g, g->d, g->n, g->n + g->ng); /* the owned: with the flow rates */
-            gpu_dcdt(s, g, g->d, sel_all());
-        } else if (s->halo && s->flow_on) { /* the ghosts' shear rate, while the interior goes on */
-            gpu_refresh_start(s, g, t);
-            gpu_dcdt(s, g, g->d, sel_in(g, 2));
-            gpu_refresh_finish(s, g);
-            gpu_seg_coeffs(s, g, g->d, g->n, g->n + g->ng);
-            gpu_dcdt(s, g, g->d, sel_bd(g, 2));
-        } else {
-            if (!s->flow_on) gpu_seg_coeffs(s, g, g->d, 0, g->n + g->ng);
-            gpu_dcdt(s, g, g->d, sel_all());
-        }
-        prof_end(g->st, P_SEG);
-    }
 }
 
 /* save_start and advance only note what to do: the per-particle updates
@@ -196,30 +243,41 @@ static void gpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS])
 {
     gpu_t *g = gpu_hook(s, 1);
     gpu_settle(s, g);
+    const stage_sched *m = gpu_sched(s);
     particles_t p = g->d;
-    const real inv = (real)(1.0 / T);
     prof_begin(g->st);
-    each(g, g->n, [=] __device__(size_t i) {
-        particles_t q = p;
-        step_shear_mean(i, &q, inv);
-    });
-    if (s->halo) gpu_refresh(s, g, fields_tab(g, gpu_sched(s)->refresh[1][ST_SHEAR_MEAN], 1));
-    if (s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) {
-        grid_view v = g->view;
-        seg_ctx sc = s->seg;
-        team(g, g->n + g->ng, [=] __device__(size_t i, int lane, int T) {
-            if (p.kind[i] == KIND_MATERIAL) seg_renorm_team(i, &p, &v, &sc, lane, T);
-        });
-    }
-    particles_t q = p;
-    q.gdot = p.gsum;
-    bnd3 init = {{0, 0, 0}};
-    auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{q, s->step_c});
-    reduce(g, it, (bnd3 *)g->dres, g->n, bnd_max(), init);
-    CK(cudaMemcpyAsync(g->hres, g->dres, 3 * sizeof(double), cudaMemcpyDeviceToHost, g->st));
-    CK(cudaStreamSynchronize(g->st));
+    for (int k = 0; k < m->n[HOOK_CONC_BEGIN]; ++k) switch (m->ids[HOOK_CONC_BEGIN][k]) {
+        case ST_SHEAR_MEAN: {
+            const real inv = (real)(1.0 / T);
+            each(g, g->n, [=] __device__(size_t i) {
+                particles_t q = p;
+                step_shear_mean(i, &q, inv);
+            });
+            if (s->halo) gpu_refresh(s, g, fields_tab(g, m->refresh[1][ST_SHEAR_MEAN], 1));
+            break;
+        }
+        case ST_WIN_RENORM: {
+            grid_view v = g->view;
+            seg_ctx sc = s->seg;
+            team(g, g->n + g->ng, [=] __device__(size_t i, int lane, int T) {
+                if (p.kind[i] == KIND_MATERIAL) seg_renorm_team(i, &p, &v, &sc, lane, T);
+            });
+            break;
+        }
+        case ST_WIN_BOUNDS: {
+            particles_t q = p;
+            q.gdot = p.gsum;
+            bnd3 init = {{0, 0, 0}};
+            auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{q, s->step_c});
+            reduce(g, it, (bnd3 *)g->dres, g->n, bnd_max(), init);
+            CK(cudaMemcpyAsync(g->hres, g->dres, 3 * sizeof(double), cudaMemcpyDeviceToHost, g->st));
+            CK(cudaStreamSynchronize(g->st));
+            out[STEP_D] = g->hres[0], out[STEP_WAVE] = g->hres[1], out[STEP_SPEED] = 0, out[STEP_ACC] = 0;
+            break;
+        }
+        default: error_exit(1, "backend_gpu: stage %d has no body in conc_begin", m->ids[HOOK_CONC_BEGIN][k]);
+        }
     prof_end(g->st, P_SEG);
-    out[STEP_D] = g->hres[0], out[STEP_WAVE] = g->hres[1], out[STEP_SPEED] = 0, out[STEP_ACC] = 0;
 }
 
 /* One midpoint step of C alone (length a) at the window's mean shear rate;
@@ -228,20 +286,25 @@ static void gpu_conc_step(sim_t *s, double a, int last)
 {
     gpu_t *g = gpu_hook(s, 1);
     gpu_settle(s, g);
+    const stage_sched *m = gpu_sched(s);
     particles_t p = g->d, q = g->d;
     q.gdot = p.gsum;
-    const ftab c = fields_tab(g, gpu_sched(s)->refresh[1][ST_WIN_ADVANCE], 1);
     prof_begin(g->st);
-    for (int stage = 0; stage < 2; ++stage) {
-        gpu_seg_coeffs(s, g, q, 0, g->n + g->ng);
-        gpu_dcdt(s, g, q, sel_all());
-        const real as = (real)(stage ? a : 0.5 * a);
-        each(g, g->n, [=] __device__(size_t i) {
-            particles_t r = p;
-            step_conc_advance(i, &r, as, stage);
-        });
-        if (s->halo) gpu_refresh(s, g, c);
-    }
+    for (int stage = 0; stage < 2; ++stage)
+        for (int k = 0; k < m->n[HOOK_CONC_STEP]; ++k) switch (m->ids[HOOK_CONC_STEP][k]) {
+            case ST_WIN_COEFFS: gpu_seg_coeffs(s, g, q, 0, g->n + g->ng); break;
+            case ST_WIN_DCDT: gpu_dcdt(s, g, q, sel_all()); break;
+            case ST_WIN_ADVANCE: {
+                const real as = (real)(stage ? a : 0.5 * a);
+                each(g, g->n, [=] __device__(size_t i) {
+                    particles_t r = p;
+                    step_conc_advance(i, &r, as, stage);
+                });
+                if (s->halo) gpu_refresh(s, g, fields_tab(g, m->refresh[1][ST_WIN_ADVANCE], 1));
+                break;
+            }
+            default: error_exit(1, "backend_gpu: stage %d has no body in conc_step", m->ids[HOOK_CONC_STEP][k]);
+            }
     if (last) CK(cudaMemsetAsync(p.gsum, 0, (g->n + g->ng) * sizeof(real), g->st));
     prof_end(g->st, P_SEG);
 }
@@ -250,16 +313,24 @@ static void gpu_filter(sim_t *s)
 {
     gpu_t *g = gpu_hook(s, 1);
     gpu_settle(s, g);
+    const stage_sched *m = gpu_sched(s);
     particles_t p = g->d;
     grid_view v = g->view;
     flow_ctx c = s->flow;
-    prof_begin(g->st);
-    team(g, g->n, [=] __device__(size_t i, int lane, int T) {
-        particles_t q = p;
-        if (q.kind[i] == KIND_MATERIAL) flow_shepard_team(i, &q, &v, &c, lane, T);
-    });
-    each(g, g->n, [=] __device__(size_t i) { flow_shepard_store(i, &p); });
-    prof_end(g->st, P_FILTER);
-    if (s->halo) gpu_refresh(s, g, fields_tab(g, gpu_sched(s)->refresh[1][ST_SHEPARD_STORE], 1));
-    gpu_walls_renorm(s, g, 1, 0, sel_all());
+    for (int k = 0; k < m->n[HOOK_FILTER]; ++k) switch (m->ids[HOOK_FILTER][k]) {
+        case ST_SHEPARD:
+            prof_begin(g->st);
+            team(g, g->n, [=] __device__(size_t i, int lane, int T) {
+                particles_t q = p;
+                if (q.kind[i] == KIND_MATERIAL) flow_shepard_team(i, &q, &v, &c, lane, T);
+            });
+            break;
+        case ST_SHEPARD_STORE:
+            each(g, g->n, [=] __device__(size_t i) { flow_shepard_store(i, &p); });
+            prof_end(g->st, P_FILTER);
+            if (s->halo) gpu_refresh(s, g, fields_tab(g, m->refresh[1][ST_SHEPARD_STORE], 1));
+            break;
+        case ST_WALLS: gpu_walls_renorm(s, g, 1, 0, sel_all()); break;
+        default: error_exit(1, "backend_gpu: stage %d has no body in filter", m->ids[HOOK_FILTER][k]);
+        }
 }
