@@ -96,6 +96,12 @@ static const cyaml_schema_field_t kinematics_fields[] = {
     CYAML_FIELD_END,
 };
 
+static const cyaml_schema_field_t grains_fields[] = {
+    FLT(scene_grains, d_small, OPT),
+    FLT(scene_grains, d_large, OPT),
+    CYAML_FIELD_END,
+};
+
 /* V and D are required only for the constant model: require_model_keys(). */
 static const cyaml_schema_field_t segregation_fields[] = {
     ENM(scene_segregation, enabled, on_off),
@@ -107,8 +113,6 @@ static const cyaml_schema_field_t segregation_fields[] = {
     FLT(scene_segregation, D, OPT),
     FLT(scene_segregation, chi_V, OPT),
     FLT(scene_segregation, chi_D, OPT),
-    FLT(scene_segregation, d_small, OPT),
-    FLT(scene_segregation, d_large, OPT),
     ENM(scene_segregation, scheme, seg_schemes),
     ENM(scene_segregation, renormalize, on_off),
     FLT(scene_segregation, drift_tol, OPT),
@@ -179,6 +183,7 @@ static const cyaml_schema_field_t scene_fields[] = {
     SEC("Run", run, run_fields),
     SEC("Geometry", geometry, geometry_fields),
     SEC("Kinematics", kinematics, kinematics_fields),
+    SEC("Grains", grains, grains_fields),
     SEC("Segregation", segregation, segregation_fields),
     SEC("Initial", initial, initial_fields),
     SEC("Output", output, output_fields),
@@ -223,6 +228,8 @@ static const struct scene_default scene_defaults[] = {
     {"Kinematics", "velocity", "oscillatory_shear"},
     {"Kinematics", "gamma0", "0.5773502691896257"}, /* tan 30 deg */
     {"Kinematics", "period", "13"},
+    {"Grains", "d_small", "0.004"},
+    {"Grains", "d_large", "0.008"},
     {"Segregation", "enabled", "on"},
     {"Segregation", "flux", "symmetric"},
     {"Segregation", "A", "1.6"},
@@ -230,8 +237,6 @@ static const struct scene_default scene_defaults[] = {
     {"Segregation", "model", "constant"},
     {"Segregation", "chi_V", "0.11"},
     {"Segregation", "chi_D", "0.0307"},
-    {"Segregation", "d_small", "0.004"},
-    {"Segregation", "d_large", "0.008"},
     {"Segregation", "scheme", "conservative"},
     {"Segregation", "renormalize", "on"},
     {"Segregation", "drift_tol", "1e-3"},
@@ -303,14 +308,14 @@ static const struct scene_range scene_ranges[] = {
     RNG("Geometry", geometry, fill, 0, 1, LO_OPEN | HI_OPEN, ALWAYS),
     RNG("Kinematics", kinematics, gamma0, 0, INFINITY, HI_OPEN, ALWAYS),
     POS("Kinematics", kinematics, period),
+    POS("Grains", grains, d_small),
+    POS("Grains", grains, d_large),
     POS("Segregation", segregation, A),
     RNG("Segregation", segregation, kappa, 0, 1, HI_OPEN, ALWAYS),
     RNG("Segregation", segregation, V, 0, INFINITY, HI_OPEN, IF_CONSTANT),
     RNG("Segregation", segregation, D, 0, INFINITY, LO_OPEN | HI_OPEN, IF_CONSTANT),
     RNG("Segregation", segregation, chi_V, 0, INFINITY, HI_OPEN, IF_SHEAR_RATE),
     RNG("Segregation", segregation, chi_D, 0, INFINITY, LO_OPEN | HI_OPEN, IF_SHEAR_RATE),
-    POS("Segregation", segregation, d_small),
-    POS("Segregation", segregation, d_large),
     POS("Segregation", segregation, drift_tol),
     UNIT("Initial", initial, C_below),
     UNIT("Initial", initial, C_above),
@@ -775,6 +780,8 @@ static int over_split(const char *arg, char *buf, size_t n, char **comp, int *nc
 static int over_check(struct scene_ctx *c, int i, char *const *comp, int n)
 {
     const cyaml_schema_field_t *fields = scene_fields;
+    if (n == 2 && !strcmp(comp[0], "Segregation") && (!strcmp(comp[1], "d_small") || !strcmp(comp[1], "d_large")))
+        return 0; /* the grain sizes' old place: move_grain_keys */
     char name[256];
     size_t len = 0;
     for (int j = 0; j < n; ++j) {
@@ -1181,8 +1188,8 @@ static int check_special(struct scene_ctx *c, const struct scene *s)
                        "computed needs Geometry:type column or drum (the shear box's walls are prescribed)");
     if (!s->segregation.enabled && vel != KIN_COMPUTED)
         return fail_at(c, "Segregation:enabled", "off with prescribed velocity leaves nothing to solve");
-    if (!(s->segregation.d_small < s->segregation.d_large))
-        return fail_at(c, "Segregation:d_large", "must be larger than Segregation:d_small");
+    if (!(s->grains.d_small < s->grains.d_large))
+        return fail_at(c, "Grains:d_large", "must be larger than Grains:d_small");
     for (int k = 0; k < 3; ++k)
         if (!isfinite(g[k])) return fail_at(c, "Physics:gravity", "entry %d is not finite", k + 1);
     if (g[0] == 0 && g[1] == 0 && g[2] == 0) return fail_at(c, "Physics:gravity", "must not be all zero");
@@ -1217,9 +1224,58 @@ static int keys_keep(struct scene_ctx *c, struct scene *s)
     return 0;
 }
 
+/* Segregation:d_small and :d_large, the grain sizes' place before the
+ * Grains section, are read as Grains:d_small and :d_large with a warning
+ * that names where they were; given in both places, the scene is refused.
+ * The key and value nodes move as they are, so that later messages about
+ * the value still name its line. */
+static int move_grain_keys(struct scene_ctx *c)
+{
+    static const char *const keys[] = {"d_small", "d_large"};
+    for (size_t k = 0; k < ARRAY_LEN(keys); ++k) {
+        yaml_node_pair_t *sp = map_pair(c, 1, "Segregation");
+        int seg = sp ? sp->value : 0;
+        yaml_node_pair_t *old = seg ? map_pair(c, seg, keys[k]) : NULL;
+        if (!old) continue;
+        const int key = old->key, val = old->value;
+        const int over = node_origin(c, key), line = over == -1 ? node_line(c, key) : 0;
+        char name[SCENE_NAME];
+        snprintf(name, sizeof name, "Segregation:%s", keys[k]);
+        yaml_node_pair_t *gp = map_pair(c, 1, "Grains");
+        int grains = gp ? gp->value : 0;
+        if (grains && node(c, grains)->type != YAML_MAPPING_NODE) continue; /* the walk reports it */
+        yaml_node_pair_t *dup = grains ? map_pair(c, grains, keys[k]) : NULL;
+        if (dup) {
+            int dover = node_origin(c, dup->key), dline = dover == -1 ? node_line(c, dup->key) : 0;
+            char where[SCENE_NAME + 16];
+            if (dover >= 0) snprintf(where, sizeof where, "-P %.*s", SCENE_NAME, c->over[dover]);
+            else snprintf(where, sizeof where, "line %d", dline);
+            return fail(c, over, line, name, "given twice: here and as Grains:%s (%s); the grain sizes belong in the "
+                        "Grains section", keys[k], where);
+        }
+        if (!grains) {
+            grains = yaml_document_add_mapping(&c->doc, NULL, YAML_BLOCK_MAPPING_STYLE);
+            if (!grains || map_append(c, 1, "Grains", grains)) return fail(c, -1, 0, NULL, "out of memory");
+        }
+        if (!yaml_document_append_mapping_pair(&c->doc, grains, key, val)) return fail(c, -1, 0, NULL, "out of memory");
+        yaml_node_t *m = node(c, seg); /* the pair out of Segregation */
+        yaml_node_pair_t *q = map_pair(c, seg, keys[k]);
+        memmove(q, q + 1, (size_t)(m->data.mapping.pairs.top - q - 1) * sizeof *q);
+        m->data.mapping.pairs.top--;
+        if (over >= 0)
+            warning("-P %s: Segregation:%s is read as Grains:%s (the grain sizes have a section of their own, which "
+                    "the flow's mu(I) reads too)", c->over[over], keys[k], keys[k]);
+        else
+            warning("%s:%d: Segregation:%s is read as Grains:%s (the grain sizes have a section of their own, which "
+                    "the flow's mu(I) reads too): move it there", c->path, line, keys[k], keys[k]);
+    }
+    return 0;
+}
+
 static int parse_steps(struct scene_ctx *c, struct scene *s)
 {
-    if (read_text(c) || load_doc(c) || apply_overrides(c) || walk_map(c, 1, scene_fields, "", 1) ||
+    if (read_text(c) || load_doc(c) || apply_overrides(c) || move_grain_keys(c) ||
+        walk_map(c, 1, scene_fields, "", 1) ||
         require_model_keys(c) || add_defaults(c) || load_struct(c, s))
         return -1;
     if (!leaf_find(c, "Output:diag_dt")) s->output.diag_dt = s->output.dt / 20;

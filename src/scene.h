@@ -53,6 +53,15 @@ struct scene_kinematics {
     double period;          /* T, s; default 13 */
 };
 
+/* The grains: their sizes, read by the flow's mu(I) (d_avg in I, eq. 2.13)
+ * and by the segregation (V, D of eq. 2.7), so that a flow-only run needs
+ * no segregation key. Until this section existed they were
+ * Segregation:d_small and :d_large, which are still read (with a warning). */
+struct scene_grains {
+    double d_small; /* d^S, m; default 0.004 */
+    double d_large; /* d^L, m; default 0.008; > d_small */
+};
+
 struct scene_segregation {
     int enabled;            /* on | off: solve the concentration equation; default on */
     enum seg_flux flux;     /* symmetric (2.8) | asymmetric (2.9); default symmetric */
@@ -63,8 +72,6 @@ struct scene_segregation {
     double D;               /* m^2/s, constant model */
     double chi_V;           /* eq. (2.7b), shear_rate model; default 0.11 */
     double chi_D;           /* eq. (2.7a), shear_rate model; default 0.0307 */
-    double d_small;         /* d^S, m; default 0.004 */
-    double d_large;         /* d^L, m; default 0.008 */
     enum seg_scheme scheme; /* paper | direct | conservative; default conservative */
     int renormalize;        /* on | off: conservative scheme's symmetric kernel
                              * renormalisation (restores consistency where the
@@ -143,6 +150,7 @@ struct scene {
     struct scene_run run;
     struct scene_geometry geometry;
     struct scene_kinematics kinematics;
+    struct scene_grains grains;
     struct scene_segregation segregation;
     struct scene_initial initial;
     struct scene_output output;

@@ -311,7 +311,7 @@ void setup_contexts(sim_t *s)
     sp->shear_model = g->model == SEG_MODEL_SHEAR_RATE;
     sp->V = (real)g->V, sp->D = (real)g->D;
     sp->chi_V = (real)g->chi_V, sp->chi_D = (real)g->chi_D;
-    sp->d_small = (real)g->d_small, sp->d_large = (real)g->d_large;
+    sp->d_small = (real)sc->grains.d_small, sp->d_large = (real)sc->grains.d_large;
     const double *gv = sc->physics.gravity;
     double gn = sqrt(gv[0] * gv[0] + gv[1] * gv[1] + gv[2] * gv[2]);
     for (int d = 0; d < 3; ++d) sp->ghat[d] = (real)(gv[d] / gn);

@@ -104,7 +104,7 @@ static void test_shearbox(void **state)
     assert_int_equal(s.segregation.flux, SEG_FLUX_SYMMETRIC);
     assert_int_equal(s.segregation.scheme, SEG_SCHEME_CONSERVATIVE);
     /* eq. (5.6) with dbar = 6 mm and gammadot_m = 4 gamma0 / T, to 2-3 digits */
-    double gm = 4 * g0 / T, dbar = 0.5 * (s.segregation.d_small + s.segregation.d_large);
+    double gm = 4 * g0 / T, dbar = 0.5 * (s.grains.d_small + s.grains.d_large);
     assert_true(fabs(s.segregation.chi_V - B * 3.0e-2 / (T * gm * dbar)) < 0.005);
     assert_true(fabs(s.segregation.chi_D - B * B * 1.01e-3 / (T * gm * dbar * dbar)) < 0.0005);
     assert_bits(s.initial.C_below, 0);
@@ -152,8 +152,8 @@ static void test_defaults(void **state)
     assert_int_equal(s.segregation.model, SEG_MODEL_CONSTANT);
     assert_bits(s.segregation.chi_V, 0.11);
     assert_bits(s.segregation.chi_D, 0.0307);
-    assert_bits(s.segregation.d_small, 0.004);
-    assert_bits(s.segregation.d_large, 0.008);
+    assert_bits(s.grains.d_small, 0.004);
+    assert_bits(s.grains.d_large, 0.008);
     assert_int_equal(s.segregation.scheme, SEG_SCHEME_CONSERVATIVE);
     assert_int_equal(s.segregation.renormalize, 1);
     assert_bits(s.segregation.drift_tol, 1e-3);
@@ -208,6 +208,33 @@ static void test_overrides(void **state)
     scene_free(&s);
 }
 
+/* The grain sizes' old place, Segregation:d_small/d_large (file or -P), is
+ * read as Grains (with a warning); the values land in s.grains, and the echo
+ * holds them under Grains only. */
+static void test_grains_old_place(void **state)
+{
+    (void)state;
+    struct scene s;
+    char text[512];
+    snprintf(text, sizeof text, "%s  d_small: 0.003\n  d_large: 0.006\n", minimal_yaml);
+    write_text(tmp_path("grains_old.yml"), text);
+    parse_ok(&s, tmp_path("grains_old.yml"), 0, NULL);
+    assert_bits(s.grains.d_small, 0.003);
+    assert_bits(s.grains.d_large, 0.006);
+    char *used = scene_used_text(&s);
+    assert_non_null(used);
+    assert_non_null(strstr(used, "Grains:\n  d_small: 0.003\n  d_large: 0.006\n"));
+    assert_null(strstr(strstr(used, "Segregation:"), "d_small"));
+    free(used);
+    scene_free(&s);
+    const char *over[] = {"Segregation:d_large=0.01"};
+    write_text(tmp_path("minimal.yml"), minimal_yaml);
+    parse_ok(&s, tmp_path("minimal.yml"), 1, over);
+    assert_bits(s.grains.d_small, 0.004); /* the default */
+    assert_bits(s.grains.d_large, 0.01);
+    scene_free(&s);
+}
+
 /* Overrides apply before validation: a bad value in the file can be fixed. */
 static void test_override_fixes_file(void **state)
 {
@@ -255,7 +282,7 @@ static void assert_scene_equal(const struct scene *a, const struct scene *b)
     EQ(kinematics.velocity), EQ(kinematics.gamma0), EQ(kinematics.period);
     EQ(segregation.flux), EQ(segregation.A), EQ(segregation.kappa), EQ(segregation.model);
     EQ(segregation.V), EQ(segregation.D), EQ(segregation.chi_V), EQ(segregation.chi_D);
-    EQ(segregation.d_small), EQ(segregation.d_large), EQ(segregation.scheme), EQ(segregation.renormalize);
+    EQ(grains.d_small), EQ(grains.d_large), EQ(segregation.scheme), EQ(segregation.renormalize);
     EQ(segregation.drift_tol);
     EQ(initial.C_below), EQ(initial.C_above), EQ(initial.split);
     EQ(output.dt), EQ(output.diag_dt), EQ(physics.gravity), EQ(physics.rho);
@@ -334,7 +361,8 @@ static const char *const bad_files[] = {
     "gravity_short.yml",   "inf.yml",         "kappa_one.yml",     "missing_V.yml",   "missing_run.yml",
     "missing_t_end.yml",   "nan.yml",         "negative_dr.yml",   "not_yaml.yml",    "overflow.yml",
     "section_scalar.yml",  "top_list.yml",    "two_documents.yml", "unit_suffix.yml", "unknown_key.yml",
-    "unknown_section.yml", "width_small.yml", "wrong_type.yml",    "drum3d_length.yml"};
+    "unknown_section.yml", "width_small.yml", "wrong_type.yml",    "drum3d_length.yml", "grains_twice.yml",
+    "grains_order.yml"};
 
 static void test_bad_files(void **state)
 {
@@ -437,7 +465,7 @@ static int teardown(void **state)
 {
     (void)state;
     static const char *const names[] = {"minimal.yml", "empty_sec.yml", "used_params.yml",
-                                        "empty.yml",   "dr_big.yml",    "no_run.yml"};
+                                        "empty.yml",   "dr_big.yml",    "no_run.yml",   "grains_old.yml"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; ++i)
         remove(tmp_path(names[i]));
     return rmdir(g_dir);
@@ -450,6 +478,7 @@ int main(void)
         cmocka_unit_test(test_defaults),
         cmocka_unit_test(test_empty_section),
         cmocka_unit_test(test_overrides),
+        cmocka_unit_test(test_grains_old_place),
         cmocka_unit_test(test_override_fixes_file),
         cmocka_unit_test(test_round_trip),
         cmocka_unit_test(test_write_used_fails),

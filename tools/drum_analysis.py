@@ -171,7 +171,8 @@ class Drum:
     def rate_terms(self):
         """C1 = -F grad_g V, C2 = -V F' grad_g C, C3 = div(D grad C), 1/s."""
         seg = self.par["Segregation"]
-        dS, dL = seg["d_small"], seg["d_large"]
+        grains = self.par.get("Grains", seg)  # an output written before the Grains section: Segregation's
+        dS, dL = grains["d_small"], grains["d_large"]
         C = self.C
         davg = dS * C + dL * (1 - C)
         V = seg["chi_V"] * self.gdot * davg

@@ -70,6 +70,8 @@ def params_from_dict(d):
     every key it reads must be there."""
     geo, kin = _sec(d, "Geometry"), _sec(d, "Kinematics")
     seg, ini = _sec(d, "Segregation"), _sec(d, "Initial")
+    # the grain sizes: Grains (before that section existed, an output held them in Segregation)
+    G, gra = ("Grains", d["Grains"]) if "Grains" in d else ("Segregation", seg)
     f = lambda sec, name, key: float(_key(sec, name, key))
     flux = str(_key(seg, "Segregation", "flux")).lower()
     model = str(_key(seg, "Segregation", "model")).lower()
@@ -83,7 +85,7 @@ def params_from_dict(d):
         A=f(seg, S, "A"), kappa=f(seg, S, "kappa"), model=model,
         V=f(seg, S, "V"), D=f(seg, S, "D"),
         chi_V=f(seg, S, "chi_V"), chi_D=f(seg, S, "chi_D"),
-        d_small=f(seg, S, "d_small"), d_large=f(seg, S, "d_large"),
+        d_small=f(gra, G, "d_small"), d_large=f(gra, G, "d_large"),
         gamma0=f(kin, K, "gamma0"), period=f(kin, K, "period"),
         sheared=str(_key(kin, K, "velocity")).lower() != "rest",
         C_below=f(ini, I, "C_below"), C_above=f(ini, I, "C_above"),
