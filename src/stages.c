@@ -47,9 +47,12 @@ const stage stage_table[] = {
 const int stage_table_n = (int)(sizeof stage_table / sizeof stage_table[0]);
 
 /* The hooks in the order a run can call them: two half steps, the filter,
- * a window's close with its two midpoint stages; then round again. A
- * superset of any run's order, so the refreshes derived from it are never
- * fewer than a run needs. */
+ * a window's close with its two midpoint stages; then round again. Every
+ * reader a run can meet after a writer is in it. A writer that only some
+ * runs call (the filter's store) could close a field early for the others;
+ * in this table none stands between another writer and its first reader,
+ * and tests/test_stages.c holds the derived refreshes to the lists worked
+ * out by hand. */
 static const int cycle[] = {HOOK_RATES,   HOOK_SAVE,   HOOK_ADVANCE,    HOOK_PREPARE,   HOOK_RATES,
                             HOOK_ADVANCE, HOOK_PREPARE, HOOK_FILTER,    HOOK_PREPARE,   HOOK_CONC_BEGIN,
                             HOOK_CONC_STEP, HOOK_CONC_STEP};
