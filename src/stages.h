@@ -100,7 +100,7 @@ uint32_t stage_ghost_fields(unsigned flags);
  * out); all its writes with from_owner; none for RANGE_ALL. The later
  * stages are those of a cycle of hooks that holds every order a run can
  * call them in (two half steps, the filter, a window's close and two of its
- * midpoint stages), so that no run needs more. */
+ * midpoint stages: stages.c says what that holds). */
 uint32_t stage_refresh_after(int id, unsigned flags, int keep);
 
 /* For a backend that keeps its ghosts (keep = 1): the fields that the
