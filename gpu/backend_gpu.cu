@@ -137,6 +137,7 @@ static void gpu_to_host(sim_t *s)
     gpu_settle(s, g);
     gpu_download(s, g);
     if (s->halo) hx_resolve(g, s->halo);
+    if (s->halo) halo_wrap(s->halo, &s->p); /* periodic axes: the copy written is in the period */
 }
 
 /* A load balance moved particles between ranks on the host: take them. */

@@ -40,6 +40,30 @@ template <int UNPACK> __global__ void k_pack(ftab t, const unsigned *idx, size_t
     }
 }
 
+/* A channel to this rank itself (periodic images, mpi/halo.h): the fields of
+ * the owners src[e] straight into the ghost slots dst[e], on the device. */
+__global__ void k_self(ftab t, const unsigned *src, const unsigned *dst, size_t cnt)
+{
+    size_t e = (size_t)blockIdx.x * blockDim.x + threadIdx.x;
+    if (e >= cnt) return;
+    size_t i = src[e], j = dst[e];
+    for (int f = 0; f < t.n; ++f) switch (t.es[f]) {
+        case 8: ((uint64_t *)t.p[f])[j] = ((const uint64_t *)t.p[f])[i]; break;
+        case 4: ((uint32_t *)t.p[f])[j] = ((const uint32_t *)t.p[f])[i]; break;
+        default: ((uint8_t *)t.p[f])[j] = ((const uint8_t *)t.p[f])[i];
+        }
+}
+
+/* Is channel k of the halo a channel to this rank itself; its partner (the
+ * channel that receives what k sends) in *kp. */
+static int hx_self(const halo_t *h, int k, int *kp)
+{
+    if (h->nb[k] != h->rank) return 0;
+    for (int q = 0; q < h->nnb; ++q)
+        if (h->nb[q] == h->rank && h->nbs[q] == HALO_NCODES - 1 - h->nbs[k]) return *kp = q, 1;
+    error_exit(1, "backend_gpu: self channel %d of rank %d has no partner", k, h->rank);
+}
+
 static void ft_add(ftab *t, void *p, size_t es)
 {
     if (t->n >= FT_MAX) error_exit(1, "backend_gpu: more than %d refresh fields", FT_MAX);
@@ -94,6 +118,51 @@ static void hx_mark(gpu_t *g, halo_t *h, int end)
     CK(cudaEventRecord(x->ev[x->nev++], g->st));
 }
 
+/* Periodic images (mpi/halo.h): add the channel's shift to the positions
+ * among the refreshed fields of its ghosts (x real, x_n double). */
+__global__ void k_shift_images(real *x0, real *x1, real *x2, preal *n0, preal *n1, preal *n2, const unsigned *idx,
+                               size_t cnt, double s0, double s1, double s2)
+{
+    size_t e = (size_t)blockIdx.x * blockDim.x + threadIdx.x;
+    if (e >= cnt) return;
+    size_t i = idx[e];
+    real *x[3] = {x0, x1, x2};
+    preal *n[3] = {n0, n1, n2};
+    const double s[3] = {s0, s1, s2};
+    for (int d = 0; d < 3; ++d) {
+        if (s[d] == 0) continue;
+        if (x[d]) x[d][i] = (real)((double)x[d][i] + s[d]);
+        if (n[d]) n[d][i] += (preal)s[d];
+    }
+}
+
+static void gpu_shift_images(sim_t *s, gpu_t *g, const ftab &t, int self)
+{
+    halo_t *h = s->halo;
+    dhalo *x = g->hx;
+    if (!h->per) return;
+    real *px[3] = {NULL, NULL, NULL};
+    preal *pn[3] = {NULL, NULL, NULL};
+    int any = 0;
+    for (int f = 0; f < t.n; ++f)
+        for (int d = 0; d < 3; ++d) {
+            if (t.p[f] == (void *)g->d.x[d]) px[d] = g->d.x[d], any = 1;
+            if (t.p[f] == (void *)g->d.x_n[d]) pn[d] = g->d.x_n[d], any = 1;
+        }
+    if (!any) return;
+    for (int k = 0; k < h->nnb; ++k) {
+        int kp;
+        if (hx_self(h, k, &kp) != self) continue; /* self: the channels that k_self filled */
+        size_t cnt = x->roff[k + 1] - x->roff[k];
+        double sh[3];
+        halo_image_shift(h, k, sh);
+        if (!cnt || (sh[0] == 0 && sh[1] == 0 && sh[2] == 0)) continue;
+        k_shift_images<<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(
+            px[0], px[1], px[2], pn[0], pn[1], pn[2], x->ridx + x->roff[k], cnt, sh[0], sh[1], sh[2]);
+    }
+    CK(cudaGetLastError());
+}
+
 /* Start a refresh of fields t of the ghosts: pack the send lists on the
  * device, stage (or hand the device buffer to a CUDA-aware MPI), post. */
 static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
@@ -104,29 +173,40 @@ static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
     if (x->pending) error_exit(1, "backend_gpu: a refresh is already in flight");
     double t0 = now();
     x->sb[0] = x->rb[0] = 0;
-    for (int k = 0; k < m; ++k) {
-        x->sb[k + 1] = x->sb[k] + ft_bytes(t, x->soff[k + 1] - x->soff[k]);
-        x->rb[k + 1] = x->rb[k] + ft_bytes(t, x->roff[k + 1] - x->roff[k]);
+    for (int k = 0; k < m; ++k) { /* a channel to this rank itself sends nothing through MPI */
+        int kp, self = hx_self(h, k, &kp);
+        x->sb[k + 1] = x->sb[k] + (self ? 0 : ft_bytes(t, x->soff[k + 1] - x->soff[k]));
+        x->rb[k + 1] = x->rb[k] + (self ? 0 : ft_bytes(t, x->roff[k + 1] - x->roff[k]));
     }
     x->dsend = (char *)grow_dev(x->dsend, &x->cap_dsend, x->sb[m]);
     x->drecv = (char *)grow_dev(x->drecv, &x->cap_drecv, x->rb[m]);
     hx_mark(g, h, 0);
     for (int k = 0; k < m; ++k) {
         size_t cnt = x->soff[k + 1] - x->soff[k];
-        if (cnt)
-            k_pack<0><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(t, x->sidx + x->soff[k], cnt,
-                                                                                   x->dsend + x->sb[k]);
+        int kp;
+        if (!cnt) continue;
+        if (hx_self(h, k, &kp)) { /* periodic images of this rank's own particles: device to device */
+            if (x->roff[kp + 1] - x->roff[kp] != cnt)
+                error_exit(1, "backend_gpu: self channel %d sends %zu, its partner expects %zu", k, cnt,
+                           x->roff[kp + 1] - x->roff[kp]);
+            k_self<<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(t, x->sidx + x->soff[k],
+                                                                               x->ridx + x->roff[kp], cnt);
+            continue;
+        }
+        k_pack<0><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(t, x->sidx + x->soff[k], cnt,
+                                                                               x->dsend + x->sb[k]);
     }
     CK(cudaGetLastError());
+    gpu_shift_images(s, g, t, 1);
     char *sbuf = x->dsend, *rbuf = x->drecv;
     if (!x->cuda_aware) {
         x->hsend = (char *)grow_pinned(x->hsend, &x->cap_hsend, x->sb[m]);
         x->hrecv = (char *)grow_pinned(x->hrecv, &x->cap_hrecv, x->rb[m]);
-        CK(cudaMemcpyAsync(x->hsend, x->dsend, x->sb[m], cudaMemcpyDeviceToHost, g->st));
+        if (x->sb[m]) CK(cudaMemcpyAsync(x->hsend, x->dsend, x->sb[m], cudaMemcpyDeviceToHost, g->st));
         sbuf = x->hsend, rbuf = x->hrecv;
     }
     hx_mark(g, h, 1);
-    CK(cudaStreamSynchronize(g->st));
+    if (x->sb[m]) CK(cudaStreamSynchronize(g->st)); /* the host buffer is read by MPI next */
     h->wall_comm += now() - t0;
     halo_post_bytes(h, sbuf, x->sb, rbuf, x->rb);
     x->pend = t;
@@ -135,7 +215,7 @@ static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
 }
 
 /* Complete the refresh in flight: wait for the messages, unpack into the
- * ghost slots. The GPU's wait for them (idle) plus the copy and unpack
+ * ghost slots (and shift the periodic images' positions). The GPU's wait for them (idle) plus the copy and unpack
  * count as exposed halo time. */
 static void gpu_refresh_finish(sim_t *s, gpu_t *g)
 {
@@ -146,14 +226,16 @@ static void gpu_refresh_finish(sim_t *s, gpu_t *g)
     hx_mark(g, h, 0);
     halo_wait_bytes(h);
     double t0 = now();
-    if (!x->cuda_aware) CK(cudaMemcpyAsync(x->drecv, x->hrecv, x->rb[m], cudaMemcpyHostToDevice, g->st));
+    if (!x->cuda_aware && x->rb[m]) CK(cudaMemcpyAsync(x->drecv, x->hrecv, x->rb[m], cudaMemcpyHostToDevice, g->st));
     for (int k = 0; k < m; ++k) {
         size_t cnt = x->roff[k + 1] - x->roff[k];
-        if (cnt)
+        int kp;
+        if (cnt && !hx_self(h, k, &kp))
             k_pack<1><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(x->pend, x->ridx + x->roff[k], cnt,
                                                                                    x->drecv + x->rb[k]);
     }
     CK(cudaGetLastError());
+    gpu_shift_images(s, g, x->pend, 0);
     hx_mark(g, h, 1);
     x->pending = 0;
     h->wall_comm += now() - t0;

@@ -49,7 +49,6 @@ void halo_init(halo_t *h, int dim, real support, int method, int axis, const int
     memcpy(h->arr, arr, (size_t)narr * sizeof *arr);
     h->narr = narr;
     h->bound = halo_calloc((size_t)h->size + 1, sizeof(long));
-    h->nb_of = halo_calloc((size_t)h->size, sizeof(int));
 }
 
 void halo_set_depth(halo_t *h, int depth)
@@ -59,17 +58,100 @@ void halo_set_depth(halo_t *h, int depth)
     h->blk = depth;
 }
 
+/* ---- periodic axes ------------------------------------------------------------- */
+
+void halo_set_periodic(halo_t *h, int mask, const real lo[3], const real len[3])
+{
+    h->per = mask & ((1 << h->dim) - 1);
+    h->nimg = 0;
+    for (int code = 0; code < HALO_NCODES; ++code) { /* the shifts along periodic axes only */
+        int sh[3], ok = code != HALO_NOSHIFT;
+        halo_shift_of(code, sh);
+        for (int d = 0; d < 3; ++d) ok &= !sh[d] || (d < h->dim && (h->per >> d & 1));
+        if (ok) h->img[h->nimg++] = code;
+    }
+    for (int d = 0; d < 3; ++d) {
+        h->plo[d] = lo[d], h->plen[d] = len[d];
+        if (h->per >> d & 1) h->origin[d] = lo[d] - (real)(h->depth + 1) * h->support;
+    }
+}
+
+void halo_shift_of(int code, int s[3])
+{
+    s[0] = code % 3 - 1, s[1] = code / 3 % 3 - 1, s[2] = code / 9 - 1;
+}
+
+void halo_image_shift(const halo_t *h, int k, double s[3])
+{
+    int q[3];
+    halo_shift_of(HALO_NCODES - 1 - h->nbs[k], q); /* the sender moved them by its channel's shift */
+    for (int d = 0; d < 3; ++d) s[d] = q[d] * (double)h->plen[d];
+}
+
+/* Move owned particle i by s along axis d: the position kept to double
+ * (x + xr in the single build) and the start-of-step x_n alike, so that
+ * x = x_n + a u still holds within the step. */
+static void halo_move(particles_t *p, size_t i, int d, double s)
+{
+    double xd = (double)p->x[d][i] + (POS_REMAINDER ? (double)p->xr[d][i] : 0.0) + s;
+    p->x[d][i] = (real)xd;
+    if (POS_REMAINDER) p->xr[d][i] = (real)(xd - (double)p->x[d][i]);
+    p->x_n[d][i] += (preal)s;
+}
+
+void halo_wrap(const halo_t *h, particles_t *p)
+{
+    for (int d = 0; d < h->dim; ++d) {
+        if (!(h->per >> d & 1)) continue;
+        double lo = h->plo[d], len = h->plen[d];
+        for (size_t i = 0; i < p->n; ++i) {
+            double x = (double)p->x[d][i] + (POS_REMAINDER ? (double)p->xr[d][i] : 0.0);
+            if (x >= lo && x < lo + len) continue;
+            halo_move(p, i, d, -floor((x - lo) / len) * len);
+        }
+    }
+}
+
+/* The images' shifts on the positions among arrays arr of the ghosts
+ * received (halo_exchange, halo_refresh): store indices h->recv in
+ * channel order. */
+static void halo_shift_images(const halo_t *h, particles_t *p, const int *arr, int narr)
+{
+    if (!h->per) return;
+    int fx[3] = {-1, -1, -1}, fn[3] = {-1, -1, -1};
+    for (int d = 0; d < 3; ++d) {
+        int ix = part_array_find(p, p->x[d]), in = part_array_find(p, p->x_n[d]);
+        for (int a = 0; a < narr; ++a) {
+            if (arr[a] == ix) fx[d] = ix;
+            if (arr[a] == in) fn[d] = in;
+        }
+    }
+    size_t q = 0;
+    for (int k = 0; k < h->nnb; ++k) {
+        double s[3];
+        halo_image_shift(h, k, s);
+        for (size_t e = 0; e < h->nrecv[k]; ++e, ++q) {
+            size_t i = h->recv[q];
+            for (int d = 0; d < h->dim; ++d) {
+                if (s[d] == 0) continue;
+                if (fx[d] >= 0) p->x[d][i] = (real)((double)p->x[d][i] + s[d]);
+                if (fn[d] >= 0) p->x_n[d][i] += (preal)s[d];
+            }
+        }
+    }
+}
+
 static void halo_free_lists(halo_t *h)
 {
     for (int k = 0; k < h->nnb; ++k) free(h->send[k]);
-    free(h->send), free(h->nsend), free(h->cap_send), free(h->nrecv), free(h->nb);
-    h->send = NULL, h->nsend = h->cap_send = h->nrecv = NULL, h->nb = NULL, h->nnb = 0;
+    free(h->send), free(h->nsend), free(h->cap_send), free(h->nrecv), free(h->nb), free(h->nbs);
+    h->send = NULL, h->nsend = h->cap_send = h->nrecv = NULL, h->nb = h->nbs = NULL, h->nnb = 0;
 }
 
 void halo_free(halo_t *h)
 {
     halo_free_lists(h);
-    free(h->bound), free(h->nb_of), free(h->part), free(h->recv), free(h->inv);
+    free(h->bound), free(h->part), free(h->recv), free(h->inv);
     free(h->buf[0]), free(h->buf[1]), free(h->req);
     memset(h, 0, sizeof *h);
 }
@@ -110,28 +192,36 @@ int halo_owner(const halo_t *h, const long c[3])
     return lo;
 }
 
-static int halo_add_target(const halo_t *h, int r, int *out, int n)
+/* Add (rank r, shift code) to the targets out/code[0..n) unless it is this
+ * rank unshifted or already there; returns the new count. */
+static int halo_add_target(const halo_t *h, int r, int code, int *out, int *codes, int n)
 {
-    if (r == h->rank) return n;
+    if (r == h->rank && code == HALO_NOSHIFT) return n;
     for (int k = 0; k < n; ++k)
-        if (out[k] == r) return n;
-    out[n] = r;
+        if (out[k] == r && codes[k] == code) return n;
+    out[n] = r, codes[n] = code;
     return n + 1;
 }
 
-/* Ranks other than this one owning a lattice cell within depth cells of c:
- * the owners of the 2 depth + 1 columns around c (slabs), or of the coarse
- * cells that the box c +- depth touches (at most 2^dim: blk >= depth). */
-static int halo_targets(const halo_t *h, const long c[3], int *out)
+/* Targets of a particle in lattice cell c, its image moved by shift code
+ * (HALO_NOSHIFT: itself): the ranks other than this one (or this one, for
+ * an image) owning a lattice cell within depth cells of c: the owners of
+ * the 2 depth + 1 columns around c (slabs; along a periodic slab axis only
+ * the columns of the period), or of the coarse cells that the box c +-
+ * depth touches (at most 2^dim: blk >= depth). */
+static int halo_targets(const halo_t *h, const long c[3], int code, int *out, int *codes, int n)
 {
-    int n = 0;
     if (h->method != HALO_METIS) {
-        long a = c[h->axis];
-        if (a - h->depth >= h->bound[h->rank] && a + h->depth < h->bound[h->rank + 1]) return 0; /* inner */
+        long a = c[h->axis], lo = a - h->depth, hi = a + h->depth;
+        if (code == HALO_NOSHIFT && lo >= h->bound[h->rank] && hi < h->bound[h->rank + 1]) return n; /* inner */
+        if (h->per >> h->axis & 1) {
+            long c0 = halo_column(h, h->axis, h->plo[h->axis]), c1 = halo_column(h, h->axis, h->plo[h->axis] + h->plen[h->axis]);
+            lo = lo < c0 ? c0 : lo, hi = hi > c1 ? c1 : hi;
+        }
         long q[3] = {c[0], c[1], c[2]};
-        for (long k = c[h->axis] - h->depth; k <= c[h->axis] + h->depth; ++k) {
+        for (long k = lo; k <= hi; ++k) {
             q[h->axis] = k;
-            n = halo_add_target(h, halo_owner(h, q), out, n);
+            n = halo_add_target(h, halo_owner(h, q), code, out, codes, n);
         }
         return n;
     }
@@ -144,19 +234,46 @@ static int halo_targets(const halo_t *h, const long c[3], int *out)
         for (long y = lo[1]; y <= hi[1]; ++y)
             for (long x = lo[0]; x <= hi[0]; ++x)
                 n = halo_add_target(h, h->part[((size_t)z * (size_t)h->cg_n[1] + (size_t)y) * (size_t)h->cg_n[0] + (size_t)x],
-                                    out, n);
+                                    code, out, codes, n);
+    return n;
+}
+
+/* Every target of owned particle i: its own (halo_targets), and on
+ * periodic axes those of each image whose position lies within depth
+ * cells of the period (at most 3^dim - 1 images). */
+static int halo_particle_targets(const halo_t *h, const particles_t *p, size_t i, int *out, int *codes)
+{
+    long c[3];
+    halo_cell_of(h, p, i, c);
+    int n = halo_targets(h, c, HALO_NOSHIFT, out, codes, 0);
+    for (int m = 0; m < h->nimg; ++m) {
+        int s[3], code = h->img[m], near = 1;
+        halo_shift_of(code, s);
+        long q[3] = {c[0], c[1], c[2]};
+        for (int d = 0; d < 3 && near; ++d) {
+            if (!s[d]) continue;
+            real y = p->x[d][i] + (real)s[d] * h->plen[d];
+            real lo = h->plo[d] - (real)h->depth * h->support, hi = h->plo[d] + h->plen[d] + (real)h->depth * h->support;
+            near = y > lo && y < hi;
+            q[d] = halo_column(h, d, y);
+        }
+        if (near) n = halo_targets(h, q, code, out, codes, n);
+    }
     return n;
 }
 
 /* ---- neighbours ----------------------------------------------------------------- */
 
+/* The channels: is_nb[r * HALO_NCODES + code] for rank r and shift code. */
 static void halo_set_neighbours(halo_t *h, const int *is_nb)
 {
     halo_free_lists(h);
-    for (int r = 0; r < h->size; ++r) h->nb_of[r] = -1;
-    h->nb = halo_calloc((size_t)h->size, sizeof(int));
+    h->nb = halo_calloc((size_t)h->size * HALO_NCODES, sizeof(int));
+    h->nbs = halo_calloc((size_t)h->size * HALO_NCODES, sizeof(int));
     for (int r = 0; r < h->size; ++r)
-        if (is_nb[r] && r != h->rank) h->nb_of[r] = h->nnb, h->nb[h->nnb++] = r;
+        for (int code = 0; code < HALO_NCODES; ++code)
+            if (is_nb[r * HALO_NCODES + code] && !(r == h->rank && code == HALO_NOSHIFT))
+                h->nb[h->nnb] = r, h->nbs[h->nnb++] = code;
     size_t m = (size_t)(h->nnb ? h->nnb : 1);
     h->send = halo_calloc(m, sizeof(size_t *));
     h->nsend = halo_calloc(m, sizeof(size_t));
@@ -164,16 +281,50 @@ static void halo_set_neighbours(halo_t *h, const int *is_nb)
     h->nrecv = halo_calloc(m, sizeof(size_t));
 }
 
-/* Slabs: the ranks whose columns overlap [lo - depth, hi + depth). */
+/* Slab r's extent along the axis, m: open ends far away, or at the ends of
+ * the period along a periodic axis. */
+static void halo_slab_span(const halo_t *h, int r, double *a, double *b)
+{
+    int d = h->axis;
+    *a = h->bound[r] == LONG_MIN ? -1e300 : (double)h->origin[d] + (double)h->bound[r] * (double)h->support;
+    *b = h->bound[r + 1] == LONG_MAX ? 1e300 : (double)h->origin[d] + (double)h->bound[r + 1] * (double)h->support;
+    if (h->per >> d & 1) {
+        double lo = h->plo[d], hi = lo + h->plen[d];
+        *a = *a < lo ? lo : *a, *b = *b > hi ? hi : *b;
+    }
+}
+
+/* Does slab ra, moved by shift code, come within the ghost reach of slab
+ * rb (depth + 1 cells, and one more for rounding)? Evaluated alike on
+ * both ranks (the pair in one canonical order), so that a channel always
+ * has its partner: (rb, code) on ra and (ra, 26 - code) on rb. */
+static int halo_slab_near(const halo_t *h, int ra, int rb, int code)
+{
+    if (ra > rb || (ra == rb && code > HALO_NOSHIFT)) {
+        int t = ra;
+        ra = rb, rb = t, code = HALO_NCODES - 1 - code;
+    }
+    int s[3];
+    halo_shift_of(code, s);
+    double sig = h->per >> h->axis & 1 ? s[h->axis] * (double)h->plen[h->axis] : 0.0, a0, a1, b0, b1;
+    halo_slab_span(h, ra, &a0, &a1);
+    halo_slab_span(h, rb, &b0, &b1);
+    double gap = fmax(b0 - (a1 + sig), (a0 + sig) - b1);
+    return gap < (double)(h->depth + 2) * (double)h->support;
+}
+
+/* Slabs: the ranks whose columns overlap [lo - depth, hi + depth); with
+ * periodic axes also every (rank, shift) whose slab the shift brings near. */
 static void halo_slab_neighbours(halo_t *h)
 {
-    int *is = halo_calloc((size_t)h->size, sizeof(int));
+    int *is = halo_calloc((size_t)h->size * HALO_NCODES, sizeof(int));
     long lo = h->bound[h->rank], hi = h->bound[h->rank + 1];
     for (int r = 0; r < h->size; ++r) {
         long a = h->bound[r], b = h->bound[r + 1];
         int below = lo != LONG_MIN && b != LONG_MAX && b <= lo - h->depth;
         int above = hi != LONG_MAX && a != LONG_MIN && a >= hi + h->depth;
-        is[r] = !below && !above;
+        is[r * HALO_NCODES + HALO_NOSHIFT] = !below && !above;
+        for (int m = 0; m < h->nimg; ++m) is[r * HALO_NCODES + h->img[m]] = halo_slab_near(h, h->rank, r, h->img[m]);
     }
     halo_set_neighbours(h, is);
     free(is);
@@ -183,7 +334,7 @@ static void halo_slab_neighbours(halo_t *h)
  * coarse edge blk >= depth, so ghosts reach no farther). Symmetric. */
 static void halo_metis_neighbours(halo_t *h)
 {
-    int *is = halo_calloc((size_t)h->size, sizeof(int)), n[3] = {h->cg_n[0], h->cg_n[1], h->dim == 3 ? h->cg_n[2] : 1};
+    int *is = halo_calloc((size_t)h->size * HALO_NCODES, sizeof(int)), n[3] = {h->cg_n[0], h->cg_n[1], h->dim == 3 ? h->cg_n[2] : 1};
     for (int z = 0; z < n[2]; ++z)
         for (int y = 0; y < n[1]; ++y)
             for (int x = 0; x < n[0]; ++x) {
@@ -193,7 +344,7 @@ static void halo_metis_neighbours(halo_t *h)
                         for (int dx = -1; dx <= 1; ++dx) {
                             int X = x + dx, Y = y + dy, Z = z + dz;
                             if (X < 0 || Y < 0 || Z < 0 || X >= n[0] || Y >= n[1] || Z >= n[2]) continue;
-                            is[h->part[((size_t)Z * n[1] + Y) * n[0] + X]] = 1;
+                            is[h->part[((size_t)Z * n[1] + Y) * n[0] + X] * HALO_NCODES + HALO_NOSHIFT] = 1;
                         }
             }
     halo_set_neighbours(h, is);
@@ -201,6 +352,14 @@ static void halo_metis_neighbours(halo_t *h)
 }
 
 /* ---- point-to-point exchange ------------------------------------------------------ */
+
+/* The tag of a message of kind `base` on channel k: a send carries its
+ * channel's shift code, a receive expects its partner's, the opposite
+ * (two channels between the same two ranks differ in shift). */
+static int halo_tag(const halo_t *h, int k, int base, int recv)
+{
+    return base * 32 + (recv ? HALO_NCODES - 1 - h->nbs[k] : h->nbs[k]);
+}
 
 static MPI_Datatype halo_record_type(size_t bytes)
 {
@@ -222,8 +381,8 @@ static size_t halo_swap(halo_t *h, const particles_t *p, size_t *const *list, co
     long long *cs = halo_calloc((size_t)(2 * m + 1), sizeof(long long)), *cr = cs + m;
     for (int k = 0; k < m; ++k) {
         cs[k] = (long long)n[k], ns += n[k];
-        MPICHECK(MPI_Irecv(&cr[k], 1, MPI_LONG_LONG, h->nb[k], 21, MPI_COMM_WORLD, &rq[k]));
-        MPICHECK(MPI_Isend(&cs[k], 1, MPI_LONG_LONG, h->nb[k], 21, MPI_COMM_WORLD, &rq[m + k]));
+        MPICHECK(MPI_Irecv(&cr[k], 1, MPI_LONG_LONG, h->nb[k], halo_tag(h, k, 21, 1), MPI_COMM_WORLD, &rq[k]));
+        MPICHECK(MPI_Isend(&cs[k], 1, MPI_LONG_LONG, h->nb[k], halo_tag(h, k, 21, 0), MPI_COMM_WORLD, &rq[m + k]));
     }
     double t0 = MPI_Wtime();
     MPICHECK(MPI_Waitall(2 * m, rq, MPI_STATUSES_IGNORE));
@@ -235,8 +394,8 @@ static size_t halo_swap(halo_t *h, const particles_t *p, size_t *const *list, co
     size_t os = 0, orr = 0;
     for (int k = 0; k < m; ++k) {
         part_pack(p, list[k], n[k], arr, narr, h->buf[0] + os * rec);
-        MPICHECK(MPI_Irecv(h->buf[1] + orr * rec, (int)got[k], t, h->nb[k], 22, MPI_COMM_WORLD, &rq[k]));
-        MPICHECK(MPI_Isend(h->buf[0] + os * rec, (int)n[k], t, h->nb[k], 22, MPI_COMM_WORLD, &rq[m + k]));
+        MPICHECK(MPI_Irecv(h->buf[1] + orr * rec, (int)got[k], t, h->nb[k], halo_tag(h, k, 22, 1), MPI_COMM_WORLD, &rq[k]));
+        MPICHECK(MPI_Isend(h->buf[0] + os * rec, (int)n[k], t, h->nb[k], halo_tag(h, k, 22, 0), MPI_COMM_WORLD, &rq[m + k]));
         os += n[k], orr += got[k];
         h->bytes += (long long)(n[k] * rec + sizeof(long long)), h->messages += 2;
     }
@@ -248,9 +407,18 @@ static size_t halo_swap(halo_t *h, const particles_t *p, size_t *const *list, co
     return nr;
 }
 
-static void halo_list_add(halo_t *h, int r, size_t i, const char *what)
+/* Channel k of (rank r, shift code), or for code < 0 the first channel to
+ * r (a migrating particle, already wrapped, may travel on any). */
+static int halo_channel(const halo_t *h, int r, int code)
 {
-    int k = h->nb_of[r];
+    for (int k = 0; k < h->nnb; ++k)
+        if (h->nb[k] == r && (code < 0 || h->nbs[k] == code)) return k;
+    return -1;
+}
+
+static void halo_list_add(halo_t *h, int r, int code, size_t i, const char *what)
+{
+    int k = halo_channel(h, r, code);
     if (k < 0)
         error_exit(EXIT_NUMERICAL, "%s: rank %d is not a neighbour of rank %d (a particle crossed more than "
                    "one domain in a step: the flow is unstable)", what, r, h->rank);
@@ -275,7 +443,13 @@ static void halo_corner(halo_t *h, const particles_t *p, real *hi)
     MPICHECK(MPI_Allreduce(MPI_IN_PLACE, lo, 3, HALO_MPI_REAL, MPI_MIN, MPI_COMM_WORLD));
     if (hi) MPICHECK(MPI_Allreduce(up, hi, 3, HALO_MPI_REAL, MPI_MAX, MPI_COMM_WORLD));
     h->wall_wait += MPI_Wtime() - t0;
-    for (int d = 0; d < 3; ++d) h->origin[d] = d < h->dim ? lo[d] - R(1e-6) * h->support : 0;
+    for (int d = 0; d < 3; ++d) {
+        if (h->per >> d & 1) { /* fixed (halo_set_periodic); the period's end */
+            if (hi) hi[d] = h->plo[d] + h->plen[d];
+            continue;
+        }
+        h->origin[d] = d < h->dim ? lo[d] - R(1e-6) * h->support : 0;
+    }
 }
 
 static void halo_all_arrays(int *arr, int *narr)
@@ -291,6 +465,7 @@ static void halo_migrate(halo_t *h, particles_t *p)
 {
     int all[HALO_MAX_ARRAYS + 8], nall;
     halo_all_arrays(all, &nall);
+    halo_wrap(h, p);
     size_t nkeep = 0;
     h->inv = halo_grow(h->inv, &h->cap_inv, p->n, sizeof(size_t)); /* keep list */
     for (int k = 0; k < h->nnb; ++k) h->nsend[k] = 0;
@@ -299,7 +474,7 @@ static void halo_migrate(halo_t *h, particles_t *p)
         halo_cell_of(h, p, i, c);
         int r = halo_owner(h, c);
         if (r == h->rank) h->inv[nkeep++] = i;
-        else halo_list_add(h, r, i, "migration"), h->migrated++;
+        else halo_list_add(h, r, -1, i, "migration"), h->migrated++;
     }
     size_t *got = halo_calloc((size_t)h->nnb + 1, sizeof(size_t));
     size_t nin = halo_swap(h, p, h->send, h->nsend, all, nall, got);
@@ -314,13 +489,11 @@ static void halo_migrate(halo_t *h, particles_t *p)
  * is sent to that rank, carrying h->arr; arrivals at [n, n + ng). */
 static void halo_make_ghosts(halo_t *h, particles_t *p)
 {
-    int tg[64];
+    int tg[256], tc[256];
     for (int k = 0; k < h->nnb; ++k) h->nsend[k] = 0;
     for (size_t i = 0; i < p->n; ++i) {
-        long c[3];
-        halo_cell_of(h, p, i, c);
-        int nt = halo_targets(h, c, tg);
-        for (int t = 0; t < nt; ++t) halo_list_add(h, tg[t], i, "ghosts");
+        int nt = halo_particle_targets(h, p, i, tg, tc);
+        for (int t = 0; t < nt; ++t) halo_list_add(h, tg[t], tc[t], i, "ghosts");
     }
     size_t ng = halo_swap(h, p, h->send, h->nsend, h->arr, h->narr, h->nrecv);
     part_reserve(p, p->n + ng);
@@ -328,6 +501,7 @@ static void halo_make_ghosts(halo_t *h, particles_t *p)
     p->ng = ng;
     h->recv = halo_grow(h->recv, &h->cap_recv, ng, sizeof(size_t));
     for (size_t k = 0; k < ng; ++k) h->recv[k] = p->n + k;
+    halo_shift_images(h, p, h->arr, h->narr);
 }
 
 void halo_exchange(halo_t *h, particles_t *p)
@@ -363,6 +537,7 @@ void halo_refresh(halo_t *h, particles_t *p, const int *arr, int narr)
         total += got[k];
     }
     part_unpack(p, h->recv, 0, total, arr, narr, h->buf[1]);
+    halo_shift_images(h, p, arr, narr);
     free(got);
     h->wall_comm += MPI_Wtime() - t0;
 }
@@ -524,6 +699,7 @@ void halo_decompose(halo_t *h, particles_t *p)
 {
     double t0 = MPI_Wtime();
     p->ng = 0;
+    halo_wrap(h, p);
     size_t nbin = halo_grid(h, p);
     double *w = halo_weights(h, p, nbin, 1.0);
     halo_cut(h, w, nbin);
@@ -588,6 +764,7 @@ int halo_recut(halo_t *h, particles_t *p, double cost, double imb, double thresh
     int *op = halo_calloc(nold + 1, sizeof(int)), ocg[3] = {h->cg_n[0], h->cg_n[1], h->cg_n[2]};
     memcpy(ob, h->bound, ((size_t)h->size + 1) * sizeof(long));
     if (nold) memcpy(op, h->part, nold * sizeof(int));
+    halo_wrap(h, p);
     size_t nbin = halo_grid(h, p);
     double *w = halo_weights(h, p, nbin, p->n ? cost / (double)p->n : 0);
     halo_cut(h, w, nbin);
@@ -620,7 +797,7 @@ void halo_post_bytes(halo_t *h, const char *send, const size_t *soff, char *recv
     double t0 = MPI_Wtime();
     int m = h->nnb;
     if (h->nreq) error_exit(1, "halo_post_bytes: an exchange is already posted");
-    if (!h->req) h->req = halo_calloc((size_t)(2 * h->size + 2), sizeof(MPI_Request));
+    h->req = halo_grow(h->req, &h->cap_req, (size_t)(2 * m + 2), sizeof(MPI_Request)); /* channels may outnumber ranks */
     MPI_Request *rq = h->req;
     MPI_Datatype t8; /* 8-byte words: segments up to 16 GiB in an int count */
     MPICHECK(MPI_Type_contiguous(8, MPI_BYTE, &t8));
@@ -629,8 +806,8 @@ void halo_post_bytes(halo_t *h, const char *send, const size_t *soff, char *recv
         size_t ns = soff[k + 1] - soff[k], nr = roff[k + 1] - roff[k];
         if (ns % 8 || nr % 8 || ns / 8 > INT_MAX || nr / 8 > INT_MAX)
             error_exit(1, "halo_post_bytes: segment of %zu / %zu bytes (multiples of 8 up to 16 GiB)", ns, nr);
-        MPICHECK(MPI_Irecv(recv + roff[k], (int)(nr / 8), t8, h->nb[k], 23, MPI_COMM_WORLD, &rq[k]));
-        MPICHECK(MPI_Isend(send + soff[k], (int)(ns / 8), t8, h->nb[k], 23, MPI_COMM_WORLD, &rq[m + k]));
+        MPICHECK(MPI_Irecv(recv + roff[k], (int)(nr / 8), t8, h->nb[k], halo_tag(h, k, 23, 1), MPI_COMM_WORLD, &rq[k]));
+        MPICHECK(MPI_Isend(send + soff[k], (int)(ns / 8), t8, h->nb[k], halo_tag(h, k, 23, 0), MPI_COMM_WORLD, &rq[m + k]));
         h->bytes += (long long)ns, h->messages += 1;
     }
     MPICHECK(MPI_Type_free(&t8));

@@ -26,13 +26,18 @@
  * arrays after the stages that change what neighbours read
  * (src/backend_cpu.c). The GPU backend exchanges only at its list builds and
  * refreshes with device-packed byte segments (halo_post_bytes) in between.
- * One rank uses none of this (sim_t.halo is NULL). */
+ * One rank uses none of this (sim_t.halo is NULL), unless an axis is
+ * periodic: the images across a period are ghosts of the rank itself
+ * (halo_set_periodic). */
 #ifndef SPHSEG_HALO_H
 #define SPHSEG_HALO_H
 #include <stddef.h>
 #include "../src/particles.h"
 
 enum { HALO_MAX_ARRAYS = 64, HALO_DEPTH = 2 };
+/* Shift codes: (s0 + 1) + 3 (s1 + 1) + 9 (s2 + 1) for a shift of s_d in
+ * {-1, 0, 1} periods along axis d; 26 - code is the opposite shift. */
+enum { HALO_NOSHIFT = 13, HALO_NCODES = 27 };
 enum halo_method { HALO_SLABS = 0, HALO_METIS = 1 };
 
 typedef struct halo {
@@ -46,7 +51,21 @@ typedef struct halo {
     /* METIS: the coarse grid of blk^dim lattice cells per vertex, its owners */
     int blk, cg_n[3];
     int *part;             /* rank owning each coarse cell */
-    int nnb, *nb, *nb_of;  /* neighbour ranks (ascending); nb_of[rank]: index in nb or -1 */
+    /* Channels: a neighbour rank and a shift. Channel k sends to rank nb[k]
+     * the images, moved by shift nbs[k] (a code: halo_shift_of) times the
+     * periods, of the particles that lie near that rank's domain so moved,
+     * and receives from it the images it sends this rank. Without periodic
+     * axes every channel is a plain neighbour (shift code HALO_NOSHIFT, no
+     * self); with them a rank may also be its own neighbour, and a rank may
+     * be a neighbour through several shifts. Ascending by rank, then code. */
+    int nnb, *nb, *nbs;
+    /* Periodic axes (halo_set_periodic): bit d of per; the period along d
+     * is [plo[d], plo[d] + plen[d]). Along a periodic axis the lattice
+     * origin stays at plo - (depth + 1) 2h, so that images of depth cells
+     * stay at positive columns. */
+    int per;
+    real plo[3], plen[3];
+    int img[HALO_NCODES], nimg; /* the shift codes of the images: shifts along periodic axes only */
     int arr[HALO_MAX_ARRAYS], narr; /* arrays a ghost carries (part_array index) */
     size_t **send, *nsend, *cap_send; /* per neighbour: owned particles ghosted to it */
     size_t *nrecv;                    /* per neighbour: ghosts from it */
@@ -65,6 +84,7 @@ typedef struct halo {
     long long messages;    /* point-to-point sends of this rank, counts included */
     void *req;             /* MPI requests of a posted byte exchange (halo_post_bytes) */
     int nreq;
+    size_t cap_req;
 } halo_t;
 
 /* Set up for particles of dimension dim on a lattice of edge support;
@@ -76,6 +96,28 @@ void halo_init(halo_t *h, int dim, real support, int method, int axis, const int
  * backend, whose neighbour lists reach 2h + skin and are kept for many
  * steps, needs 3); METIS coarse cells as wide. Before halo_decompose. */
 void halo_set_depth(halo_t *h, int depth);
+/* Periodic axes: bit d of mask makes axis d periodic with the period
+ * [lo[d], lo[d] + len[d]). After halo_set_depth, before halo_decompose or
+ * halo_restore. Owned particles are wrapped into the period at every
+ * exchange (x with xr, and x_n by the same shift); every owned particle
+ * within depth cells of a domain across a period boundary is sent there
+ * as an image (positions shifted by the period), on one rank too: the
+ * same ghost machinery, refreshes included, so no neighbour loop knows
+ * about periods. Each period must be longer than 2 depth cells
+ * (SCENE_PERIOD_SUPPORTS). */
+void halo_set_periodic(halo_t *h, int mask, const real lo[3], const real len[3]);
+/* The owned particles back into the period along every periodic axis (x
+ * with xr, and x_n by the same shift); every exchange does it first. For a
+ * host copy about to be written (the GPU's, whose device store wraps only
+ * at its exchanges). */
+void halo_wrap(const halo_t *h, particles_t *p);
+/* The shift (-1, 0 or 1 periods per axis) of a shift code. */
+void halo_shift_of(int code, int s[3]);
+/* The displacement, m, of the images received on channel k from their
+ * owners' positions (zero on a plain neighbour's channel). halo_exchange
+ * and halo_refresh add it to x (and x_n) of those ghosts; a backend that
+ * unpacks its own refreshes (the GPU) adds it itself. */
+void halo_image_shift(const halo_t *h, int k, double s[3]);
 /* Collective. Whatever rank holds which particles, cut the domain so that
  * each rank holds an equal share of the particles — slabs (every slab at
  * least depth columns wide; exit 2 if the domain is too short for the rank

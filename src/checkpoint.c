@@ -122,6 +122,8 @@ static void ckpt_write_run(hid_t file, const ckpt_run *r)
     ckpt_attr_double(g, "SmallVolume0", r->small0);
     ckpt_attr_double(g, "MaxDrift", r->max_drift);
     ckpt_attr_int64(g, "Warned", r->warned);
+    ckpt_attr_int64(g, "OutflowCount", r->out_n);
+    ckpt_attr_double(g, "OutflowSmallVolume", r->out_cv);
     H5CHECK(H5Gclose(g));
     H5CHECK(g = H5Gcreate2(file, "Outputs", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
     ckpt_attr_int64(g, "Count", r->nsnap);

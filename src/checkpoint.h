@@ -49,6 +49,8 @@ enum { CKPT_FORMAT = 2, CKPT_USERBLOCK = 512 };
 typedef struct ckpt_run {
     double small0, max_drift; /* diag: sum C_i V_i at t = 0, largest |drift| so far */
     int warned;               /* diag: the drift warning was given */
+    long long out_n;          /* Outlet: material particles that left so far (all ranks) */
+    double out_cv;            /* Outlet: their sum C_i V_i (all ranks) */
     int nsnap;                /* snapshots written so far */
     double *times;            /* their times (malloc'd by ckpt_read) */
     long long *npart;         /* their particle totals (malloc'd by ckpt_read) */

@@ -18,7 +18,8 @@ static enum ckpt_key_class ckpt_key_class(const char *name)
         if (!strncmp(name, run[k], strlen(run[k]))) return KEY_RUN;
     for (size_t k = 0; k < 3; ++k)
         if (!strcmp(name, modules[k])) return KEY_STATE;
-    if (!strncmp(name, "Segregation:", 12) || !strncmp(name, "Flow:", 5) || !strncmp(name, "Grains:", 7))
+    if (!strncmp(name, "Segregation:", 12) || !strncmp(name, "Flow:", 5) || !strncmp(name, "Grains:", 7) ||
+        !strncmp(name, "Outlet:", 7))
         return KEY_MODEL;
     return KEY_STATE;
 }

@@ -7,6 +7,7 @@
  * collective read for one that has left. */
 #include <errno.h>
 #include <hdf5.h>
+#include <limits.h>
 #include <math.h>
 #include <mpi.h>
 #include <stdarg.h>
@@ -366,6 +367,8 @@ static void ckpt_read_run(hid_t f, double t, ckpt_run *r)
     r->small0 = ckpt_get_double(g, "SmallVolume0", -HUGE_VAL, HUGE_VAL);
     r->max_drift = ckpt_get_double(g, "MaxDrift", 0, HUGE_VAL);
     r->warned = (int)ckpt_get_int(g, "Warned", 0, 1);
+    r->out_n = ckpt_get_int(g, "OutflowCount", 0, LLONG_MAX);
+    r->out_cv = ckpt_get_double(g, "OutflowSmallVolume", -HUGE_VAL, HUGE_VAL);
     H5CHECK(H5Gclose(g));
     g = ckpt_group(f, "Outputs");
     r->nsnap = (int)ckpt_get_int(g, "Count", 0, CKPT_MAX_SNAP);

@@ -52,6 +52,8 @@ diag_values diag_measure(const sim_t *s)
     v.max_speed = comm_max(vmax);
     v.C_min = comm_min(cmin);
     v.C_max = comm_max(cmax);
+    v.n_outflow = comm_sum_ll(s->out_n);
+    v.small_outflow = comm_sum(s->out_cv);
     v.drift = 0;
     return v;
 }
@@ -112,7 +114,7 @@ static void diag_start(diag *d, const char *outdir, const sim_t *s, double small
     diag_check(d, !d->f, "open");
     int bad = old ? diag_keep_rows(d->f, old, s->step)
                   : fprintf(d->f, "step,time,dt,n_material,small_volume,small_volume_drift,kinetic_energy,"
-                                  "max_speed,wall_s,C_min,C_max\n") < 0;
+                                  "max_speed,wall_s,C_min,C_max,n_outflow,small_volume_outflow\n") < 0;
     diag_check(d, bad || fflush(d->f) != 0, "header");
     free(old);
 }
@@ -130,7 +132,8 @@ void diag_reopen(diag *d, const char *outdir, const sim_t *s, double small0, dou
 void diag_row(diag *d, const sim_t *s)
 {
     diag_values v = diag_measure(s);
-    v.drift = d->small0 != 0 ? (v.small_volume - d->small0) / d->small0 : v.small_volume;
+    double inside_out = v.small_volume + v.small_outflow; /* an outlet's outflow still counts */
+    v.drift = d->small0 != 0 ? (inside_out - d->small0) / d->small0 : inside_out;
     d->max_drift = fmax(d->max_drift, fabs(v.drift));
     if (fabs(v.drift) > s->sc->segregation.drift_tol && !d->warned) {
         d->warned = 1;
@@ -139,9 +142,9 @@ void diag_row(diag *d, const sim_t *s)
                     "Segregation:drift_tol = %.3g", s->step, s->t, v.drift, s->sc->segregation.drift_tol);
     }
     if (!d->f) return;
-    int bad = fprintf(d->f, "%ld,%.17g,%.17g,%lld,%.17g,%.17g,%.17g,%.17g,%.6f,%.17g,%.17g\n", s->step, s->t,
-                      s->dt, v.n_material, v.small_volume, v.drift, v.kinetic_energy, v.max_speed,
-                      diag_wall() - d->wall0, v.C_min, v.C_max) < 0;
+    int bad = fprintf(d->f, "%ld,%.17g,%.17g,%lld,%.17g,%.17g,%.17g,%.17g,%.6f,%.17g,%.17g,%lld,%.17g\n", s->step,
+                      s->t, s->dt, v.n_material, v.small_volume, v.drift, v.kinetic_energy, v.max_speed,
+                      diag_wall() - d->wall0, v.C_min, v.C_max, v.n_outflow, v.small_outflow) < 0;
     diag_check(d, bad || fflush(d->f) != 0, "a row");
 }
 

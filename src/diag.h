@@ -19,6 +19,8 @@ typedef struct diag {
 typedef struct diag_values {
     long long n_material;
     double small_volume, drift, kinetic_energy, max_speed, C_min, C_max;
+    long long n_outflow; /* material particles that left through the outlet so far */
+    double small_outflow; /* their sum C_i V_i: the drift is that of small_volume + small_outflow */
 } diag_values;
 
 double diag_wall(void);

@@ -98,7 +98,10 @@ int integrate_conc(sim_t *s, int force)
  *               resolved in time);
  *  flow:        (3.19), dt <= chi_CFL min(sqrt(h / a_max), h / c_s), with
  *               the elastic sound speed c_s and the largest acceleration of
- *               the last rate evaluation (0 at the start). */
+ *               the last rate evaluation (0 at the start);
+ *  viscosity:   a Newtonian fluid (Material:model newtonian), dt <= 0.125
+ *               h^2 / nu (Morris et al. 1997, eq. 11: the viscous term is an
+ *               SPH Laplacian like the diffusion's). */
 double integrate_dt(sim_t *s)
 {
     const struct scene *sc = s->sc;
@@ -110,6 +113,7 @@ double integrate_dt(sim_t *s)
     if (umax > 0) dt = fmin(dt, sc->run.cfl_kinematic * h / umax);
     if (s->flow_on) /* (3.19); |acc| from the last rate evaluation */
         dt = fmin(dt, stress_dt((real)sc->run.cfl_flow, (real)h, (real)comm_max(b[STEP_ACC]), s->flow.cs));
+    if (s->flow_on && s->flow.nu > 0) dt = fmin(dt, 0.125 * h * h / (double)s->flow.nu);
     conc_window *w = &s->win;
     if (w->on && w->k == 0) { /* a window opens: its length in steps */
         double k = w->every ? (double)w->every : fmin(floor(tc / dt), (double)CONC_AUTO_MAX);

@@ -164,15 +164,37 @@ static void blowup(const sim_t *s, diag *d, size_t i, const char *fmt, ...)
                s->t, (long long)p->id[i], (double)p->x[0][i], (double)p->x[1][i], why, s->dt);
 }
 
-/* The backend finds the lowest-index material particle in a blow-up state
- * (step_guard, physics/step.h); the host copy names it. */
-static void check_finite(sim_t *s, diag *d)
+/* Outlet: the material particles below the plane leave the run (collective:
+ * every rank drains its own, here_host when this rank's host copy is up to
+ * date). Their count and sum C_i V_i are kept for the diagnostics; the store
+ * shrinks, the backend takes it over, and the state is prepared again at t
+ * (as after a load balance). */
+static void outlet_drain(sim_t *s, int here_host)
 {
-    long first = s->be->check(s);
-    if (first < 0) return;
+    if (!here_host) s->be->to_host(s);
+    particles_t *p = &s->p;
+    size_t *keep = malloc((p->n + 1) * sizeof *keep), m = 0;
+    if (!keep) error_exit(1, "out of memory");
+    for (size_t i = 0; i < p->n; ++i) {
+        if (p->kind[i] == KIND_MATERIAL && (double)p->x[1][i] < s->step_c.outlet_below) {
+            s->out_n++;
+            s->out_cv += (double)p->C[i] * (double)p->vol[i];
+        } else {
+            keep[m++] = i;
+        }
+    }
+    p->ng = 0;
+    if (m < p->n) part_compact(p, keep, m);
+    free(keep);
+    s->be->from_host(s);
+    s->be->prepare(s, s->t, !s->win.on);
+}
+
+/* Particle i is in a blow-up state, or below the outlet (returns 1). */
+static int check_failed(sim_t *s, diag *d, size_t i)
+{
     s->be->to_host(s);
     const particles_t *p = &s->p;
-    size_t i = (size_t)first;
     double mv = 0;
     for (int c = 0; c < 3; ++c) mv += pow((double)p->x[c][i] - (double)p->x_n[c][i], 2);
     switch (step_guard(i, p, &s->step_c, s->t)) {
@@ -187,10 +209,25 @@ static void check_finite(sim_t *s, diag *d)
     case STEP_BAD_OUTSIDE:
         blowup(s, d, i, "left its container through a wall");
         break;
+    case STEP_OUTLET:
+        return 1;
     default:
         blowup(s, d, i, "moved %.3g m > h = %.3g m in one step: CFL condition violated (lower Run:cfl_flow)",
                sqrt(mv), (double)s->seg.k.h);
     }
+    return 0;
+}
+
+
+/* The backend finds the lowest-index material particle in a blow-up state
+ * (step_guard, physics/step.h); the host copy names it. A particle below an
+ * outlet is no failure: every rank drains its outlet (outlet_drain). */
+static void check_finite(sim_t *s, diag *d)
+{
+    long first = s->be->check(s);
+    int drain = 0;
+    if (first >= 0) drain = check_failed(s, d, (size_t)first);
+    if (s->step_c.outlet && comm_max(drain) > 0) outlet_drain(s, first >= 0);
 }
 
 /* The arrays a ghost carries: what the run's stages read of ghosts
@@ -219,14 +256,18 @@ static void parallel_report(const halo_t *h, const particles_t *p)
     if (h->method == HALO_METIS)
         message("METIS decomposition over %d ranks (coarse cells of %d x 2h): %lld to %lld particles per rank, up "
                 "to %d neighbours, ghosts %d cells of 2h deep", h->size, h->blk, nmin, nmax, nbmax, h->depth);
-    else
+    else if (h->size > 1)
         message("slab decomposition along %c over %d ranks: %lld to %lld particles per rank, ghosts %d cells "
                 "of 2h deep", "xyz"[h->axis], h->size, nmin, nmax, h->depth);
+    if (h->per)
+        message("periodic along %s%s: images %d cells of 2h deep across each period boundary, %d channel(s) on "
+                "the busiest rank", h->per & 1 ? "x" : "", h->per & 4 ? "z" : "", h->depth, nbmax);
 }
 
 static void parallel_start(sim_t *s, const ckpt_run *rs)
 {
-    if (comm_size() == 1) return;
+    const int per = (int)s->sc->geometry.periodic;
+    if (comm_size() == 1 && !per) return; /* one rank with periodic axes: its own images (mpi/halo.h) */
     particles_t *p = &s->p;
     int arr[HALO_MAX_ARRAYS], narr = parallel_ghost_arrays(s, arr);
     s->halo = malloc(sizeof *s->halo);
@@ -235,6 +276,10 @@ static void parallel_start(sim_t *s, const ckpt_run *rs)
     int method = s->sc->parallel.method == PART_METIS ? HALO_METIS : HALO_SLABS;
     halo_init(s->halo, p->dim, R(2.0) * s->seg.k.h, method, axis, arr, narr);
     halo_set_depth(s->halo, s->be->ghost_depth);
+    if (per) { /* the periods are the container's, whole dr (setup_contexts) */
+        const real lo[3] = {0, 0, 0}, len[3] = {s->flow.w.width, 0, s->flow.w.depth};
+        halo_set_periodic(s->halo, per, lo, len);
+    }
     /* METIS parts are coarse cells as wide as the ghost depth: a cut saved
      * with other coarse cells (a backend with another depth) is re-made, and
      * the run continues to round-off rather than bit for bit */
@@ -330,7 +375,7 @@ static void write_checkpoint(outputs *o, sim_t *s, const diag *d, ckpt_clock *ck
 {
     s->be->to_host(s);
     ckpt_run r = {.small0 = d->small0, .max_drift = d->max_drift, .warned = d->warned, .nsnap = o->n,
-                  .times = o->times, .npart = o->npart};
+                  .times = o->times, .npart = o->npart, .out_n = comm_sum_ll(s->out_n), .out_cv = comm_sum(s->out_cv)};
     ck->write_s = ckpt_write(o->dir, s, &r, o->text);
 }
 
@@ -374,6 +419,8 @@ static double run_start(sim_t *s, outputs *o, diag *d, ckpt_run *rs)
         return diag_wall() - d->wall0;
     }
     diag_reopen(d, o->dir, s, rs->small0, rs->max_drift, rs->warned);
+    s->out_n = comm_rank() == 0 ? rs->out_n : 0; /* the outflow so far: the sums count it once */
+    s->out_cv = comm_rank() == 0 ? rs->out_cv : 0.0;
     o->n = rs->nsnap, o->times = rs->times, o->npart = rs->npart; /* o takes them over */
     rs->times = NULL, rs->npart = NULL;
     snapshots_present(o);

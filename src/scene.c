@@ -57,6 +57,9 @@ static const cyaml_strval_t seg_schemes[] = {
     {"paper", SEG_SCHEME_PAPER}, {"direct", SEG_SCHEME_DIRECT}, {"conservative", SEG_SCHEME_CONSERVATIVE}};
 static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
 static const cyaml_strval_t part_methods[] = {{"slabs", PART_SLABS}, {"metis", PART_METIS}};
+static const cyaml_strval_t periodic_axes[] = {
+    {"none", PERIODIC_NONE}, {"x", PERIODIC_X}, {"z", PERIODIC_Z}, {"xz", PERIODIC_XZ}};
+static const cyaml_strval_t mat_models[] = {{"granular", MAT_GRANULAR}, {"newtonian", MAT_NEWTONIAN}};
 static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
 
 static const cyaml_schema_value_t gravity_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
@@ -86,6 +89,8 @@ static const cyaml_schema_field_t geometry_fields[] = {
     FLT(scene_geometry, radius, OPT),
     FLT(scene_geometry, length, OPT),
     FLT(scene_geometry, fill, OPT),
+    ENM(scene_geometry, periodic, periodic_axes),
+    FLT(scene_geometry, outlet_width, OPT),
     CYAML_FIELD_END,
 };
 
@@ -129,6 +134,8 @@ static const cyaml_schema_field_t initial_fields[] = {
 };
 
 static const cyaml_schema_field_t material_fields[] = {
+    ENM(scene_material, model, mat_models),
+    FLT(scene_material, eta, OPT),
     FLT(scene_material, E, OPT),
     FLT(scene_material, nu, OPT),
     FLT(scene_material, rho_s, OPT),
@@ -179,6 +186,12 @@ static const cyaml_schema_field_t parallel_fields[] = {
     CYAML_FIELD_END,
 };
 
+static const cyaml_schema_field_t outlet_fields[] = {
+    ENM(scene_outlet, enabled, on_off),
+    FLT(scene_outlet, below, OPT),
+    CYAML_FIELD_END,
+};
+
 static const cyaml_schema_field_t scene_fields[] = {
     SEC("Run", run, run_fields),
     SEC("Geometry", geometry, geometry_fields),
@@ -192,6 +205,7 @@ static const cyaml_schema_field_t scene_fields[] = {
     SEC("Flow", flow, flow_fields),
     SEC("Walls", walls, walls_fields),
     SEC("Parallel", parallel, parallel_fields),
+    SEC("Outlet", outlet, outlet_fields),
     CYAML_FIELD_END,
 };
 
@@ -225,6 +239,8 @@ static const struct scene_default scene_defaults[] = {
     {"Geometry", "radius", "0.035"},
     {"Geometry", "length", "0.02"},
     {"Geometry", "fill", "0.42"},
+    {"Geometry", "periodic", "none"},
+    {"Geometry", "outlet_width", "0"},
     {"Kinematics", "velocity", "oscillatory_shear"},
     {"Kinematics", "gamma0", "0.5773502691896257"}, /* tan 30 deg */
     {"Kinematics", "period", "13"},
@@ -247,6 +263,8 @@ static const struct scene_default scene_defaults[] = {
     {"Initial", "stress", "geostatic"},
     {"Physics", "gravity", "[0, -9.81, 0]"},
     {"Physics", "rho", "1500"},
+    {"Material", "model", "granular"},
+    {"Material", "eta", "0.001"},
     {"Material", "E", "1e7"},
     {"Material", "nu", "0.3"},
     {"Material", "rho_s", "2500"},
@@ -264,6 +282,8 @@ static const struct scene_default scene_defaults[] = {
     {"Walls", "direction", "clockwise"},
     {"Walls", "velocity", "[0, 0, 0]"},
     {"Parallel", "method", "slabs"},
+    {"Outlet", "enabled", "off"},
+    {"Outlet", "below", "0"},
     {"Parallel", "axis", "auto"},
     {"Parallel", "balance_every", "200"},
     {"Parallel", "balance_threshold", "0.1"},
@@ -324,6 +344,8 @@ static const struct scene_range scene_ranges[] = {
     POS("Output", output, diag_dt),
     RNG("Output", output, checkpoint_dt, 0, INFINITY, HI_OPEN, ALWAYS),
     POS("Physics", physics, rho),
+    RNG("Geometry", geometry, outlet_width, 0, INFINITY, HI_OPEN, ALWAYS),
+    POS("Material", material, eta),
     POS("Material", material, E),
     RNG("Material", material, nu, 0, 0.5, HI_OPEN, ALWAYS),
     POS("Material", material, rho_s),
@@ -1140,6 +1162,21 @@ static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g)
         fmt_double(b, sizeof b, g->depth);
         return fail_at(c, "Geometry:depth", "must be >= 4*dr = %s, got %s", a, b);
     }
+    if (g->periodic != PERIODIC_NONE && g->type != GEOM_COLUMN)
+        return fail_at(c, "Geometry:periodic", "needs Geometry:type column (the walls of a %s are fixed)",
+                       g->type == GEOM_DRUM ? "drum" : "shear box");
+    if ((g->periodic & PERIODIC_Z) && g->dim != 3)
+        return fail_at(c, "Geometry:periodic", "z needs Geometry:dim 3");
+    /* a period must hold the ghost layers of both sides (mpi/halo.h): 3 cells
+     * of 2h each way on the GPU, so 6 supports; shorter would need images of
+     * images */
+    for (int d = 0; d < 3; d += 2) {
+        double len = d == 0 ? g->width : g->depth, need = SCENE_PERIOD_SUPPORTS * 2 * g->h_factor * g->dr;
+        if (!(g->periodic & (1u << d)) || len >= need) continue;
+        return fail_at(c, d == 0 ? "Geometry:width" : "Geometry:depth",
+                       "a periodic axis needs a period of at least %d supports 2h = %.4g m, got %.4g",
+                       SCENE_PERIOD_SUPPORTS, need, len);
+    }
     if (g->type == GEOM_DRUM) {
         fmt_double(a, sizeof a, 8 * g->dr);
         fmt_double(b, sizeof b, g->radius);
@@ -1202,6 +1239,22 @@ static int check_special(struct scene_ctx *c, const struct scene *s)
         return fail_at(c, "Walls:velocity", "a translating container needs Geometry:type column");
     if (s->geometry.dim == 2 && g[2] != 0)
         return fail_at(c, "Physics:gravity", "z entry must be 0 in 2D (the x-y plane)");
+    if (s->geometry.outlet_width > 0 && s->geometry.type != GEOM_COLUMN)
+        return fail_at(c, "Geometry:outlet_width", "needs Geometry:type column (an opening in its base)");
+    if (s->geometry.outlet_width > 0 &&
+        !(s->geometry.outlet_width <= s->geometry.width - 2 * s->geometry.dr &&
+          (s->geometry.dim == 2 || s->geometry.outlet_width <= s->geometry.depth - 2 * s->geometry.dr)))
+        return fail_at(c, "Geometry:outlet_width", "%.4g m leaves less than 2 dr of base beside the opening",
+                       s->geometry.outlet_width);
+    if (s->outlet.enabled && (s->geometry.type != GEOM_COLUMN || vel != KIN_COMPUTED))
+        return fail_at(c, "Outlet:enabled", "needs Geometry:type column and Kinematics:velocity computed");
+    if (s->outlet.enabled && !(s->outlet.below <= 0))
+        return fail_at(c, "Outlet:below", "must be at or below the base, y <= 0 (the plane would cut the material "
+                       "at the start), got %.4g", s->outlet.below);
+    if (s->geometry.periodic != PERIODIC_NONE && s->parallel.method == PART_METIS)
+        return fail_at(c, "Parallel:method", "metis does not cut periodic axes yet (Geometry:periodic): use slabs");
+    if (s->geometry.periodic != PERIODIC_NONE && vel != KIN_COMPUTED)
+        return fail_at(c, "Geometry:periodic", "needs Kinematics:velocity computed");
     if (strcmp(backend, "cpu") != 0 && strcmp(backend, "gpu") != 0 && strcmp(backend, "auto") != 0)
         return fail_at(c, "Run:backend", "expected auto, cpu or gpu, got '%.40s'", backend);
     return 0;

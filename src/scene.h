@@ -13,12 +13,18 @@ enum seg_model { SEG_MODEL_CONSTANT = 0, SEG_MODEL_SHEAR_RATE = 1 };
  * conservative: pairwise antisymmetric fluxes, no source terms. */
 enum seg_scheme { SEG_SCHEME_PAPER = 0, SEG_SCHEME_DIRECT = 1, SEG_SCHEME_CONSERVATIVE = 2 };
 enum geom_type { GEOM_SHEARBOX = 0, GEOM_COLUMN = 1, GEOM_DRUM = 2 };
+/* Geometry:periodic, one bit per axis (bit d: axis d). */
+enum periodic_axes { PERIODIC_NONE = 0, PERIODIC_X = 1, PERIODIC_Z = 4, PERIODIC_XZ = 5 };
 /* rest and oscillatory_shear prescribe the velocity (no momentum or stress
  * solved); computed solves the granular flow (momentum 3.9, stress 2.16). */
 enum kin_type { KIN_REST = 0, KIN_OSCILLATORY_SHEAR = 1, KIN_COMPUTED = 2 };
 enum wall_slip { SLIP_NO = 0, SLIP_FREE = 1 };
 enum rot_dir { ROT_CLOCKWISE = 0, ROT_COUNTERCLOCKWISE = 1 };
 enum init_stress { INIT_STRESS_ZERO = 0, INIT_STRESS_GEOSTATIC = 1 };
+/* granular: the mu(I) elastoplastic material of the paper; newtonian: a weakly
+ * compressible Newtonian fluid (pressure from the bulk modulus, viscous
+ * momentum of Morris et al. 1997). */
+enum mat_model { MAT_GRANULAR = 0, MAT_NEWTONIAN = 1 };
 
 struct scene_run {
     double t_end;           /* s, required */
@@ -45,6 +51,12 @@ struct scene_geometry {
     double radius;       /* drum: inner radius R, m; default 0.035 */
     double length;       /* 3D drum: length along the axis (z) between the end walls, m; default 0.02 */
     double fill;         /* drum: filling level R_f = (H + R)/2R (paper §6), in (0,1); default 0.42 */
+    double outlet_width; /* column: an opening of this width (m) in the base, centred on x = width/2
+                          * (3D: a square opening, also centred on z = depth/2), through which material
+                          * falls; default 0 (none) */
+    unsigned periodic;   /* column: the axes without walls, where the material continues periodically
+                          * (enum periodic_axes: none | x | z | xz; the period is the width along x,
+                          * the depth along z, from 0); default none */
 };
 
 struct scene_kinematics {
@@ -91,9 +103,13 @@ struct scene_initial {
                               * cone); default geostatic */
 };
 
-/* The mu(I) elastoplastic material (paper §2.3, Table 1); computed flow only. */
+/* The mu(I) elastoplastic material (paper §2.3, Table 1), or a Newtonian
+ * fluid; computed flow only. */
 struct scene_material {
-    double E;      /* Young's modulus, Pa; default 1e7 */
+    enum mat_model model; /* granular | newtonian; default granular */
+    double eta;    /* newtonian: dynamic viscosity, Pa s; default 1e-3 */
+    double E;      /* Young's modulus, Pa; default 1e7 (newtonian: with nu, the bulk modulus
+                    * K = E / (3 (1 - 2 nu)) and the sound speed sqrt(K / rho)) */
     double nu;     /* Poisson's ratio, [0, 0.5); default 0.3 */
     double rho_s;  /* intrinsic grain density, kg/m^3; default 2500 */
     double mu_s;   /* static friction; default 0.382 */
@@ -144,6 +160,14 @@ struct scene_parallel {
                                * the mean by more than this fraction; default 0.1 */
 };
 
+/* An outlet: material particles that fall below a horizontal plane leave the
+ * run (main.c outlet_drain); their count and sum C_i V_i go to
+ * diagnostics.csv, and the conservation check counts them. */
+struct scene_outlet {
+    int enabled;  /* on | off; default off */
+    double below; /* the plane's height y, m; default 0 */
+};
+
 struct scene_keys; /* where each key was set (scene.c) */
 
 struct scene {
@@ -159,6 +183,7 @@ struct scene {
     struct scene_flow flow;
     struct scene_walls walls;
     struct scene_parallel parallel;
+    struct scene_outlet outlet;
     char *path; /* the scene file as given */
     char *text; /* the scene file's text, for snapshot headers */
     struct scene_keys *keys; /* for scene_key_line / scene_key_where */
@@ -171,6 +196,9 @@ struct scene {
  * place of FILE:LINE for an override; "FILE: why" when the file cannot be
  * read). SCENE_ERRLEN bytes always suffice. */
 enum { SCENE_ERRLEN = 1024 };
+/* The shortest period of a periodic axis, in supports 2h: the ghost layers
+ * (3 cells of 2h on the GPU) of both sides fit in it. */
+enum { SCENE_PERIOD_SUPPORTS = 6 };
 /* The largest Segregation:every a scene may give. */
 enum { SCENE_EVERY_MAX = 1000000 };
 int scene_parse(struct scene *s, const char *path, int n_over, char **over, char *err,

@@ -2,7 +2,9 @@
  * Shear box (paper §5) and granular column: material on a square lattice of spacing dr filling
  * [0, W] x [0, H]; ceil(2h/dr) layers of dummy particles below the base and
  * outside both side walls (the walls reach the same number of layers above
- * the material); no dummies at the top, which is a free surface.
+ * the material), no side walls when x is periodic (Geometry:periodic: the
+ * base ends at the period, and the lattice continues through the images);
+ * no dummies at the top, which is a free surface.
  * Drum (2D and 3D) and 3D column below. */
 #include <math.h>
 #include <stdlib.h>
@@ -13,6 +15,7 @@
 
 typedef struct box_layout {
     long nx, ny, nl; /* material columns, rows; dummy layers */
+    long ns;         /* dummy layers of each side wall: nl, or 0 when x is periodic */
     size_t n_mat, n_dum;
 } box_layout;
 
@@ -23,8 +26,9 @@ static box_layout setup_layout(const struct scene *sc)
     b.nx = lround(g->width / g->dr);
     b.ny = lround(g->height / g->dr);
     b.nl = (long)ceil(2.0 * g->h_factor - 1e-9);
+    b.ns = g->periodic & PERIODIC_X ? 0 : b.nl;
     b.n_mat = (size_t)(b.nx * b.ny);
-    b.n_dum = (size_t)(b.nl * (b.nx + 2 * b.nl) + 2 * b.nl * (b.ny + b.nl));
+    b.n_dum = (size_t)(b.nl * (b.nx + 2 * b.ns) + 2 * b.ns * (b.ny + b.nl));
     return b;
 }
 
@@ -89,11 +93,14 @@ static void setup_box(sim_t *s)
             double y = (j + 0.5) * dr;
             setup_put(p, k, (i + 0.5) * dr, y, 0, KIND_MATERIAL, vol, y <= split ? sc->initial.C_below : sc->initial.C_above);
         }
-    for (long l = 0; l < b.nl; ++l) /* base */
-        for (long i = -b.nl; i < b.nx + b.nl; ++i, ++k)
-            setup_put(p, k, (i + 0.5) * dr, -(l + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
+    double W = b.nx * dr, ow = sc->geometry.outlet_width;
+    for (long l = 0; l < b.nl; ++l) /* base, less its opening */
+        for (long i = -b.ns; i < b.nx + b.ns; ++i) {
+            if (fabs((i + 0.5) * dr - 0.5 * W) < 0.5 * ow) continue;
+            setup_put(p, k++, (i + 0.5) * dr, -(l + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
+        }
     for (long j = 0; j < b.ny + b.nl; ++j) /* side walls */
-        for (long l = 0; l < b.nl; ++l) {
+        for (long l = 0; l < b.ns; ++l) {
             setup_put(p, k++, -(l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
             setup_put(p, k++, (b.nx + l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
         }
@@ -215,8 +222,9 @@ static void setup_stress(sim_t *s)
     particles_t *p = &s->p;
     if (sc->initial.stress != INIT_STRESS_GEOSTATIC) return;
     const double *gv = sc->physics.gravity;
-    double gn = sqrt(gv[0] * gv[0] + gv[1] * gv[1]), K0 = sc->material.nu / (1 - sc->material.nu);
-    real kmu = stress_kmu((real)sc->material.mu_s);
+    int fluid = sc->material.model == MAT_NEWTONIAN; /* hydrostatic: K0 = 1, no shear stress */
+    double gn = sqrt(gv[0] * gv[0] + gv[1] * gv[1]), K0 = fluid ? 1.0 : sc->material.nu / (1 - sc->material.nu);
+    real kmu = fluid ? R(0.0) : stress_kmu((real)sc->material.mu_s);
     for (size_t i = 0; i < p->n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
         double depth = fmax(0.0, s->surface_y - (double)p->x[1][i]);
@@ -231,7 +239,10 @@ static void setup_stress(sim_t *s)
 /* 3D column: material on the lattice of spacing dr filling [0, W] x [0, H]
  * x [0, D]; nl = ceil(2h/dr) layers of dummies below the base (corners
  * included) and outside the four side walls, which reach nl layers above
- * the material; the top is a free surface. */
+ * the material; the top is a free surface. A periodic axis
+ * (Geometry:periodic) has no side walls: the lattice and the base end at
+ * the period, and the material continues through the ghosts' images
+ * (mpi/halo.h). */
 static void setup_box3d(sim_t *s)
 {
     const struct scene *sc = s->sc;
@@ -239,19 +250,23 @@ static void setup_box3d(sim_t *s)
     double dr = g->dr, vol = dr * dr * dr;
     long nx = lround(g->width / dr), ny = lround(g->height / dr), nz = lround(g->depth / dr);
     long nl = (long)ceil(2.0 * g->h_factor - 1e-9);
-    size_t cap = (size_t)((nx + 2 * nl) * (ny + 2 * nl) * (nz + 2 * nl));
+    long sx = g->periodic & PERIODIC_X ? 0 : nl, sz = g->periodic & PERIODIC_Z ? 0 : nl; /* side wall layers */
+    size_t cap = (size_t)((nx + 2 * sx) * (ny + 2 * nl) * (nz + 2 * sz));
     setup_alloc(sc, &s->p, 3, cap);
     particles_t *p = &s->p;
     size_t k = 0;
     double H = ny * dr, split = sc->initial.split * H;
     for (int pass = 0; pass < 2; ++pass) /* material first, then dummies */
         for (long j = -nl; j < ny + nl; ++j)
-            for (long q = -nl; q < nz + nl; ++q)
-                for (long i = -nl; i < nx + nl; ++i) {
+            for (long q = -sz; q < nz + sz; ++q)
+                for (long i = -sx; i < nx + sx; ++i) {
                     int inside = i >= 0 && i < nx && q >= 0 && q < nz;
                     if (inside && j >= ny) continue; /* above the free surface */
                     int mat = inside && j >= 0;
                     if (mat != (pass == 0)) continue;
+                    if (j < 0 && fabs((i + 0.5) * dr - 0.5 * nx * dr) < 0.5 * g->outlet_width &&
+                        fabs((q + 0.5) * dr - 0.5 * nz * dr) < 0.5 * g->outlet_width)
+                        continue; /* the base's opening */
                     double y = (j + 0.5) * dr;
                     setup_put(p, k++, (i + 0.5) * dr, y, (q + 0.5) * dr, mat ? KIND_MATERIAL : KIND_DUMMY, vol,
                               y <= split ? sc->initial.C_below : sc->initial.C_above);
@@ -328,6 +343,8 @@ void setup_contexts(sim_t *s)
     const struct scene_material *m = &sc->material;
     f->k = s->seg.k;
     stress_moduli((real)m->E, (real)m->nu, &f->m.G, &f->m.K);
+    f->nu = m->model == MAT_NEWTONIAN ? (real)(m->eta / sc->physics.rho) : R(0.0);
+    if (m->model == MAT_NEWTONIAN) f->m.G = 0; /* a fluid: pressure alone, the viscous force apart */
     f->m.rho_s = (real)m->rho_s;
     f->m.mu_s = (real)m->mu_s, f->m.mu_d = (real)m->mu_d;
     f->m.I0 = (real)m->I0, f->m.lambda = (real)m->lambda;
@@ -347,6 +364,7 @@ void setup_contexts(sim_t *s)
     w->slip_base = sc->walls.slip == SLIP_FREE;
     w->slip_sides = sc->walls.side_slip == SLIP_FREE;
     for (int d = 0; d < 3; ++d) w->u[d] = (real)sc->walls.velocity[d];
+    w->periodic = (int)sc->geometry.periodic;
 
     step_ctx *st = &s->step_c;
     st->h = s->seg.k.h;
@@ -355,4 +373,6 @@ void setup_contexts(sim_t *s)
     st->kin = s->kin;
     st->sp = *sp;
     st->w = *w;
+    st->outlet = sc->outlet.enabled;
+    st->outlet_below = sc->outlet.below;
 }

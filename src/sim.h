@@ -113,6 +113,8 @@ typedef struct sim {
     long step;
     double dt;         /* last time step, s */
     size_t n_material; /* material particles (set by setup; all ranks together) */
+    long long out_n;   /* Outlet: material particles that left the run through it, on this rank */
+    double out_cv;     /* Outlet: their sum C_i V_i (diagnostics: inside plus outflow is conserved) */
 } sim_t;
 
 /* Build the particles of the scene at t = 0 (src/setup.c). Exits with status

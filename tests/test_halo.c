@@ -19,9 +19,16 @@
  *  - balance: when a rank reports three times the cost of the others, the
  *    re-cut equalises the predicted cost (each particle weighs its rank's
  *    cost per particle) to within 25 % of the mean, and no ID is lost;
- * for slabs and for METIS parts of the coarse-cell graph alike.
+ * for slabs and for METIS parts of the coarse-cell graph alike; and with
+ * periodic axes (slabs; 2D: x and y, 3D: x and z, so that one is the slab
+ * axis and one is not), where the brute force takes the nearest image, the
+ * moves wrap, the refresh must bring every image's position shifted by its
+ * period, and (check_lattice) a lattice that fills the periods gives every
+ * particle of a row the same kernel sum, before and after the whole lattice
+ * moves across the period boundary.
  * Failures are counted on every rank and summed, so that all ranks take
  * part in every collective and the program ends nonzero on any failure. */
+#include <math.h>
 #include <mpi.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -40,6 +47,7 @@ static int fails;
     } while (0)
 
 enum { N = 3000 };
+#define TOL (sizeof(real) == 4 ? 1e-5 : 1e-12) /* round-off of a position moved by a period */
 static const double H = 0.0125, L[3] = {1.0, 0.3, 0.2}; /* support 2h = 0.025: 40 columns along x */
 
 static double urand(unsigned *s)
@@ -50,6 +58,15 @@ static double urand(unsigned *s)
 
 /* The global cloud: positions g[d][id]; every rank holds the same copy. */
 static real *g[3];
+static int per; /* periodic axes of this run (bit d), period L[d] from 0 */
+
+/* The separation of a and b along axis d: the nearest image on a periodic axis. */
+static double sep(int d, double a, double b)
+{
+    double x = a - b;
+    if (per >> d & 1) x -= L[d] * floor(x / L[d] + 0.5);
+    return x;
+}
 
 static void cloud_init(particles_t *p, int dim, int rank, int size)
 {
@@ -74,7 +91,9 @@ static void cloud_move(particles_t *p, int dim, int round)
         unsigned s = (unsigned)(i * 7919 + round * 104729 + 1);
         for (int d = 0; d < dim; ++d) {
             real x = g[d][i] + (real)((urand(&s) - 0.5) * 1.4 * H);
-            g[d][i] = x < 0 ? -x : x > L[d] ? 2 * (real)L[d] - x : x;
+            if (per >> d & 1) x = x < 0 ? x + (real)L[d] : x >= (real)L[d] ? x - (real)L[d] : x;
+            else x = x < 0 ? -x : x > L[d] ? 2 * (real)L[d] - x : x;
+            g[d][i] = x;
         }
     }
     for (size_t k = 0; k < p->n; ++k)
@@ -122,7 +141,7 @@ static void check_neighbours(const nbr_grid *gr, const particles_t *p, real supp
         int64_t id = p->id[i];
         for (int j = 0; j < N; ++j) {
             real r2 = 0;
-            for (int d = 0; d < p->dim; ++d) r2 += (g[d][id] - g[d][j]) * (g[d][id] - g[d][j]);
+            for (int d = 0; d < p->dim; ++d) r2 += (real)(sep(d, g[d][id], g[d][j]) * sep(d, g[d][id], g[d][j]));
             if (r2 < s2) ref[b++] = j;
         }
         qsort(mine, a, sizeof(int64_t), cmp_i64);
@@ -140,6 +159,26 @@ static void check_refresh(halo_t *h, particles_t *p, int round)
     halo_refresh(h, p, arr, 1);
     for (size_t i = p->n; i < p->n + p->ng; ++i)
         CHECK(p->C[i] == (real)(2 * p->id[i] + round), "ghost %lld not refreshed", (long long)p->id[i]);
+    /* positions: a ghost's is its owner's, an image's moved by a period */
+    real *was[3];
+    int ax[3];
+    for (int d = 0; d < p->dim; ++d) {
+        was[d] = malloc((p->ng + 1) * sizeof(real));
+        memcpy(was[d], p->x[d] + p->n, p->ng * sizeof(real));
+        for (size_t i = p->n; i < p->n + p->ng; ++i) p->x[d][i] = -99;
+        ax[d] = part_array_find(p, p->x[d]);
+    }
+    halo_refresh(h, p, ax, p->dim);
+    int bad = 0;
+    for (int d = 0; d < p->dim; ++d) {
+        for (size_t i = 0; i < p->ng; ++i) {
+            double x = p->x[d][p->n + i], own = g[d][p->id[p->n + i]], off = x - own;
+            bad += x != was[d][i] || fabs(off - L[d] * floor(off / L[d] + 0.5)) > TOL ||
+                   (!(per >> d & 1) && off != 0);
+        }
+        free(was[d]);
+    }
+    CHECK(bad == 0, "%d ghost positions not their owners' (or an image's) after a refresh", bad);
 }
 
 static int cmp_ll(const void *a, const void *b)
@@ -160,7 +199,7 @@ static void check_present(const particles_t *p, int dim, double radius)
     for (size_t i = 0; i < p->n; ++i)
         for (long long j = 0; j < N; ++j) {
             double r2 = 0;
-            for (int d = 0; d < dim; ++d) r2 += ((double)p->x[d][i] - (double)g[d][j]) * ((double)p->x[d][i] - (double)g[d][j]);
+            for (int d = 0; d < dim; ++d) r2 += sep(d, p->x[d][i], g[d][j]) * sep(d, p->x[d][i], g[d][j]);
             if (r2 < radius * radius && !bsearch(&j, ids, m, sizeof *ids, cmp_ll)) missing++;
         }
     CHECK(missing == 0, "%d particles within %.4g of an owned particle are not held (depth too thin)", missing, radius);
@@ -200,8 +239,84 @@ static void check_bytes(halo_t *h, const particles_t *p)
     free(sb), free(rb), free(sbuf), free(rbuf);
 }
 
-static void run_dim(int dim, int method, int rank, int size, int depth)
+/* A lattice of spacing a that fills the periods (x; in 3D also z; y is
+ * not periodic, so the rows near its ends have cut supports): every
+ * particle of a row (same y) has the same sum of a smooth function of the
+ * distance over its support, whatever its place relative to the period
+ * boundary or to the slabs; and after the whole lattice moved by 0.63 a
+ * along the periodic axes (a column crossing the boundary, wrapped by the
+ * exchange) the sums are the same again. */
+static void check_lattice(int dim, int rank, int size, int depth)
 {
+    per = dim == 3 ? 5 : 1;
+    const real support = (real)(2 * H), a = support / (dim == 3 ? 2 : 3), s2 = support * support;
+    long n[3] = {lround(L[0] / (double)a), lround(L[1] / (double)a), dim == 3 ? lround(L[2] / (double)a) : 1};
+    size_t tot = (size_t)(n[0] * n[1] * n[2]), lo = tot * (size_t)rank / (size_t)size, hi = tot * (size_t)(rank + 1) / (size_t)size;
+    particles_t p;
+    part_alloc(&p, dim, hi - lo);
+    for (size_t k = lo; k < hi; ++k, ++p.n) {
+        long i = (long)(k % (size_t)n[0]), j = (long)(k / (size_t)n[0] % (size_t)n[1]), q = (long)(k / (size_t)(n[0] * n[1]));
+        p.x[0][p.n] = (real)((i + 0.5) * a), p.x[1][p.n] = (real)((j + 0.5) * a);
+        p.x[2][p.n] = dim == 3 ? (real)((q + 0.5) * a) : 0;
+        p.id[p.n] = (int64_t)k, p.vol[p.n] = 1;
+    }
+    int arr[8], na = 0;
+    for (int d = 0; d < 3; ++d) arr[na++] = part_array_find(&p, p.x[d]);
+    arr[na++] = part_array_find(&p, p.id), arr[na++] = part_array_find(&p, p.vol);
+    halo_t h;
+    halo_init(&h, dim, support, HALO_SLABS, -1, arr, na);
+    halo_set_depth(&h, depth);
+    const real plo[3] = {0, 0, 0}, plen[3] = {(real)(n[0] * a), (real)(n[1] * a), (real)(n[2] * a)};
+    halo_set_periodic(&h, per, plo, plen);
+    halo_decompose(&h, &p);
+    nbr_grid gr = {0};
+    double *rlo = malloc((size_t)n[1] * sizeof(double)), *rhi = malloc((size_t)n[1] * sizeof(double));
+    double *ref = malloc((size_t)n[1] * sizeof(double));
+    for (int pass = 0; pass < 2; ++pass) {
+        if (pass == 1)
+            for (size_t i = 0; i < p.n; ++i) {
+                p.x[0][i] += (real)(0.63 * a);
+                if (dim == 3) p.x[2][i] += (real)(0.63 * a);
+            }
+        halo_exchange(&h, &p);
+        nbr_build(&gr, &p, support, h.origin);
+        halo_sorted(&h, gr.perm, p.n + p.ng);
+        for (long r = 0; r < n[1]; ++r) rlo[r] = 1e300, rhi[r] = -1e300;
+        long crossed = 0;
+        for (size_t i = 0; i < p.n; ++i) {
+            double sum = 0;
+            NBR_BEGIN(&gr.view, p.x, i, j)
+                real xij[3], r2 = grid_pair(dim, p.x, i, j, xij);
+                if (r2 < s2) sum += (1 - (double)r2 / (double)s2) * (1 - (double)r2 / (double)s2);
+            NBR_END
+            long r = lround((double)p.x[1][i] / (double)a - 0.5);
+            rlo[r] = sum < rlo[r] ? sum : rlo[r], rhi[r] = sum > rhi[r] ? sum : rhi[r];
+            crossed += pass == 1 && p.id[i] % n[0] == n[0] - 1 && p.x[0][i] < a;
+        }
+        MPI_Allreduce(MPI_IN_PLACE, rlo, (int)n[1], MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+        MPI_Allreduce(MPI_IN_PLACE, rhi, (int)n[1], MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+        MPI_Allreduce(MPI_IN_PLACE, &crossed, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+        int bad = 0;
+        for (long r = 0; r < n[1]; ++r) {
+            bad += rhi[r] - rlo[r] > TOL * rhi[r];
+            if (pass == 0) ref[r] = rhi[r];
+            else bad += fabs(rhi[r] - ref[r]) > TOL * ref[r];
+        }
+        CHECK(bad == 0, "%dD lattice, pass %d: %d rows whose kernel sums differ along the period", dim, pass, bad);
+        if (pass == 1)
+            CHECK(crossed == n[1] * n[2], "%ld particles of the last column wrapped to the start, expected %ld", crossed,
+                  n[1] * n[2]);
+    }
+    if (rank == 0) printf("%dD lattice across the period, depth %d: row sums equal, also after crossing\n", dim, depth);
+    free(rlo), free(rhi), free(ref);
+    halo_free(&h);
+    nbr_free(&gr);
+    part_free(&p);
+}
+
+static void run_dim(int dim, int method, int rank, int size, int depth, int periodic)
+{
+    per = periodic;
     particles_t p;
     nbr_grid gr = {0};
     cloud_init(&p, dim, rank, size);
@@ -212,6 +327,10 @@ static void run_dim(int dim, int method, int rank, int size, int depth)
     real support = (real)(2 * H);
     halo_init(&h, dim, support, method, -1, arr, na);
     halo_set_depth(&h, depth);
+    if (per) {
+        const real lo[3] = {0, 0, 0}, len[3] = {(real)L[0], (real)L[1], (real)L[2]};
+        halo_set_periodic(&h, per, lo, len);
+    }
     halo_decompose(&h, &p);
     CHECK(method == HALO_METIS || h.axis == 0, "slab axis %d, expected the longest (x)", h.axis);
     check_owned(&h, &p);
@@ -219,7 +338,7 @@ static void run_dim(int dim, int method, int rank, int size, int depth)
         if (round > 0) cloud_move(&p, dim, round);
         halo_exchange(&h, &p);
         check_owned(&h, &p);
-        nbr_build(&gr, &p, support, size > 1 ? h.origin : NULL);
+        nbr_build(&gr, &p, support, size > 1 || per ? h.origin : NULL);
         halo_sorted(&h, gr.perm, p.n + p.ng);
         check_neighbours(&gr, &p, support);
         check_refresh(&h, &p, round);
@@ -246,13 +365,14 @@ static void run_dim(int dim, int method, int rank, int size, int depth)
     }
     check_owned(&h, &p);
     halo_exchange(&h, &p);
-    nbr_build(&gr, &p, support, size > 1 ? h.origin : NULL);
+    nbr_build(&gr, &p, support, size > 1 || per ? h.origin : NULL);
     check_neighbours(&gr, &p, support);
     int nbmax = h.nnb;
     MPI_Allreduce(MPI_IN_PLACE, &nbmax, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     if (rank == 0)
-        printf("%dD %s, depth %d: %lld migrations, up to %d neighbours, balance %s\n", dim,
-               method == HALO_METIS ? "metis" : "slabs", depth, moved, nbmax, changed ? "moved bounds" : "no move");
+        printf("%dD %s, depth %d%s: %lld migrations, up to %d channels, balance %s\n", dim,
+               method == HALO_METIS ? "metis" : "slabs", depth, per ? ", periodic" : "", moved, nbmax,
+               changed ? "moved bounds" : "no move");
     halo_free(&h);
     nbr_free(&gr);
     part_free(&p);
@@ -265,11 +385,16 @@ int main(int argc, char **argv)
     int rank, size;
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     MPI_Comm_size(MPI_COMM_WORLD, &size);
-    for (int depth = HALO_DEPTH; depth <= 3; ++depth)
+    for (int depth = HALO_DEPTH; depth <= 3; ++depth) {
         for (int m = HALO_SLABS; m <= HALO_METIS; ++m) {
-            run_dim(2, m, rank, size, depth);
-            run_dim(3, m, rank, size, depth);
+            run_dim(2, m, rank, size, depth, 0);
+            run_dim(3, m, rank, size, depth, 0);
         }
+        run_dim(2, HALO_SLABS, rank, size, depth, 3);
+        run_dim(3, HALO_SLABS, rank, size, depth, 5);
+        check_lattice(2, rank, size, depth);
+        check_lattice(3, rank, size, depth);
+    }
     int total = 0;
     MPI_Allreduce(&fails, &total, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
     if (rank == 0) printf("test_halo on %d ranks: %s (%d failed checks)\n", size, total ? "FAIL" : "ok", total);

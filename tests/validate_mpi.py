@@ -18,7 +18,11 @@ are compared particle by particle (matched by ParticleIDs):
   forced load balance must move the slab bounds, so that both paths are
   exercised; the METIS partition (Parallel:method metis) passes the same
   comparison;
-  the run on 3 ranks repeated is bit-identical (determinism).
+  the run on 3 ranks repeated is bit-identical (determinism);
+  the periodic chutes (Geometry:periodic) must carry material across the
+  period boundary, and every position of the snapshot lies in the period;
+  the silo's outlet must take material out of the run, as many particles on
+  every rank count (the comparison above also needs the same IDs).
 
 --backend gpu (default cpu) runs every case, 1, 2 and 3 ranks and the
 repeated run, with sphseg --backend gpu (ranks take devices by local rank;
@@ -64,6 +68,14 @@ TOL = 1e-10     # CPU, any scheme, across rank counts
 TOL_GPU = 1e-8  # GPU runs, and the GPU against the CPU
 TOL_C1 = 1e-4   # GPU runs of the paper scheme
 DRUM = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:shepard_every=20"]
+FILM = ["Material:model=newtonian", "Material:eta=1.5", "Material:E=11250", "Geometry:periodic=x",
+        "Geometry:dr=0.0005", "Geometry:height=0.01", "Geometry:width=0.01", "Physics:gravity=[4.905,-8.496,0]",
+        "Flow:alpha_av=0", "Flow:damping_until=0", "Initial:stress=geostatic"]
+SILO = ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:outlet_width=0.0125", "Outlet:enabled=on",
+        "Outlet:below=-0.02", "Material:E=1e5", "Flow:damping_until=0", "Segregation:enabled=on",
+        "Segregation:V=0.01", "Segregation:D=1e-5", "Initial:C_below=0.3"]
+CHUTE = ["Geometry:dr=0.0025", "Geometry:height=0.03", "Geometry:periodic=x", "Material:E=1e5",
+         "Flow:damping_until=0", "Physics:gravity=[6.306,-7.515,0]"]
 
 # name, scene, steps, overrides, what must happen on several ranks
 CASES = [
@@ -80,6 +92,19 @@ CASES = [
     ("drum_3d", "drum_3d.yml", 60, ["Geometry:dr=0.0025", "Geometry:length=0.025", "Material:E=1e5",
                                     "Segregation:every=9"], None),
     ("drum_EV_metis", "drum_2d_EV.yml", 800, DRUM + ["Parallel:method=metis"], "migrate"),
+    # periodic axes (Geometry:periodic, mpi/halo.h): a layer sliding down a
+    # 40-degree incline, periodic along x; slabs cut across the period (x) and
+    # along it (y), and a 3D layer periodic along x and z
+    ("chute_x", "column_2d.yml", 2000, CHUTE + ["Parallel:axis=x"], "wrap"),
+    ("chute_y", "column_2d.yml", 600, CHUTE + ["Parallel:axis=y", "Geometry:height=0.07"], "wrap"),
+    # an outlet under a silo's opening (Outlet, Geometry:outlet_width): the store shrinks
+    ("silo", "column_2d.yml", 4000, SILO, "outflow"),
+    # the Newtonian fluid (Material:model newtonian): a film down the incline, tests/validate_film.py
+    ("film", "column_2d.yml", 600, FILM + ["Parallel:axis=x"], None),
+    ("chute_3d", "column_2d.yml", 150, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.09",
+                                        "Geometry:depth=0.09", "Geometry:height=0.03", "Geometry:periodic=xz",
+                                        "Material:E=1e5", "Flow:damping_until=0",
+                                        "Physics:gravity=[6.306,-7.515,0]"], None),
     ("column_3d_metis", "column_2d.yml", 30, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.05",
                                               "Geometry:depth=0.05", "Geometry:height=0.1",
                                               "Parallel:method=metis"], None),
@@ -187,6 +212,23 @@ def main():
             good = m is not None and int(m.group(1)) > 0
             print("%s %-14s particles migrated across domains on 3 ranks: %s" % (
                 "ok  " if good else "FAIL", name, m.group(1) if m else "none"))
+            ok &= good
+        if must == "wrap":  # material left through x = width and came back at x = 0
+            s0 = snap.read_snapshot(snap.list_snapshots(os.path.join(a.work, "%s_1" % name))[0])
+            o0 = np.argsort(s0["ParticleIDs"])
+            x0, x1 = np.asarray(s0["Coordinates"])[o0, 0], res[1]["Coordinates"][:, 0]
+            n = int(np.sum((res[1]["Kind"] == 0) & (x1 < x0 - 0.02)))
+            inside = bool(np.all((x1 >= 0) & (x1 < 0.05)))
+            good = n > 0 and inside
+            print("%s %-14s material particles that crossed the period boundary: %d, all inside it: %s" % (
+                "ok  " if good else "FAIL", name, n, inside))
+            ok &= good
+        if must == "outflow":  # material left through the outlet alike on every rank count
+            n = {k: int(np.sum(res[k]["Kind"] == 0)) for k in (1, 2, 3)}
+            good = len(set(n.values())) == 1 and n[1] < int(np.sum(snap.read_snapshot(snap.list_snapshots(
+                os.path.join(a.work, "%s_1" % name))[0])["Kind"] == 0))
+            print("%s %-14s material left through the outlet; inside at the end on 1, 2, 3 ranks: %s" % (
+                "ok  " if good else "FAIL", name, list(n.values())))
             ok &= good
         if must == "balance":
             good = "domains re-cut" in logs[3]

@@ -33,6 +33,11 @@ typedef struct flow_ctx {
     real damping;  /* zeta of the settling term -zeta u, 1/s (0 when off) */
     seg_params sp; /* d_avg = d^S C + d^L (1 - C) for mu(I) */
     wall_geom w;
+    real nu;       /* Newtonian fluid (Material:model newtonian): kinematic viscosity eta / rho,
+                    * m^2/s; 0 for the granular material. The fluid's stress is the pressure
+                    * alone (m.G = 0: no shear stress, the return mapping with k_mu = 0 keeps it
+                    * isotropic and cuts tension), and the viscous force is Morris et al.'s
+                    * (1997) pair term (mom_visc_add) */
 } flow_ctx;
 
 /* Dummy d's velocity and stress from the sums over the material in its
@@ -150,6 +155,7 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
         mom_velgrad_add(L, volj, uij, gradW);
         real Pi = c->alpha_av > 0 ? mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij) : R(0.0);
         mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
+        if (c->nu > 0) mom_visc_add(a, volj, c->nu, f, r2, k->eta2, uij);
     NBR_END
     team_sum(L, 9, nlanes);
     team_sum(a, 3, nlanes);
@@ -188,8 +194,9 @@ HD_INLINE int flow_advance(size_t i, particles_t *p, real a, const flow_ctx *c)
     }
     real s[6];
     for (int q = 0; q < 6; ++q) s[q] = p->sig_n[q][i] + a * p->dsig[q][i];
-    real mu = stress_mu(&c->m, p->gdot[i], stress_pressure(s), seg_davg(&c->sp, p->C[i]));
-    int r = stress_return_map(s, stress_kmu(mu));
+    real kmu = R(0.0); /* the Newtonian fluid: pressure only */
+    if (!(c->nu > 0)) kmu = stress_kmu(stress_mu(&c->m, p->gdot[i], stress_pressure(s), seg_davg(&c->sp, p->C[i])));
+    int r = stress_return_map(s, kmu);
     for (int q = 0; q < 6; ++q) p->sig[q][i] = s[q];
     return r;
 }

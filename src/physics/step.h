@@ -21,6 +21,8 @@ typedef struct step_ctx {
     kin_params kin;
     seg_params sp;
     wall_geom w;
+    int outlet;          /* Outlet:enabled: material below outlet_below leaves the run */
+    double outlet_below; /* Outlet:below, m */
 } step_ctx;
 
 /* The local maxima the time step is bounded by (integrate_dt). */
@@ -53,7 +55,8 @@ enum step_bad {
     STEP_BAD_C = 1,        /* C non-finite or far outside [0, 1] */
     STEP_BAD_STATE = 2,    /* non-finite position, velocity or stress */
     STEP_BAD_OUTSIDE = 3,  /* beyond a wall by more than h */
-    STEP_BAD_CFL = 4       /* moved more than h in one step */
+    STEP_BAD_CFL = 4,      /* moved more than h in one step */
+    STEP_OUTLET = 5        /* not a failure: below the outlet, to leave the run (main.c outlet_drain) */
 };
 
 /* Is material particle i outside its container (beyond a wall by > h) at
@@ -64,9 +67,10 @@ HD_INLINE int step_outside(size_t i, const particles_t *p, const step_ctx *c, do
     const wall_geom *w = &c->w;
     double h = c->h, x = p->x[0][i], y = p->x[1][i], z = p->x[2][i];
     if (w->type != WALL_DRUM) x -= w->u[0] * t, y -= w->u[1] * t, z -= w->u[2] * t;
-    int outz = w->depth > 0 && (z < -h || z > w->depth + h); /* 3D: box sides, drum end walls */
+    int outz = w->depth > 0 && !(w->periodic & 4) && (z < -h || z > w->depth + h); /* 3D: box sides, drum end walls */
     if (w->type == WALL_DRUM) return outz || hypot(x - w->centre[0], y - w->centre[1]) > w->radius + h;
-    return x < -h || x > w->width + h || y < -h || outz;
+    /* periodic axes: wrapped; with an outlet, material may fall through the base's opening to it */
+    return (!(w->periodic & 1) && (x < -h || x > w->width + h)) || (!c->outlet && y < -h) || outz;
 }
 
 /* Which blow-up condition material particle i meets after a step ending at
@@ -84,6 +88,7 @@ HD_INLINE int step_guard(size_t i, const particles_t *p, const step_ctx *c, doub
     }
     for (int q = 0; q < 6; ++q) sum += (double)p->sig[q][i];
     if (!isfinite(sum)) return STEP_BAD_STATE;
+    if (c->outlet && (double)p->x[1][i] < c->outlet_below) return STEP_OUTLET;
     if (step_outside(i, p, c, t)) return STEP_BAD_OUTSIDE;
     return mv > c->h * c->h ? STEP_BAD_CFL : STEP_OK;
 }

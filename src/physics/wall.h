@@ -26,6 +26,8 @@ typedef struct wall_geom {
     int slip_base;   /* box base and drum walls (cylinder, end walls): 1 free slip (4.2), 0 no slip (4.1) */
     int slip_sides;  /* box side walls: 1 free slip, 0 no slip */
     real u[3];       /* box: translation velocity of the whole container, m/s */
+    int periodic;    /* box: bit d set: no walls across axis d, which is periodic (x: period width,
+                      * z: period depth, from 0; Geometry:periodic) */
 } wall_geom;
 
 /* Position and velocity at time t of the wall point (dummy) whose reference
@@ -68,7 +70,8 @@ HD_INLINE int wall_normal_drum(const wall_geom *w, const real x[3], real n[3])
 
 /* Unit wall normal at dummy position x, pointing into the material, and
  * whether that wall is free-slip. Box: below the base (y < 0, corners
- * included) the base, else the nearer side wall. x is in the box's own frame
+ * included) the base, else the nearer side wall (of the axes that are not
+ * periodic). x is in the box's own frame
  * (a translating box: the caller subtracts u t, wall_frame). Drum:
  * wall_normal_drum. */
 HD_INLINE int wall_normal(const wall_geom *w, const real x[3], real n[3])
@@ -80,8 +83,8 @@ HD_INLINE int wall_normal(const wall_geom *w, const real x[3], real n[3])
         return w->slip_base;
     }
     /* side walls: the one the dummy lies furthest beyond (x or, in 3D, z) */
-    real ox = x[0] < 0 ? -x[0] : x[0] - w->width;
-    real oz = w->depth > 0 ? (x[2] < 0 ? -x[2] : x[2] - w->depth) : (real)-1e30;
+    real ox = w->periodic & 1 ? (real)-1e30 : x[0] < 0 ? -x[0] : x[0] - w->width;
+    real oz = w->depth > 0 && !(w->periodic & 4) ? (x[2] < 0 ? -x[2] : x[2] - w->depth) : (real)-1e30;
     if (oz > ox) n[2] = x[2] < R(0.5) * w->depth ? R(1.0) : R(-1.0);
     else n[0] = x[0] < R(0.5) * w->width ? R(1.0) : R(-1.0);
     return w->slip_sides;
