@@ -301,11 +301,12 @@ static int ckpt_finite(const real *a, size_t n)
 static const char *ckpt_check_rows(const particles_t *p, char *why, size_t len)
 {
     for (size_t i = 0; i < p->n; ++i) {
-        if (p->kind[i] > KIND_DUMMY || p->bclass[i] > BC_DUMMY || p->id[i] < 0 ||
+        if (p->kind[i] > KIND_DUMMY || p->bclass[i] > BC_DUMMY || p->wall[i] > WALL_ID_DRUM ||
+            (p->kind[i] == KIND_DUMMY) != (p->wall[i] != WALL_ID_NONE) || p->id[i] < 0 ||
             !(p->vol[i] > 0 && isfinite((double)p->vol[i])) ||
             (p->kind[i] == KIND_MATERIAL && !((double)p->C[i] >= -1 && (double)p->C[i] <= 2))) {
             snprintf(why, len, "--restart %s: particle row %zu of this rank is out of range (kind %u, class %u, "
-                     "ID %lld, volume %g, C %g)", ckpt_file, i, p->kind[i], p->bclass[i], (long long)p->id[i],
+                     "wall %u, ID %lld, volume %g, C %g)", ckpt_file, i, p->kind[i], p->bclass[i], p->wall[i], (long long)p->id[i],
                      (double)p->vol[i], (double)p->C[i]);
             return why;
         }

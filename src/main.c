@@ -164,19 +164,21 @@ static void blowup(const sim_t *s, diag *d, size_t i, const char *fmt, ...)
                s->t, (long long)p->id[i], (double)p->x[0][i], (double)p->x[1][i], why, s->dt);
 }
 
-/* Outlet: the material particles below the plane leave the run (collective:
- * every rank drains its own, here_host when this rank's host copy is up to
- * date). Their count and sum C_i V_i are kept for the diagnostics; the store
- * shrinks, the backend takes it over, and the state is prepared again at t
- * (as after a load balance). */
-static void outlet_drain(sim_t *s, int here_host)
+/* Particles leave the run (collective: every rank drops its own, here_host
+ * when this rank's host copy is up to date): gate 0, the material below the
+ * outlet, whose count and sum C_i V_i are kept for the diagnostics; gate 1,
+ * the gate's dummies (Walls:gate_open). The store shrinks, the backend
+ * takes it over, and the state is prepared again at t (as after a load
+ * balance). */
+static void drain(sim_t *s, int here_host, int gate)
 {
     if (!here_host) s->be->to_host(s);
     particles_t *p = &s->p;
     size_t *keep = malloc((p->n + 1) * sizeof *keep), m = 0;
     if (!keep) error_exit(1, "out of memory");
     for (size_t i = 0; i < p->n; ++i) {
-        if (p->kind[i] == KIND_MATERIAL && (double)p->x[1][i] < s->step_c.outlet_below) {
+        if (gate && p->wall[i] == WALL_ID_GATE) continue;
+        if (!gate && p->kind[i] == KIND_MATERIAL && (double)p->x[1][i] < s->step_c.outlet_below) {
             s->out_n++;
             s->out_cv += (double)p->C[i] * (double)p->vol[i];
         } else {
@@ -221,13 +223,13 @@ static int check_failed(sim_t *s, diag *d, size_t i)
 
 /* The backend finds the lowest-index material particle in a blow-up state
  * (step_guard, physics/step.h); the host copy names it. A particle below an
- * outlet is no failure: every rank drains its outlet (outlet_drain). */
+ * outlet is no failure: every rank drains its outlet (drain). */
 static void check_finite(sim_t *s, diag *d)
 {
     long first = s->be->check(s);
-    int drain = 0;
-    if (first >= 0) drain = check_failed(s, d, (size_t)first);
-    if (s->step_c.outlet && comm_max(drain) > 0) outlet_drain(s, first >= 0);
+    int out = 0;
+    if (first >= 0) out = check_failed(s, d, (size_t)first);
+    if (s->step_c.outlet && comm_max(out) > 0) drain(s, first >= 0, 0);
 }
 
 /* The arrays a ghost carries: what the run's stages read of ghosts
@@ -485,6 +487,11 @@ static void run(sim_t *s, outputs *o, ckpt_run *rs)
     ckpt_clock_start(&ck, o->wall0, sc->run.max_wall_time, o->dir);
     ckpt_signals_stepping(); /* from here SIGTERM, SIGINT ask for a checkpoint; before, they end the run */
     while (s->t < sc->run.t_end) {
+        if (s->gate && s->t >= sc->walls.gate_open * (1 - 1e-12)) { /* the gate is lifted: its dummies leave */
+            drain(s, 0, 1);
+            s->gate = 0;
+            message("t = %.6g s: the gate is open (Walls:gate_open)", s->t);
+        }
         double t_next = fmin(t_out, t_diag), dt = integrate_dt(s);
         if (s->t + dt >= t_next * (1 - 1e-12)) dt = t_next - s->t;
         double t_step = diag_wall(), comm0 = s->halo ? s->halo->wall_comm : 0;
@@ -591,6 +598,9 @@ int main(int argc, char **argv)
     else
         setup_particles(&s); /* exits 2 if it would not fit */
     parallel_start(&s, c.restart ? &rs : NULL);
+    long long ng = 0; /* a gate still standing (Geometry:runout): in the store until Walls:gate_open */
+    for (size_t i = 0; i < s.p.n; ++i) ng += s.p.wall[i] == WALL_ID_GATE;
+    s.gate = comm_sum_ll(ng) > 0;
     outputs o = {0, NULL, NULL, NULL, c.outdir ? c.outdir : default_outdir(c.scene), c.wall0,
                  c.restart ? chosen : NULL, c.scene, &c, NULL};
     make_dirs(o.dir);

@@ -61,7 +61,7 @@ static const struct part_array part_arrays[] = {
     {offsetof(particles_t, L[2]), sizeof(real)},     {offsetof(particles_t, L[3]), sizeof(real)},
     {offsetof(particles_t, L[4]), sizeof(real)},     {offsetof(particles_t, L[5]), sizeof(real)},
     {offsetof(particles_t, id), sizeof(int64_t)},     {offsetof(particles_t, kind), sizeof(uint8_t)},
-    {offsetof(particles_t, bclass), sizeof(uint8_t)},
+    {offsetof(particles_t, bclass), sizeof(uint8_t)}, {offsetof(particles_t, wall), sizeof(uint8_t)},
 };
 #define PART_NARRAYS (sizeof part_arrays / sizeof part_arrays[0])
 

@@ -56,6 +56,7 @@ typedef struct particles {
     int64_t *id;  /* global particle ID */
     uint8_t *kind;   /* enum part_kind */
     uint8_t *bclass; /* enum part_bclass */
+    uint8_t *wall;   /* a dummy's wall (enum wall_id, src/physics/wall.h), set by setup; 0 for material */
 } particles_t;
 
 void part_alloc(particles_t *p, int dim, size_t cap);

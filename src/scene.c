@@ -90,6 +90,7 @@ static const cyaml_schema_field_t geometry_fields[] = {
     FLT(scene_geometry, length, OPT),
     FLT(scene_geometry, fill, OPT),
     ENM(scene_geometry, periodic, periodic_axes),
+    FLT(scene_geometry, runout, OPT),
     FLT(scene_geometry, outlet_width, OPT),
     CYAML_FIELD_END,
 };
@@ -157,6 +158,7 @@ static const cyaml_schema_field_t flow_fields[] = {
 static const cyaml_schema_field_t walls_fields[] = {
     ENM(scene_walls, slip, slips),
     ENM(scene_walls, side_slip, slips),
+    FLT(scene_walls, gate_open, OPT),
     FLT(scene_walls, rpm, OPT),
     ENM(scene_walls, direction, rot_dirs),
     CYAML_FIELD_SEQUENCE_FIXED("velocity", OPT, struct scene_walls, velocity, &gravity_entry, 3),
@@ -240,6 +242,7 @@ static const struct scene_default scene_defaults[] = {
     {"Geometry", "length", "0.02"},
     {"Geometry", "fill", "0.42"},
     {"Geometry", "periodic", "none"},
+    {"Geometry", "runout", "0"},
     {"Geometry", "outlet_width", "0"},
     {"Kinematics", "velocity", "oscillatory_shear"},
     {"Kinematics", "gamma0", "0.5773502691896257"}, /* tan 30 deg */
@@ -277,6 +280,7 @@ static const struct scene_default scene_defaults[] = {
     {"Flow", "damping", "0"},
     {"Flow", "damping_until", "0"},
     {"Walls", "slip", "no_slip"},
+    {"Walls", "gate_open", "0"},
     {"Walls", "side_slip", "free_slip"},
     {"Walls", "rpm", "0"},
     {"Walls", "direction", "clockwise"},
@@ -345,6 +349,8 @@ static const struct scene_range scene_ranges[] = {
     RNG("Output", output, checkpoint_dt, 0, INFINITY, HI_OPEN, ALWAYS),
     POS("Physics", physics, rho),
     RNG("Geometry", geometry, outlet_width, 0, INFINITY, HI_OPEN, ALWAYS),
+    RNG("Geometry", geometry, runout, 0, INFINITY, HI_OPEN, ALWAYS),
+    RNG("Walls", walls, gate_open, 0, INFINITY, HI_OPEN, ALWAYS),
     POS("Material", material, eta),
     POS("Material", material, E),
     RNG("Material", material, nu, 0, 0.5, HI_OPEN, ALWAYS),
@@ -1239,6 +1245,18 @@ static int check_special(struct scene_ctx *c, const struct scene *s)
         return fail_at(c, "Walls:velocity", "a translating container needs Geometry:type column");
     if (s->geometry.dim == 2 && g[2] != 0)
         return fail_at(c, "Physics:gravity", "z entry must be 0 in 2D (the x-y plane)");
+    if (s->geometry.runout > 0) {
+        const struct scene_geometry *g = &s->geometry;
+        double need = (ceil(2.0 * g->h_factor - 1e-9) + 1) * g->dr;
+        if (g->type != GEOM_COLUMN || vel != KIN_COMPUTED)
+            return fail_at(c, "Geometry:runout", "needs Geometry:type column and Kinematics:velocity computed");
+        if (g->periodic & PERIODIC_X) return fail_at(c, "Geometry:runout", "needs walls along x (Geometry:periodic)");
+        if (g->runout < need)
+            return fail_at(c, "Geometry:runout", "must be 0 or at least the gate's thickness plus dr, %.4g m, got %.4g",
+                           need, g->runout);
+        if (g->outlet_width > 0)
+            return fail_at(c, "Geometry:outlet_width", "an opening in a base with a runout is not supported");
+    }
     if (s->geometry.outlet_width > 0 && s->geometry.type != GEOM_COLUMN)
         return fail_at(c, "Geometry:outlet_width", "needs Geometry:type column (an opening in its base)");
     if (s->geometry.outlet_width > 0 &&

@@ -51,6 +51,9 @@ struct scene_geometry {
     double radius;       /* drum: inner radius R, m; default 0.035 */
     double length;       /* 3D drum: length along the axis (z) between the end walls, m; default 0.02 */
     double fill;         /* drum: filling level R_f = (H + R)/2R (paper §6), in (0,1); default 0.42 */
+    double runout;       /* column: the floor continues this far past the material (x from width to
+                          * width + runout), closed by a side wall there; the material is held at
+                          * x = width by a gate until Walls:gate_open; default 0 (no runout, no gate) */
     double outlet_width; /* column: an opening of this width (m) in the base, centred on x = width/2
                           * (3D: a square opening, also centred on z = depth/2), through which material
                           * falls; default 0 (none) */
@@ -133,6 +136,8 @@ struct scene_walls {
     enum wall_slip side_slip; /* box side walls; default free_slip */
     double rpm;               /* drum rotation speed, rev/min, >= 0; default 0 */
     enum rot_dir direction;   /* clockwise | counterclockwise (seen with y up); default clockwise */
+    double gate_open;         /* s: the gate of a column with a runout (Geometry:runout) is removed at this
+                               * time, >= 0; default 0 (at the start) */
     double velocity[3];       /* box walls (shear box excepted): prescribed translation velocity,
                                * m/s, of the whole container; default [0, 0, 0] */
 };

@@ -16,6 +16,7 @@
 typedef struct box_layout {
     long nx, ny, nl; /* material columns, rows; dummy layers */
     long ns;         /* dummy layers of each side wall: nl, or 0 when x is periodic */
+    long nr;         /* lattice columns of the runout past the material (Geometry:runout), 0 if none */
     size_t n_mat, n_dum;
 } box_layout;
 
@@ -27,8 +28,9 @@ static box_layout setup_layout(const struct scene *sc)
     b.ny = lround(g->height / g->dr);
     b.nl = (long)ceil(2.0 * g->h_factor - 1e-9);
     b.ns = g->periodic & PERIODIC_X ? 0 : b.nl;
+    b.nr = lround(g->runout / g->dr);
     b.n_mat = (size_t)(b.nx * b.ny);
-    b.n_dum = (size_t)(b.nl * (b.nx + 2 * b.ns) + 2 * b.ns * (b.ny + b.nl));
+    b.n_dum = (size_t)(b.nl * (b.nx + b.nr + 2 * b.ns) + 2 * b.ns * (b.ny + b.nl) + (b.nr ? b.nl * (b.ny + b.nl) : 0));
     return b;
 }
 
@@ -67,6 +69,7 @@ static void setup_put(particles_t *p, size_t k, double x, double y, double z, in
     p->X0[1][i] = p->x[1][i] = (real)y;
     p->X0[2][i] = p->x[2][i] = (real)z;
     p->kind[i] = (uint8_t)kind;
+    p->wall[i] = 0; /* setup_walls */
     p->vol[i] = (real)vol;
     p->id[i] = (int64_t)k;
     p->psi[i] = 1;
@@ -95,14 +98,19 @@ static void setup_box(sim_t *s)
         }
     double W = b.nx * dr, ow = sc->geometry.outlet_width;
     for (long l = 0; l < b.nl; ++l) /* base, less its opening */
-        for (long i = -b.ns; i < b.nx + b.ns; ++i) {
+        for (long i = -b.ns; i < b.nx + b.nr + b.ns; ++i) {
             if (fabs((i + 0.5) * dr - 0.5 * W) < 0.5 * ow) continue;
             setup_put(p, k++, (i + 0.5) * dr, -(l + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
         }
     for (long j = 0; j < b.ny + b.nl; ++j) /* side walls */
         for (long l = 0; l < b.ns; ++l) {
             setup_put(p, k++, -(l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
-            setup_put(p, k++, (b.nx + l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
+            setup_put(p, k++, (b.nx + b.nr + l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
+        }
+    for (long j = 0; b.nr && j < b.ny + b.nl; ++j) /* the gate, nl layers past the material */
+        for (long l = 0; l < b.nl; ++l, ++k) {
+            setup_put(p, k, (b.nx + l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
+            if (k >= setup_win.lo && k < setup_win.hi) p->wall[k - setup_win.lo] = WALL_ID_GATE;
         }
     p->n = setup_count(k);
     s->n_material = b.n_mat;
@@ -251,7 +259,8 @@ static void setup_box3d(sim_t *s)
     long nx = lround(g->width / dr), ny = lround(g->height / dr), nz = lround(g->depth / dr);
     long nl = (long)ceil(2.0 * g->h_factor - 1e-9);
     long sx = g->periodic & PERIODIC_X ? 0 : nl, sz = g->periodic & PERIODIC_Z ? 0 : nl; /* side wall layers */
-    size_t cap = (size_t)((nx + 2 * sx) * (ny + 2 * nl) * (nz + 2 * sz));
+    long nr = lround(g->runout / dr);                                                   /* runout columns */
+    size_t cap = (size_t)((nx + nr + 2 * sx) * (ny + 2 * nl) * (nz + 2 * sz));
     setup_alloc(sc, &s->p, 3, cap);
     particles_t *p = &s->p;
     size_t k = 0;
@@ -259,21 +268,37 @@ static void setup_box3d(sim_t *s)
     for (int pass = 0; pass < 2; ++pass) /* material first, then dummies */
         for (long j = -nl; j < ny + nl; ++j)
             for (long q = -sz; q < nz + sz; ++q)
-                for (long i = -sx; i < nx + sx; ++i) {
-                    int inside = i >= 0 && i < nx && q >= 0 && q < nz;
+                for (long i = -sx; i < nx + nr + sx; ++i) {
+                    int inside = i >= 0 && i < nx + nr && q >= 0 && q < nz;
                     if (inside && j >= ny) continue; /* above the free surface */
-                    int mat = inside && j >= 0;
+                    int mat = inside && j >= 0 && i < nx;
+                    int gate = inside && j >= 0 && i >= nx && i < nx + nl; /* nr > 0 only */
+                    if (inside && j >= 0 && !mat && !gate) continue;        /* the runout's empty floor space */
                     if (mat != (pass == 0)) continue;
                     if (j < 0 && fabs((i + 0.5) * dr - 0.5 * nx * dr) < 0.5 * g->outlet_width &&
                         fabs((q + 0.5) * dr - 0.5 * nz * dr) < 0.5 * g->outlet_width)
                         continue; /* the base's opening */
                     double y = (j + 0.5) * dr;
-                    setup_put(p, k++, (i + 0.5) * dr, y, (q + 0.5) * dr, mat ? KIND_MATERIAL : KIND_DUMMY, vol,
+                    setup_put(p, k, (i + 0.5) * dr, y, (q + 0.5) * dr, mat ? KIND_MATERIAL : KIND_DUMMY, vol,
                               y <= split ? sc->initial.C_below : sc->initial.C_above);
+                    if (gate && k >= setup_win.lo && k < setup_win.hi) p->wall[k - setup_win.lo] = WALL_ID_GATE;
+                    ++k;
                 }
     p->n = setup_count(k);
     s->n_material = (size_t)(nx * ny * nz);
     s->surface_y = H;
+}
+
+/* Every dummy's wall (particles_t.wall) from its reference position, by
+ * the rule of wall_normal; the gate's were set where they were placed. */
+static void setup_walls(sim_t *s)
+{
+    particles_t *p = &s->p;
+    for (size_t i = 0; i < p->n; ++i) {
+        if (p->kind[i] != KIND_DUMMY || p->wall[i]) continue;
+        real X0[3] = {p->X0[0][i], p->X0[1][i], p->X0[2][i]};
+        p->wall[i] = (uint8_t)wall_id_at(&s->flow.w, X0);
+    }
 }
 
 void setup_particles(sim_t *s)
@@ -281,6 +306,7 @@ void setup_particles(sim_t *s)
     if (s->sc->geometry.type == GEOM_DRUM) setup_drum(s);
     else if (s->sc->geometry.dim == 3) setup_box3d(s);
     else setup_box(s);
+    setup_walls(s);
     if (s->flow_on) setup_stress(s);
 }
 
@@ -355,7 +381,8 @@ void setup_contexts(sim_t *s)
     f->sp = *sp;
     wall_geom *w = &f->w;
     w->type = sc->geometry.type == GEOM_DRUM ? WALL_DRUM : WALL_BOX;
-    w->width = (real)(lround(sc->geometry.width / sc->geometry.dr) * sc->geometry.dr);
+    w->width = (real)((lround(sc->geometry.width / sc->geometry.dr) + lround(sc->geometry.runout / sc->geometry.dr)) *
+                      sc->geometry.dr); /* the container's, the runout included */
     double zlen = sc->geometry.type == GEOM_DRUM ? sc->geometry.length : sc->geometry.depth; /* as setup_*: whole dr */
     w->depth = sc->geometry.dim == 3 ? (real)(lround(zlen / sc->geometry.dr) * sc->geometry.dr) : 0;
     w->centre[0] = w->centre[1] = w->centre[2] = 0;

@@ -115,6 +115,7 @@ typedef struct sim {
     size_t n_material; /* material particles (set by setup; all ranks together) */
     long long out_n;   /* Outlet: material particles that left the run through it, on this rank */
     double out_cv;     /* Outlet: their sum C_i V_i (diagnostics: inside plus outflow is conserved) */
+    int gate;          /* the gate's dummies (Geometry:runout) are still in the store */
 } sim_t;
 
 /* Build the particles of the scene at t = 0 (src/setup.c). Exits with status

@@ -24,8 +24,8 @@ const stage stage_table[] = {
     {ST_RENORM, H(HOOK_PREPARE), "seg_renorm", SF_SEG | SF_RENORM, 0, RANGE_ALL, NB_GEOM, FLD_L, 0},
     {ST_SHEPARD, H(HOOK_FILTER), "flow_shepard", SF_FLOW, 0, RANGE_OWNED, FLD_X | FLD_KIND | FLD_SIG, FLD_DSIG, 0},
     {ST_SHEPARD_STORE, H(HOOK_FILTER), "flow_shepard_store", SF_FLOW, 0, RANGE_OWNED, 0, FLD_SIG, 0},
-    /* a dummy's own X0 gives a box wall's normal */
-    {ST_WALLS, H(HOOK_PREPARE) | H(HOOK_FILTER), "flow_wall", SF_FLOW, 0, RANGE_ALL, NB_FLOW | FLD_X0,
+    /* a dummy's own wall id gives a box wall's normal */
+    {ST_WALLS, H(HOOK_PREPARE) | H(HOOK_FILTER), "flow_wall", SF_FLOW, 0, RANGE_ALL, NB_FLOW | FLD_WALL,
      FLD_V | FLD_SIG, 0},
     /* with SF_RENORM the owned L come with it when prepare classified: ST_RENORM's, fused */
     {ST_FLOW, H(HOOK_RATES), "flow_rates_team", SF_FLOW, 0, RANGE_OWNED, NB_FLOW, FLD_ACC | FLD_DSIG | FLD_GDOT, 0},
@@ -223,6 +223,7 @@ int stage_arrays(const particles_t *p, uint32_t f, int trim2d, void **ptrs)
     if (f & FLD_ID) ptrs[n++] = p->id;
     if (f & FLD_KIND) ptrs[n++] = p->kind;
     if (f & FLD_BCLASS) ptrs[n++] = p->bclass;
+    if (f & FLD_WALL) ptrs[n++] = p->wall;
 #undef ADD3
     return n;
 }
@@ -231,7 +232,7 @@ const char *stage_fields_str(uint32_t f, char *buf, size_t len)
 {
     static const char *name[FLD_NFIELDS] = {"x",   "X0",   "v",    "vol", "C",   "C_n", "dCdt", "gdot",
                                             "gsum", "nrm", "psi",  "seg", "sig", "sig_n", "dsig", "x_n",
-                                            "v_n", "acc", "L",    "id",  "kind", "bclass"};
+                                            "v_n", "acc", "L",    "id",  "kind", "bclass", "wall"};
     size_t o = 0;
     buf[0] = 0;
     for (int k = 0; k < FLD_NFIELDS; ++k)

@@ -22,7 +22,7 @@ enum stage_field {
     FLD_SEGC = 1u << 11, /* segV, segQ, segD */
     FLD_SIG = 1u << 12, FLD_SIGN = 1u << 13, FLD_DSIG = 1u << 14, FLD_XN = 1u << 15, FLD_VN = 1u << 16,
     FLD_ACC = 1u << 17, FLD_L = 1u << 18, FLD_ID = 1u << 19, FLD_KIND = 1u << 20, FLD_BCLASS = 1u << 21,
-    FLD_NFIELDS = 22
+    FLD_WALL = 1u << 22, FLD_NFIELDS = 23
 };
 
 /* What the run solves, as bits: a stage runs when all of its `when` bits

@@ -48,6 +48,7 @@ static void fill_store(particles_t *p, size_t n)
     }
     for (size_t i = 0; i < n; ++i) { /* the arrays ckpt_read checks for range hold valid values */
         p->kind[i] = (uint8_t)(i % 3 == 0);
+        p->wall[i] = (uint8_t)(p->kind[i] ? 1 + i % 7 : 0); /* a dummy has a wall, material none */
         p->bclass[i] = (uint8_t)(i % 6);
         p->id[i] = (int64_t)(1000 * g_rank + (int)i);
         p->vol[i] = (real)(1e-6 * (1 + (double)i));
@@ -61,7 +62,7 @@ static void fill_store(particles_t *p, size_t n)
 static int is_checked(const particles_t *p, size_t k)
 {
     const void *a = part_array_get(p, k);
-    if (a == p->kind || a == p->bclass || a == p->id || a == p->vol || a == p->C) return 1;
+    if (a == p->kind || a == p->bclass || a == p->wall || a == p->id || a == p->vol || a == p->C) return 1;
     for (int d = 0; d < 3; ++d)
         if (a == p->x[d] || a == p->X0[d] || a == p->v[d]) return 1;
     for (int q = 0; q < 6; ++q)

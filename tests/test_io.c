@@ -46,6 +46,7 @@ static double ref_value(const char *name, int c, int64_t id)
     if (!strcmp(name, "Psi")) return 0.1 * (id % 11);
     if (!strcmp(name, "Kind")) return (double)(id % 2);
     if (!strcmp(name, "BoundaryClass")) return (double)(id % 6);
+    if (!strcmp(name, "Wall")) return id % 2 ? (double)(1 + id % 7) : 0.0; /* a dummy's wall id, material 0 */
     if (!strcmp(name, "ParticleIDs")) return d;
     fail_msg("no reference for field %s", name);
     return 0;
@@ -80,6 +81,7 @@ static void fill_particle(particles_t *p, size_t k, int64_t id)
     p->psi[k] = (real)ref_value("Psi", 0, id);
     p->kind[k] = (uint8_t)ref_value("Kind", 0, id);
     p->bclass[k] = (uint8_t)ref_value("BoundaryClass", 0, id);
+    p->wall[k] = (uint8_t)ref_value("Wall", 0, id);
     p->id[k] = id;
     p->C_n[k] = (real)(-2000.0 - id);
     p->dCdt[k] = (real)(-3000.0 - id);
@@ -369,9 +371,9 @@ static void test_part_alloc(void **state)
     part_free(&p);
     /* 52 real arrays (x, X0, v, nrm, xr, v_n, acc: 3 each; vol, gdot, gsum,
      * psi, segV, segQ, segD; L, sig, sig_n, dsig: 6 each), 3 creal (C, C_n,
-     * dCdt) and 3 preal (x_n): double in both precisions, id (8 B), kind and
-     * bclass (1 B each). */
-    assert_int_equal(part_bytes_per_particle(), 52 * sizeof(real) + 3 * sizeof(creal) + 3 * sizeof(preal) + 8 + 2);
+     * dCdt) and 3 preal (x_n): double in both precisions, id (8 B), kind,
+     * bclass and wall (1 B each). */
+    assert_int_equal(part_bytes_per_particle(), 52 * sizeof(real) + 3 * sizeof(creal) + 3 * sizeof(preal) + 8 + 3);
 }
 
 /* Value of array a (0..56) for a particle originally at index k. */

@@ -45,6 +45,7 @@ static double ref_value(const char *name, int c, int64_t id)
     double d = (double)(id % 100003) + 1e-3 * (double)(id / 100003);
     if (!strcmp(name, "Kind")) return (double)(id % 2);
     if (!strcmp(name, "BoundaryClass")) return (double)(id % 6);
+    if (!strcmp(name, "Wall")) return id % 2 ? (double)(1 + id % 7) : 0.0; /* a dummy's wall id, material 0 */
     if (!strcmp(name, "ParticleIDs")) return (double)id;
     return (double)(real)(sin(d + c) * (1.0 + strlen(name)));
 }

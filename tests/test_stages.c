@@ -7,7 +7,7 @@
  *    walls), with the stages a run does not solve left out;
  *  - the ghosts' fields for the drum (flow, conservative renormalised C),
  *    the drum in windows (the window's mean shear rate gsum instead of
- *    gdot), the shear box (prescribed flow, paper scheme: no v, sig, X0, L)
+ *    gdot), the shear box (prescribed flow, paper scheme: no v, sig, wall, L)
  *    and the column (flow only: no C, gdot, L);
  *  - the refresh after each stage: classes, normals and psi after the
  *    classification (from the owners), gdot after the flow rates only
@@ -67,10 +67,10 @@ static void test_ghost_fields(void **st)
 {
     (void)st;
     const uint32_t base = FLD_X | FLD_VOL | FLD_ID | FLD_KIND | FLD_BCLASS | FLD_NRM | FLD_PSI;
-    assert_int_equal(stage_ghost_fields(DRUM), base | FLD_X0 | FLD_V | FLD_SIG | FLD_C | FLD_GDOT | FLD_L);
-    assert_int_equal(stage_ghost_fields(DRUM | SF_WIN), base | FLD_X0 | FLD_V | FLD_SIG | FLD_C | FLD_GSUM | FLD_L);
+    assert_int_equal(stage_ghost_fields(DRUM), base | FLD_WALL | FLD_V | FLD_SIG | FLD_C | FLD_GDOT | FLD_L);
+    assert_int_equal(stage_ghost_fields(DRUM | SF_WIN), base | FLD_WALL | FLD_V | FLD_SIG | FLD_C | FLD_GSUM | FLD_L);
     assert_int_equal(stage_ghost_fields(SHEARBOX), base | FLD_C | FLD_GDOT);
-    assert_int_equal(stage_ghost_fields(COLUMN), base | FLD_X0 | FLD_V | FLD_SIG);
+    assert_int_equal(stage_ghost_fields(COLUMN), base | FLD_WALL | FLD_V | FLD_SIG);
 }
 
 static void test_refreshes(void **st)

@@ -81,9 +81,48 @@ static void test_shepard_constant(void **st)
     for (int c = 0; c < 6; ++c) assert_true(fabs(acc[c] / ws - s[c]) < RT(1e-12));
 }
 
+/* Wall ids (enum wall_id): a dummy's wall, set once from its reference
+ * position (wall_id_at), gives the normal and slip the position rule gives
+ * (wall_normal) for every dummy around a 3D box, corners included, with and
+ * without periodic x; the gate faces -x with the side walls' slip; a drum's
+ * dummies keep the position rule. */
+static void test_wall_ids(void **st)
+{
+    (void)st;
+    wall_geom w = {0};
+    w.type = WALL_BOX, w.width = (real)0.05, w.depth = (real)0.04, w.slip_base = 0, w.slip_sides = 1;
+    for (int per = 0; per <= 1; ++per) {
+        w.periodic = per;
+        int seen[WALL_ID_DRUM + 1] = {0};
+        for (int i = -3; i < 53; ++i)
+            for (int j = -3; j < 8; ++j)
+                for (int q = -3; q < 43; ++q) {
+                    real x[3] = {(real)((i + 0.5) * 1e-3), (real)((j + 0.5) * 1e-3), (real)((q + 0.5) * 1e-3)};
+                    int inside = i >= 0 && i < 50 && j >= 0 && q >= 0 && q < 40;
+                    if (inside || (per && j >= 0 && q >= 0 && q < 40)) continue; /* material, or no wall */
+                    real n0[3], n1[3];
+                    int id = wall_id_at(&w, x), s0 = wall_normal(&w, x, n0), s1 = wall_normal_of(&w, id, x, n1);
+                    seen[id]++;
+                    assert_int_equal(s0, s1);
+                    for (int a = 0; a < 3; ++a) assert_true(n0[a] == n1[a]);
+                }
+        assert_true(seen[WALL_ID_BASE] > 0 && seen[WALL_ID_ZLO] > 0 && seen[WALL_ID_ZHI] > 0);
+        assert_true(per ? seen[WALL_ID_XLO] == 0 && seen[WALL_ID_XHI] == 0 : seen[WALL_ID_XLO] > 0 && seen[WALL_ID_XHI] > 0);
+    }
+    real n[3], x[3] = {(real)0.0305, (real)0.01, (real)0.02};
+    assert_int_equal(wall_normal_of(&w, WALL_ID_GATE, x, n), 1);
+    assert_true(n[0] == -1 && n[1] == 0 && n[2] == 0);
+    w.type = WALL_DRUM, w.radius = (real)0.03, w.depth = 0;
+    real xd[3] = {(real)0.0, (real)-0.031, 0}, nd0[3], nd1[3];
+    assert_int_equal(wall_id_at(&w, xd), WALL_ID_DRUM);
+    wall_normal(&w, xd, nd0);
+    wall_normal_of(&w, WALL_ID_DRUM, xd, nd1);
+    for (int a = 0; a < 3; ++a) assert_true(nd0[a] == nd1[a]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_hydrostatic_dummy), cmocka_unit_test(test_velocity),
-                                       cmocka_unit_test(test_shepard_constant)};
+                                       cmocka_unit_test(test_shepard_constant), cmocka_unit_test(test_wall_ids)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

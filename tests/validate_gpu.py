@@ -58,7 +58,10 @@ CASES = [
     # sliding down a 40-degree incline across the period boundary, 2D and 3D
     ("chute", "column_2d.yml", 400, ["Geometry:dr=0.0025", "Geometry:height=0.03", "Geometry:periodic=x",
                                      "Material:E=1e5", "Flow:damping_until=0", "Physics:gravity=[6.306,-7.515,0]"]),
-    # an outlet under a silo's opening: the device store shrinks (outlet_drain)
+    # a gate lifted at t = 0.01 s (Geometry:runout, Walls:gate_open): a column collapse
+    ("collapse", "column_2d.yml", 1500, ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:runout=0.1",
+                                         "Walls:gate_open=0.01", "Material:E=1e5", "Flow:damping_until=0.01"]),
+    # an outlet under a silo's opening: the device store shrinks (main.c drain)
     ("silo", "column_2d.yml", 5000, ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:outlet_width=0.0125",
                                      "Outlet:enabled=on", "Outlet:below=-0.02", "Material:E=1e5",
                                      "Flow:damping_until=0", "Segregation:enabled=on", "Segregation:V=0.01",

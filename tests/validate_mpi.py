@@ -97,6 +97,10 @@ CASES = [
     # along it (y), and a 3D layer periodic along x and z
     ("chute_x", "column_2d.yml", 2000, CHUTE + ["Parallel:axis=x"], "wrap"),
     ("chute_y", "column_2d.yml", 600, CHUTE + ["Parallel:axis=y", "Geometry:height=0.07"], "wrap"),
+    # a gate (Geometry:runout, Walls:gate_open): a column collapse, the gate's dummies leave at t = 0.01 s
+    ("collapse", "column_2d.yml", 1500, ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:runout=0.1",
+                                         "Walls:gate_open=0.01", "Material:E=1e5", "Flow:damping_until=0.01"],
+     "migrate"),
     # an outlet under a silo's opening (Outlet, Geometry:outlet_width): the store shrinks
     ("silo", "column_2d.yml", 4000, SILO, "outflow"),
     # the Newtonian fluid (Material:model newtonian): a film down the incline, tests/validate_film.py

@@ -47,15 +47,13 @@ HD_INLINE void flow_wall_set(size_t d, particles_t *p, const flow_ctx *c, const 
     const wall_sums ws = *wsp;
     real xd[3] = {p->x[0][d], p->x[1][d], p->x[2][d]};
     /* the wall velocity at d: drum rotation omega e_z x (x_d - centre), or the
-     * box's translation; the normal from d's reference position (the box
-     * translates rigidly, so X0 is d in the box frame) */
+     * box's translation; the normal from d's wall (p->wall, set by setup) */
     real uw[3] = {c->w.u[0], c->w.u[1], c->w.u[2]}, n[3], ud[3], sd[6];
     if (c->w.type == WALL_DRUM) {
         uw[0] = (real)(-c->w.omega * (double)(xd[1] - c->w.centre[1]));
         uw[1] = (real)(c->w.omega * (double)(xd[0] - c->w.centre[0]));
     }
-    real X0[3] = {p->X0[0][d], p->X0[1][d], p->X0[2][d]};
-    int free_slip = wall_normal(&c->w, c->w.type == WALL_DRUM ? xd : X0, n);
+    int free_slip = wall_normal_of(&c->w, p->wall[d], xd, n);
     if (ws.w > 0) {
         wall_velocity(&ws, uw, n, free_slip, ud);
         wall_stress(&ws, sd);

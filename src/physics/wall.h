@@ -90,6 +90,50 @@ HD_INLINE int wall_normal(const wall_geom *w, const real x[3], real n[3])
     return w->slip_sides;
 }
 
+/* Which wall a dummy belongs to: set once by setup (wall_id_at, from its
+ * reference position, or directly for a gate) and carried with the dummy
+ * (particles_t.wall), so that its normal and slip come from the wall, not
+ * from where it is. */
+enum wall_id {
+    WALL_ID_NONE = 0, /* material */
+    WALL_ID_BASE = 1, /* box base (y < 0, corners included) */
+    WALL_ID_XLO = 2,  /* box side wall at x = 0 */
+    WALL_ID_XHI = 3,  /* box side wall at x = width */
+    WALL_ID_ZLO = 4,  /* 3D box side wall at z = 0 */
+    WALL_ID_ZHI = 5,  /* 3D box side wall at z = depth */
+    WALL_ID_GATE = 6, /* box: the gate holding a column at x = gate_x until Walls:gate_open */
+    WALL_ID_DRUM = 7  /* drum: cylinder and end walls (their normal follows the turning position) */
+};
+
+/* The wall of a dummy at reference position X0 by the rule of wall_normal. */
+HD_INLINE int wall_id_at(const wall_geom *w, const real X0[3])
+{
+    if (w->type == WALL_DRUM) return WALL_ID_DRUM;
+    real n[3];
+    wall_normal(w, X0, n);
+    if (n[1] > 0) return WALL_ID_BASE;
+    if (n[2] != 0) return n[2] > 0 ? WALL_ID_ZLO : WALL_ID_ZHI;
+    return n[0] > 0 ? WALL_ID_XLO : WALL_ID_XHI;
+}
+
+/* Unit normal (into the material) and slip of the wall `id` of a dummy at x:
+ * a box's walls are planes, each its own normal; the drum's follows x
+ * (wall_normal_drum). The gate faces -x (the column lies at x < gate_x) and
+ * slips as the side walls. */
+HD_INLINE int wall_normal_of(const wall_geom *w, int id, const real x[3], real n[3])
+{
+    n[0] = n[1] = n[2] = 0;
+    switch (id) {
+    case WALL_ID_BASE: n[1] = 1; return w->slip_base;
+    case WALL_ID_XLO: n[0] = 1; return w->slip_sides;
+    case WALL_ID_XHI: n[0] = -1; return w->slip_sides;
+    case WALL_ID_ZLO: n[2] = 1; return w->slip_sides;
+    case WALL_ID_ZHI: n[2] = -1; return w->slip_sides;
+    case WALL_ID_GATE: n[0] = -1; return w->slip_sides;
+    default: return wall_normal(w, x, n);
+    }
+}
+
 /* Acceleration of the wall at x (drum: centripetal -omega^2 (x - centre));
  * the wall stress (4.3) extrapolates with g - a_w (Adami et al. 2012). */
 HD_INLINE void wall_accel(const wall_geom *w, const real x[3], real a[3])
