@@ -43,6 +43,7 @@ for name in $UNIT_TESTS; do
     if [ -x "$t" ]; then run_one "$name" "$t"; else run_one "$name" missing "$t"; fi
 done
 run_one badinput bash tests/test_badinput.sh "$BUILD/sphseg"
+run_one inputs bash tests/test_inputs.sh "$BUILD/sphseg"
 run_one mpi_launch bash tests/test_launch.sh "$BUILD/sphseg"
 run_one mpi_halo_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUILD/tests/test_halo"
 run_one checkpoint_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUILD/tests/test_checkpoint"
