@@ -40,10 +40,9 @@ import snap  # noqa: E402
 
 SCENE = os.path.join(HERE, "..", "inputs", "column_2d.yml")
 H, DR, NU, G = 0.01, 0.0005, 1e-3, 4.905
-FILM = ["Material:model=newtonian", "Material:eta=1.5", "Material:E=11250", "Geometry:periodic=x",
-        "Geometry:dr=%g" % DR, "Geometry:height=%g" % H, "Geometry:width=0.01", "Physics:gravity=[4.905,-8.496,0]",
-        "Flow:alpha_av=0", "Flow:damping_until=0", "Initial:stress=geostatic", "Run:t_end=0.3", "Output:dt=0.05",
-        "Run:progress_s=1e9"]
+sys.path.insert(0, HERE)
+from containers import FILM as FILM_CASE  # noqa: E402  (tests/containers.py)
+FILM = FILM_CASE + ["Run:t_end=0.3", "Output:dt=0.05", "Run:progress_s=1e9"]
 TIMES, TOL, TOL_ROW = (0.05, 0.1, 0.3), 0.025, 1e-9
 
 

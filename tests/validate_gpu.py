@@ -37,6 +37,9 @@ TOL = 1e-8
 TOL_C1 = 1e-4
 
 # name, scene, steps, overrides
+sys.path.insert(0, HERE)
+from containers import CHUTE, CHUTE_3D, COLLAPSE, FILM, SILO  # noqa: E402  (tests/containers.py)
+
 CASES = [
     ("shearbox", "shearbox_2d.yml", 40, []),
     ("shearbox_paper", "shearbox_2d.yml", 40, ["Segregation:scheme=paper"]),
@@ -56,25 +59,14 @@ CASES = [
                                     "Segregation:every=8"]),
     # periodic axes (mpi/halo.h: images as ghosts of the rank itself): a layer
     # sliding down a 40-degree incline across the period boundary, 2D and 3D
-    ("chute", "column_2d.yml", 400, ["Geometry:dr=0.0025", "Geometry:height=0.03", "Geometry:periodic=x",
-                                     "Material:E=1e5", "Flow:damping_until=0", "Physics:gravity=[6.306,-7.515,0]"]),
+    ("chute", "column_2d.yml", 400, CHUTE),
     # a gate lifted at t = 0.01 s (Geometry:runout, Walls:gate_open): a column collapse
-    ("collapse", "column_2d.yml", 1500, ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:runout=0.1",
-                                         "Walls:gate_open=0.01", "Material:E=1e5", "Flow:damping_until=0.01"]),
+    ("collapse", "column_2d.yml", 1500, COLLAPSE),
     # an outlet under a silo's opening: the device store shrinks (main.c drain)
-    ("silo", "column_2d.yml", 5000, ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:outlet_width=0.0125",
-                                     "Outlet:enabled=on", "Outlet:below=-0.02", "Material:E=1e5",
-                                     "Flow:damping_until=0", "Segregation:enabled=on", "Segregation:V=0.01",
-                                     "Segregation:D=1e-5", "Initial:C_below=0.3"]),
+    ("silo", "column_2d.yml", 5000, SILO),
     # the Newtonian fluid (Material:model newtonian): a film down the incline, tests/validate_film.py
-    ("film", "column_2d.yml", 400, ["Material:model=newtonian", "Material:eta=1.5", "Material:E=11250",
-                                    "Geometry:periodic=x", "Geometry:dr=0.0005", "Geometry:height=0.01",
-                                    "Geometry:width=0.01", "Physics:gravity=[4.905,-8.496,0]", "Flow:alpha_av=0",
-                                    "Flow:damping_until=0", "Initial:stress=geostatic"]),
-    ("chute_3d", "column_2d.yml", 60, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.09",
-                                        "Geometry:depth=0.09", "Geometry:height=0.03", "Geometry:periodic=xz",
-                                        "Material:E=1e5", "Flow:damping_until=0",
-                                        "Physics:gravity=[6.306,-7.515,0]"]),
+    ("film", "column_2d.yml", 400, FILM),
+    ("chute_3d", "column_2d.yml", 60, CHUTE_3D),
 ]
 # (Segregation:every = 1: C with the flow in every step; K > 1: in windows of
 # K steps, closed 5-9 times in these runs, the last one left open at

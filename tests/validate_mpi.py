@@ -68,14 +68,7 @@ TOL = 1e-10     # CPU, any scheme, across rank counts
 TOL_GPU = 1e-8  # GPU runs, and the GPU against the CPU
 TOL_C1 = 1e-4   # GPU runs of the paper scheme
 DRUM = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:shepard_every=20"]
-FILM = ["Material:model=newtonian", "Material:eta=1.5", "Material:E=11250", "Geometry:periodic=x",
-        "Geometry:dr=0.0005", "Geometry:height=0.01", "Geometry:width=0.01", "Physics:gravity=[4.905,-8.496,0]",
-        "Flow:alpha_av=0", "Flow:damping_until=0", "Initial:stress=geostatic"]
-SILO = ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:outlet_width=0.0125", "Outlet:enabled=on",
-        "Outlet:below=-0.02", "Material:E=1e5", "Flow:damping_until=0", "Segregation:enabled=on",
-        "Segregation:V=0.01", "Segregation:D=1e-5", "Initial:C_below=0.3"]
-CHUTE = ["Geometry:dr=0.0025", "Geometry:height=0.03", "Geometry:periodic=x", "Material:E=1e5",
-         "Flow:damping_until=0", "Physics:gravity=[6.306,-7.515,0]"]
+from containers import CHUTE, CHUTE_3D, COLLAPSE, FILM, SILO  # noqa: E402  (tests/containers.py)
 
 # name, scene, steps, overrides, what must happen on several ranks
 CASES = [
@@ -98,17 +91,12 @@ CASES = [
     ("chute_x", "column_2d.yml", 2000, CHUTE + ["Parallel:axis=x"], "wrap"),
     ("chute_y", "column_2d.yml", 600, CHUTE + ["Parallel:axis=y", "Geometry:height=0.07"], "wrap"),
     # a gate (Geometry:runout, Walls:gate_open): a column collapse, the gate's dummies leave at t = 0.01 s
-    ("collapse", "column_2d.yml", 1500, ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:runout=0.1",
-                                         "Walls:gate_open=0.01", "Material:E=1e5", "Flow:damping_until=0.01"],
-     "migrate"),
+    ("collapse", "column_2d.yml", 1500, COLLAPSE, "migrate"),
     # an outlet under a silo's opening (Outlet, Geometry:outlet_width): the store shrinks
     ("silo", "column_2d.yml", 4000, SILO, "outflow"),
     # the Newtonian fluid (Material:model newtonian): a film down the incline, tests/validate_film.py
     ("film", "column_2d.yml", 600, FILM + ["Parallel:axis=x"], None),
-    ("chute_3d", "column_2d.yml", 150, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.09",
-                                        "Geometry:depth=0.09", "Geometry:height=0.03", "Geometry:periodic=xz",
-                                        "Material:E=1e5", "Flow:damping_until=0",
-                                        "Physics:gravity=[6.306,-7.515,0]"], None),
+    ("chute_3d", "column_2d.yml", 150, CHUTE_3D, None),
     ("column_3d_metis", "column_2d.yml", 30, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.05",
                                               "Geometry:depth=0.05", "Geometry:height=0.1",
                                               "Parallel:method=metis"], None),

@@ -31,10 +31,9 @@ sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import snap  # noqa: E402
 
 SCENE = os.path.join(HERE, "..", "inputs", "column_2d.yml")
-SILO = ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:outlet_width=0.0125", "Outlet:enabled=on",
-        "Outlet:below=-0.02", "Material:E=1e5", "Flow:damping_until=0", "Segregation:enabled=on",
-        "Segregation:V=0.01", "Segregation:D=1e-5", "Initial:C_below=0.3", "Run:t_end=0.15", "Output:dt=0.05", "Output:diag_dt=0.005",
-        "Run:progress_s=1e9"]
+sys.path.insert(0, HERE)
+from containers import SILO as SILO_CASE  # noqa: E402  (tests/containers.py)
+SILO = SILO_CASE + ["Run:t_end=0.15", "Output:dt=0.05", "Output:diag_dt=0.005", "Run:progress_s=1e9"]
 TOL = 1e-12
 
 

@@ -89,13 +89,9 @@ BOX_P = ["Geometry:dr=0.00348", "Run:t_end=13", "Output:dt=3.25", "Run:progress_
 DRUM_P = ["Geometry:dr=0.0025", "Material:E=1e5", "Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.001",
           "Run:progress_s=1e9"]
 COLUMN = os.path.join(HERE, "..", "inputs", "column_2d.yml")
-CHUTE_P = ["Geometry:dr=0.0025", "Geometry:height=0.03", "Geometry:periodic=x", "Material:E=1e5",
-           "Flow:damping_until=0", "Physics:gravity=[6.306,-7.515,0]", "Parallel:axis=x", "Run:t_end=100",
-           "Output:dt=1e3", "Output:diag_dt=0.001", "Run:progress_s=1e9"]
-SILO_P = ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:outlet_width=0.0125", "Outlet:enabled=on",
-          "Outlet:below=-0.02", "Material:E=1e5", "Flow:damping_until=0", "Segregation:enabled=on",
-          "Segregation:V=0.01", "Segregation:D=1e-5", "Initial:C_below=0.3", "Run:t_end=100", "Output:dt=1e3",
-          "Output:diag_dt=0.002", "Run:progress_s=1e9"]
+from containers import CHUTE, SILO  # noqa: E402  (tests/containers.py)
+CHUTE_P = CHUTE + ["Parallel:axis=x", "Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.001", "Run:progress_s=1e9"]
+SILO_P = SILO + ["Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.002", "Run:progress_s=1e9"]
 OK = True
 TOL = 1e-8
 AGREE = {"cpu": "bit-identical", "gpu": "equal to round-off"}  # what a restart must reach

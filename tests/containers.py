@@ -1,0 +1,24 @@
+"""The CI-sized container scenes the validations share, as -P overrides of
+inputs/column_2d.yml (one place, so that validate_mpi, validate_gpu,
+validate_restart and the single-case validations run the same cases).
+
+  CHUTE     a 3 cm layer on a 40-degree incline, periodic along x (dr 2.5 mm)
+  CHUTE_3D  the same in 3D, periodic along x and z (dr 5 mm, 9 x 9 cm)
+  FILM      a Newtonian film, 1 cm on a 30-degree incline (validate_film.py)
+  SILO      a 2D silo with a 1.25 cm opening over an outlet 2 cm below the base,
+            a bidisperse fill (validate_outlet.py)
+  COLLAPSE  a 5 cm column held by a gate lifted at 0.01 s over a 10 cm runout
+"""
+CHUTE = ["Geometry:dr=0.0025", "Geometry:height=0.03", "Geometry:periodic=x", "Material:E=1e5",
+         "Flow:damping_until=0", "Physics:gravity=[6.306,-7.515,0]"]
+CHUTE_3D = ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.09", "Geometry:depth=0.09",
+            "Geometry:height=0.03", "Geometry:periodic=xz", "Material:E=1e5", "Flow:damping_until=0",
+            "Physics:gravity=[6.306,-7.515,0]"]
+FILM = ["Material:model=newtonian", "Material:eta=1.5", "Material:E=11250", "Geometry:periodic=x",
+        "Geometry:dr=0.0005", "Geometry:height=0.01", "Geometry:width=0.01", "Physics:gravity=[4.905,-8.496,0]",
+        "Flow:alpha_av=0", "Flow:damping_until=0", "Initial:stress=geostatic"]
+SILO = ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:outlet_width=0.0125", "Outlet:enabled=on",
+        "Outlet:below=-0.02", "Material:E=1e5", "Flow:damping_until=0", "Segregation:enabled=on",
+        "Segregation:V=0.01", "Segregation:D=1e-5", "Initial:C_below=0.3"]
+COLLAPSE = ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:runout=0.1", "Walls:gate_open=0.01",
+            "Material:E=1e5", "Flow:damping_until=0.01"]
