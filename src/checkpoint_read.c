@@ -301,7 +301,7 @@ static int ckpt_finite(const real *a, size_t n)
 static const char *ckpt_check_rows(const particles_t *p, char *why, size_t len)
 {
     for (size_t i = 0; i < p->n; ++i) {
-        if (p->kind[i] > KIND_DUMMY || p->bclass[i] > BC_DUMMY || p->wall[i] > WALL_ID_DRUM ||
+        if (p->kind[i] > KIND_DUMMY || p->bclass[i] > BC_DUMMY || p->wall[i] > WALL_ID_MAX ||
             (p->kind[i] == KIND_DUMMY) != (p->wall[i] != WALL_ID_NONE) || p->id[i] < 0 ||
             !(p->vol[i] > 0 && isfinite((double)p->vol[i])) ||
             (p->kind[i] == KIND_MATERIAL && !((double)p->C[i] >= -1 && (double)p->C[i] <= 2))) {

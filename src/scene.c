@@ -90,6 +90,7 @@ static const cyaml_schema_field_t geometry_fields[] = {
     FLT(scene_geometry, length, OPT),
     FLT(scene_geometry, fill, OPT),
     ENM(scene_geometry, periodic, periodic_axes),
+    ENM(scene_geometry, lid, on_off),
     FLT(scene_geometry, runout, OPT),
     FLT(scene_geometry, outlet_width, OPT),
     CYAML_FIELD_END,
@@ -242,6 +243,7 @@ static const struct scene_default scene_defaults[] = {
     {"Geometry", "length", "0.02"},
     {"Geometry", "fill", "0.42"},
     {"Geometry", "periodic", "none"},
+    {"Geometry", "lid", "off"},
     {"Geometry", "runout", "0"},
     {"Geometry", "outlet_width", "0"},
     {"Kinematics", "velocity", "oscillatory_shear"},
@@ -1257,6 +1259,8 @@ static int check_special(struct scene_ctx *c, const struct scene *s)
         if (g->outlet_width > 0)
             return fail_at(c, "Geometry:outlet_width", "an opening in a base with a runout is not supported");
     }
+    if (s->geometry.lid && (s->geometry.type != GEOM_COLUMN || s->geometry.runout > 0))
+        return fail_at(c, "Geometry:lid", "needs Geometry:type column without a runout");
     if (s->geometry.outlet_width > 0 && s->geometry.type != GEOM_COLUMN)
         return fail_at(c, "Geometry:outlet_width", "needs Geometry:type column (an opening in its base)");
     if (s->geometry.outlet_width > 0 &&

@@ -51,6 +51,8 @@ struct scene_geometry {
     double radius;       /* drum: inner radius R, m; default 0.035 */
     double length;       /* 3D drum: length along the axis (z) between the end walls, m; default 0.02 */
     double fill;         /* drum: filling level R_f = (H + R)/2R (paper §6), in (0,1); default 0.42 */
+    int lid;             /* column: on | off: a rigid wall over the material at y = height (a channel
+                          * between the base and the lid, with the base's slip); default off */
     double runout;       /* column: the floor continues this far past the material (x from width to
                           * width + runout), closed by a side wall there; the material is held at
                           * x = width by a gate until Walls:gate_open; default 0 (no runout, no gate) */

@@ -30,7 +30,8 @@ static box_layout setup_layout(const struct scene *sc)
     b.ns = g->periodic & PERIODIC_X ? 0 : b.nl;
     b.nr = lround(g->runout / g->dr);
     b.n_mat = (size_t)(b.nx * b.ny);
-    b.n_dum = (size_t)(b.nl * (b.nx + b.nr + 2 * b.ns) + 2 * b.ns * (b.ny + b.nl) + (b.nr ? b.nl * (b.ny + b.nl) : 0));
+    b.n_dum = (size_t)(b.nl * (b.nx + b.nr + 2 * b.ns) * (g->lid ? 2 : 1) + 2 * b.ns * (b.ny + b.nl) +
+                       (b.nr ? b.nl * (b.ny + b.nl) : 0));
     return b;
 }
 
@@ -106,6 +107,11 @@ static void setup_box(sim_t *s)
         for (long l = 0; l < b.ns; ++l) {
             setup_put(p, k++, -(l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
             setup_put(p, k++, (b.nx + b.nr + l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
+        }
+    for (long l = 0; sc->geometry.lid && l < b.nl; ++l) /* the lid, nl layers over the material */
+        for (long i = -b.ns; i < b.nx + b.ns; ++i, ++k) {
+            setup_put(p, k, (i + 0.5) * dr, H + (l + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
+            if (k >= setup_win.lo && k < setup_win.hi) p->wall[k - setup_win.lo] = WALL_ID_LID;
         }
     for (long j = 0; b.nr && j < b.ny + b.nl; ++j) /* the gate, nl layers past the material */
         for (long l = 0; l < b.nl; ++l, ++k) {
@@ -270,10 +276,11 @@ static void setup_box3d(sim_t *s)
             for (long q = -sz; q < nz + sz; ++q)
                 for (long i = -sx; i < nx + nr + sx; ++i) {
                     int inside = i >= 0 && i < nx + nr && q >= 0 && q < nz;
-                    if (inside && j >= ny) continue; /* above the free surface */
-                    int mat = inside && j >= 0 && i < nx;
+                    int lid = g->lid && inside && j >= ny; /* the lid's layers */
+                    if (inside && j >= ny && !lid) continue; /* above the free surface */
+                    int mat = inside && j >= 0 && j < ny && i < nx;
                     int gate = inside && j >= 0 && i >= nx && i < nx + nl; /* nr > 0 only */
-                    if (inside && j >= 0 && !mat && !gate) continue;        /* the runout's empty floor space */
+                    if (inside && j >= 0 && !mat && !gate && !lid) continue; /* the runout's empty floor space */
                     if (mat != (pass == 0)) continue;
                     if (j < 0 && fabs((i + 0.5) * dr - 0.5 * nx * dr) < 0.5 * g->outlet_width &&
                         fabs((q + 0.5) * dr - 0.5 * nz * dr) < 0.5 * g->outlet_width)
@@ -281,7 +288,8 @@ static void setup_box3d(sim_t *s)
                     double y = (j + 0.5) * dr;
                     setup_put(p, k, (i + 0.5) * dr, y, (q + 0.5) * dr, mat ? KIND_MATERIAL : KIND_DUMMY, vol,
                               y <= split ? sc->initial.C_below : sc->initial.C_above);
-                    if (gate && k >= setup_win.lo && k < setup_win.hi) p->wall[k - setup_win.lo] = WALL_ID_GATE;
+                    if ((gate || lid) && k >= setup_win.lo && k < setup_win.hi)
+                        p->wall[k - setup_win.lo] = gate ? WALL_ID_GATE : WALL_ID_LID;
                     ++k;
                 }
     p->n = setup_count(k);

@@ -38,7 +38,7 @@ TOL_C1 = 1e-4
 
 # name, scene, steps, overrides
 sys.path.insert(0, HERE)
-from containers import CHUTE, CHUTE_3D, COLLAPSE, FILM, SILO  # noqa: E402  (tests/containers.py)
+from containers import CHANNEL, CHUTE, CHUTE_3D, COLLAPSE, FILM, SILO  # noqa: E402  (tests/containers.py)
 
 CASES = [
     ("shearbox", "shearbox_2d.yml", 40, []),
@@ -66,6 +66,7 @@ CASES = [
     ("silo", "column_2d.yml", 5000, SILO),
     # the Newtonian fluid (Material:model newtonian): a film down the incline, tests/validate_film.py
     ("film", "column_2d.yml", 400, FILM),
+    ("channel", "column_2d.yml", 400, CHANNEL),
     ("chute_3d", "column_2d.yml", 60, CHUTE_3D),
 ]
 # (Segregation:every = 1: C with the flow in every step; K > 1: in windows of

@@ -102,7 +102,9 @@ enum wall_id {
     WALL_ID_ZLO = 4,  /* 3D box side wall at z = 0 */
     WALL_ID_ZHI = 5,  /* 3D box side wall at z = depth */
     WALL_ID_GATE = 6, /* box: the gate holding a column at x = gate_x until Walls:gate_open */
-    WALL_ID_DRUM = 7  /* drum: cylinder and end walls (their normal follows the turning position) */
+    WALL_ID_DRUM = 7, /* drum: cylinder and end walls (their normal follows the turning position) */
+    WALL_ID_LID = 8,  /* box: a wall over the material at y = height (Geometry:lid), the base's slip */
+    WALL_ID_MAX = 8
 };
 
 /* The wall of a dummy at reference position X0 by the rule of wall_normal. */
@@ -130,6 +132,7 @@ HD_INLINE int wall_normal_of(const wall_geom *w, int id, const real x[3], real n
     case WALL_ID_ZLO: n[2] = 1; return w->slip_sides;
     case WALL_ID_ZHI: n[2] = -1; return w->slip_sides;
     case WALL_ID_GATE: n[0] = -1; return w->slip_sides;
+    case WALL_ID_LID: n[1] = -1; return w->slip_base;
     default: return wall_normal(w, x, n);
     }
 }
