@@ -220,7 +220,6 @@ static int check_failed(sim_t *s, diag *d, size_t i)
     return 0;
 }
 
-
 /* The backend finds the lowest-index material particle in a blow-up state
  * (step_guard, physics/step.h); the host copy names it. A particle below an
  * outlet is no failure: every rank drains its outlet (drain). */
