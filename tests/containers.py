@@ -27,3 +27,16 @@ COLLAPSE = ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:runout=0.1",
 CHANNEL = ["Material:model=newtonian", "Material:eta=1.5", "Material:E=1800", "Geometry:periodic=x",
            "Geometry:lid=on", "Geometry:dr=0.0005", "Geometry:height=0.01", "Geometry:width=0.01",
            "Physics:gravity=[2,0,0]", "Flow:alpha_av=0", "Flow:damping_until=0", "Initial:stress=zero"]
+
+
+def row_profile(s, dr):
+    """The material of snapshot s by lattice row (y = (j + 1/2) dr): each row's
+    mean height, mean x velocity, and the largest spread of the x velocity
+    within a row (a layer periodic along x is uniform along it)."""
+    import numpy as np
+    mat = np.asarray(s["Kind"]) == 0
+    y, u = np.asarray(s["Coordinates"])[mat, 1], np.asarray(s["Velocities"])[mat, 0]
+    row = np.round(y / dr - 0.5).astype(int)
+    rows = np.unique(row)
+    return (np.array([y[row == k].mean() for k in rows]), np.array([u[row == k].mean() for k in rows]),
+            max(np.ptp(u[row == k]) for k in rows))

@@ -41,7 +41,7 @@ import snap  # noqa: E402
 SCENE = os.path.join(HERE, "..", "inputs", "column_2d.yml")
 H, DR, NU, G = 0.01, 0.0005, 1e-3, 4.905
 sys.path.insert(0, HERE)
-from containers import FILM as FILM_CASE  # noqa: E402  (tests/containers.py)
+from containers import FILM as FILM_CASE, row_profile  # noqa: E402  (tests/containers.py)
 FILM = FILM_CASE + ["Run:t_end=0.3", "Output:dt=0.05", "Run:progress_s=1e9"]
 TIMES, TOL, TOL_ROW = (0.05, 0.1, 0.3), 0.025, 1e-9
 
@@ -74,13 +74,8 @@ def main():
         t = float(s["Time"])
         if not any(abs(t - want) < 1e-9 for want in TIMES):
             continue
-        mat = np.asarray(s["Kind"]) == 0
-        y, u = np.asarray(s["Coordinates"])[mat, 1], np.asarray(s["Velocities"])[mat, 0]
-        row = np.round(y / DR - 0.5).astype(int)
-        rows = np.unique(row)
-        yr = np.array([y[row == k].mean() for k in rows])
-        ur = np.array([u[row == k].mean() for k in rows])
-        spread = max(np.ptp(u[row == k]) for k in rows) / umax
+        yr, ur, spread = row_profile(s, DR)
+        spread /= umax
         err = np.abs(ur - series(yr, t)).max() / umax
         good = err <= TOL and spread <= TOL_ROW
         ok &= good
