@@ -332,6 +332,61 @@ static void halo_slab_neighbours(halo_t *h)
 
 /* METIS: the owners of the coarse cells around this rank's coarse cells (the
  * coarse edge blk >= depth, so ghosts reach no farther). Symmetric. */
+/* METIS with periodic axes: the box, m, of the coarse cells rank r owns (lo,
+ * hi per axis; empty: lo > hi), the columns before the period's start and
+ * after its end left out along a periodic axis. */
+static void halo_metis_box(const halo_t *h, int r, double lo[3], double hi[3])
+{
+    int n[3] = {h->cg_n[0], h->cg_n[1], h->dim == 3 ? h->cg_n[2] : 1};
+    for (int d = 0; d < 3; ++d) lo[d] = 1e300, hi[d] = -1e300;
+    for (int z = 0; z < n[2]; ++z)
+        for (int y = 0; y < n[1]; ++y)
+            for (int x = 0; x < n[0]; ++x) {
+                if (h->part[((size_t)z * n[1] + y) * n[0] + x] != r) continue;
+                int c[3] = {x, y, z};
+                for (int d = 0; d < h->dim; ++d) {
+                    double a = (double)h->origin[d] + (double)c[d] * h->blk * (double)h->support;
+                    double b = a + h->blk * (double)h->support;
+                    if (h->per >> d & 1) {
+                        a = a < h->plo[d] ? h->plo[d] : a;
+                        b = b > h->plo[d] + h->plen[d] ? h->plo[d] + h->plen[d] : b;
+                        if (a >= b) continue;
+                    }
+                    lo[d] = a < lo[d] ? a : lo[d], hi[d] = b > hi[d] ? b : hi[d];
+                }
+            }
+}
+
+/* Does rank ra's box, moved by shift code, come within the ghost reach of
+ * rank rb's on every axis? The pair in one canonical order, as
+ * halo_slab_near, so that channels come in pairs. Boxes enclose a part:
+ * a channel may carry nothing, never miss an image. */
+static int halo_metis_near(const halo_t *h, int ra, int rb, int code)
+{
+    if (ra > rb || (ra == rb && code > HALO_NOSHIFT)) {
+        int t = ra;
+        ra = rb, rb = t, code = HALO_NCODES - 1 - code;
+    }
+    int sh[3];
+    halo_shift_of(code, sh);
+    double alo[3], ahi[3], blo[3], bhi[3], reach = (double)(h->depth + 2) * (double)h->support;
+    halo_metis_box(h, ra, alo, ahi);
+    halo_metis_box(h, rb, blo, bhi);
+    for (int d = 0; d < h->dim; ++d) {
+        if (alo[d] > ahi[d] || blo[d] > bhi[d]) return 0; /* a rank without coarse cells */
+        double sig = sh[d] * (double)h->plen[d];
+        double gap = fmax(blo[d] - (ahi[d] + sig), (alo[d] + sig) - bhi[d]);
+        if (gap >= reach) return 0;
+    }
+    return 1;
+}
+
+static void halo_metis_images(halo_t *h, int *is)
+{
+    for (int r = 0; r < h->size; ++r)
+        for (int m = 0; m < h->nimg; ++m) is[r * HALO_NCODES + h->img[m]] = halo_metis_near(h, h->rank, r, h->img[m]);
+}
+
 static void halo_metis_neighbours(halo_t *h)
 {
     int *is = halo_calloc((size_t)h->size * HALO_NCODES, sizeof(int)), n[3] = {h->cg_n[0], h->cg_n[1], h->dim == 3 ? h->cg_n[2] : 1};
@@ -347,6 +402,7 @@ static void halo_metis_neighbours(halo_t *h)
                             is[h->part[((size_t)Z * n[1] + Y) * n[0] + X] * HALO_NCODES + HALO_NOSHIFT] = 1;
                         }
             }
+    if (h->per) halo_metis_images(h, is);
     halo_set_neighbours(h, is);
     free(is);
 }

@@ -1273,8 +1273,6 @@ static int check_special(struct scene_ctx *c, const struct scene *s)
     if (s->outlet.enabled && !(s->outlet.below <= 0))
         return fail_at(c, "Outlet:below", "must be at or below the base, y <= 0 (the plane would cut the material "
                        "at the start), got %.4g", s->outlet.below);
-    if (s->geometry.periodic != PERIODIC_NONE && s->parallel.method == PART_METIS)
-        return fail_at(c, "Parallel:method", "metis does not cut periodic axes yet (Geometry:periodic): use slabs");
     if (s->geometry.periodic != PERIODIC_NONE && vel != KIN_COMPUTED)
         return fail_at(c, "Geometry:periodic", "needs Kinematics:velocity computed");
     if (strcmp(backend, "cpu") != 0 && strcmp(backend, "gpu") != 0 && strcmp(backend, "auto") != 0)

@@ -20,8 +20,8 @@
  *    re-cut equalises the predicted cost (each particle weighs its rank's
  *    cost per particle) to within 25 % of the mean, and no ID is lost;
  * for slabs and for METIS parts of the coarse-cell graph alike; and with
- * periodic axes (slabs; 2D: x and y, 3D: x and z, so that one is the slab
- * axis and one is not), where the brute force takes the nearest image, the
+ * periodic axes (slabs and METIS; 2D: x and y, 3D: x and z, so that one is
+ * the slab axis and one is not), where the brute force takes the nearest image, the
  * moves wrap, the refresh must bring every image's position shifted by its
  * period, and (check_lattice) a lattice that fills the periods gives every
  * particle of a row the same kernel sum, before and after the whole lattice
@@ -390,8 +390,10 @@ int main(int argc, char **argv)
             run_dim(2, m, rank, size, depth, 0);
             run_dim(3, m, rank, size, depth, 0);
         }
-        run_dim(2, HALO_SLABS, rank, size, depth, 3);
-        run_dim(3, HALO_SLABS, rank, size, depth, 5);
+        for (int m = HALO_SLABS; m <= HALO_METIS; ++m) {
+            run_dim(2, m, rank, size, depth, 3);
+            run_dim(3, m, rank, size, depth, 5);
+        }
         check_lattice(2, rank, size, depth);
         check_lattice(3, rank, size, depth);
     }

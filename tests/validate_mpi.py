@@ -90,6 +90,7 @@ CASES = [
     # along it (y), and a 3D layer periodic along x and z
     ("chute_x", "column_2d.yml", 2000, CHUTE + ["Parallel:axis=x"], "wrap"),
     ("chute_y", "column_2d.yml", 600, CHUTE + ["Parallel:axis=y", "Geometry:height=0.07"], "wrap"),
+    ("chute_metis", "column_2d.yml", 1000, CHUTE + ["Parallel:method=metis", "Geometry:height=0.07"], "wrap"),
     # a gate (Geometry:runout, Walls:gate_open): a column collapse, the gate's dummies leave at t = 0.01 s
     ("collapse", "column_2d.yml", 1500, COLLAPSE, "migrate"),
     # an outlet under a silo's opening (Outlet, Geometry:outlet_width): the store shrinks
