@@ -120,20 +120,10 @@ static void hx_mark(gpu_t *g, halo_t *h, int end)
 
 /* Periodic images (mpi/halo.h): add the channel's shift to the positions
  * among the refreshed fields of its ghosts (x real, x_n double). */
-__global__ void k_shift_images(real *x0, real *x1, real *x2, preal *n0, preal *n1, preal *n2, const unsigned *idx,
-                               size_t cnt, double s0, double s1, double s2)
+__global__ void k_shift_images(grid_image im, const unsigned *idx, size_t cnt)
 {
     size_t e = (size_t)blockIdx.x * blockDim.x + threadIdx.x;
-    if (e >= cnt) return;
-    size_t i = idx[e];
-    real *x[3] = {x0, x1, x2};
-    preal *n[3] = {n0, n1, n2};
-    const double s[3] = {s0, s1, s2};
-    for (int d = 0; d < 3; ++d) {
-        if (s[d] == 0) continue;
-        if (x[d]) x[d][i] = (real)((double)x[d][i] + s[d]);
-        if (n[d]) n[d][i] += (preal)s[d];
-    }
+    if (e < cnt) grid_image_move(&im, idx[e]);
 }
 
 static void gpu_shift_images(sim_t *s, gpu_t *g, const ftab &t, int self)
@@ -141,24 +131,21 @@ static void gpu_shift_images(sim_t *s, gpu_t *g, const ftab &t, int self)
     halo_t *h = s->halo;
     dhalo *x = g->hx;
     if (!h->per) return;
-    real *px[3] = {NULL, NULL, NULL};
-    preal *pn[3] = {NULL, NULL, NULL};
+    grid_image im = {{NULL, NULL, NULL}, {NULL, NULL, NULL}, {0, 0, 0}};
     int any = 0;
     for (int f = 0; f < t.n; ++f)
         for (int d = 0; d < 3; ++d) {
-            if (t.p[f] == (void *)g->d.x[d]) px[d] = g->d.x[d], any = 1;
-            if (t.p[f] == (void *)g->d.x_n[d]) pn[d] = g->d.x_n[d], any = 1;
+            if (t.p[f] == (void *)g->d.x[d]) im.x[d] = g->d.x[d], any = 1;
+            if (t.p[f] == (void *)g->d.x_n[d]) im.xn[d] = g->d.x_n[d], any = 1;
         }
     if (!any) return;
     for (int k = 0; k < h->nnb; ++k) {
         int kp;
         if (hx_self(h, k, &kp) != self) continue; /* self: the channels that k_self filled */
         size_t cnt = x->roff[k + 1] - x->roff[k];
-        double sh[3];
-        halo_image_shift(h, k, sh);
-        if (!cnt || (sh[0] == 0 && sh[1] == 0 && sh[2] == 0)) continue;
-        k_shift_images<<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(
-            px[0], px[1], px[2], pn[0], pn[1], pn[2], x->ridx + x->roff[k], cnt, sh[0], sh[1], sh[2]);
+        halo_image_shift(h, k, im.s);
+        if (!cnt || (im.s[0] == 0 && im.s[1] == 0 && im.s[2] == 0)) continue;
+        k_shift_images<<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(im, x->ridx + x->roff[k], cnt);
     }
     CK(cudaGetLastError());
 }

@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "../src/error.h"
+#include "../src/physics/grid.h"
 
 #define HALO_MPI_REAL (sizeof(real) == sizeof(double) ? MPI_DOUBLE : MPI_FLOAT)
 
@@ -118,26 +119,18 @@ void halo_wrap(const halo_t *h, particles_t *p)
 static void halo_shift_images(const halo_t *h, particles_t *p, const int *arr, int narr)
 {
     if (!h->per) return;
-    int fx[3] = {-1, -1, -1}, fn[3] = {-1, -1, -1};
-    for (int d = 0; d < 3; ++d) {
+    grid_image im = {{NULL, NULL, NULL}, {NULL, NULL, NULL}, {0, 0, 0}};
+    for (int d = 0; d < h->dim; ++d) {
         int ix = part_array_find(p, p->x[d]), in = part_array_find(p, p->x_n[d]);
         for (int a = 0; a < narr; ++a) {
-            if (arr[a] == ix) fx[d] = ix;
-            if (arr[a] == in) fn[d] = in;
+            if (arr[a] == ix) im.x[d] = p->x[d];
+            if (arr[a] == in) im.xn[d] = p->x_n[d];
         }
     }
     size_t q = 0;
     for (int k = 0; k < h->nnb; ++k) {
-        double s[3];
-        halo_image_shift(h, k, s);
-        for (size_t e = 0; e < h->nrecv[k]; ++e, ++q) {
-            size_t i = h->recv[q];
-            for (int d = 0; d < h->dim; ++d) {
-                if (s[d] == 0) continue;
-                if (fx[d] >= 0) p->x[d][i] = (real)((double)p->x[d][i] + s[d]);
-                if (fn[d] >= 0) p->x_n[d][i] += (preal)s[d];
-            }
-        }
+        halo_image_shift(h, k, im.s);
+        for (size_t e = 0; e < h->nrecv[k]; ++e, ++q) grid_image_move(&im, h->recv[q]);
     }
 }
 
@@ -281,40 +274,81 @@ static void halo_set_neighbours(halo_t *h, const int *is_nb)
     h->nrecv = halo_calloc(m, sizeof(size_t));
 }
 
-/* Slab r's extent along the axis, m: open ends far away, or at the ends of
- * the period along a periodic axis. */
-static void halo_slab_span(const halo_t *h, int r, double *a, double *b)
+/* The box, m, of every rank's domain (lo[3 r + d], hi[3 r + d]), along a
+ * periodic axis cut to the period: slabs, their extent along the axis (open
+ * ends and the other axes unbounded); METIS, the box of the coarse cells a
+ * rank owns (empty, lo > hi, for a rank without any). One pass for all
+ * ranks, so that both sides of a pair see the same numbers. */
+static void halo_boxes(const halo_t *h, double *lo, double *hi)
 {
-    int d = h->axis;
-    *a = h->bound[r] == LONG_MIN ? -1e300 : (double)h->origin[d] + (double)h->bound[r] * (double)h->support;
-    *b = h->bound[r + 1] == LONG_MAX ? 1e300 : (double)h->origin[d] + (double)h->bound[r + 1] * (double)h->support;
-    if (h->per >> d & 1) {
-        double lo = h->plo[d], hi = lo + h->plen[d];
-        *a = *a < lo ? lo : *a, *b = *b > hi ? hi : *b;
+    for (int k = 0; k < 3 * h->size; ++k) lo[k] = -1e300, hi[k] = 1e300;
+    if (h->method != HALO_METIS) {
+        int d = h->axis;
+        for (int r = 0; r < h->size; ++r) {
+            if (h->bound[r] != LONG_MIN) lo[3 * r + d] = (double)h->origin[d] + (double)h->bound[r] * (double)h->support;
+            if (h->bound[r + 1] != LONG_MAX)
+                hi[3 * r + d] = (double)h->origin[d] + (double)h->bound[r + 1] * (double)h->support;
+        }
+    } else {
+        for (int k = 0; k < 3 * h->size; ++k) lo[k] = 1e300, hi[k] = -1e300;
+        int n[3] = {h->cg_n[0], h->cg_n[1], h->dim == 3 ? h->cg_n[2] : 1};
+        for (int z = 0; z < n[2]; ++z)
+            for (int y = 0; y < n[1]; ++y)
+                for (int x = 0; x < n[0]; ++x) {
+                    int r = h->part[((size_t)z * n[1] + y) * n[0] + x], c[3] = {x, y, z};
+                    for (int d = 0; d < h->dim; ++d) {
+                        double a = (double)h->origin[d] + (double)c[d] * h->blk * (double)h->support;
+                        lo[3 * r + d] = fmin(lo[3 * r + d], a);
+                        hi[3 * r + d] = fmax(hi[3 * r + d], a + h->blk * (double)h->support);
+                    }
+                }
     }
+    for (int r = 0; r < h->size; ++r)
+        for (int d = 0; d < h->dim; ++d)
+            if (h->per >> d & 1) {
+                lo[3 * r + d] = fmax(lo[3 * r + d], (double)h->plo[d]);
+                hi[3 * r + d] = fmin(hi[3 * r + d], (double)h->plo[d] + (double)h->plen[d]);
+            }
 }
 
-/* Does slab ra, moved by shift code, come within the ghost reach of slab
- * rb (depth + 1 cells, and one more for rounding)? Evaluated alike on
- * both ranks (the pair in one canonical order), so that a channel always
- * has its partner: (rb, code) on ra and (ra, 26 - code) on rb. */
-static int halo_slab_near(const halo_t *h, int ra, int rb, int code)
+/* Does rank ra's box, moved by shift code, come within the ghost reach of
+ * rank rb's (depth + 1 cells, and one more for rounding) on every axis?
+ * Evaluated alike on both ranks (the pair in one canonical order), so that
+ * a channel always has its partner: (rb, code) on ra and (ra, 26 - code) on
+ * rb. A box encloses a domain: a channel may carry nothing, never miss an
+ * image. */
+static int halo_near(const halo_t *h, const double *lo, const double *hi, int ra, int rb, int code)
 {
     if (ra > rb || (ra == rb && code > HALO_NOSHIFT)) {
         int t = ra;
         ra = rb, rb = t, code = HALO_NCODES - 1 - code;
     }
-    int s[3];
-    halo_shift_of(code, s);
-    double sig = h->per >> h->axis & 1 ? s[h->axis] * (double)h->plen[h->axis] : 0.0, a0, a1, b0, b1;
-    halo_slab_span(h, ra, &a0, &a1);
-    halo_slab_span(h, rb, &b0, &b1);
-    double gap = fmax(b0 - (a1 + sig), (a0 + sig) - b1);
-    return gap < (double)(h->depth + 2) * (double)h->support;
+    int sh[3];
+    halo_shift_of(code, sh);
+    const double reach = (double)(h->depth + 2) * (double)h->support;
+    for (int d = 0; d < h->dim; ++d) {
+        const double *al = lo + 3 * ra, *ah = hi + 3 * ra, *bl = lo + 3 * rb, *bh = hi + 3 * rb;
+        if (al[d] > ah[d] || bl[d] > bh[d]) return 0; /* a rank without a domain */
+        double sig = sh[d] * (double)h->plen[d];
+        if (fmax(bl[d] - (ah[d] + sig), (al[d] + sig) - bh[d]) >= reach) return 0;
+    }
+    return 1;
+}
+
+/* Periodic axes: the channels to every (rank, shift) whose domain the shift
+ * brings within reach of this rank's, into is (halo_set_neighbours). */
+static void halo_image_neighbours(const halo_t *h, int *is)
+{
+    if (!h->per) return;
+    double *lo = halo_calloc((size_t)(6 * h->size), sizeof(double)), *hi = lo + 3 * h->size;
+    halo_boxes(h, lo, hi);
+    for (int r = 0; r < h->size; ++r)
+        for (int m = 0; m < h->nimg; ++m) is[r * HALO_NCODES + h->img[m]] = halo_near(h, lo, hi, h->rank, r, h->img[m]);
+    free(lo);
 }
 
 /* Slabs: the ranks whose columns overlap [lo - depth, hi + depth); with
- * periodic axes also every (rank, shift) whose slab the shift brings near. */
+ * periodic axes also the images' channels. */
 static void halo_slab_neighbours(halo_t *h)
 {
     int *is = halo_calloc((size_t)h->size * HALO_NCODES, sizeof(int));
@@ -324,69 +358,15 @@ static void halo_slab_neighbours(halo_t *h)
         int below = lo != LONG_MIN && b != LONG_MAX && b <= lo - h->depth;
         int above = hi != LONG_MAX && a != LONG_MIN && a >= hi + h->depth;
         is[r * HALO_NCODES + HALO_NOSHIFT] = !below && !above;
-        for (int m = 0; m < h->nimg; ++m) is[r * HALO_NCODES + h->img[m]] = halo_slab_near(h, h->rank, r, h->img[m]);
     }
+    halo_image_neighbours(h, is);
     halo_set_neighbours(h, is);
     free(is);
 }
 
 /* METIS: the owners of the coarse cells around this rank's coarse cells (the
- * coarse edge blk >= depth, so ghosts reach no farther). Symmetric. */
-/* METIS with periodic axes: the box, m, of the coarse cells rank r owns (lo,
- * hi per axis; empty: lo > hi), the columns before the period's start and
- * after its end left out along a periodic axis. */
-static void halo_metis_box(const halo_t *h, int r, double lo[3], double hi[3])
-{
-    int n[3] = {h->cg_n[0], h->cg_n[1], h->dim == 3 ? h->cg_n[2] : 1};
-    for (int d = 0; d < 3; ++d) lo[d] = 1e300, hi[d] = -1e300;
-    for (int z = 0; z < n[2]; ++z)
-        for (int y = 0; y < n[1]; ++y)
-            for (int x = 0; x < n[0]; ++x) {
-                if (h->part[((size_t)z * n[1] + y) * n[0] + x] != r) continue;
-                int c[3] = {x, y, z};
-                for (int d = 0; d < h->dim; ++d) {
-                    double a = (double)h->origin[d] + (double)c[d] * h->blk * (double)h->support;
-                    double b = a + h->blk * (double)h->support;
-                    if (h->per >> d & 1) {
-                        a = a < h->plo[d] ? h->plo[d] : a;
-                        b = b > h->plo[d] + h->plen[d] ? h->plo[d] + h->plen[d] : b;
-                        if (a >= b) continue;
-                    }
-                    lo[d] = a < lo[d] ? a : lo[d], hi[d] = b > hi[d] ? b : hi[d];
-                }
-            }
-}
-
-/* Does rank ra's box, moved by shift code, come within the ghost reach of
- * rank rb's on every axis? The pair in one canonical order, as
- * halo_slab_near, so that channels come in pairs. Boxes enclose a part:
- * a channel may carry nothing, never miss an image. */
-static int halo_metis_near(const halo_t *h, int ra, int rb, int code)
-{
-    if (ra > rb || (ra == rb && code > HALO_NOSHIFT)) {
-        int t = ra;
-        ra = rb, rb = t, code = HALO_NCODES - 1 - code;
-    }
-    int sh[3];
-    halo_shift_of(code, sh);
-    double alo[3], ahi[3], blo[3], bhi[3], reach = (double)(h->depth + 2) * (double)h->support;
-    halo_metis_box(h, ra, alo, ahi);
-    halo_metis_box(h, rb, blo, bhi);
-    for (int d = 0; d < h->dim; ++d) {
-        if (alo[d] > ahi[d] || blo[d] > bhi[d]) return 0; /* a rank without coarse cells */
-        double sig = sh[d] * (double)h->plen[d];
-        double gap = fmax(blo[d] - (ahi[d] + sig), (alo[d] + sig) - bhi[d]);
-        if (gap >= reach) return 0;
-    }
-    return 1;
-}
-
-static void halo_metis_images(halo_t *h, int *is)
-{
-    for (int r = 0; r < h->size; ++r)
-        for (int m = 0; m < h->nimg; ++m) is[r * HALO_NCODES + h->img[m]] = halo_metis_near(h, h->rank, r, h->img[m]);
-}
-
+ * coarse edge blk >= depth, so ghosts reach no farther). Symmetric. With
+ * periodic axes also the images' channels. */
 static void halo_metis_neighbours(halo_t *h)
 {
     int *is = halo_calloc((size_t)h->size * HALO_NCODES, sizeof(int)), n[3] = {h->cg_n[0], h->cg_n[1], h->dim == 3 ? h->cg_n[2] : 1};
@@ -402,7 +382,7 @@ static void halo_metis_neighbours(halo_t *h)
                             is[h->part[((size_t)Z * n[1] + Y) * n[0] + X] * HALO_NCODES + HALO_NOSHIFT] = 1;
                         }
             }
-    if (h->per) halo_metis_images(h, is);
+    halo_image_neighbours(h, is);
     halo_set_neighbours(h, is);
     free(is);
 }

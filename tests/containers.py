@@ -40,3 +40,19 @@ def row_profile(s, dr):
     rows = np.unique(row)
     return (np.array([y[row == k].mean() for k in rows]), np.array([u[row == k].mean() for k in rows]),
             max(np.ptp(u[row == k]) for k in rows))
+
+
+def run_column(sphseg, out, over, extra=(), backend=None):
+    """sphseg inputs/column_2d.yml -o out with the overrides over (and
+    extra arguments, --backend when given); exits the script with FAIL and
+    the run's last output when sphseg fails. Returns its stdout."""
+    import os
+    import subprocess
+    import sys
+    scene = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "inputs", "column_2d.yml")
+    cmd = [sphseg, scene, "-o", out] + (["--backend", backend] if backend else [])
+    r = subprocess.run(cmd + sum([["-P", o] for o in over], []) + list(extra), capture_output=True, text=True)
+    if r.returncode != 0:
+        print(r.stdout[-2000:], r.stderr[-2000:])
+        sys.exit("FAIL: sphseg exited with %d" % r.returncode)
+    return r.stdout

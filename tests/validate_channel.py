@@ -21,7 +21,6 @@ dummies carry wall id 8.
 """
 import argparse
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -30,9 +29,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import snap  # noqa: E402
 sys.path.insert(0, HERE)
-from containers import CHANNEL, row_profile  # noqa: E402  (tests/containers.py)
+from containers import CHANNEL, row_profile, run_column  # noqa: E402  (tests/containers.py)
 
-SCENE = os.path.join(HERE, "..", "inputs", "column_2d.yml")
 H, DR, NU, F = 0.01, 0.0005, 1e-3, 2.0
 TIMES, TOL, TOL_ROW = (0.01, 0.02, 0.1), 0.03, 1e-9
 
@@ -49,15 +47,10 @@ def main():
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
     out = os.path.join(a.work, "channel")
-    over = CHANNEL + ["Run:t_end=0.1", "Output:dt=0.01", "Run:progress_s=1e9"]
-    r = subprocess.run([a.sphseg, SCENE, "-o", out] + sum([["-P", o] for o in over], []), capture_output=True,
-                       text=True)
-    if r.returncode != 0:
-        print(r.stdout[-2000:], r.stderr[-2000:])
-        sys.exit("FAIL: sphseg exited with %d" % r.returncode)
+    run_column(a.sphseg, out, CHANNEL + ["Run:t_end=0.1", "Output:dt=0.01", "Run:progress_s=1e9"])
     ok, umax = True, F * H * H / (8 * NU)
     snaps = [snap.read_snapshot(p) for p in snap.list_snapshots(out)]
-    wall, kind = np.asarray(snaps[0]["Wall"]), np.asarray(snaps[0]["Kind"])
+    wall = np.asarray(snaps[0]["Wall"])
     lid = int(np.sum(wall == 8))
     good = lid == 3 * round(0.01 / DR) and np.all(np.asarray(snaps[0]["Coordinates"])[wall == 8, 1] > H)
     ok &= good

@@ -29,7 +29,6 @@ periodic images: a film is uniform along the slope).
 """
 import argparse
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -38,10 +37,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import snap  # noqa: E402
 
-SCENE = os.path.join(HERE, "..", "inputs", "column_2d.yml")
 H, DR, NU, G = 0.01, 0.0005, 1e-3, 4.905
 sys.path.insert(0, HERE)
-from containers import FILM as FILM_CASE, row_profile  # noqa: E402  (tests/containers.py)
+from containers import FILM as FILM_CASE, row_profile, run_column  # noqa: E402  (tests/containers.py)
 FILM = FILM_CASE + ["Run:t_end=0.3", "Output:dt=0.05", "Run:progress_s=1e9"]
 TIMES, TOL, TOL_ROW = (0.05, 0.1, 0.3), 0.025, 1e-9
 
@@ -63,11 +61,7 @@ def main():
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
     out = os.path.join(a.work, "film")
-    cmd = [a.sphseg, SCENE, "-o", out] + sum([["-P", o] for o in FILM], [])
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        print(r.stdout[-2000:], r.stderr[-2000:])
-        sys.exit("FAIL: sphseg exited with %d" % r.returncode)
+    run_column(a.sphseg, out, FILM)
     ok, umax = True, G * H * H / (2 * NU)
     for path in snap.list_snapshots(out):
         s = snap.read_snapshot(path)

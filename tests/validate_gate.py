@@ -24,7 +24,6 @@ Every run uses --backend (default cpu).
 """
 import argparse
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -32,8 +31,9 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import snap  # noqa: E402
+sys.path.insert(0, HERE)
+from containers import run_column  # noqa: E402  (tests/containers.py)
 
-SCENE = os.path.join(HERE, "..", "inputs", "column_2d.yml")
 BACKEND = "cpu"
 DR, W, H, RUN, T_OPEN = 0.0025, 0.05, 0.05, 0.1, 0.03
 GATE = ["Geometry:dr=%g" % DR, "Geometry:width=%g" % W, "Geometry:height=%g" % H, "Geometry:runout=%g" % RUN,
@@ -42,12 +42,7 @@ GATE = ["Geometry:dr=%g" % DR, "Geometry:width=%g" % W, "Geometry:height=%g" % H
 
 
 def run(sphseg, out, over, extra=()):
-    r = subprocess.run([sphseg, SCENE, "-o", out, "--backend", BACKEND] + sum([["-P", o] for o in over], []) + list(extra),
-                       capture_output=True, text=True)
-    if r.returncode != 0:
-        print(r.stdout[-2000:], r.stderr[-2000:])
-        sys.exit("FAIL: sphseg exited with %d" % r.returncode)
-    return r.stdout
+    return run_column(sphseg, out, over, extra, BACKEND)
 
 
 def main():

@@ -21,7 +21,6 @@ segregation on, so that C varies along what drains) and the material soft (E = 0
 import argparse
 import csv
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -30,9 +29,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import snap  # noqa: E402
 
-SCENE = os.path.join(HERE, "..", "inputs", "column_2d.yml")
 sys.path.insert(0, HERE)
-from containers import SILO as SILO_CASE  # noqa: E402  (tests/containers.py)
+from containers import SILO as SILO_CASE, run_column  # noqa: E402  (tests/containers.py)
 SILO = SILO_CASE + ["Run:t_end=0.15", "Output:dt=0.05", "Output:diag_dt=0.005", "Run:progress_s=1e9"]
 TOL = 1e-12
 
@@ -43,11 +41,7 @@ def main():
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
     out = os.path.join(a.work, "silo")
-    r = subprocess.run([a.sphseg, SCENE, "-o", out] + sum([["-P", o] for o in SILO], []), capture_output=True,
-                       text=True)
-    if r.returncode != 0:
-        print(r.stdout[-2000:], r.stderr[-2000:])
-        sys.exit("FAIL: sphseg exited with %d" % r.returncode)
+    run_column(a.sphseg, out, SILO)
     with open(os.path.join(out, "diagnostics.csv")) as f:
         rows = list(csv.DictReader(f))
     ok = True

@@ -147,6 +147,25 @@ HD_INLINE real grid_pair(int dim, real *const *x, size_t i, size_t j, real xij[3
     return xij[0] * xij[0] + xij[1] * xij[1] + xij[2] * xij[2];
 }
 
+/* Periodic images (mpi/halo.h) are ghosts whose positions are their
+ * owners' moved by a period: the position arrays a refresh sets (NULL where
+ * it does not set that array), and the move of ghost i by s (m per axis).
+ * The CPU's halo and the GPU's refresh both call it. */
+typedef struct grid_image {
+    real *x[3];
+    preal *xn[3];
+    double s[3];
+} grid_image;
+
+HD_INLINE void grid_image_move(const grid_image *q, size_t i)
+{
+    for (int d = 0; d < 3; ++d) {
+        if (q->s[d] == 0) continue;
+        if (q->x[d]) q->x[d][i] = (real)((double)q->x[d][i] + q->s[d]);
+        if (q->xn[d]) q->xn[d][i] += (preal)q->s[d];
+    }
+}
+
 /* Neighbour list of particle i from the cell scan of g (g->nl NULL): the
  * particles within sqrt(support2), at most cap of them stored, at
  * nl[q * stride + i]. Returns how many there are (stored or not). */
