@@ -90,7 +90,7 @@ static void gpu_bounds(sim_t *s, double out[STEP_NBOUNDS])
         bnd3 init = {{0, 0, 0}};
         prof_begin(g->st);
         gpu_acc_reduce(g);
-        auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{g->d, s->step_c});
+        auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{g->d, gpu_step_ctx(s, g)});
         reduce(g, it, (bnd3 *)g->dres, g->n, bnd_max(), init);
         CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
         CK(cudaStreamSynchronize(g->st));
@@ -108,7 +108,8 @@ static long gpu_check(sim_t *s)
     gpu_t *g = gpu_hook(s, 0);
     prof_begin(g->st);
     const int acc = g->acc_pending; /* |acc| in the same pass */
-    chkb_of f = {chk_of{g->d, s->step_c, s->t, g->xb[0], g->xb[1], g->xb[2]}, bnd_of{g->d, s->step_c},
+    const step_ctx *dc = gpu_step_ctx(s, g);
+    chkb_of f = {chk_of{g->d, dc, s->t, g->xb[0], g->xb[1], g->xb[2]}, bnd_of{g->d, dc},
                  acc ? g->amag : NULL};
     auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), f);
     chkb init = {{(long long)g->n, 0, 0}, {{0, 0, 0}}, R(0.0)};
@@ -189,13 +190,14 @@ static void gpu_finish(sim_t *s)
     }
     void *bufs[] = {g->start, g->end, g->cell_mat, g->cell_type, g->key, g->key2, g->idx, g->idx2,
                     g->cls, g->sums, g->nl, g->ncnt, g->amag, g->tmp, g->dbox, g->dres, g->dfirst,
-                    g->dchk, g->xb[0], g->xb[1], g->xb[2], g->lvl, g->wact};
+                    g->dchk, g->dstep, g->xb[0], g->xb[1], g->xb[2], g->lvl, g->wact};
     for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k)
         if (bufs[k]) CK(cudaFree(bufs[k]));
     CK(cudaFreeHost(g->hbox));
     CK(cudaFreeHost(g->hres));
     CK(cudaFreeHost(g->hfirst));
     CK(cudaFreeHost(g->hchk));
+    free(g->hstep);
     CK(cudaStreamDestroy(g->st));
     free(g);
     s->be_data = NULL;

@@ -122,13 +122,16 @@ struct box_merge {
 struct bnd3 {
     double v[3];
 };
+/* The reductions' functors hold the step_ctx by pointer, to a device copy
+ * (gpu_step_ctx): CUB copies a functor into each thread's local memory, and
+ * the context with its wall table is kilobytes. */
 struct bnd_of {
     particles_t p;
-    step_ctx c;
+    const step_ctx *c;
     __device__ bnd3 operator()(size_t i) const
     {
         bnd3 b = {{0, 0, 0}};
-        if (p.kind[i] == KIND_MATERIAL) step_bounds_of(i, &p, &c, b.v);
+        if (p.kind[i] == KIND_MATERIAL) step_bounds_of(i, &p, c, b.v);
         return b;
     }
 };
@@ -149,13 +152,13 @@ struct chk {
 };
 struct chk_of {
     particles_t p;
-    step_ctx c;
+    const step_ctx *c;
     double t;
     const real *xb0, *xb1, *xb2;
     __device__ chk operator()(size_t i) const
     {
         chk r;
-        r.first = p.kind[i] == KIND_MATERIAL && step_guard(i, &p, &c, t) ? (long long)i : (long long)p.n;
+        r.first = p.kind[i] == KIND_MATERIAL && step_guard(i, &p, c, t) ? (long long)i : (long long)p.n;
         real b0 = p.x[0][i] - xb0[i], b1 = p.x[1][i] - xb1[i], b2 = p.x[2][i] - xb2[i];
         real s0 = p.x[0][i] - p.x_n[0][i], s1 = p.x[1][i] - p.x_n[1][i], s2 = p.x[2][i] - p.x_n[2][i];
         r.build2 = b0 * b0 + b1 * b1 + b2 * b2;
@@ -195,6 +198,17 @@ struct chkb_merge {
         return chkb{chk_merge()(a.c, b.c), bnd_max()(a.b, b.b), b.amax > a.amax ? b.amax : a.amax};
     }
 };
+/* s->step_c on the device for the reductions, sent on the stream when it
+ * has changed since the last send (in practice once). */
+static const step_ctx *gpu_step_ctx(sim_t *s, gpu_t *g)
+{
+    if (memcmp(g->hstep, &s->step_c, sizeof(step_ctx))) {
+        memcpy(g->hstep, &s->step_c, sizeof(step_ctx));
+        CK(cudaMemcpyAsync(g->dstep, g->hstep, sizeof(step_ctx), cudaMemcpyHostToDevice, g->st));
+    }
+    return g->dstep;
+}
+
 struct max_real {
     __device__ real operator()(real a, real b) const { return b > a ? b : a; }
 };

@@ -151,6 +151,10 @@ static gpu_t *gpu_get(sim_t *s)
     CK(cudaMemset(g->dres, 0, STEP_NBOUNDS * sizeof(double)));
     g->dfirst = (long long *)dev_alloc(sizeof(long long));
     g->dchk = (chkb *)dev_alloc(sizeof(chkb));
+    g->dstep = (step_ctx *)dev_alloc(sizeof(step_ctx));
+    g->hstep = (step_ctx *)malloc(sizeof(step_ctx)); /* pageable: a send is staged at once, so the copy may change after */
+    if (!g->hstep) error_exit(1, "out of memory");
+    memset(g->hstep, 0xff, sizeof(step_ctx)); /* differs from any context: the first use sends it */
     CK(cudaMallocHost((void **)&g->hchk, sizeof(chkb)));
     CK(cudaMallocHost((void **)&g->hbox, sizeof(box)));
     CK(cudaMallocHost((void **)&g->hres, STEP_NBOUNDS * sizeof(double)));

@@ -268,7 +268,7 @@ static void gpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS])
             particles_t q = p;
             q.gdot = p.gsum;
             bnd3 init = {{0, 0, 0}};
-            auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{q, s->step_c});
+            auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{q, gpu_step_ctx(s, g)});
             reduce(g, it, (bnd3 *)g->dres, g->n, bnd_max(), init);
             CK(cudaMemcpyAsync(g->hres, g->dres, 3 * sizeof(double), cudaMemcpyDeviceToHost, g->st));
             CK(cudaStreamSynchronize(g->st));

@@ -103,6 +103,7 @@ typedef struct gpu {
     double *dres;       /* [STEP_NBOUNDS]: D, wave, speed, acc */
     long long *dfirst;  /* also the list-length maximum */
     struct chkb *dchk, *hchk;
+    step_ctx *dstep, *hstep; /* the reductions' step_ctx on the device (gpu_step_ctx) and the copy last sent */
     int bnd_fresh;      /* hres[0..2] hold the bounds of the current store (gpu_check) */
     struct box *hbox;   /* pinned host copies */
     double *hres;

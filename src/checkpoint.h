@@ -43,7 +43,9 @@
 #define SPHSEG_CHECKPOINT_H
 #include "sim.h"
 
-enum { CKPT_FORMAT = 2, CKPT_USERBLOCK = 512 };
+/* 3: a dummy's Wall is the 1-based index of its wall primitive (wall.h), no
+ * longer a fixed wall id. */
+enum { CKPT_FORMAT = 3, CKPT_USERBLOCK = 512 };
 
 /* The run state beside sim_t that a checkpoint carries. */
 typedef struct ckpt_run {

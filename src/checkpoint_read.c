@@ -297,12 +297,13 @@ static int ckpt_finite(const real *a, size_t n)
 }
 
 /* This rank's rows in range (kind, class, finite positions, velocities,
- * stresses, volumes > 0, C within the blow-up bounds); NULL or the problem. */
-static const char *ckpt_check_rows(const particles_t *p, char *why, size_t len)
+ * stresses, volumes > 0, C within the blow-up bounds, a dummy's wall one of the
+ * container's nwalls); NULL or the problem. */
+static const char *ckpt_check_rows(const particles_t *p, int nwalls, char *why, size_t len)
 {
     for (size_t i = 0; i < p->n; ++i) {
-        if (p->kind[i] > KIND_DUMMY || p->bclass[i] > BC_DUMMY || p->wall[i] > WALL_ID_MAX ||
-            (p->kind[i] == KIND_DUMMY) != (p->wall[i] != WALL_ID_NONE) || p->id[i] < 0 ||
+        if (p->kind[i] > KIND_DUMMY || p->bclass[i] > BC_DUMMY || p->wall[i] > nwalls ||
+            (p->kind[i] == KIND_DUMMY) != (p->wall[i] != 0) || p->id[i] < 0 ||
             !(p->vol[i] > 0 && isfinite((double)p->vol[i])) ||
             (p->kind[i] == KIND_MATERIAL && !((double)p->C[i] >= -1 && (double)p->C[i] <= 2))) {
             snprintf(why, len, "--restart %s: particle row %zu of this rank is out of range (kind %u, class %u, "
@@ -353,7 +354,7 @@ static void ckpt_read_particles(hid_t f, sim_t *s, int dim, long long ntot, int 
     }
     H5CHECK(H5Gclose(g));
     char why[600];
-    input_error_agree(ckpt_check_rows(&s->p, why, sizeof why));
+    input_error_agree(ckpt_check_rows(&s->p, s->flow.w.n, why, sizeof why));
     long long nm = 0;
     for (size_t i = 0; i < s->p.n; ++i) nm += s->p.kind[i] == KIND_MATERIAL;
     s->n_material = (size_t)comm_sum_ll(nm);

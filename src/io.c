@@ -452,7 +452,7 @@ static void io_write_particles(hid_t file, const particles_t *p, long long ntot)
 }
 
 static void io_write_header(hid_t file, int dim, double time, long step, long long ntot,
-                            const char *scene_text, const char *code_version)
+                            const char *scene_text, const char *walls, const char *code_version)
 {
     hid_t g;
     int64_t step64 = step, ntot64 = ntot;
@@ -465,6 +465,7 @@ static void io_write_header(hid_t file, int dim, double time, long step, long lo
     io_attr_string(g, "Version", code_version);
     io_attr_string(g, "Precision", sizeof(real) == sizeof(float) ? "single" : "double");
     io_attr_string(g, "Scene", scene_text);
+    io_attr_string(g, "Walls", walls ? walls : "");
     H5CHECK(H5Gclose(g));
 }
 
@@ -496,7 +497,7 @@ void io_close_file(hid_t file)
 void io_forget_tmp(void) { io_open.tmp[0] = 0; }
 
 int io_write_snapshot(const char *outdir, int index, const particles_t *p, double time, long step,
-                      const char *scene_text, const char *code_version)
+                      const char *scene_text, const char *walls, const char *code_version)
 {
     char name[32], path[IO_PATH_MAX], tmp[IO_PATH_MAX];
     snprintf(name, sizeof name, "snapshot_%05d.h5", index);
@@ -507,7 +508,7 @@ int io_write_snapshot(const char *outdir, int index, const particles_t *p, doubl
     MPICHECK(MPI_Allreduce(&n, &ntot, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD));
 
     hid_t file = io_create_file(tmp, 0);
-    io_write_header(file, p->dim, time, step, ntot, scene_text, code_version);
+    io_write_header(file, p->dim, time, step, ntot, scene_text, walls, code_version);
     io_write_particles(file, p, ntot);
     io_close_file(file);
     io_commit(tmp, path, 1);

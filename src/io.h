@@ -43,10 +43,12 @@ extern const int io_nfields;
  * of IDs); N is their sum. The file lists all N in increasing ParticleIDs
  * order whatever the rank count (rows are redistributed by ID rank, io.c);
  * IDs must be unique (a duplicate stops the run, status 1); p itself is not
- * modified. scene_text and code_version must be the
- * same on every rank (scene_text may be NULL: stored as ""). */
+ * modified. scene_text, walls and code_version must be the same on every
+ * rank (scene_text and walls may be NULL: stored as ""). walls names the
+ * container's wall primitives, which the Wall field indexes ("1 base,
+ * 2 xlo, ..."), in the header attribute Walls. */
 int io_write_snapshot(const char *outdir, int index, const particles_t *p, double time, long step,
-                      const char *scene_text, const char *code_version);
+                      const char *scene_text, const char *walls, const char *code_version);
 
 /* Write OUTDIR/snapshots.xmf indexing snapshots 0 .. nsnap-1 (times[i],
  * npart[i] particles each; only those with present[i] != 0 when present is

@@ -121,6 +121,7 @@ typedef struct outputs {
     const char *scene;     /* the scene file, for the how-to-continue message */
     const cli *c;          /* the command line, for the how-to-continue message */
     unsigned char *present; /* per snapshot: it is in dir (a restart into a new OUTDIR lacks the earlier ones) */
+    char walls[512];        /* the container's wall primitives by id (wall_list), for the snapshot headers */
 } outputs;
 
 static void write_snapshot(outputs *o, sim_t *s)
@@ -128,7 +129,7 @@ static void write_snapshot(outputs *o, sim_t *s)
     if (!s->sc->output.snapshots) return;
     if (!s->hcsr) s->be->prepare(s, s->t, 2); /* classes and normals for the record */
     s->be->to_host(s);
-    io_write_snapshot(o->dir, o->n, &s->p, s->t, s->step, o->text, SPHSEG_VERSION);
+    io_write_snapshot(o->dir, o->n, &s->p, s->t, s->step, o->text, o->walls, SPHSEG_VERSION);
     o->times = realloc(o->times, (size_t)(o->n + 1) * sizeof(double));
     o->npart = realloc(o->npart, (size_t)(o->n + 1) * sizeof(long long));
     o->present = realloc(o->present, (size_t)(o->n + 1));
@@ -166,18 +167,19 @@ static void blowup(const sim_t *s, diag *d, size_t i, const char *fmt, ...)
 
 /* Particles leave the run (collective: every rank drops its own, here_host
  * when this rank's host copy is up to date): gate 0, the material below the
- * outlet, whose count and sum C_i V_i are kept for the diagnostics; gate 1,
- * the gate's dummies (Walls:gate_open). The store shrinks, the backend
+ * outlet, whose count and sum C_i V_i are kept for the diagnostics; else
+ * the dummies of the gates of bit mask `gate` (bit k: wall primitive k).
+ * The store shrinks, the backend
  * takes it over, and the state is prepared again at t (as after a load
  * balance). */
-static void drain(sim_t *s, int here_host, int gate)
+static void drain(sim_t *s, int here_host, unsigned gate)
 {
     if (!here_host) s->be->to_host(s);
     particles_t *p = &s->p;
     size_t *keep = malloc((p->n + 1) * sizeof *keep), m = 0;
     if (!keep) error_exit(1, "out of memory");
     for (size_t i = 0; i < p->n; ++i) {
-        if (gate && p->wall[i] == WALL_ID_GATE) continue;
+        if (gate && p->wall[i] && (gate >> (p->wall[i] - 1) & 1)) continue;
         if (!gate && p->kind[i] == KIND_MATERIAL && (double)p->x[1][i] < s->step_c.outlet_below) {
             s->out_n++;
             s->out_cv += (double)p->C[i] * (double)p->vol[i];
@@ -278,7 +280,7 @@ static void parallel_start(sim_t *s, const ckpt_run *rs)
     halo_init(s->halo, p->dim, R(2.0) * s->seg.k.h, method, axis, arr, narr);
     halo_set_depth(s->halo, s->be->ghost_depth);
     if (per) { /* the periods are the container's, whole dr (setup_contexts) */
-        const real lo[3] = {0, 0, 0}, len[3] = {s->flow.w.width, 0, s->flow.w.depth};
+        const real lo[3] = {0, 0, 0}, len[3] = {s->flow.w.period[0], 0, s->flow.w.period[2]};
         halo_set_periodic(s->halo, per, lo, len);
     }
     /* METIS parts are coarse cells as wide as the ghost depth: a cut saved
@@ -486,10 +488,14 @@ static void run(sim_t *s, outputs *o, ckpt_run *rs)
     ckpt_clock_start(&ck, o->wall0, sc->run.max_wall_time, o->dir);
     ckpt_signals_stepping(); /* from here SIGTERM, SIGINT ask for a checkpoint; before, they end the run */
     while (s->t < sc->run.t_end) {
-        if (s->gate && s->t >= sc->walls.gate_open * (1 - 1e-12)) { /* the gate is lifted: its dummies leave */
-            drain(s, 0, 1);
-            s->gate = 0;
-            message("t = %.6g s: the gate is open (Walls:gate_open)", s->t);
+        unsigned lift = 0; /* the gates whose time has come: their dummies leave */
+        for (int k = 0; k < s->flow.w.n; ++k)
+            if ((s->gate >> k & 1) && s->t >= s->flow.w.prim[k].open_at * (1 - 1e-12)) lift |= 1u << k;
+        if (lift) {
+            drain(s, 0, lift);
+            s->gate &= ~lift;
+            for (int k = 0; k < s->flow.w.n; ++k)
+                if (lift >> k & 1) message("t = %.6g s: the gate is open (wall %s)", s->t, s->wall_name[k]);
         }
         double t_next = fmin(t_out, t_diag), dt = integrate_dt(s);
         if (s->t + dt >= t_next * (1 - 1e-12)) dt = t_next - s->t;
@@ -597,11 +603,14 @@ int main(int argc, char **argv)
     else
         setup_particles(&s); /* exits 2 if it would not fit */
     parallel_start(&s, c.restart ? &rs : NULL);
-    long long ng = 0; /* a gate still standing (Geometry:runout): in the store until Walls:gate_open */
-    for (size_t i = 0; i < s.p.n; ++i) ng += s.p.wall[i] == WALL_ID_GATE;
-    s.gate = comm_sum_ll(ng) > 0;
+    /* the gates still standing (a restart after one opened has none of its dummies) */
+    for (int k = 0; k < s.flow.w.n; ++k) {
+        long long ng = 0;
+        for (size_t i = 0; s.flow.w.prim[k].open_at >= 0 && i < s.p.n; ++i) ng += s.p.wall[i] == k + 1;
+        if (comm_sum_ll(ng) > 0) s.gate |= 1u << k;
+    }
     outputs o = {0, NULL, NULL, NULL, c.outdir ? c.outdir : default_outdir(c.scene), c.wall0,
-                 c.restart ? chosen : NULL, c.scene, &c, NULL};
+                 c.restart ? chosen : NULL, c.scene, &c, NULL, ""};
     make_dirs(o.dir);
     outdir_claim(o.dir, c.overwrite, o.restart); /* exits 2 if OUTDIR is in use or holds another run */
     char used[4200];
@@ -609,6 +618,7 @@ int main(int argc, char **argv)
     if (comm_rank() == 0 && scene_write_used(&sc, used) != 0)
         error_exit(EXIT_WRITE, "cannot write %s: %s", used, strerror(errno));
     o.text = scene_used_text(&sc);
+    wall_list(&s, 0, o.walls, sizeof o.walls);
     const char *scheme = !s.seg_on ? "off"
                          : sc.segregation.scheme == SEG_SCHEME_CONSERVATIVE ? "conservative"
                          : sc.segregation.scheme == SEG_SCHEME_DIRECT       ? "direct" : "paper";
@@ -616,6 +626,8 @@ int main(int argc, char **argv)
             "%d rank(s), backend %s, output %s", SPHSEG_VERSION, sc.path, s.n_material,
             (size_t)comm_sum_ll((long long)s.p.n) - s.n_material,
             (double)s.seg.k.h, s.flow_on ? "computed" : "prescribed", scheme, comm_size(), s.be->name, o.dir);
+    char wl[1024];
+    message("container: walls %s", wall_list(&s, 1, wl, sizeof wl));
     if (s.flow_on)
         message("flow: c_s = %.4g m/s, h/c_s = %.3g s, Shepard filter every %u steps, alpha_av = %g",
                 (double)s.flow.cs, (double)(s.seg.k.h / s.flow.cs), sc.flow.shepard_every, sc.flow.alpha_av);

@@ -41,7 +41,7 @@
 #define SEC(key, member, fields) CYAML_FIELD_MAPPING(key, OPT, struct scene, member, fields)
 
 static const cyaml_strval_t geom_types[] = {
-    {"shearbox", GEOM_SHEARBOX}, {"column", GEOM_COLUMN}, {"drum", GEOM_DRUM}};
+    {"shearbox", GEOM_SHEARBOX}, {"column", GEOM_COLUMN}, {"drum", GEOM_DRUM}, {"container", GEOM_CONTAINER}};
 static const cyaml_strval_t kin_types[] = {
     {"rest", KIN_REST}, {"oscillatory_shear", KIN_OSCILLATORY_SHEAR}, {"computed", KIN_COMPUTED}};
 static const cyaml_strval_t slips[] = {{"no_slip", SLIP_NO}, {"free_slip", SLIP_FREE}};
@@ -166,6 +166,55 @@ static const cyaml_schema_field_t walls_fields[] = {
     CYAML_FIELD_END,
 };
 
+static const cyaml_strval_t cwall_shapes[] = {{"segment", CWALL_SEGMENT}, {"cylinder", CWALL_CYLINDER}};
+static const cyaml_strval_t cwall_motions[] = {
+    {"fixed", CWALL_FIXED}, {"translating", CWALL_TRANSLATING}, {"turning", CWALL_TURNING}};
+static const cyaml_strval_t region_shapes[] = {{"box", REGION_BOX}, {"sector", REGION_SECTOR}, {"fill", REGION_FILL}};
+
+static const cyaml_schema_field_t cwall_fields[] = {
+    CYAML_FIELD_STRING_PTR("name", OPT, struct scene_wall, name, 1, 32),
+    ENM(scene_wall, shape, cwall_shapes),
+    CYAML_FIELD_SEQUENCE_FIXED("from", OPT, struct scene_wall, from, &gravity_entry, 2),
+    CYAML_FIELD_SEQUENCE_FIXED("to", OPT, struct scene_wall, to, &gravity_entry, 2),
+    CYAML_FIELD_SEQUENCE_FIXED("centre", OPT, struct scene_wall, centre, &gravity_entry, 2),
+    FLT(scene_wall, radius, OPT),
+    ENM(scene_wall, slip, slips),
+    ENM(scene_wall, motion, cwall_motions),
+    CYAML_FIELD_SEQUENCE_FIXED("velocity", OPT, struct scene_wall, velocity, &gravity_entry, 3),
+    FLT(scene_wall, rpm, OPT),
+    ENM(scene_wall, direction, rot_dirs),
+    FLT(scene_wall, open_at, OPT),
+    CYAML_FIELD_UINT("priority", OPT, struct scene_wall, priority),
+    CYAML_FIELD_END,
+};
+static const cyaml_schema_value_t cwall_entry = {CYAML_VALUE_MAPPING(CYAML_FLAG_DEFAULT, struct scene_wall, cwall_fields)};
+
+static const cyaml_schema_field_t region_fields[] = {
+    ENM(scene_region, shape, region_shapes),
+    CYAML_FIELD_SEQUENCE_FIXED("lo", OPT, struct scene_region, lo, &gravity_entry, 2),
+    CYAML_FIELD_SEQUENCE_FIXED("hi", OPT, struct scene_region, hi, &gravity_entry, 2),
+    CYAML_FIELD_SEQUENCE_FIXED("centre", OPT, struct scene_region, centre, &gravity_entry, 2),
+    FLT(scene_region, r_in, OPT),
+    FLT(scene_region, r_out, OPT),
+    FLT(scene_region, from_deg, OPT),
+    FLT(scene_region, to_deg, OPT),
+    FLT(scene_region, level, OPT),
+    FLT(scene_region, floor, OPT),
+    FLT(scene_region, C, OPT),
+    CYAML_FIELD_END,
+};
+static const cyaml_schema_value_t region_entry = {
+    CYAML_VALUE_MAPPING(CYAML_FLAG_DEFAULT, struct scene_region, region_fields)};
+
+/* Lists of mappings: the walk names an entry Section:key:K (K from 1). */
+static const cyaml_schema_field_t container_fields[] = {
+    CYAML_FIELD_SEQUENCE("walls", OPT | CYAML_FLAG_POINTER, struct scene_container, walls, &cwall_entry, 0,
+                         SCENE_WALLS_MAX),
+    CYAML_FIELD_SEQUENCE("regions", OPT | CYAML_FLAG_POINTER, struct scene_container, regions, &region_entry, 0,
+                         SCENE_REGIONS_MAX),
+    CYAML_FIELD_END,
+};
+
 static const cyaml_schema_field_t output_fields[] = {
     FLT(scene_output, dt, REQ),
     FLT(scene_output, diag_dt, OPT), /* default dt/20, set after loading */
@@ -209,6 +258,7 @@ static const cyaml_schema_field_t scene_fields[] = {
     SEC("Walls", walls, walls_fields),
     SEC("Parallel", parallel, parallel_fields),
     SEC("Outlet", outlet, outlet_fields),
+    SEC("Container", container, container_fields),
     CYAML_FIELD_END,
 };
 
@@ -370,7 +420,7 @@ static const struct scene_range scene_ranges[] = {
 
 /* ---- parse context and error messages ------------------------------------------ */
 
-enum { SCENE_MAX_LEAVES = 160, SCENE_MAX_DEPTH = 4, SCENE_NAME = 64 };
+enum { SCENE_MAX_LEAVES = 640, SCENE_MAX_DEPTH = 4, SCENE_NAME = 64 };
 
 /* A key the walk met: where it was set, for errors found after loading. */
 struct scene_leaf {
@@ -458,7 +508,7 @@ static int leaf_add(struct scene_ctx *c, const char *name, int line, int over)
 {
     if (c->n_leaf == SCENE_MAX_LEAVES) return fail(c, -1, line, name, "too many keys");
     struct scene_leaf *l = &c->leaf[c->n_leaf++];
-    snprintf(l->name, sizeof l->name, "%s", name);
+    snprintf(l->name, sizeof l->name, "%.63s", name);
     l->line = line;
     l->over = over;
     return 0;
@@ -910,6 +960,7 @@ static const char *type_word(const cyaml_schema_value_t *v)
     case CYAML_MAPPING:
         return "a section (a mapping of keys)";
     case CYAML_SEQUENCE_FIXED:
+    case CYAML_SEQUENCE:
         return "a list";
     default:
         return "a string";
@@ -969,6 +1020,29 @@ static int walk_seq(struct scene_ctx *c, yaml_node_t *n, const cyaml_schema_valu
     return 0;
 }
 
+/* A list of mappings (Container:walls): each entry, named name:K (K from 1),
+ * against the entry's fields. */
+static int walk_list(struct scene_ctx *c, int val, const cyaml_schema_value_t *v, int over, int line,
+                     const char *name)
+{
+    char item[SCENE_NAME + 24];
+    yaml_node_t *n = node(c, val);
+    if (n->type != YAML_SEQUENCE_NODE) return fail(c, over, line, name, "expected a list of mappings");
+    long count = (long)(n->data.sequence.items.top - n->data.sequence.items.start);
+    if (count > (long)v->sequence.max)
+        return fail(c, over, line, name, "at most %u entries, got %ld", v->sequence.max, count);
+    for (long i = 0; i < count; ++i) {
+        int e = node(c, val)->data.sequence.items.start[i];
+        int eline = node_origin(c, e) == -1 ? node_line(c, e) : 0;
+        snprintf(item, sizeof item, "%.40s:%ld", name, i + 1);
+        if (leaf_add(c, item, eline, node_origin(c, e))) return -1;
+        if (node(c, e)->type != YAML_MAPPING_NODE)
+            return fail(c, over, eline ? eline : line, item, "expected a mapping of keys");
+        if (walk_map(c, e, v->sequence.entry->mapping.fields, item, eline > 0 ? eline : line)) return -1;
+    }
+    return 0;
+}
+
 /* The value node val of key node key, named "Section:key". */
 static int walk_value(struct scene_ctx *c, int key, int val, const cyaml_schema_value_t *v, const char *name)
 {
@@ -982,6 +1056,7 @@ static int walk_value(struct scene_ctx *c, int key, int val, const cyaml_schema_
         return walk_map(c, val, v->mapping.fields, name, line > 0 ? line : 1);
     }
     if (v->type == CYAML_SEQUENCE_FIXED) return walk_seq(c, n, v, over, line, name);
+    if (v->type == CYAML_SEQUENCE) return walk_list(c, val, v, over, line, name);
     if (scalar_check(n, v, why, sizeof why)) return fail(c, over, line, name, "%s", why);
     return 0;
 }
@@ -1185,6 +1260,7 @@ static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g)
                        "a periodic axis needs a period of at least %d supports 2h = %.4g m, got %.4g",
                        SCENE_PERIOD_SUPPORTS, need, len);
     }
+    if (g->type == GEOM_CONTAINER) return 0; /* its walls and regions: check_container */
     if (g->type == GEOM_DRUM) {
         fmt_double(a, sizeof a, 8 * g->dr);
         fmt_double(b, sizeof b, g->radius);
@@ -1218,11 +1294,97 @@ static int check_every(struct scene_ctx *c, struct scene_segregation *g)
     return 0;
 }
 
-static int check_special(struct scene_ctx *c, const struct scene *s)
+/* Container:walls and :regions (Geometry:type container): each entry on
+ * its own, located as Container:walls:K:key; what needs the lattice
+ * (overlapping regions, a region beyond the walls) is found by the builder
+ * (setup_container.c). Sets each wall's gate flag and default name. */
+static int check_container(struct scene_ctx *c, struct scene *s)
+{
+    struct scene_container *k = &s->container;
+    char nm[SCENE_NAME + 40];
+    const double dr = s->geometry.dr;
+    if (s->geometry.type != GEOM_CONTAINER) {
+        if (k->walls_count) return fail_at(c, "Container:walls", "needs Geometry:type container");
+        if (k->regions_count) return fail_at(c, "Container:regions", "needs Geometry:type container");
+        return 0;
+    }
+    if (!k->walls_count) return fail_at(c, "Container:walls", "Geometry:type container needs at least one wall");
+    if (!k->regions_count)
+        return fail_at(c, "Container:regions", "Geometry:type container needs at least one region of material");
+    for (unsigned i = 0; i < k->walls_count; ++i) {
+        struct scene_wall *w = &k->walls[i];
+#define AT(key) (snprintf(nm, sizeof nm, "Container:walls:%u%s%s", i + 1, *(key) ? ":" : "", key), nm)
+        const double *v = w->velocity;
+        for (int a = 0; a < 2; ++a)
+            if (!isfinite(w->from[a]) || !isfinite(w->to[a]) || !isfinite(w->centre[a]))
+                return fail_at(c, AT(""), "a coordinate is not finite");
+        if (!isfinite(w->radius) || !isfinite(w->rpm) || !isfinite(w->open_at) || !isfinite(v[0]) ||
+            !isfinite(v[1]) || !isfinite(v[2]))
+            return fail_at(c, AT(""), "a value is not finite");
+        if (w->shape == CWALL_SEGMENT && hypot(w->to[0] - w->from[0], w->to[1] - w->from[1]) < 2 * dr)
+            return fail_at(c, AT("to"), "a segment must be at least 2 dr long (from and to too close)");
+        if (w->shape == CWALL_CYLINDER && !(w->radius >= 8 * dr))
+            return fail_at(c, AT("radius"), "must be >= 8 dr = %.4g m, got %.4g", 8 * dr, w->radius);
+        if (w->motion == CWALL_TURNING && w->shape != CWALL_CYLINDER)
+            return fail_at(c, AT("motion"), "only a cylinder turns (about its own axis)");
+        if (w->motion != CWALL_TURNING && w->rpm != 0) return fail_at(c, AT("rpm"), "needs motion turning");
+        if (!(w->rpm >= 0)) return fail_at(c, AT("rpm"), "must be >= 0, got %.4g", w->rpm);
+        if (w->motion != CWALL_TRANSLATING && (v[0] != 0 || v[1] != 0 || v[2] != 0))
+            return fail_at(c, AT("velocity"), "needs motion translating");
+        if (s->geometry.dim == 2 && v[2] != 0) return fail_at(c, AT("velocity"), "z entry must be 0 in 2D");
+        w->gate = leaf_find(c, AT("open_at")) != NULL;
+        if (w->gate && !(w->open_at >= 0))
+            return fail_at(c, AT("open_at"), "a gate opens at t >= 0, got %.4g", w->open_at);
+        if (w->gate && w->shape != CWALL_SEGMENT) return fail_at(c, AT("open_at"), "only a segment can be a gate");
+        if (w->priority > 100) return fail_at(c, AT("priority"), "must be <= 100, got %u", w->priority);
+        if (!w->name) {
+            char def[16];
+            snprintf(def, sizeof def, "wall%u", i + 1);
+            if (!(w->name = strdup(def))) return fail(c, -1, 0, NULL, "out of memory");
+        }
+        for (const char *q = w->name; *q; ++q)
+            if (!isalnum((unsigned char)*q) && *q != '_')
+                return fail_at(c, AT("name"), "letters, digits and _ only, got '%.32s'", w->name);
+        for (unsigned j = 0; j < i; ++j)
+            if (!strcmp(k->walls[j].name, w->name))
+                return fail_at(c, AT("name"), "'%s' names wall %u already", w->name, j + 1);
+        if (s->geometry.dim == 3 && (!strcmp(w->name, "zlo") || !strcmp(w->name, "zhi")))
+            return fail_at(c, AT("name"), "'%s' is the name of an end wall of a 3D container", w->name);
+#undef AT
+    }
+    for (unsigned i = 0; i < k->regions_count; ++i) {
+        const struct scene_region *r = &k->regions[i];
+#define AT(key) (snprintf(nm, sizeof nm, "Container:regions:%u%s%s", i + 1, *(key) ? ":" : "", key), nm)
+        const double vals[] = {r->lo[0], r->lo[1], r->hi[0], r->hi[1], r->centre[0], r->centre[1], r->r_in,
+                               r->r_out, r->from_deg, r->to_deg, r->level, r->C};
+        for (size_t q = 0; q < ARRAY_LEN(vals); ++q)
+            if (!isfinite(vals[q])) return fail_at(c, AT(""), "a value is not finite");
+        if (!(r->C >= 0 && r->C <= 1)) return fail_at(c, AT("C"), "must be in [0, 1], got %.4g", r->C);
+        if (r->shape == REGION_BOX && !(r->lo[0] < r->hi[0] && r->lo[1] < r->hi[1]))
+            return fail_at(c, AT("hi"), "must lie above and right of lo");
+        if (r->shape == REGION_SECTOR && !(r->r_in >= 0 && r->r_in < r->r_out))
+            return fail_at(c, AT("r_out"), "needs 0 <= r_in < r_out, got r_in %.4g, r_out %.4g", r->r_in, r->r_out);
+        ((struct scene_region *)r)->has_floor = leaf_find(c, AT("floor")) != NULL;
+        if (r->has_floor && !(r->floor < r->level))
+            return fail_at(c, AT("floor"), "must lie below level, got floor %.4g, level %.4g", r->floor, r->level);
+        if (r->shape == REGION_SECTOR && r->from_deg == r->to_deg)
+            return fail_at(c, AT("to_deg"), "an empty sector: from_deg equals to_deg");
+#undef AT
+    }
+    if (s->geometry.periodic != PERIODIC_NONE)
+        return fail_at(c, "Geometry:periodic", "needs Geometry:type column (a container's walls are listed)");
+    if (s->geometry.dim == 3 && s->geometry.depth < 4 * dr)
+        return fail_at(c, "Geometry:depth", "must be >= 4*dr = %.4g, got %.4g", 4 * dr, s->geometry.depth);
+    if (s->geometry.dim == 3 && k->walls_count > SCENE_WALLS_MAX)
+        return fail_at(c, "Container:walls", "at most %d walls", SCENE_WALLS_MAX);
+    return 0;
+}
+
+static int check_special(struct scene_ctx *c, struct scene *s)
 {
     const double *g = s->physics.gravity;
     const char *backend = s->run.backend ? s->run.backend : "";
-    if (check_geometry(c, &s->geometry)) return -1;
+    if (check_geometry(c, &s->geometry) || check_container(c, s)) return -1;
     if (!(s->material.mu_s <= s->material.mu_d))
         return fail_at(c, "Material:mu_d", "must be >= Material:mu_s");
     int box = s->geometry.type == GEOM_SHEARBOX, vel = s->kinematics.velocity;
@@ -1268,9 +1430,10 @@ static int check_special(struct scene_ctx *c, const struct scene *s)
           (s->geometry.dim == 2 || s->geometry.outlet_width <= s->geometry.depth - 2 * s->geometry.dr)))
         return fail_at(c, "Geometry:outlet_width", "%.4g m leaves less than 2 dr of base beside the opening",
                        s->geometry.outlet_width);
-    if (s->outlet.enabled && (s->geometry.type != GEOM_COLUMN || vel != KIN_COMPUTED))
-        return fail_at(c, "Outlet:enabled", "needs Geometry:type column and Kinematics:velocity computed");
-    if (s->outlet.enabled && !(s->outlet.below <= 0))
+    if (s->outlet.enabled &&
+        ((s->geometry.type != GEOM_COLUMN && s->geometry.type != GEOM_CONTAINER) || vel != KIN_COMPUTED))
+        return fail_at(c, "Outlet:enabled", "needs Geometry:type column or container and Kinematics:velocity computed");
+    if (s->outlet.enabled && s->geometry.type == GEOM_COLUMN && !(s->outlet.below <= 0))
         return fail_at(c, "Outlet:below", "must be at or below the base, y <= 0 (the plane would cut the material "
                        "at the start), got %.4g", s->outlet.below);
     if (s->geometry.periodic != PERIODIC_NONE && vel != KIN_COMPUTED)
@@ -1466,6 +1629,36 @@ static void put_value(struct buf *b, const cyaml_schema_value_t *v, const char *
     }
 }
 
+/* A list of mappings (field f of the section at base) as a block list of
+ * flow mappings, every key with its value but an absent name, the open_at
+ * of a wall that is not a gate and an absent floor; [] when empty. */
+static void put_list(struct buf *b, const cyaml_schema_field_t *f, const char *base)
+{
+    const char *items;
+    memcpy(&items, base + f->data_offset, sizeof items);
+    uint64_t count = read_uint(base + f->count_offset, f->count_size);
+    if (!count) buf_add(b, "[]");
+    const cyaml_schema_value_t *e = f->value.sequence.entry;
+    for (uint64_t i = 0; i < count; ++i) {
+        const char *it = items + i * e->data_size;
+        buf_add(b, "\n    - {");
+        int first = 1;
+        for (const cyaml_schema_field_t *g = e->mapping.fields; g->key; ++g) {
+            const char *str;
+            if (g->value.type == CYAML_STRING && (memcpy(&str, it + g->data_offset, sizeof str), !str)) continue;
+            if (e == &cwall_entry && !strcmp(g->key, "open_at") && !((const struct scene_wall *)(const void *)it)->gate)
+                continue;
+            if (e == &region_entry && !strcmp(g->key, "floor") &&
+                !((const struct scene_region *)(const void *)it)->has_floor)
+                continue;
+            buf_add(b, "%s%s: ", first ? "" : ", ", g->key);
+            put_value(b, &g->value, it + g->data_offset);
+            first = 0;
+        }
+        buf_add(b, "}");
+    }
+}
+
 char *scene_used_text(const struct scene *s)
 {
     struct buf b = {0};
@@ -1473,8 +1666,12 @@ char *scene_used_text(const struct scene *s)
     for (const cyaml_schema_field_t *sec = scene_fields; sec->key; ++sec) {
         buf_add(&b, "%s:\n", sec->key);
         for (const cyaml_schema_field_t *f = sec->value.mapping.fields; f->key; ++f) {
+            const char *base = (const char *)s + sec->data_offset;
             buf_add(&b, "  %s: ", f->key);
-            put_value(&b, &f->value, (const char *)s + sec->data_offset + f->data_offset);
+            if (f->value.type == CYAML_SEQUENCE)
+                put_list(&b, f, base);
+            else
+                put_value(&b, &f->value, base + f->data_offset);
             buf_add(&b, "\n");
         }
     }
@@ -1538,6 +1735,9 @@ void scene_free(struct scene *s)
         free(s->keys->over);
         free(s->keys);
     }
+    for (unsigned i = 0; i < s->container.walls_count; ++i) free(s->container.walls[i].name);
+    free(s->container.walls);
+    free(s->container.regions);
     free(s->run.backend);
     free(s->segregation.every);
     free(s->path);

@@ -12,7 +12,7 @@ enum seg_model { SEG_MODEL_CONSTANT = 0, SEG_MODEL_SHEAR_RATE = 1 };
  * gradients (App. E); direct: eq. (2.5) with the same boundaries (App. A);
  * conservative: pairwise antisymmetric fluxes, no source terms. */
 enum seg_scheme { SEG_SCHEME_PAPER = 0, SEG_SCHEME_DIRECT = 1, SEG_SCHEME_CONSERVATIVE = 2 };
-enum geom_type { GEOM_SHEARBOX = 0, GEOM_COLUMN = 1, GEOM_DRUM = 2 };
+enum geom_type { GEOM_SHEARBOX = 0, GEOM_COLUMN = 1, GEOM_DRUM = 2, GEOM_CONTAINER = 3 };
 /* Geometry:periodic, one bit per axis (bit d: axis d). */
 enum periodic_axes { PERIODIC_NONE = 0, PERIODIC_X = 1, PERIODIC_Z = 4, PERIODIC_XZ = 5 };
 /* rest and oscillatory_shear prescribe the velocity (no momentum or stress
@@ -41,13 +41,14 @@ struct scene_run {
 };
 
 struct scene_geometry {
-    enum geom_type type; /* shearbox | column | drum */
-    unsigned dim;        /* 2, or 3 for the column and the drum; default 2 */
+    enum geom_type type; /* shearbox | column | drum | container (the walls and regions of the Container
+                          * section); default shearbox */
+    unsigned dim;        /* 2, or 3 for the column, the drum and a container; default 2 */
     double dr;           /* initial particle spacing, m, required */
     double h_factor;     /* h = h_factor * dr; default 1.5 (lattice moments within 0.5 %, tests/test_kernel.c) */
     double height;       /* material height H, m; default 0.087 */
     double width;        /* box width, m; default 0.037 */
-    double depth;        /* 3D column: extent along z, m; default 0.037 */
+    double depth;        /* 3D column and container: extent along z, m; default 0.037 */
     double radius;       /* drum: inner radius R, m; default 0.035 */
     double length;       /* 3D drum: length along the axis (z) between the end walls, m; default 0.02 */
     double fill;         /* drum: filling level R_f = (H + R)/2R (paper §6), in (0,1); default 0.42 */
@@ -175,6 +176,59 @@ struct scene_outlet {
     double below; /* the plane's height y, m; default 0 */
 };
 
+/* A container described as data (Geometry:type container): its walls and
+ * its material, in the x-y plane; a 3D container is that section extruded
+ * along z over Geometry:depth, closed by end walls at z = 0 and z = depth
+ * (setup_container.c). */
+enum cwall_shape { CWALL_SEGMENT = 0, CWALL_CYLINDER = 1 };
+enum cwall_motion { CWALL_FIXED = 0, CWALL_TRANSLATING = 1, CWALL_TURNING = 2 };
+enum region_shape { REGION_BOX = 0, REGION_SECTOR = 1, REGION_FILL = 2 };
+
+/* One entry of Container:walls. */
+struct scene_wall {
+    char *name;               /* for the log and the snapshot header Walls; default wallK (K its place in the list) */
+    enum cwall_shape shape;   /* segment | cylinder; default segment */
+    double from[2], to[2];    /* segment: its ends (x, y), m; the material lies on its left going from -> to,
+                               * so a closed container lists its walls counter-clockwise */
+    double centre[2];         /* cylinder: its axis (along z) at (x, y), m */
+    double radius;            /* cylinder: inner radius, m; the material inside */
+    enum wall_slip slip;      /* no_slip (4.1) | free_slip (4.2); default no_slip */
+    enum cwall_motion motion; /* fixed | translating | turning (a cylinder about its axis); default fixed */
+    double velocity[3];       /* translating: m/s; default [0, 0, 0] */
+    double rpm;               /* turning: rev/min, >= 0 */
+    enum rot_dir direction;   /* turning: clockwise | counterclockwise (seen with y up); default clockwise */
+    double open_at;           /* s, >= 0: the wall is a gate, removed at this time; absent: it stays */
+    unsigned priority;        /* a lattice site behind two walls is a dummy of the one of higher priority,
+                               * else of the one it lies further behind (a box's base: 1, keeping its
+                               * corners); default 0; a gate's are taken last */
+    int gate;                 /* set by the checks: open_at was given */
+};
+
+/* One entry of Container:regions: where the material is at the start and
+ * its C. Regions must not overlap and must lie inside the walls. */
+struct scene_region {
+    enum region_shape shape; /* box | sector | fill; default box */
+    double lo[2], hi[2];     /* box: lower-left and upper-right corners (x, y), m */
+    double centre[2];        /* sector: centre (x, y), m */
+    double r_in, r_out;      /* sector: radii, m, 0 <= r_in < r_out */
+    double from_deg, to_deg; /* sector: counter-clockwise from from_deg to to_deg, degrees from +x */
+    double level;            /* fill: everything inside the walls below y = level, m */
+    double floor;            /* fill: and at or above y = floor, m; absent: no lower bound */
+    int has_floor;           /* set by the checks: floor was given */
+    double C;                /* initial small-grain concentration, [0, 1]; default 0 */
+};
+
+struct scene_container {
+    struct scene_wall *walls;
+    unsigned walls_count;
+    struct scene_region *regions;
+    unsigned regions_count;
+};
+
+/* The most walls and regions a container lists (the end walls of 3D take
+ * two of the wall primitives, WALL_PRIM_MAX). */
+enum { SCENE_WALLS_MAX = 10, SCENE_REGIONS_MAX = 32 };
+
 struct scene_keys; /* where each key was set (scene.c) */
 
 struct scene {
@@ -191,6 +245,7 @@ struct scene {
     struct scene_walls walls;
     struct scene_parallel parallel;
     struct scene_outlet outlet;
+    struct scene_container container;
     char *path; /* the scene file as given */
     char *text; /* the scene file's text, for snapshot headers */
     struct scene_keys *keys; /* for scene_key_line / scene_key_where */

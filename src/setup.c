@@ -8,10 +8,11 @@
  * Drum (2D and 3D) and 3D column below. */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 #include <unistd.h>
 #include "error.h"
 #include "mpi/comm.h"
-#include "sim.h"
+#include "setup.h"
 
 typedef struct box_layout {
     long nx, ny, nl; /* material columns, rows; dummy layers */
@@ -45,7 +46,7 @@ static struct {
 
 /* Allocate this rank's share of n particles; exit with status 2 if it
  * would not fit in this machine. */
-static void setup_alloc(const struct scene *sc, particles_t *p, int dim, size_t n)
+void setup_alloc(const struct scene *sc, particles_t *p, int dim, size_t n)
 {
     size_t r = (size_t)comm_rank(), P = (size_t)comm_size();
     setup_win.lo = n * r / P, setup_win.hi = n * (r + 1) / P;
@@ -62,7 +63,7 @@ static void setup_alloc(const struct scene *sc, particles_t *p, int dim, size_t 
 
 /* Particle k of the scene at (x, y, z), stored if it is in this rank's
  * share; C is set for material only. */
-static void setup_put(particles_t *p, size_t k, double x, double y, double z, int kind, double vol, double C)
+void setup_put(particles_t *p, size_t k, double x, double y, double z, int kind, double vol, double C)
 {
     if (k < setup_win.lo || k >= setup_win.hi) return;
     size_t i = k - setup_win.lo;
@@ -77,8 +78,13 @@ static void setup_put(particles_t *p, size_t k, double x, double y, double z, in
     if (kind == KIND_MATERIAL) p->C[i] = (real)C;
 }
 
+void setup_put_wall(particles_t *p, size_t k, int id)
+{
+    if (k >= setup_win.lo && k < setup_win.hi) p->wall[k - setup_win.lo] = (uint8_t)id;
+}
+
 /* This rank's particles once the scene's first k are placed. */
-static size_t setup_count(size_t k)
+size_t setup_count(size_t k)
 {
     return k <= setup_win.lo ? 0 : (k < setup_win.hi ? k : setup_win.hi) - setup_win.lo;
 }
@@ -111,12 +117,12 @@ static void setup_box(sim_t *s)
     for (long l = 0; sc->geometry.lid && l < b.nl; ++l) /* the lid, nl layers over the material */
         for (long i = -b.ns; i < b.nx + b.ns; ++i, ++k) {
             setup_put(p, k, (i + 0.5) * dr, H + (l + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
-            if (k >= setup_win.lo && k < setup_win.hi) p->wall[k - setup_win.lo] = WALL_ID_LID;
+            if (k >= setup_win.lo && k < setup_win.hi) p->wall[k - setup_win.lo] = (uint8_t)wall_named(s, "lid");
         }
     for (long j = 0; b.nr && j < b.ny + b.nl; ++j) /* the gate, nl layers past the material */
         for (long l = 0; l < b.nl; ++l, ++k) {
             setup_put(p, k, (b.nx + l + 0.5) * dr, (j + 0.5) * dr, 0, KIND_DUMMY, vol, 0);
-            if (k >= setup_win.lo && k < setup_win.hi) p->wall[k - setup_win.lo] = WALL_ID_GATE;
+            if (k >= setup_win.lo && k < setup_win.hi) p->wall[k - setup_win.lo] = (uint8_t)wall_named(s, "gate");
         }
     p->n = setup_count(k);
     s->n_material = b.n_mat;
@@ -289,7 +295,7 @@ static void setup_box3d(sim_t *s)
                     setup_put(p, k, (i + 0.5) * dr, y, (q + 0.5) * dr, mat ? KIND_MATERIAL : KIND_DUMMY, vol,
                               y <= split ? sc->initial.C_below : sc->initial.C_above);
                     if ((gate || lid) && k >= setup_win.lo && k < setup_win.hi)
-                        p->wall[k - setup_win.lo] = gate ? WALL_ID_GATE : WALL_ID_LID;
+                        p->wall[k - setup_win.lo] = (uint8_t)wall_named(s, gate ? "gate" : "lid");
                     ++k;
                 }
     p->n = setup_count(k);
@@ -297,23 +303,151 @@ static void setup_box3d(sim_t *s)
     s->surface_y = H;
 }
 
-/* Every dummy's wall (particles_t.wall) from its reference position, by
- * the rule of wall_normal; the gate's were set where they were placed. */
+/* Every dummy's wall (particles_t.wall) from its reference position,
+ * wall_id_at; the gate's and the lid's were set where they were placed. */
 static void setup_walls(sim_t *s)
 {
     particles_t *p = &s->p;
     for (size_t i = 0; i < p->n; ++i) {
         if (p->kind[i] != KIND_DUMMY || p->wall[i]) continue;
         real X0[3] = {p->X0[0][i], p->X0[1][i], p->X0[2][i]};
-        p->wall[i] = (uint8_t)wall_id_at(&s->flow.w, X0);
+        int id = wall_id_at(&s->flow.w, X0);
+        if (!id) error_exit(1, "setup: dummy %lld at (%g, %g, %g) m lies beyond no wall", (long long)p->id[i],
+                            (double)X0[0], (double)X0[1], (double)X0[2]);
+        p->wall[i] = (uint8_t)id;
     }
+}
+
+/* The container's wall primitives (wall.h) of the built-in scenes. */
+
+/* Appends a primitive named `name` with the motion of the scene's walls
+ * (the box's translation, Walls:velocity); returns it for the caller to
+ * shape. */
+wall_prim *wall_add_prim(sim_t *s, const char *name, int shape, int slip, int bound, int claim)
+{
+    wall_geom *w = &s->flow.w;
+    if (w->n >= WALL_PRIM_MAX) error_exit(1, "setup: more than %d wall primitives", WALL_PRIM_MAX);
+    wall_prim *q = &w->prim[w->n];
+    memset(q, 0, sizeof *q);
+    s->wall_name[w->n++] = name;
+    q->shape = shape, q->slip = slip, q->bound = bound, q->claim = claim;
+    q->open_at = -1;
+    q->t_lo = (real)-1e30, q->t_hi = (real)1e30; /* unbounded */
+    const double *u = s->sc->walls.velocity;
+    if (u[0] != 0 || u[1] != 0 || u[2] != 0) {
+        q->move = WALL_TRANSLATE;
+        for (int d = 0; d < 3; ++d) q->u[d] = (real)u[d];
+    }
+    return q;
+}
+
+wall_prim *wall_plane(sim_t *s, const char *name, int slip, int bound, int claim, double px, double py,
+                             double pz, double nx, double ny, double nz)
+{
+    wall_prim *q = wall_add_prim(s, name, WALL_PLANE, slip, bound, claim);
+    q->p[0] = (real)px, q->p[1] = (real)py, q->p[2] = (real)pz;
+    q->n[0] = (real)nx, q->n[1] = (real)ny, q->n[2] = (real)nz;
+    return q;
+}
+
+/* Shear box and column: the base y = 0 (its corners; not bounding when an
+ * outlet opens it), the side walls x = 0 and x = width and in 3D z = 0 and
+ * z = depth (none across a periodic axis), the gate x = width of the
+ * material with a runout, the lid y = height. Widths in whole dr, the
+ * runout included, as the particles are placed. */
+static void walls_box(sim_t *s)
+{
+    const struct scene *sc = s->sc;
+    const struct scene_geometry *g = &sc->geometry;
+    double dr = g->dr, W = (double)(lround(g->width / dr) + lround(g->runout / dr)) * dr;
+    double D = g->dim == 3 ? (double)lround(g->depth / dr) * dr : 0.0, H = (double)lround(g->height / dr) * dr;
+    int sb = sc->walls.slip == SLIP_FREE, ss = sc->walls.side_slip == SLIP_FREE;
+    wall_plane(s, "base", sb, !sc->outlet.enabled, WALL_CLAIM_FIRST, 0, 0, 0, 0, 1, 0);
+    if (!(g->periodic & PERIODIC_X)) {
+        wall_plane(s, "xlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 1, 0, 0);
+        wall_plane(s, "xhi", ss, 1, WALL_CLAIM_SIDE, W, 0, 0, -1, 0, 0);
+    }
+    if (g->dim == 3 && !(g->periodic & PERIODIC_Z)) {
+        wall_plane(s, "zlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
+        wall_plane(s, "zhi", ss, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1);
+    }
+    if (g->runout > 0)
+        wall_plane(s, "gate", ss, 0, WALL_CLAIM_NONE, (double)lround(g->width / dr) * dr, 0, 0, -1, 0, 0)->open_at =
+            sc->walls.gate_open;
+    if (g->lid) wall_plane(s, "lid", sb, 1, WALL_CLAIM_NONE, 0, H, 0, 0, -1, 0);
+    s->flow.w.period[0] = (real)W, s->flow.w.period[2] = (real)D;
+}
+
+/* Drum: the cylinder r = R about the z axis and in 3D the end walls z = 0
+ * and z = length (whole dr), all turning at Walls:rpm; the cylinder first,
+ * so that it takes the corner dummies on a tie. */
+static void walls_drum(sim_t *s)
+{
+    const struct scene *sc = s->sc;
+    const struct scene_geometry *g = &sc->geometry;
+    int sb = sc->walls.slip == SLIP_FREE;
+    double omega = sc->walls.rpm * 2.0 * M_PI / 60.0 * (sc->walls.direction == ROT_CLOCKWISE ? -1.0 : 1.0);
+    double L = (double)lround(g->length / g->dr) * g->dr;
+    wall_prim *q[3] = {wall_add_prim(s, "drum", WALL_CYLINDER, sb, 1, WALL_CLAIM_SIDE), NULL, NULL};
+    q[0]->radius = (real)g->radius;
+    if (g->dim == 3) {
+        q[1] = wall_plane(s, "end_lo", sb, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
+        q[2] = wall_plane(s, "end_hi", sb, 1, WALL_CLAIM_SIDE, 0, 0, L, 0, 0, -1);
+    }
+    for (int k = 0; k < 3; ++k)
+        if (q[k]) q[k]->move = WALL_ROTATE, q[k]->omega = omega; /* about the z axis, c = 0 */
+}
+
+/* The built-in containers, one row each: which scenes it serves, its walls
+ * and its particles. */
+static const struct setup_builder {
+    enum geom_type type;
+    unsigned dim; /* 0: either */
+    void (*walls)(sim_t *);
+    void (*place)(sim_t *);
+} setup_builders[] = {
+    {GEOM_SHEARBOX, 2, walls_box, setup_box},
+    {GEOM_COLUMN, 2, walls_box, setup_box},
+    {GEOM_COLUMN, 3, walls_box, setup_box3d},
+    {GEOM_DRUM, 0, walls_drum, setup_drum},
+    {GEOM_CONTAINER, 0, container_walls, container_place}, /* setup_container.c */
+};
+
+static const struct setup_builder *setup_builder_of(const struct scene *sc)
+{
+    for (size_t k = 0; k < sizeof setup_builders / sizeof *setup_builders; ++k)
+        if (setup_builders[k].type == sc->geometry.type &&
+            (!setup_builders[k].dim || setup_builders[k].dim == sc->geometry.dim))
+            return &setup_builders[k];
+    error_exit(1, "setup: no builder for Geometry:type %d in %uD", (int)sc->geometry.type, sc->geometry.dim);
+    return NULL;
+}
+
+int wall_named(const sim_t *s, const char *name)
+{
+    for (int k = 0; k < s->flow.w.n; ++k)
+        if (!strcmp(s->wall_name[k], name)) return k + 1;
+    return 0;
+}
+
+char *wall_list(const sim_t *s, int longer, char *buf, size_t n)
+{
+    static const char *move[] = {"fixed", "translating", "turning"};
+    size_t k = 0;
+    buf[0] = 0;
+    for (int i = 0; i < s->flow.w.n && k < n; ++i) {
+        const wall_prim *q = &s->flow.w.prim[i];
+        k += (size_t)snprintf(buf + k, n - k, "%s%d %s", i ? ", " : "", i + 1, s->wall_name[i]);
+        if (longer && k < n)
+            k += (size_t)snprintf(buf + k, n - k, " (%s, %s, %s%s)", q->shape == WALL_CYLINDER ? "cylinder" : "plane",
+                                  q->slip ? "free slip" : "no slip", move[q->move], q->open_at >= 0 ? ", a gate" : "");
+    }
+    return buf;
 }
 
 void setup_particles(sim_t *s)
 {
-    if (s->sc->geometry.type == GEOM_DRUM) setup_drum(s);
-    else if (s->sc->geometry.dim == 3) setup_box3d(s);
-    else setup_box(s);
+    setup_builder_of(s->sc)->place(s);
     setup_walls(s);
     if (s->flow_on) setup_stress(s);
 }
@@ -388,18 +522,9 @@ void setup_contexts(sim_t *s)
     for (int d = 0; d < 3; ++d) f->g[d] = (real)gv[d];
     f->sp = *sp;
     wall_geom *w = &f->w;
-    w->type = sc->geometry.type == GEOM_DRUM ? WALL_DRUM : WALL_BOX;
-    w->width = (real)((lround(sc->geometry.width / sc->geometry.dr) + lround(sc->geometry.runout / sc->geometry.dr)) *
-                      sc->geometry.dr); /* the container's, the runout included */
-    double zlen = sc->geometry.type == GEOM_DRUM ? sc->geometry.length : sc->geometry.depth; /* as setup_*: whole dr */
-    w->depth = sc->geometry.dim == 3 ? (real)(lround(zlen / sc->geometry.dr) * sc->geometry.dr) : 0;
-    w->centre[0] = w->centre[1] = w->centre[2] = 0;
-    w->radius = (real)sc->geometry.radius;
-    w->omega = sc->walls.rpm * 2.0 * M_PI / 60.0 * (sc->walls.direction == ROT_CLOCKWISE ? -1.0 : 1.0);
-    w->slip_base = sc->walls.slip == SLIP_FREE;
-    w->slip_sides = sc->walls.side_slip == SLIP_FREE;
-    for (int d = 0; d < 3; ++d) w->u[d] = (real)sc->walls.velocity[d];
+    memset(w, 0, sizeof *w);
     w->periodic = (int)sc->geometry.periodic;
+    setup_builder_of(sc)->walls(s);
 
     step_ctx *st = &s->step_c;
     st->h = s->seg.k.h;

@@ -101,6 +101,7 @@ typedef struct sim {
     seg_ctx seg;
     kin_params kin;
     flow_ctx flow;
+    const char *wall_name[WALL_PRIM_MAX]; /* the name of each wall primitive of flow.w (setup.c builders) */
     step_ctx step_c;   /* time-step bounds and blow-up guard */
     int flow_on;       /* Kinematics:velocity computed: momentum and stress solved */
     int seg_on;        /* Segregation:enabled: the concentration equation solved */
@@ -115,12 +116,18 @@ typedef struct sim {
     size_t n_material; /* material particles (set by setup; all ranks together) */
     long long out_n;   /* Outlet: material particles that left the run through it, on this rank */
     double out_cv;     /* Outlet: their sum C_i V_i (diagnostics: inside plus outflow is conserved) */
-    int gate;          /* the gate's dummies (Geometry:runout) are still in the store */
+    unsigned gate;     /* bit k: the dummies of gate primitive k (flow.w.prim[k].open_at >= 0) are still in the store */
 } sim_t;
 
 /* Build the particles of the scene at t = 0 (src/setup.c). Exits with status
  * 2 if the resolution needs more memory than the machine has. */
 void setup_particles(sim_t *s);
+/* The 1-based id of the wall primitive called `name` ("base", "gate", "drum", ...), 0 if none. */
+int wall_named(const sim_t *s, const char *name);
+/* The container's wall primitives into buf[n], "ID NAME" each, comma
+ * separated ("1 base, 2 xlo, 3 xhi"); long: with each one's shape, slip and
+ * motion, for the log. Returns buf. */
+char *wall_list(const sim_t *s, int longer, char *buf, size_t n);
 /* Fill the physics contexts from the scene. */
 void setup_contexts(sim_t *s);
 

@@ -8,6 +8,11 @@ validate_restart and the single-case validations run the same cases).
   SILO      a 2D silo with a 1.25 cm opening over an outlet 2 cm below the base,
             a bidisperse fill (validate_outlet.py)
   COLLAPSE  a 5 cm column held by a gate lifted at 0.01 s over a 10 cm runout
+  HOPPER    inputs/hopper_2d.yml (Geometry:type container) at dr 2 mm: a bin on a
+            45-degree hopper, its opening gated until 0.05 s, three layers
+  HOPPER_3D the same extruded 2.4 cm along z (dr 4 mm)
+  COLUMN_AS_CONTAINER, DRUM_AS_CONTAINER  inputs/column_2d.yml and
+            inputs/drum_2d_EN.yml written as containers (validate_container.py)
 """
 CHUTE = ["Geometry:dr=0.0025", "Geometry:height=0.03", "Geometry:periodic=x", "Material:E=1e5",
          "Flow:damping_until=0", "Physics:gravity=[6.306,-7.515,0]"]
@@ -28,6 +33,24 @@ CHANNEL = ["Material:model=newtonian", "Material:eta=1.5", "Material:E=1800", "G
            "Geometry:lid=on", "Geometry:dr=0.0005", "Geometry:height=0.01", "Geometry:width=0.01",
            "Physics:gravity=[2,0,0]", "Flow:alpha_av=0", "Flow:damping_until=0", "Initial:stress=zero"]
 
+HOPPER = ["Geometry:dr=0.002"]
+HOPPER_3D = ["Geometry:dim=3", "Geometry:depth=0.024", "Geometry:dr=0.004"]
+# column_2d.yml's box at dr = 2.5 mm as a list of walls: the base keeps its
+# corners (priority 1), as the built-in column's does; side walls as high as
+# the built-in ones (the material plus nl = 3 layers)
+COLUMN_AS_CONTAINER = [
+    "Geometry:type=container",
+    "Container:walls=[{name: base, from: [0, 0], to: [0.05, 0], priority: 1},"
+    " {name: xhi, from: [0.05, 0], to: [0.05, 0.1075], slip: free_slip},"
+    " {name: xlo, from: [0, 0.1075], to: [0, 0], slip: free_slip}]",
+    "Container:regions=[{lo: [0, 0], hi: [0.05, 0.1]}]"]
+# drum_2d_EN.yml as a turning cylinder filled to H = (2 R_f - 1) R =
+# 0.00637 m, in two layers split at -R + 0.5 (H + R) = -0.014315 m (both
+# C = 0.11, as the scene's Initial section)
+DRUM_AS_CONTAINER = [
+    "Geometry:type=container",
+    "Container:walls=[{name: drum, shape: cylinder, centre: [0, 0], radius: 0.035, motion: turning, rpm: 5}]",
+    "Container:regions=[{shape: fill, level: -0.014315, C: 0.11}, {shape: fill, floor: -0.014315, level: 0.00637, C: 0.11}]"]
 
 def row_profile(s, dr):
     """The material of snapshot s by lattice row (y = (j + 1/2) dr): each row's

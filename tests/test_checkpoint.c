@@ -29,6 +29,9 @@
 
 static char g_dir[64];
 static int g_rank, g_size;
+/* The wall primitives of the container the rows refer to (setup_contexts
+ * builds them in a run; ckpt_read refuses a wall id past them). */
+enum { NWALLS = 7 };
 
 /* Byte b of element i of array k on rank r: never the same pattern twice. */
 static uint8_t ref_byte(size_t k, int r, size_t i, size_t b)
@@ -48,7 +51,7 @@ static void fill_store(particles_t *p, size_t n)
     }
     for (size_t i = 0; i < n; ++i) { /* the arrays ckpt_read checks for range hold valid values */
         p->kind[i] = (uint8_t)(i % 3 == 0);
-        p->wall[i] = (uint8_t)(p->kind[i] ? 1 + i % 7 : 0); /* a dummy has a wall, material none */
+        p->wall[i] = (uint8_t)(p->kind[i] ? 1 + i % NWALLS : 0); /* a dummy has a wall, material none */
         p->bclass[i] = (uint8_t)(i % 6);
         p->id[i] = (int64_t)(1000 * g_rank + (int)i);
         p->vol[i] = (real)(1e-6 * (1 + (double)i));
@@ -124,6 +127,7 @@ static void test_round_trip(void **state)
     load_scene(&sc);
     sim_t a = {0}, b = {0};
     a.sc = b.sc = &sc;
+    a.flow.w.n = b.flow.w.n = NWALLS;
     size_t n = 50 + 13 * (size_t)g_rank; /* unequal blocks */
     fill_store(&a.p, n);
     a.t = 1.2345678901234567, a.step = 4242, a.dt = 3.3e-5, a.amax = 98.765;
@@ -161,11 +165,13 @@ static void test_round_trip(void **state)
     sim_t c = {0};
     ckpt_run rc = {0};
     c.sc = &sc;
+    c.flow.w.n = NWALLS;
     ckpt_read(prev, &c, &rc, chosen, sizeof chosen);
     assert_int_equal(c.step, 4242);
     sim_t e = {0}; /* the directory: its newest valid checkpoint */
     ckpt_run re = {0};
     e.sc = &sc;
+    e.flow.w.n = NWALLS;
     ckpt_read(g_dir, &e, &re, chosen, sizeof chosen);
     assert_int_equal(e.step, 4243);
     assert_string_equal(chosen, cur);
@@ -221,6 +227,7 @@ static void test_other_rank_count(void **state)
     load_scene(&sc);
     sim_t a = {0}, b = {0};
     a.sc = b.sc = &sc;
+    a.flow.w.n = b.flow.w.n = NWALLS;
     fill_store(&a.p, 20 + 7 * (size_t)g_rank);
     ckpt_run ra = {0}, rb = {0};
     char *text = scene_used_text(&sc), path[128];

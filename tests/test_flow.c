@@ -49,6 +49,57 @@
 
 static const double DR = 1e-3;
 
+/* The walls of a 2D box of width W (wall.h): the base, claiming its
+ * corners, and side walls at x = 0 and W, at rest, no slip at the base and
+ * free slip at the sides (as setup.c builds them). */
+static wall_prim plane(double px, double py, double nx, double ny, int slip, int claim)
+{
+    wall_prim q;
+    memset(&q, 0, sizeof q);
+    q.shape = WALL_PLANE, q.slip = slip, q.bound = 1, q.claim = claim, q.open_at = -1;
+    q.p[0] = (real)px, q.p[1] = (real)py, q.n[0] = (real)nx, q.n[1] = (real)ny;
+    return q;
+}
+
+static wall_geom box_walls(double W)
+{
+    wall_geom w;
+    memset(&w, 0, sizeof w);
+    w.prim[w.n++] = plane(0, 0, 0, 1, 0, WALL_CLAIM_FIRST);
+    w.prim[w.n++] = plane(0, 0, 1, 0, 1, WALL_CLAIM_SIDE);
+    w.prim[w.n++] = plane(W, 0, -1, 0, 1, WALL_CLAIM_SIDE);
+    return w;
+}
+
+/* A drum of radius R about the origin turning at omega (rad/s), in 3D
+ * (L > 0) with end walls at z = 0 and L; the cylinder listed first. */
+static wall_geom drum_walls(double R, double L, double omega)
+{
+    wall_geom w;
+    memset(&w, 0, sizeof w);
+    wall_prim c;
+    memset(&c, 0, sizeof c);
+    c.shape = WALL_CYLINDER, c.radius = (real)R, c.bound = 1, c.claim = WALL_CLAIM_SIDE, c.open_at = -1;
+    w.prim[w.n++] = c;
+    if (L > 0) {
+        w.prim[w.n] = plane(0, 0, 0, 0, 0, WALL_CLAIM_SIDE), w.prim[w.n].n[2] = 1, w.n++;
+        w.prim[w.n] = plane(0, 0, 0, 0, 0, WALL_CLAIM_SIDE), w.prim[w.n].n[2] = -1, w.prim[w.n].p[2] = (real)L, w.n++;
+    }
+    for (int k = 0; k < w.n; ++k) w.prim[k].move = WALL_ROTATE, w.prim[k].omega = omega;
+    return w;
+}
+
+/* Every dummy's wall from its reference position, as setup.c does. */
+static void assign_walls(particles_t *p, const wall_geom *w)
+{
+    for (size_t i = 0; i < p->n; ++i) {
+        if (p->kind[i] != KIND_DUMMY) continue;
+        real X0[3] = {p->X0[0][i], p->X0[1][i], p->X0[2][i]};
+        p->wall[i] = (uint8_t)wall_id_at(w, X0);
+        assert_true(p->wall[i] > 0);
+    }
+}
+
 static flow_ctx make_ctx(void)
 {
     flow_ctx c;
@@ -62,7 +113,7 @@ static flow_ctx make_ctx(void)
     c.alpha_av = (real)0.1;
     c.g[1] = (real)-9.81;
     c.sp.d_small = (real)0.25e-3, c.sp.d_large = (real)0.5e-3;
-    c.w.type = WALL_BOX;
+    c.w = box_walls(1.0);
     return c;
 }
 
@@ -377,10 +428,10 @@ static void test_drum_dummy_stress(void **st)
     particles_t p;
     nbr_grid g = {0};
     flow_ctx c = make_ctx();
-    c.w.type = WALL_DRUM, c.w.radius = (real)0.03, c.w.omega = 60; /* a_w = 108 m/s^2 at r = R */
+    c.w = drum_walls(0.03, 0, 60); /* a_w = 108 m/s^2 at r = R */
     double xd = 0.0305, yd = 0.0005, P0 = 5000, V = DR * DR;
     real aw[3], xdv[3] = {(real)xd, (real)yd, 0};
-    wall_accel(&c.w, xdv, aw);
+    wall_accel(&c.w, 1, xdv, aw);
     double geff[2] = {c.g[0] - aw[0], c.g[1] - aw[1]};
     assert_true(fabs(aw[0] + 60.0 * 60.0 * xd) < RT(1e-9) * 100); /* centripetal, towards the axis */
     part_alloc(&p, 2, 64);
@@ -394,6 +445,7 @@ static void test_drum_dummy_stress(void **st)
             p.sig[1][k] = (real)(-P0 - c.rho * geff[1] * (y - yd));
             p.sig[2][k] = (real)-P0;
         }
+    assign_walls(&p, &c.w);
     nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
     size_t d = tu_find(&p, 0);
     flow_wall(d, &p, &g.view, &c);
@@ -411,6 +463,8 @@ static void test_dummy_above_surface(void **st)
     int n = 8;
     double H = n * DR, rg = c.rho * 9.81;
     tu_block2d(&p, n, n, DR, 3, 3); /* side walls reach 3 rows above the material */
+    c.w = box_walls(n * DR);
+    assign_walls(&p, &c.w);
     for (size_t k = 0; k < p.n; ++k)
         p.sig[1][k] = (real)(p.kind[k] == KIND_MATERIAL ? -rg * (H - p.x[1][k]) : 0);
     nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
@@ -434,48 +488,50 @@ static void test_dummy_above_surface(void **st)
 static void test_drum_wall_motion(void **st)
 {
     (void)st;
-    wall_geom w;
-    memset(&w, 0, sizeof w);
-    w.type = WALL_DRUM;
-    w.radius = (real)0.035;
-    w.omega = -5 * 2 * M_PI / 60; /* 5 rpm clockwise */
+    const double omega = -5 * 2 * M_PI / 60; /* 5 rpm clockwise */
+    wall_geom w = drum_walls(0.035, 0, omega);
+    w.prim[0].slip = 1;
     real X0[3] = {(real)0.036, 0, 0}, x[3], u[3];
     double t = 1.5;
-    wall_motion(&w, X0, t, x, u);
+    assert_int_equal(wall_id_at(&w, X0), 1);
+    wall_motion(&w, 1, X0, t, x, u);
     assert_true(fabs(hypot(x[0], x[1]) - 0.036) < RT(1e-14));
-    assert_true(fabs(atan2(x[1], x[0]) - w.omega * t) < RT(1e-12));
-    assert_true(fabs(u[0] + w.omega * x[1]) < RT(1e-14) && fabs(u[1] - w.omega * x[0]) < RT(1e-14));
-    real n[3];
-    w.slip_base = 1;
-    assert_int_equal(wall_normal(&w, x, n), 1);
+    assert_true(fabs(atan2(x[1], x[0]) - omega * t) < RT(1e-12));
+    assert_true(fabs(u[0] + omega * x[1]) < RT(1e-14) && fabs(u[1] - omega * x[0]) < RT(1e-14));
+    real n[3], uw[3];
+    wall_velocity_at(&w.prim[0], x, uw); /* the velocity at the point it has now, as the motion's */
+    assert_true(fabs(uw[0] - u[0]) < RT(1e-14) && fabs(uw[1] - u[1]) < RT(1e-14));
+    assert_int_equal(wall_normal_of(&w, 1, x, n), 1);
     assert_true(fabs(n[0] * x[0] + n[1] * x[1] + 0.036) < RT(1e-12)); /* points to the centre */
 }
 
 static void test_box_translation(void **st)
 {
     (void)st;
-    wall_geom w;
-    memset(&w, 0, sizeof w);
-    w.type = WALL_BOX;
-    w.width = (real)0.05;
-    w.u[0] = (real)0.1, w.u[1] = (real)-0.02;
+    wall_geom w = box_walls(0.05);
+    for (int k = 0; k < w.n; ++k) w.prim[k].move = WALL_TRANSLATE, w.prim[k].u[0] = (real)0.1, w.prim[k].u[1] = (real)-0.02;
     real X0[3] = {(real)-0.001, (real)0.02, 0}, x[3], u[3], n[3];
-    wall_motion(&w, X0, 2.0, x, u);
+    int id = wall_id_at(&w, X0);
+    assert_int_equal(id, 2); /* the left wall */
+    wall_motion(&w, id, X0, 2.0, x, u);
     assert_true(fabs(x[0] - (-0.001 + 0.2)) < RT(1e-14) && fabs(x[1] - (0.02 - 0.04)) < RT(1e-14));
-    assert_true(u[0] == w.u[0] && u[1] == w.u[1] && u[2] == 0);
-    wall_normal(&w, X0, n); /* in the box frame: the left wall, normal +x */
+    assert_true(u[0] == w.prim[1].u[0] && u[1] == w.prim[1].u[1] && u[2] == 0);
+    wall_normal_of(&w, id, x, n); /* normal +x wherever the box has moved */
     assert_true(n[0] == 1 && n[1] == 0);
+    /* beyond the container in the box's frame: 1.1 h left of the moved wall */
+    const double h = 1.5 * DR, t = 2.0;
+    double at[3] = {0.2 - 1.1 * h, 0.01 - 0.04, 0}, in[3] = {0.2 - 0.9 * h, 0.01 - 0.04, 0};
+    assert_int_equal(wall_beyond(&w, at, t, h), 1);
+    assert_int_equal(wall_beyond(&w, in, t, h), 0);
 }
 
 static void test_drum3d_walls(void **st)
 {
     (void)st;
     const double Rd = 0.035, L = 0.02, h = 1.5 * DR;
-    wall_geom w;
-    memset(&w, 0, sizeof w);
-    w.type = WALL_DRUM, w.radius = (real)Rd, w.depth = (real)L, w.omega = -5 * 2 * M_PI / 60;
+    wall_geom w = drum_walls(Rd, L, -5 * 2 * M_PI / 60);
     real X0[3] = {(real)(Rd + 0.5 * DR), 0, (real)(-0.5 * DR)}, x[3], u[3], n[3];
-    wall_motion(&w, X0, 2.0, x, u);
+    wall_motion(&w, wall_id_at(&w, X0), X0, 2.0, x, u);
     assert_true(x[2] == X0[2] && u[2] == 0); /* turns about z, keeps z */
     struct { double x, y, z, n[3]; } c[] = {
         {Rd + 0.5 * DR, 0, 0.5 * L, {-1, 0, 0}},     /* cylinder */
@@ -486,7 +542,7 @@ static void test_drum3d_walls(void **st)
     };
     for (size_t k = 0; k < sizeof c / sizeof c[0]; ++k) {
         real xk[3] = {(real)c[k].x, (real)c[k].y, (real)c[k].z};
-        wall_normal(&w, xk, n);
+        wall_normal_of(&w, wall_id_at(&w, xk), xk, n);
         for (int a = 0; a < 3; ++a) assert_true(fabs(n[a] - c[k].n[a]) < RT(1e-12));
     }
     particles_t p;

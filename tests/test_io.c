@@ -253,7 +253,7 @@ static void write_snapshot(int index, size_t nmine, double time, long step, long
     make_particles(&p, nmine);
     int64_t *before = malloc((nmine ? nmine : 1) * sizeof *before);
     memcpy(before, p.id, nmine * sizeof *before);
-    int rc = io_write_snapshot(g_dir, index, &p, time, step, g_scene, "test-1.2.3");
+    int rc = io_write_snapshot(g_dir, index, &p, time, step, g_scene, NULL, "test-1.2.3");
     ssize_t open_ids = H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL); /* nothing left open */
     long long n = (long long)nmine;
     MPI_Allgather(&n, 1, MPI_LONG_LONG, nloc, 1, MPI_LONG_LONG, MPI_COMM_WORLD);

@@ -136,7 +136,7 @@ static void test_snapshot_id_order(void **state)
     particles_t p;
     make_particles(&p);
     int64_t first = p.n > 0 ? p.id[0] : -1;
-    io_write_snapshot(g_dir, g_size, &p, 1.5, 42, "scene: test\n", "test-io-ranks");
+    io_write_snapshot(g_dir, g_size, &p, 1.5, 42, "scene: test\n", "1 base", "test-io-ranks");
     assert_true(p.n == 0 || p.id[0] == first); /* the store is not reordered */
     part_free(&p);
     if (g_rank != 0) return;

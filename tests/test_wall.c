@@ -7,6 +7,7 @@
  * and the Shepard filter reproducing a constant field. */
 #include "physics/kernel.h"
 #include "physics/wall.h"
+#include <string.h>
 #include "testutil.h"
 
 static const double DR = 1e-3, H = 0.02, RHO = 1500, G = 9.81;
@@ -81,43 +82,67 @@ static void test_shepard_constant(void **st)
     for (int c = 0; c < 6; ++c) assert_true(fabs(acc[c] / ws - s[c]) < RT(1e-12));
 }
 
-/* Wall ids (enum wall_id): a dummy's wall, set once from its reference
- * position (wall_id_at), gives the normal and slip the position rule gives
- * (wall_normal) for every dummy around a 3D box, corners included, with and
- * without periodic x; the gate faces -x with the side walls' slip; a drum's
- * dummies keep the position rule. */
+/* A plane primitive (wall.h) through p with normal n into the material. */
+static wall_prim plane(double px, double py, double pz, double nx, double ny, double nz, int slip, int claim)
+{
+    wall_prim q;
+    memset(&q, 0, sizeof q);
+    q.shape = WALL_PLANE, q.slip = slip, q.bound = 1, q.claim = claim, q.open_at = -1;
+    q.p[0] = (real)px, q.p[1] = (real)py, q.p[2] = (real)pz;
+    q.n[0] = (real)nx, q.n[1] = (real)ny, q.n[2] = (real)nz;
+    return q;
+}
+
+/* Wall ids: a dummy's wall, set once from its reference position
+ * (wall_id_at), for every dummy site around a 3D box of 50 x 40 dr with the
+ * base claiming first (as setup.c's box), with and without the x walls (a
+ * periodic x): below the base (corners included) the base, else the side
+ * wall the site lies furthest beyond, x before z on a tie - the rule
+ * written out here by coordinates; its normal and slip are that plane's. */
 static void test_wall_ids(void **st)
 {
     (void)st;
-    wall_geom w = {0};
-    w.type = WALL_BOX, w.width = (real)0.05, w.depth = (real)0.04, w.slip_base = 0, w.slip_sides = 1;
+    const double W = 0.05, D = 0.04;
     for (int per = 0; per <= 1; ++per) {
-        w.periodic = per;
-        int seen[WALL_ID_DRUM + 1] = {0};
+        wall_geom w;
+        memset(&w, 0, sizeof w);
+        const char *name[5];
+        w.prim[w.n] = plane(0, 0, 0, 0, 1, 0, 0, WALL_CLAIM_FIRST), name[w.n++] = "base";
+        if (!per) {
+            w.prim[w.n] = plane(0, 0, 0, 1, 0, 0, 1, WALL_CLAIM_SIDE), name[w.n++] = "xlo";
+            w.prim[w.n] = plane(W, 0, 0, -1, 0, 0, 1, WALL_CLAIM_SIDE), name[w.n++] = "xhi";
+        }
+        w.prim[w.n] = plane(0, 0, 0, 0, 0, 1, 1, WALL_CLAIM_SIDE), name[w.n++] = "zlo";
+        w.prim[w.n] = plane(0, 0, D, 0, 0, -1, 1, WALL_CLAIM_SIDE), name[w.n++] = "zhi";
+        int seen[6] = {0};
         for (int i = -3; i < 53; ++i)
             for (int j = -3; j < 8; ++j)
                 for (int q = -3; q < 43; ++q) {
-                    real x[3] = {(real)((i + 0.5) * 1e-3), (real)((j + 0.5) * 1e-3), (real)((q + 0.5) * 1e-3)};
+                    double xd = (i + 0.5) * 1e-3, yd = (j + 0.5) * 1e-3, zd = (q + 0.5) * 1e-3;
+                    real x[3] = {(real)xd, (real)yd, (real)zd};
                     int inside = i >= 0 && i < 50 && j >= 0 && q >= 0 && q < 40;
                     if (inside || (per && j >= 0 && q >= 0 && q < 40)) continue; /* material, or no wall */
-                    real n0[3], n1[3];
-                    int id = wall_id_at(&w, x), s0 = wall_normal(&w, x, n0), s1 = wall_normal_of(&w, id, x, n1);
+                    double ox = per ? -1 : fmax(-xd, xd - W), oz = fmax(-zd, zd - D);
+                    const char *want = yd < 0 ? "base" : oz > ox ? (zd < 0 ? "zlo" : "zhi") : (xd < 0 ? "xlo" : "xhi");
+                    int id = wall_id_at(&w, x);
+                    assert_true(id >= 1 && id <= w.n);
+                    assert_string_equal(name[id - 1], want);
                     seen[id]++;
-                    assert_int_equal(s0, s1);
-                    for (int a = 0; a < 3; ++a) assert_true(n0[a] == n1[a]);
+                    real n[3];
+                    int slip = wall_normal_of(&w, id, x, n);
+                    assert_int_equal(slip, strcmp(want, "base") != 0);
+                    for (int a = 0; a < 3; ++a) assert_true(n[a] == w.prim[id - 1].n[a]);
                 }
-        assert_true(seen[WALL_ID_BASE] > 0 && seen[WALL_ID_ZLO] > 0 && seen[WALL_ID_ZHI] > 0);
-        assert_true(per ? seen[WALL_ID_XLO] == 0 && seen[WALL_ID_XHI] == 0 : seen[WALL_ID_XLO] > 0 && seen[WALL_ID_XHI] > 0);
+        for (int k = 1; k <= w.n; ++k) assert_true(seen[k] > 0);
+        real inside[3] = {(real)0.02, (real)0.01, (real)0.02};
+        assert_int_equal(wall_id_at(&w, inside), 0); /* beyond no wall */
     }
-    real n[3], x[3] = {(real)0.0305, (real)0.01, (real)0.02};
-    assert_int_equal(wall_normal_of(&w, WALL_ID_GATE, x, n), 1);
-    assert_true(n[0] == -1 && n[1] == 0 && n[2] == 0);
-    w.type = WALL_DRUM, w.radius = (real)0.03, w.depth = 0;
-    real xd[3] = {(real)0.0, (real)-0.031, 0}, nd0[3], nd1[3];
-    assert_int_equal(wall_id_at(&w, xd), WALL_ID_DRUM);
-    wall_normal(&w, xd, nd0);
-    wall_normal_of(&w, WALL_ID_DRUM, xd, nd1);
-    for (int a = 0; a < 3; ++a) assert_true(nd0[a] == nd1[a]);
+    /* a primitive that claims nothing (a gate) takes no site, however far beyond it */
+    wall_geom g;
+    memset(&g, 0, sizeof g);
+    g.prim[g.n++] = plane(0.03, 0, 0, -1, 0, 0, 1, WALL_CLAIM_NONE);
+    real far[3] = {(real)0.05, (real)0.01, 0};
+    assert_int_equal(wall_id_at(&g, far), 0);
 }
 
 int main(void)

@@ -51,10 +51,11 @@ def main():
     ok, umax = True, F * H * H / (8 * NU)
     snaps = [snap.read_snapshot(p) for p in snap.list_snapshots(out)]
     wall = np.asarray(snaps[0]["Wall"])
-    lid = int(np.sum(wall == 8))
-    good = lid == 3 * round(0.01 / DR) and np.all(np.asarray(snaps[0]["Coordinates"])[wall == 8, 1] > H)
+    lid_id = snap.wall_ids(snaps[0]).get("lid", -1)
+    lid = int(np.sum(wall == lid_id))
+    good = lid == 3 * round(0.01 / DR) and np.all(np.asarray(snaps[0]["Coordinates"])[wall == lid_id, 1] > H)
     ok &= good
-    print("%s the lid: %d dummies with wall id 8 above y = H" % ("ok  " if good else "FAIL", lid))
+    print("%s the lid: %d dummies with the lid's wall id (%d) above y = H" % ("ok  " if good else "FAIL", lid, lid_id))
     for s in snaps:
         t = float(s["Time"])
         if not any(abs(t - want) < 1e-9 for want in TIMES):

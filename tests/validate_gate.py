@@ -7,7 +7,8 @@ cm (Geometry:runout = 0.1) closed by a side wall, and the gate, nl = 3
 layers of dummies standing on the floor just past the column, removed at
 t = 0.03 s (the column settles under damping until then). Checks:
 
-  - the gate's dummies carry wall id 6 (snapshot field Wall) and stand in
+  - the gate's dummies carry the gate's wall id (snapshot field Wall, named
+    by the header attribute Walls) and stand in
     x in (W, W + 3 dr), nl (ny + nl) of them, and the other dummies carry
     the ids of the base and the two side walls;
   - while the gate stands the column stays behind it (no material past
@@ -66,14 +67,17 @@ def main():
     s0 = snaps[0]
     wall, kind, x = np.asarray(s0["Wall"]), np.asarray(s0["Kind"]), np.asarray(s0["Coordinates"])
     nl, ny = 3, round(H / DR)
-    gate = wall == 6
+    wid = snap.wall_ids(s0)
+    check("the container's walls", wid == {"base": 1, "xlo": 2, "xhi": 3, "gate": 4}, "Walls header: %s" % s0.get("Walls"))
+    gid = wid.get("gate", -1)
+    gate = wall == gid
     check("gate dummies at t = 0", gate.sum() == nl * (ny + nl) and np.all(kind[gate] == 1) and
           np.all((x[gate, 0] > W) & (x[gate, 0] < W + nl * DR)),
-          "%d with wall id 6 (expected %d), x in [%.4f, %.4f]" % (gate.sum(), nl * (ny + nl), x[gate, 0].min(),
+          "%d with the gate's wall id (expected %d), x in [%.4f, %.4f]" % (gate.sum(), nl * (ny + nl), x[gate, 0].min(),
                                                                  x[gate, 0].max()))
     ids = sorted(set(wall[kind == 1].tolist()))
-    check("dummy wall ids", ids == [1, 2, 3, 6] and np.all(wall[kind == 0] == 0),
-          "ids %s (1 base, 2 x = 0, 3 x = end, 6 gate); material 0" % ids)
+    check("dummy wall ids", ids == [1, 2, 3, 4] and np.all(wall[kind == 0] == 0),
+          "ids %s (1 base, 2 x = 0, 3 x = end, 4 gate); material 0" % ids)
     held = [s for s in snaps if float(s["Time"]) < T_OPEN - 1e-9]
     front_held = max(np.asarray(s["Coordinates"])[np.asarray(s["Kind"]) == 0, 0].max() for s in held)
     check("the column stays behind the gate", front_held < W, "front %.4f m < W = %.3f m over %d snapshots" % (
@@ -81,8 +85,8 @@ def main():
     last = snaps[-1]
     m = np.asarray(last["Kind"]) == 0
     front = np.asarray(last["Coordinates"])[m, 0].max()
-    check("the gate is lifted", "the gate is open" in log and not np.any(np.asarray(last["Wall"]) == 6),
-          "%d gate dummies left at t = %.2f s" % (int(np.sum(np.asarray(last["Wall"]) == 6)), float(last["Time"])))
+    check("the gate is lifted", "the gate is open" in log and not np.any(np.asarray(last["Wall"]) == gid),
+          "%d gate dummies left at t = %.2f s" % (int(np.sum(np.asarray(last["Wall"]) == gid)), float(last["Time"])))
     check("the column runs out", W + 10 * DR < front <= W + RUN,
           "front %.4f m at t = %.2f s (W + 10 dr = %.4f, end wall %.3f)" % (front, float(last["Time"]), W + 10 * DR,
                                                                            W + RUN))

@@ -38,7 +38,7 @@ TOL_C1 = 1e-4
 
 # name, scene, steps, overrides
 sys.path.insert(0, HERE)
-from containers import CHANNEL, CHUTE, CHUTE_3D, COLLAPSE, FILM, SILO  # noqa: E402  (tests/containers.py)
+from containers import CHANNEL, CHUTE, CHUTE_3D, COLLAPSE, FILM, HOPPER, HOPPER_3D, SILO  # noqa: E402
 
 CASES = [
     ("shearbox", "shearbox_2d.yml", 40, []),
@@ -68,6 +68,9 @@ CASES = [
     ("film", "column_2d.yml", 400, FILM),
     ("channel", "column_2d.yml", 400, CHANNEL),
     ("chute_3d", "column_2d.yml", 60, CHUTE_3D),
+    # a container described as data (Geometry:type container): a gated hopper that discharges
+    ("hopper", "hopper_2d.yml", 2400, HOPPER),
+    ("hopper_3d", "hopper_2d.yml", 40, HOPPER_3D),
 ]
 # (Segregation:every = 1: C with the flow in every step; K > 1: in windows of
 # K steps, closed 5-9 times in these runs, the last one left open at

@@ -31,6 +31,17 @@ def read_snapshot(path):
     return out
 
 
+def wall_ids(snap):
+    """The container's wall primitives of a snapshot (header attribute Walls,
+    "1 base, 2 xlo, ..."), as {name: id}; the Wall field holds the id."""
+    out = {}
+    for item in str(snap.get("Walls", "")).split(","):
+        if item.strip():
+            k, name = item.split()
+            out[name] = int(k)
+    return out
+
+
 def snapshot_time(path):
     """Header Time of a snapshot without reading the particle data."""
     with h5py.File(path, "r") as f:

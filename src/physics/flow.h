@@ -46,13 +46,9 @@ HD_INLINE void flow_wall_set(size_t d, particles_t *p, const flow_ctx *c, const 
 {
     const wall_sums ws = *wsp;
     real xd[3] = {p->x[0][d], p->x[1][d], p->x[2][d]};
-    /* the wall velocity at d: drum rotation omega e_z x (x_d - centre), or the
-     * box's translation; the normal from d's wall (p->wall, set by setup) */
-    real uw[3] = {c->w.u[0], c->w.u[1], c->w.u[2]}, n[3], ud[3], sd[6];
-    if (c->w.type == WALL_DRUM) {
-        uw[0] = (real)(-c->w.omega * (double)(xd[1] - c->w.centre[1]));
-        uw[1] = (real)(c->w.omega * (double)(xd[0] - c->w.centre[0]));
-    }
+    /* the velocity and normal of d's wall (p->wall, set by setup) at d */
+    real uw[3], n[3], ud[3], sd[6];
+    wall_velocity_at(wall_of(&c->w, p->wall[d]), xd, uw);
     int free_slip = wall_normal_of(&c->w, p->wall[d], xd, n);
     if (ws.w > 0) {
         wall_velocity(&ws, uw, n, free_slip, ud);
@@ -90,7 +86,7 @@ HD_INLINE void flow_wall_team(size_t d, particles_t *p, const grid_view *g, cons
     const sph_ctx *k = &c->k;
     wall_sums ws = {0, {0, 0, 0}, {0, 0, 0, 0, 0, 0}, {0, 0, 0}};
     real xd[3] = {p->x[0][d], p->x[1][d], p->x[2][d]}, aw[3], geff[3];
-    wall_accel(&c->w, xd, aw);
+    wall_accel(&c->w, p->wall[d], xd, aw);
     for (int a = 0; a < 3; ++a) geff[a] = c->g[a] - aw[a];
     NBR_BEGIN_T(g, p->x, d, m, lane, nlanes)
         if (p->kind[m] != KIND_MATERIAL) continue;

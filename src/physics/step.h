@@ -59,18 +59,12 @@ enum step_bad {
     STEP_OUTLET = 5        /* not a failure: below the outlet, to leave the run (main.c outlet_drain) */
 };
 
-/* Is material particle i outside its container (beyond a wall by > h) at
- * time t? Boxes are tested in their own (translating) frame; the drum's
- * cylinder radially, its end walls (3D, depth > 0) along z. */
+/* Is material particle i outside its container (beyond a bounding wall by
+ * more than h, wall_beyond) at time t? */
 HD_INLINE int step_outside(size_t i, const particles_t *p, const step_ctx *c, double t)
 {
-    const wall_geom *w = &c->w;
-    double h = c->h, x = p->x[0][i], y = p->x[1][i], z = p->x[2][i];
-    if (w->type != WALL_DRUM) x -= w->u[0] * t, y -= w->u[1] * t, z -= w->u[2] * t;
-    int outz = w->depth > 0 && !(w->periodic & 4) && (z < -h || z > w->depth + h); /* 3D: box sides, drum end walls */
-    if (w->type == WALL_DRUM) return outz || hypot(x - w->centre[0], y - w->centre[1]) > w->radius + h;
-    /* periodic axes: wrapped; with an outlet, material may fall through the base's opening to it */
-    return (!(w->periodic & 1) && (x < -h || x > w->width + h)) || (!c->outlet && y < -h) || outz;
+    const double x[3] = {p->x[0][i], p->x[1][i], p->x[2][i]};
+    return wall_beyond(&c->w, x, t, c->h);
 }
 
 /* Which blow-up condition material particle i meets after a step ending at
@@ -102,7 +96,7 @@ HD_INLINE void step_place(size_t i, const particles_t *p, int flow_on, const wal
     real X0[3] = {p->X0[0][i], p->X0[1][i], p->X0[2][i]}, x[3], u[3], gd;
     if (flow_on) {
         if (p->kind[i] != KIND_DUMMY) return;
-        wall_motion(w, X0, t, x, u);
+        wall_motion(w, p->wall[i], X0, t, x, u);
         for (int d = 0; d < 3; ++d) p->x[d][i] = x[d];
         return;
     }

@@ -8,144 +8,192 @@
 #include <math.h>
 #include "hd.h"
 
-/* The rigid container of a scene. Box (shear box, column): a base below
- * y = 0 and side walls at x = 0 and x = width (in 3D also z = 0 and
- * z = depth), at rest. Drum: a circle of
- * radius R about centre, turning at omega (rad/s, counter-clockwise
- * positive) about the z axis; in 3D a cylinder of length depth along z,
- * closed by flat end walls at z = 0 and z = depth that turn with it. */
-enum wall_type { WALL_BOX = 0, WALL_DRUM = 1 };
-
-typedef struct wall_geom {
-    int type;        /* enum wall_type */
-    real width;      /* box: inner width (x), m */
-    real depth;      /* 3D box: inner depth (z); 3D drum: length between the end walls (z); m; 0 in 2D */
-    real centre[3];  /* drum: axis position, m */
-    real radius;     /* drum: inner radius R, m */
-    double omega;    /* drum: angular velocity, rad/s, counter-clockwise > 0 */
-    int slip_base;   /* box base and drum walls (cylinder, end walls): 1 free slip (4.2), 0 no slip (4.1) */
-    int slip_sides;  /* box side walls: 1 free slip, 0 no slip */
-    real u[3];       /* box: translation velocity of the whole container, m/s */
-    int periodic;    /* box: bit d set: no walls across axis d, which is periodic (x: period width,
-                      * z: period depth, from 0; Geometry:periodic) */
-} wall_geom;
-
-/* Position and velocity at time t of the wall point (dummy) whose reference
- * position is X0: the drum (cylinder and end walls) turns rigidly by omega t
- * about the z axis through centre (z kept); the box translates by u t (at
- * rest when u = 0). */
-HD_INLINE void wall_motion(const wall_geom *w, const real X0[3], double t, real x[3], real u[3])
-{
-    if (w->type != WALL_DRUM) {
-        for (int a = 0; a < 3; ++a) x[a] = (real)((double)X0[a] + (double)w->u[a] * t), u[a] = w->u[a];
-        return;
-    }
-    x[0] = X0[0], x[1] = X0[1], x[2] = X0[2];
-    u[0] = u[1] = u[2] = 0;
-    double th = w->omega * t, c = cos(th), s = sin(th);
-    double rx = (double)X0[0] - w->centre[0], ry = (double)X0[1] - w->centre[1];
-    double qx = c * rx - s * ry, qy = s * rx + c * ry;
-    x[0] = (real)(w->centre[0] + qx);
-    x[1] = (real)(w->centre[1] + qy);
-    u[0] = (real)(-w->omega * qy); /* omega e_z x r */
-    u[1] = (real)(w->omega * qx);
-}
-
-/* Drum normal at x (n zeroed by the caller): towards the axis on the
- * cylinder; +z / -z on the end walls of a 3D drum (depth > 0). Which wall a
- * dummy belongs to depends only on its radius r and its z, which the
- * rotation about z keeps, so the current position decides as the reference
- * position would. Corner dummies (beyond both, z < 0 or z > depth and
- * r > R): the wall they lie furthest beyond, the cylinder on a tie - the
- * rule of the box's side walls. Cylinder and end walls share slip_base. */
-HD_INLINE int wall_normal_drum(const wall_geom *w, const real x[3], real n[3])
-{
-    real dx = w->centre[0] - x[0], dy = w->centre[1] - x[1];
-    real r = (real)sqrt((double)(dx * dx + dy * dy));
-    real oz = w->depth > 0 ? (x[2] < 0 ? -x[2] : x[2] - w->depth) : (real)-1e30;
-    if (oz > 0 && oz > r - w->radius) n[2] = x[2] < 0 ? R(1.0) : R(-1.0);
-    else if (r > 0) n[0] = dx / r, n[1] = dy / r;
-    return w->slip_base;
-}
-
-/* Unit wall normal at dummy position x, pointing into the material, and
- * whether that wall is free-slip. Box: below the base (y < 0, corners
- * included) the base, else the nearer side wall (of the axes that are not
- * periodic). x is in the box's own frame
- * (a translating box: the caller subtracts u t, wall_frame). Drum:
- * wall_normal_drum. */
-HD_INLINE int wall_normal(const wall_geom *w, const real x[3], real n[3])
-{
-    n[0] = n[1] = n[2] = 0;
-    if (w->type == WALL_DRUM) return wall_normal_drum(w, x, n);
-    if (x[1] < 0) {
-        n[1] = 1;
-        return w->slip_base;
-    }
-    /* side walls: the one the dummy lies furthest beyond (x or, in 3D, z) */
-    real ox = w->periodic & 1 ? (real)-1e30 : x[0] < 0 ? -x[0] : x[0] - w->width;
-    real oz = w->depth > 0 && !(w->periodic & 4) ? (x[2] < 0 ? -x[2] : x[2] - w->depth) : (real)-1e30;
-    if (oz > ox) n[2] = x[2] < R(0.5) * w->depth ? R(1.0) : R(-1.0);
-    else n[0] = x[0] < R(0.5) * w->width ? R(1.0) : R(-1.0);
-    return w->slip_sides;
-}
-
-/* Which wall a dummy belongs to: set once by setup (wall_id_at, from its
- * reference position, or directly for a gate) and carried with the dummy
- * (particles_t.wall), so that its normal and slip come from the wall, not
- * from where it is. */
-enum wall_id {
-    WALL_ID_NONE = 0, /* material */
-    WALL_ID_BASE = 1, /* box base (y < 0, corners included) */
-    WALL_ID_XLO = 2,  /* box side wall at x = 0 */
-    WALL_ID_XHI = 3,  /* box side wall at x = width */
-    WALL_ID_ZLO = 4,  /* 3D box side wall at z = 0 */
-    WALL_ID_ZHI = 5,  /* 3D box side wall at z = depth */
-    WALL_ID_GATE = 6, /* box: the gate holding a column at x = gate_x until Walls:gate_open */
-    WALL_ID_DRUM = 7, /* drum: cylinder and end walls (their normal follows the turning position) */
-    WALL_ID_LID = 8,  /* box: a wall over the material at y = height (Geometry:lid), the base's slip */
-    WALL_ID_MAX = 8
+/* The container as data: a list of wall primitives (wall_geom.prim), each
+ * with its own shape, slip and motion. Every dummy carries the 1-based
+ * index of its primitive (particles_t.wall), set once by setup
+ * (wall_id_at, or by the builder that placed it), so that its normal, its
+ * slip, its velocity and acceleration and the test "beyond the container"
+ * all come from that primitive, each by one formula below. The built-in
+ * containers (Geometry:type) are lists of these (setup.c, setup_builders).
+ *
+ * Shapes: a plane (a point p on it and the unit normal n into the
+ * material; a box face, a base, a gate, a lid) and a cylinder about an axis
+ * along z through p of radius `radius`, the material inside (a drum).
+ * Motions: fixed; translating at u; rotating at omega (rad/s,
+ * counter-clockwise positive seen with y up) about the z axis through c,
+ * for a plane only with a normal along z (the end walls of a drum), which
+ * the rotation keeps. A gate is a primitive whose dummies leave the run at
+ * open_at (main.c). */
+enum wall_shape { WALL_PLANE = 0, WALL_CYLINDER = 1 };
+enum wall_move { WALL_FIXED = 0, WALL_TRANSLATE = 1, WALL_ROTATE = 2 };
+/* The most primitives a container has (the 3D column with a runout, a gate
+ * and a lid has 7). The table travels by value in the contexts, so the GPU
+ * reads it from the kernel parameters. */
+enum { WALL_PRIM_MAX = 12 };
+/* wall_prim.claim: how a primitive takes its dummies (wall_id_at). */
+enum wall_claim {
+    WALL_CLAIM_NONE = 0,  /* only the dummies its builder placed for it (a gate, a lid) */
+    WALL_CLAIM_LAST = 1,  /* as SIDE, after every SIDE primitive (a container's gate: a dummy that is
+                           * also a permanent wall's stays when the gate opens) */
+    WALL_CLAIM_SIDE = 2,  /* those that lie beyond it, the furthest beyond winning */
+    WALL_CLAIM_FIRST = 3  /* as SIDE, before every SIDE primitive (a box's base keeps its corners) */
 };
 
-/* The wall of a dummy at reference position X0 by the rule of wall_normal. */
-HD_INLINE int wall_id_at(const wall_geom *w, const real X0[3])
-{
-    if (w->type == WALL_DRUM) return WALL_ID_DRUM;
-    real n[3];
-    wall_normal(w, X0, n);
-    if (n[1] > 0) return WALL_ID_BASE;
-    if (n[2] != 0) return n[2] > 0 ? WALL_ID_ZLO : WALL_ID_ZHI;
-    return n[0] > 0 ? WALL_ID_XLO : WALL_ID_XHI;
-}
+typedef struct wall_prim {
+    int shape;       /* enum wall_shape */
+    int move;        /* enum wall_move */
+    int slip;        /* 1 free slip (4.2), 0 no slip (4.1) */
+    int bound;       /* 1: material beyond it by more than h has left the container (step_outside);
+                      * 0 for a wall with an opening (an outlet's base), a gate, a lid */
+    int claim;       /* enum wall_claim */
+    real p[3];       /* plane: a point of it; cylinder: a point of its axis (along z), m */
+    real n[3];       /* plane: unit normal, pointing into the material */
+    real radius;     /* cylinder: inner radius, m */
+    real u[3];       /* translating: velocity, m/s */
+    real c[3];       /* rotating: a point of the axis (along z), m */
+    double omega;    /* rotating: angular velocity, rad/s, counter-clockwise > 0 */
+    double open_at;  /* a gate: its dummies leave the run at this time, s; < 0: not a gate */
+    real t[3];       /* plane: a unit direction in it, along which it is bounded (a segment) */
+    real t_lo, t_hi; /* plane: its extent along t from p, m, corners included (step_outside tests
+                      * only there); an unbounded plane: t = 0, t_lo < 0 < t_hi */
+} wall_prim;
 
-/* Unit normal (into the material) and slip of the wall `id` of a dummy at x:
- * a box's walls are planes, each its own normal; the drum's follows x
- * (wall_normal_drum). The gate faces -x (the column lies at x < gate_x) and
- * slips as the side walls. */
-HD_INLINE int wall_normal_of(const wall_geom *w, int id, const real x[3], real n[3])
+typedef struct wall_geom {
+    int n;               /* primitives in use */
+    int periodic;        /* bit d set: axis d is periodic (Geometry:periodic), no walls across it */
+    real period[3];      /* the period of each periodic axis, from 0, m */
+    wall_prim prim[WALL_PRIM_MAX];
+} wall_geom;
+
+/* The primitive of a dummy with wall id `id` (1-based; setup guarantees 1..n). */
+HD_INLINE const wall_prim *wall_of(const wall_geom *w, int id) { return &w->prim[id - 1]; }
+
+/* Position and velocity at time t of the point of primitive q whose
+ * reference position is X0: rotated by omega t about the z axis through c
+ * (z kept), translated by u t, or at rest. */
+HD_INLINE void wall_prim_motion(const wall_prim *q, const real X0[3], double t, real x[3], real u[3])
 {
-    n[0] = n[1] = n[2] = 0;
-    switch (id) {
-    case WALL_ID_BASE: n[1] = 1; return w->slip_base;
-    case WALL_ID_XLO: n[0] = 1; return w->slip_sides;
-    case WALL_ID_XHI: n[0] = -1; return w->slip_sides;
-    case WALL_ID_ZLO: n[2] = 1; return w->slip_sides;
-    case WALL_ID_ZHI: n[2] = -1; return w->slip_sides;
-    case WALL_ID_GATE: n[0] = -1; return w->slip_sides;
-    case WALL_ID_LID: n[1] = -1; return w->slip_base;
-    default: return wall_normal(w, x, n);
+    x[0] = X0[0], x[1] = X0[1], x[2] = X0[2];
+    u[0] = u[1] = u[2] = 0;
+    if (q->move == WALL_TRANSLATE) {
+        for (int a = 0; a < 3; ++a) x[a] = (real)((double)X0[a] + (double)q->u[a] * t), u[a] = q->u[a];
+    } else if (q->move == WALL_ROTATE) {
+        double th = q->omega * t, c = cos(th), s = sin(th);
+        double rx = (double)X0[0] - q->c[0], ry = (double)X0[1] - q->c[1];
+        double qx = c * rx - s * ry, qy = s * rx + c * ry;
+        x[0] = (real)(q->c[0] + qx);
+        x[1] = (real)(q->c[1] + qy);
+        u[0] = (real)(-q->omega * qy); /* omega e_z x r */
+        u[1] = (real)(q->omega * qx);
     }
 }
 
-/* Acceleration of the wall at x (drum: centripetal -omega^2 (x - centre));
- * the wall stress (4.3) extrapolates with g - a_w (Adami et al. 2012). */
-HD_INLINE void wall_accel(const wall_geom *w, const real x[3], real a[3])
+HD_INLINE void wall_motion(const wall_geom *w, int id, const real X0[3], double t, real x[3], real u[3])
 {
+    wall_prim_motion(wall_of(w, id), X0, t, x, u);
+}
+
+/* Velocity of primitive q at the point x it has now: omega e_z x (x - c)
+ * turning, u translating, 0 at rest. */
+HD_INLINE void wall_velocity_at(const wall_prim *q, const real x[3], real uw[3])
+{
+    uw[0] = uw[1] = uw[2] = 0;
+    if (q->move == WALL_TRANSLATE) uw[0] = q->u[0], uw[1] = q->u[1], uw[2] = q->u[2];
+    else if (q->move == WALL_ROTATE) {
+        uw[0] = (real)(-q->omega * (double)(x[1] - q->c[1]));
+        uw[1] = (real)(q->omega * (double)(x[0] - q->c[0]));
+    }
+}
+
+/* Unit normal (into the material) of primitive q at its point x, and
+ * whether q is free-slip: a plane's own normal (a rotating plane's is along
+ * the axis, which the rotation keeps); a cylinder's towards its axis. */
+HD_INLINE int wall_prim_normal(const wall_prim *q, const real x[3], real n[3])
+{
+    n[0] = n[1] = n[2] = 0;
+    if (q->shape == WALL_CYLINDER) {
+        real dx = q->p[0] - x[0], dy = q->p[1] - x[1];
+        real r = (real)sqrt((double)(dx * dx + dy * dy));
+        if (r > 0) n[0] = dx / r, n[1] = dy / r;
+    } else {
+        n[0] = q->n[0], n[1] = q->n[1], n[2] = q->n[2];
+    }
+    return q->slip;
+}
+
+HD_INLINE int wall_normal_of(const wall_geom *w, int id, const real x[3], real n[3])
+{
+    return wall_prim_normal(wall_of(w, id), x, n);
+}
+
+/* How far the reference-frame point x lies beyond primitive q (negative:
+ * on the material's side): along -n from a plane, radially out of a
+ * cylinder. */
+HD_INLINE real wall_prim_depth(const wall_prim *q, const real x[3])
+{
+    if (q->shape == WALL_CYLINDER) {
+        real dx = q->p[0] - x[0], dy = q->p[1] - x[1];
+        return (real)sqrt((double)(dx * dx + dy * dy)) - q->radius;
+    }
+    return -(q->n[0] * (x[0] - q->p[0]) + q->n[1] * (x[1] - q->p[1]) + q->n[2] * (x[2] - q->p[2]));
+}
+
+/* The wall of a dummy at reference position X0: among the primitives that
+ * claim by position and that X0 lies beyond, a WALL_CLAIM_FIRST one before
+ * any other, then the one it lies furthest beyond, the first listed on a
+ * tie (a box's corner dummies go to its base; a drum's to the cylinder or
+ * an end wall, whichever they lie further beyond). 0 if none. */
+HD_INLINE int wall_id_at(const wall_geom *w, const real X0[3])
+{
+    int best = 0, best_claim = 0;
+    real best_depth = 0;
+    for (int k = 0; k < w->n; ++k) {
+        const wall_prim *q = &w->prim[k];
+        if (q->claim == WALL_CLAIM_NONE) continue;
+        real d = wall_prim_depth(q, X0);
+        if (!(d > 0)) continue;
+        if (!best || q->claim > best_claim || (q->claim == best_claim && d > best_depth))
+            best = k + 1, best_claim = q->claim, best_depth = d;
+    }
+    return best;
+}
+
+/* Acceleration of the wall `id` at x (turning: centripetal
+ * -omega^2 (x - c)); the wall stress (4.3) extrapolates with g - a_w
+ * (Adami et al. 2012). */
+HD_INLINE void wall_accel(const wall_geom *w, int id, const real x[3], real a[3])
+{
+    const wall_prim *q = wall_of(w, id);
     a[0] = a[1] = a[2] = 0;
-    if (w->type != WALL_DRUM) return;
-    real o2 = (real)(w->omega * w->omega);
-    a[0] = -o2 * (x[0] - w->centre[0]);
-    a[1] = -o2 * (x[1] - w->centre[1]);
+    if (q->move != WALL_ROTATE) return;
+    real o2 = (real)(q->omega * q->omega);
+    a[0] = -o2 * (x[0] - q->c[0]);
+    a[1] = -o2 * (x[1] - q->c[1]);
+}
+
+/* Is the point x beyond a bounding primitive by more than h at time t (a
+ * bounded plane, a segment: within its extent, so that material may leave
+ * through a gap between two)?
+ * A translating primitive is tested in its own frame (x - u t); a turning
+ * one as it stands (a cylinder, or a plane across the axis, which the
+ * rotation keeps). */
+HD_INLINE int wall_beyond(const wall_geom *w, const double x[3], double t, double h)
+{
+    for (int k = 0; k < w->n; ++k) {
+        const wall_prim *q = &w->prim[k];
+        if (!q->bound) continue;
+        double y[3] = {x[0], x[1], x[2]};
+        if (q->move == WALL_TRANSLATE)
+            for (int a = 0; a < 3; ++a) y[a] -= q->u[a] * t;
+        double d, s = 0;
+        if (q->shape == WALL_CYLINDER) d = hypot(y[0] - q->p[0], y[1] - q->p[1]) - q->radius;
+        else {
+            d = -(q->n[0] * (y[0] - q->p[0]) + q->n[1] * (y[1] - q->p[1]) + q->n[2] * (y[2] - q->p[2]));
+            s = q->t[0] * (y[0] - q->p[0]) + q->t[1] * (y[1] - q->p[1]) + q->t[2] * (y[2] - q->p[2]);
+        }
+        if (d > h && s >= q->t_lo && s <= q->t_hi) return 1;
+    }
+    return 0;
 }
 
 typedef struct wall_sums {

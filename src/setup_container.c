@@ -1,0 +1,361 @@
+/* setup_container.c — Geometry:type container: a container described in the
+ * scene (Container:walls, Container:regions; scene.h) built as wall
+ * primitives (wall.h) and particles on the square lattice (i + 1/2) dr,
+ * (j + 1/2) dr of the built-in scenes.
+ *
+ * Walls. A segment from a to b is a plane through a whose normal is the
+ * left of a -> b (into the material), bounded along a -> b: its dummies are
+ * the lattice sites that lie behind it by at most nl = ceil(2h/dr) layers
+ * and whose projection falls on it, past an end by nl dr where another
+ * segment joins there (the corner), not past a free end or an end where
+ * only a gate joins (an opening stays open). A cylinder's are the sites within nl dr outside its radius. A site
+ * that two walls want goes to the one it lies further behind, a gate's last
+ * (wall_id_at's rule), so a dummy of a permanent wall stays when a gate
+ * opens.
+ *
+ * Material. The sites inside a region that are not dummies; a region site
+ * behind a wall, or inside two regions, is an input error. A region `fill`
+ * is every site inside the walls below its level, where inside means on the
+ * material's side of the nearest wall.
+ *
+ * 3D: the plane extruded along z over nz = round(depth/dr) lattice planes,
+ * closed by end walls zlo (z = 0) and zhi (z = nz dr), nl planes of dummies
+ * each, under every site inside the walls; a wall's dummy column runs
+ * through them, a corner site going to the wall it lies further behind. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "error.h"
+#include "mpi/comm.h"
+#include "setup.h"
+
+/* The lattice of the plane: sites (i0 + i + 1/2) dr, (j0 + j + 1/2) dr. */
+typedef struct ctr_lattice {
+    double dr;
+    long i0, j0, ni, nj, nl, nz; /* origin, size, dummy layers, z planes (1 in 2D) */
+    int nw;                      /* the scene's walls: primitives 1..nw (the end walls follow in 3D) */
+    int *site;                   /* per site: > 0 wall id of a dummy, < 0 -(region + 1) of material, 0 empty */
+} ctr_lattice;
+
+static double site_x(const ctr_lattice *L, long i) { return (L->i0 + i + 0.5) * L->dr; }
+static double site_y(const ctr_lattice *L, long j) { return (L->j0 + j + 0.5) * L->dr; }
+
+/* Depth behind primitive q (wall_prim_depth, in double) and whether the
+ * point falls within its extent. */
+static double ctr_depth(const wall_prim *q, double x, double y, int *within)
+{
+    if (q->shape == WALL_CYLINDER) {
+        *within = 1;
+        return hypot(x - q->p[0], y - q->p[1]) - q->radius;
+    }
+    double dx = x - q->p[0], dy = y - q->p[1], s = q->t[0] * dx + q->t[1] * dy;
+    *within = s >= q->t_lo && s <= q->t_hi;
+    return -(q->n[0] * dx + q->n[1] * dy);
+}
+
+/* The wall whose dummy the site (x, y) is, or 0: behind it by at most nl dr
+ * within its extent, by wall_id_at's preference. */
+static int ctr_dummy_wall(const sim_t *s, const ctr_lattice *L, double x, double y, double *depth)
+{
+    int best = 0, best_claim = 0;
+    double best_d = 0;
+    for (int k = 0; k < L->nw; ++k) {
+        const wall_prim *q = &s->flow.w.prim[k];
+        if (q->shape == WALL_CYLINDER) continue; /* its dummies are rings (ctr_place) */
+        int within;
+        double d = ctr_depth(q, x, y, &within);
+        if (!within || !(d > 0) || d > L->nl * L->dr) continue;
+        if (!best || q->claim > best_claim || (q->claim == best_claim && d > best_d))
+            best = k + 1, best_claim = q->claim, best_d = d;
+    }
+    *depth = best_d;
+    return best;
+}
+
+/* A scene wall's segment ends, for the inside test (the extent less any
+ * corner overlap). */
+typedef struct ctr_seg {
+    double ax, ay, bx, by;
+} ctr_seg;
+
+/* Inside the walls: on the material's side of the nearest wall (of the
+ * permanent ones and the gates), ties at a shared end broken towards
+ * inside. */
+static int ctr_inside(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg, double x, double y)
+{
+    double best = INFINITY, sign = -1;
+    for (int k = 0; k < L->nw; ++k) {
+        const wall_prim *q = &s->flow.w.prim[k];
+        double dist, depth;
+        if (q->shape == WALL_CYLINDER) {
+            depth = hypot(x - q->p[0], y - q->p[1]) - q->radius;
+            dist = fabs(depth);
+        } else {
+            const ctr_seg *g = &seg[k];
+            double ex = g->bx - g->ax, ey = g->by - g->ay, l2 = ex * ex + ey * ey;
+            double u = fmax(0.0, fmin(1.0, ((x - g->ax) * ex + (y - g->ay) * ey) / l2));
+            dist = hypot(x - g->ax - u * ex, y - g->ay - u * ey);
+            depth = -(q->n[0] * (x - g->ax) + q->n[1] * (y - g->ay));
+        }
+        if (dist < best - 1e-12 * L->dr) best = dist, sign = depth;
+        else if (dist <= best + 1e-12 * L->dr && depth < sign) sign = depth; /* a tie: inside wins */
+    }
+    return sign < 0;
+}
+
+/* Within dr/2 of a cylinder, on either side (r in (R - dr/2, R + dr/2]):
+ * its first ring of dummies lies at R + dr/2, so such a site holds no
+ * material (as in the drum), but an end wall covers it in 3D. */
+static int ctr_cylinder_band(const sim_t *s, const ctr_lattice *L, double x, double y)
+{
+    for (int k = 0; k < L->nw; ++k) {
+        const wall_prim *q = &s->flow.w.prim[k];
+        if (q->shape != WALL_CYLINDER) continue;
+        double r = hypot(x - q->p[0], y - q->p[1]);
+        if (r > q->radius - 0.5 * L->dr && r <= q->radius + 0.5 * L->dr) return 1;
+    }
+    return 0;
+}
+
+/* Does region r hold the site (x, y)? */
+static int ctr_in_region(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg, const struct scene_region *r,
+                         double x, double y)
+{
+    switch (r->shape) {
+    case REGION_BOX: return x >= r->lo[0] && x < r->hi[0] && y >= r->lo[1] && y < r->hi[1];
+    case REGION_SECTOR: {
+        double dx = x - r->centre[0], dy = y - r->centre[1], rr = hypot(dx, dy);
+        if (rr < r->r_in || rr >= r->r_out) return 0;
+        double a = atan2(dy, dx) * 180.0 / M_PI, span = fmod(fmod(r->to_deg - r->from_deg, 360.0) + 360.0, 360.0);
+        double rel = fmod(fmod(a - r->from_deg, 360.0) + 360.0, 360.0);
+        return span == 0 ? 1 : rel < span; /* a full turn when to - from is a multiple of 360 */
+    }
+    default: return y < r->level && (!r->has_floor || y >= r->floor) && ctr_inside(s, L, seg, x, y);
+    }
+}
+
+void container_walls(sim_t *s)
+{
+    const struct scene *sc = s->sc;
+    const struct scene_container *k = &sc->container;
+    const double dr = sc->geometry.dr, nl = ceil(2.0 * sc->geometry.h_factor - 1e-9);
+    for (unsigned i = 0; i < k->walls_count; ++i) {
+        const struct scene_wall *w = &k->walls[i];
+        wall_prim *q;
+        int slip = w->slip == SLIP_FREE;
+        if (w->shape == CWALL_CYLINDER) {
+            q = wall_add_prim(s, w->name, WALL_CYLINDER, slip, 1, WALL_CLAIM_SIDE + (int)w->priority);
+            q->p[0] = (real)w->centre[0], q->p[1] = (real)w->centre[1], q->radius = (real)w->radius;
+        } else {
+            double ex = w->to[0] - w->from[0], ey = w->to[1] - w->from[1], len = hypot(ex, ey);
+            q = wall_plane(s, w->name, slip, !w->gate, w->gate ? WALL_CLAIM_LAST : WALL_CLAIM_SIDE + (int)w->priority, w->from[0],
+                           w->from[1], 0, -ey / len, ex / len, 0);
+            q->t[0] = (real)(ex / len), q->t[1] = (real)(ey / len);
+            /* the extent: the segment, past an end by nl dr where another segment joins */
+            int join_a = 0, join_b = 0;
+            for (unsigned j = 0; j < k->walls_count; ++j) {
+                const struct scene_wall *o = &k->walls[j];
+                if (j == i || o->shape != CWALL_SEGMENT || (o->gate && !w->gate))
+                    continue; /* a permanent wall does not reach under a gate: the opening stays clear */
+                for (int e = 0; e < 2; ++e) {
+                    const double *pt = e ? o->to : o->from;
+                    join_a |= hypot(pt[0] - w->from[0], pt[1] - w->from[1]) < 1e-9 * dr;
+                    join_b |= hypot(pt[0] - w->to[0], pt[1] - w->to[1]) < 1e-9 * dr;
+                }
+            }
+            q->t_lo = (real)(join_a ? -nl * dr : 0.0);
+            q->t_hi = (real)(join_b ? len + nl * dr : len);
+            if (w->gate) q->open_at = w->open_at;
+        }
+        if (w->motion == CWALL_TRANSLATING) {
+            q->move = WALL_TRANSLATE;
+            for (int d = 0; d < 3; ++d) q->u[d] = (real)w->velocity[d];
+        } else if (w->motion == CWALL_TURNING) {
+            q->move = WALL_ROTATE;
+            q->omega = w->rpm * 2.0 * M_PI / 60.0 * (w->direction == ROT_CLOCKWISE ? -1.0 : 1.0);
+            q->c[0] = (real)w->centre[0], q->c[1] = (real)w->centre[1];
+        }
+    }
+    if (sc->geometry.dim == 3) {
+        double D = (double)lround(sc->geometry.depth / dr) * dr;
+        int ss = sc->walls.side_slip == SLIP_FREE; /* the end walls slip as a column's side walls */
+        wall_plane(s, "zlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
+        wall_plane(s, "zhi", ss, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1);
+    }
+}
+
+/* Where region K (0-based) was given, for an input error. */
+static const char *ctr_where(const struct scene *sc, const char *list, unsigned K, char *buf, size_t n)
+{
+    char key[48];
+    snprintf(key, sizeof key, "%s:%u", list, K + 1);
+    return scene_key_where(sc, "Container", key, buf, n);
+}
+
+/* Classify every site of the plane (L->site); exits 2 on overlapping
+ * regions, a region reaching behind a wall or holding no site, and a wall
+ * with no dummy. */
+static void ctr_classify(const sim_t *s, ctr_lattice *L, const ctr_seg *seg)
+{
+    const struct scene *sc = s->sc;
+    const struct scene_container *k = &sc->container;
+    char where[512];
+    long *held = calloc(k->regions_count, sizeof *held), *dums = calloc((size_t)L->nw + 1, sizeof *dums);
+    if (!held || !dums) error_exit(1, "out of memory");
+    for (long j = 0; j < L->nj; ++j)
+        for (long i = 0; i < L->ni; ++i) {
+            double x = site_x(L, i), y = site_y(L, j), depth;
+            int reg = -1, w = ctr_dummy_wall(s, L, x, y, &depth);
+            for (unsigned r = 0; r < k->regions_count; ++r) {
+                if (!ctr_in_region(s, L, seg, &k->regions[r], x, y)) continue;
+                if (reg >= 0)
+                    input_error("%s: Container:regions:%u: overlaps region %d at (%.6g, %.6g) m",
+                                ctr_where(sc, "regions", r, where, sizeof where), r + 1, reg + 1, x, y);
+                reg = (int)r;
+            }
+            if (reg >= 0 && !w && ctr_inside(s, L, seg, x, y) && ctr_cylinder_band(s, L, x, y))
+                reg = -1; /* too near a cylinder's first ring: empty */
+            if (reg >= 0 && (w || !ctr_inside(s, L, seg, x, y)))
+                input_error("%s: Container:regions:%d: reaches behind the walls at (%.6g, %.6g) m%s%s",
+                            ctr_where(sc, "regions", (unsigned)reg, where, sizeof where), reg + 1, x, y,
+                            w ? ", into the dummies of wall " : "", w ? s->wall_name[w - 1] : "");
+            L->site[j * L->ni + i] = w ? w : reg >= 0 ? -(reg + 1) : 0;
+            if (reg >= 0) held[reg]++;
+            dums[w]++;
+        }
+    for (unsigned r = 0; r < k->regions_count; ++r)
+        if (!held[r])
+            input_error("%s: Container:regions:%u: holds no lattice site of spacing Geometry:dr = %.4g m inside the "
+                        "walls", ctr_where(sc, "regions", r, where, sizeof where), r + 1, L->dr);
+    for (int w = 1; w <= L->nw; ++w)
+        if (!dums[w] && s->flow.w.prim[w - 1].shape != WALL_CYLINDER) /* a cylinder's are rings */
+            input_error("%s: Container:walls:%d: has no dummy particle (another wall lies over it)",
+                        ctr_where(sc, "walls", (unsigned)(w - 1), where, sizeof where), w);
+    free(held);
+    free(dums);
+}
+
+/* Place the particles of the classified lattice (p NULL: count only);
+ * material first (by row, then z plane, then column, as the built-in
+ * column), then the dummies; returns their number and the material's. */
+static size_t ctr_place(sim_t *s, particles_t *p, const ctr_lattice *L, const ctr_seg *seg, size_t *n_mat,
+                        double *top)
+{
+    const struct scene_container *k = &s->sc->container;
+    const int d3 = s->sc->geometry.dim == 3;
+    const double dr = L->dr, vol = d3 ? dr * dr * dr : dr * dr;
+    const long nl = d3 ? L->nl : 0, nz = L->nz;
+    const int zlo = L->nw + 1, zhi = L->nw + 2; /* the end walls' ids in 3D */
+    size_t n = 0;
+    *top = -INFINITY;
+    for (long j = 0; j < L->nj; ++j)
+        for (long q = 0; q < nz; ++q)
+            for (long i = 0; i < L->ni; ++i) {
+                int c = L->site[j * L->ni + i];
+                if (c >= 0) continue;
+                double y = site_y(L, j);
+                if (p) setup_put(p, n, site_x(L, i), y, d3 ? (q + 0.5) * dr : 0, KIND_MATERIAL, vol, k->regions[-c - 1].C);
+                *top = fmax(*top, y + 0.5 * dr);
+                n++;
+            }
+    *n_mat = n;
+    for (long j = 0; j < L->nj; ++j)
+        for (long i = 0; i < L->ni; ++i) {
+            int c = L->site[j * L->ni + i];
+            double x = site_x(L, i), y = site_y(L, j), depth = 0;
+            if (c <= 0 && !(d3 && (ctr_inside(s, L, seg, x, y) || ctr_cylinder_band(s, L, x, y))))
+                continue; /* no dummy here */
+            if (c > 0) ctr_dummy_wall(s, L, x, y, &depth);
+            for (long q = -nl; q < nz + nl; ++q) {
+                int w = c, beyond = q < 0 || q >= nz;
+                if (c <= 0 && !beyond) continue; /* inside: the end walls' planes only */
+                if (beyond) { /* an end wall's, or a corner: the wall it lies further behind */
+                    double dz = (q < 0 ? -q - 0.5 : q - nz + 0.5) * dr;
+                    if (c <= 0 || dz > depth) w = q < 0 ? zlo : zhi;
+                }
+                if (p) {
+                    setup_put(p, n, x, y, d3 ? (q + 0.5) * dr : 0, KIND_DUMMY, vol, 0);
+                    setup_put_wall(p, n, w);
+                }
+                n++;
+            }
+        }
+    /* each cylinder's nl rings of dummies at radii R + (l + 1/2) dr, round(2 pi r / dr) each (as the
+     * drum), in every z plane; beyond the end planes a corner goes to the wall it lies further behind */
+    for (int k = 0; k < L->nw; ++k) {
+        const wall_prim *cq = &s->flow.w.prim[k];
+        if (cq->shape != WALL_CYLINDER) continue;
+        for (long q = -nl; q < nz + nl; ++q)
+            for (long l = 0; l < L->nl; ++l) {
+                double r = cq->radius + (l + 0.5) * dr, dz = (q < 0 ? -q - 0.5 : q - nz + 0.5) * dr;
+                int w = (q < 0 || q >= nz) && dz > (l + 0.5) * dr ? (q < 0 ? zlo : zhi) : k + 1;
+                long m = lround(2 * M_PI * r / dr);
+                for (long a = 0; a < m; ++a, ++n)
+                    if (p) {
+                        setup_put(p, n, cq->p[0] + r * cos(2 * M_PI * a / m), cq->p[1] + r * sin(2 * M_PI * a / m),
+                                  d3 ? (q + 0.5) * dr : 0, KIND_DUMMY, vol, 0);
+                        setup_put_wall(p, n, w);
+                    }
+            }
+    }
+    return n;
+}
+
+void container_place(sim_t *s)
+{
+    const struct scene *sc = s->sc;
+    const struct scene_container *k = &sc->container;
+    ctr_lattice L;
+    memset(&L, 0, sizeof L);
+    L.dr = sc->geometry.dr;
+    L.nl = (long)ceil(2.0 * sc->geometry.h_factor - 1e-9);
+    L.nz = sc->geometry.dim == 3 ? lround(sc->geometry.depth / L.dr) : 1;
+    L.nw = (int)k->walls_count;
+    ctr_seg *seg = calloc(k->walls_count, sizeof *seg);
+    if (!seg) error_exit(1, "out of memory");
+    /* the lattice: the walls' box, and the regions' boxes, with nl + 1 sites to spare */
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (unsigned i = 0; i < k->walls_count; ++i) {
+        const struct scene_wall *w = &k->walls[i];
+        seg[i] = (ctr_seg){w->from[0], w->from[1], w->to[0], w->to[1]};
+        for (int a = 0; a < 2; ++a) {
+            double l = w->shape == CWALL_CYLINDER ? w->centre[a] - w->radius : fmin(w->from[a], w->to[a]);
+            double h = w->shape == CWALL_CYLINDER ? w->centre[a] + w->radius : fmax(w->from[a], w->to[a]);
+            lo[a] = fmin(lo[a], l), hi[a] = fmax(hi[a], h);
+        }
+    }
+    for (unsigned r = 0; r < k->regions_count; ++r) {
+        const struct scene_region *g = &k->regions[r];
+        if (g->shape == REGION_BOX)
+            for (int a = 0; a < 2; ++a) lo[a] = fmin(lo[a], g->lo[a]), hi[a] = fmax(hi[a], g->hi[a]);
+        if (g->shape == REGION_SECTOR)
+            for (int a = 0; a < 2; ++a) lo[a] = fmin(lo[a], g->centre[a] - g->r_out), hi[a] = fmax(hi[a], g->centre[a] + g->r_out);
+    }
+    L.i0 = (long)floor(lo[0] / L.dr) - L.nl - 1, L.j0 = (long)floor(lo[1] / L.dr) - L.nl - 1;
+    L.ni = (long)ceil(hi[0] / L.dr) + L.nl + 1 - L.i0, L.nj = (long)ceil(hi[1] / L.dr) + L.nl + 1 - L.j0;
+    if ((double)L.ni * (double)L.nj > 4e9)
+        error_exit(2, "Container: the walls span %ld x %ld lattice sites of Geometry:dr; too many", L.ni, L.nj);
+    L.site = calloc((size_t)(L.ni * L.nj), sizeof *L.site);
+    if (!L.site) error_exit(1, "out of memory");
+    ctr_classify(s, &L, seg);
+    size_t n_mat;
+    double top;
+    size_t n = ctr_place(s, NULL, &L, seg, &n_mat, &top);
+    setup_alloc(sc, &s->p, (int)sc->geometry.dim, n);
+    ctr_place(s, &s->p, &L, seg, &n_mat, &top);
+    s->p.n = setup_count(n);
+    s->n_material = n_mat;
+    s->surface_y = top;
+    if (sc->outlet.enabled && top - 0.5 * L.dr >= 0) {
+        /* material at the start below the outlet plane would leave at once */
+        double ymin = INFINITY;
+        for (size_t i = 0; i < setup_count(n_mat); ++i) ymin = fmin(ymin, (double)s->p.x[1][i]);
+        ymin = comm_min(ymin);
+        char where[512];
+        if (ymin < sc->outlet.below)
+            input_error("%s: Outlet:below: %.4g m lies above material at y = %.4g m at the start",
+                        scene_key_where(sc, "Outlet", "below", where, sizeof where), sc->outlet.below, ymin);
+    }
+    free(L.site);
+    free(seg);
+}
