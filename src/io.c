@@ -115,7 +115,7 @@ const struct io_field io_fields[] = {
      "2 free-surface vicinity, 3 wall surface, 4 wall vicinity, 5 dummy",
      io_bclass},
     {"Wall", IO_UINT8, 1, "-",
-     "A dummy's wall: 1 base, 2 x = 0, 3 x = width, 4 z = 0, 5 z = depth, 6 gate, 7 drum, 8 lid; 0 material",
+     "A dummy's wall: the 1-based index of its wall primitive, named in the header attribute Walls; 0 material",
      io_wall},
     {"ParticleIDs", IO_INT64, 1, "-", "Global particle ID, unique and constant in a run", io_id},
 };

@@ -4,7 +4,7 @@
 # stderr, "sphseg: error: FILE:LINE: Section:key: why" (or "-P ARG: ..." for a
 # bad override), and no output directory.
 #
-# Cases: each tests/scenes_bad/*.yml, whose first line "# expect: NAME:LINE: ..."
+# Cases: each tests/scenes_bad/*.yml and setup/*.yml, whose first line "# expect: NAME:LINE: ..."
 # gives the start of the message after the directory; a missing file; a
 # directory; bad -P overrides on inputs/shearbox_2d.yml.
 # Prints PASS name / FAIL name lines; exits 1 if any case fails.
@@ -49,14 +49,16 @@ check() {
     fi
 }
 
-for f in "$bad"/*.yml; do
+# scenes_bad/setup/: errors found when the particles are built (a container's
+# regions), not by the scene parser (tests/test_scene.c reads the others)
+for f in "$bad"/*.yml "$bad"/setup/*.yml; do
     expect=$(sed -n '1s/^# expect: //p' "$f")
     if [ -z "$expect" ]; then
         echo "FAIL $(basename "$f"): no '# expect: ' first line"
         n_fail=$((n_fail + 1))
         continue
     fi
-    check "$(basename "$f" .yml)" "$bad/$expect" "$f"
+    check "$(basename "$f" .yml)" "$(dirname "$f")/$expect" "$f"
 done
 
 check missing_file "$bad/does_not_exist.yml: cannot read" "$bad/does_not_exist.yml"
