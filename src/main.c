@@ -48,6 +48,7 @@ static void usage(void)
             "              (a longer Run:t_end extends a run); snapshots and diagnostics.csv continue in OUTDIR\n"
             "  --overwrite a fresh run may replace the files of an earlier run in OUTDIR (else: exit 2)\n"
             "  SIGTERM, SIGUSR1, SIGINT: finish the step, write a checkpoint, exit 0; a second SIGTERM ends at once\n"
+            "  --keys      print every scene key with its type, default, range and meaning (Markdown, docs/keys.md)\n"
             "  --version   print the version");
 }
 
@@ -57,6 +58,10 @@ static cli parse_cli(int argc, char **argv)
     for (int a = 1; a < argc; ++a) {
         if (!strcmp(argv[a], "-h") || !strcmp(argv[a], "--help")) {
             usage();
+            MPI_Finalize();
+            exit(0);
+        } else if (!strcmp(argv[a], "--keys")) {
+            if (comm_rank() == 0) scene_keys_markdown(stdout);
             MPI_Finalize();
             exit(0);
         } else if (!strcmp(argv[a], "--version")) {

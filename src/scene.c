@@ -40,227 +40,72 @@
     CYAML_FIELD_ENUM(#key, OPT | CYAML_FLAG_STRICT, struct st, key, strs, CYAML_ARRAY_LEN(strs))
 #define SEC(key, member, fields) CYAML_FIELD_MAPPING(key, OPT, struct scene, member, fields)
 
-static const cyaml_strval_t geom_types[] = {
-    {"shearbox", GEOM_SHEARBOX}, {"column", GEOM_COLUMN}, {"drum", GEOM_DRUM}, {"container", GEOM_CONTAINER}};
-static const cyaml_strval_t kin_types[] = {
-    {"rest", KIN_REST}, {"oscillatory_shear", KIN_OSCILLATORY_SHEAR}, {"computed", KIN_COMPUTED}};
-static const cyaml_strval_t slips[] = {{"no_slip", SLIP_NO}, {"free_slip", SLIP_FREE}};
-static const cyaml_strval_t rot_dirs[] = {{"clockwise", ROT_CLOCKWISE},
-                                          {"counterclockwise", ROT_COUNTERCLOCKWISE}};
-static const cyaml_strval_t init_stresses[] = {{"zero", INIT_STRESS_ZERO},
-                                               {"geostatic", INIT_STRESS_GEOSTATIC}};
-static const cyaml_strval_t seg_fluxes[] = {{"symmetric", SEG_FLUX_SYMMETRIC},
-                                            {"asymmetric", SEG_FLUX_ASYMMETRIC}};
-static const cyaml_strval_t seg_models[] = {{"constant", SEG_MODEL_CONSTANT},
-                                            {"shear_rate", SEG_MODEL_SHEAR_RATE}};
-static const cyaml_strval_t seg_schemes[] = {
-    {"paper", SEG_SCHEME_PAPER}, {"direct", SEG_SCHEME_DIRECT}, {"conservative", SEG_SCHEME_CONSERVATIVE}};
-static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
-static const cyaml_strval_t part_methods[] = {{"slabs", PART_SLABS}, {"metis", PART_METIS}};
-static const cyaml_strval_t periodic_axes[] = {
-    {"none", PERIODIC_NONE}, {"x", PERIODIC_X}, {"z", PERIODIC_Z}, {"xz", PERIODIC_XZ}};
-static const cyaml_strval_t mat_models[] = {{"granular", MAT_GRANULAR}, {"newtonian", MAT_NEWTONIAN}};
-static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
-
 static const cyaml_schema_value_t gravity_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_DEFAULT, double)};
 
-static const cyaml_schema_field_t run_fields[] = {
-    FLT(scene_run, t_end, REQ),
-    FLT(scene_run, cfl_diffusion, OPT),
-    FLT(scene_run, cfl_segregation, OPT),
-    FLT(scene_run, cfl_kinematic, OPT),
-    FLT(scene_run, cfl_flow, OPT),
-    FLT(scene_run, dt_max, OPT),
-    FLT(scene_run, progress_s, OPT),
-    CYAML_FIELD_UINT("max_steps", OPT, struct scene_run, max_steps),
-    FLT(scene_run, max_wall_time, OPT),
-    CYAML_FIELD_STRING_PTR("backend", OPT, struct scene_run, backend, 0, CYAML_UNLIMITED),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_schema_field_t geometry_fields[] = {
-    ENM(scene_geometry, type, geom_types),
-    CYAML_FIELD_UINT("dim", OPT, struct scene_geometry, dim),
-    FLT(scene_geometry, dr, REQ),
-    FLT(scene_geometry, h_factor, OPT),
-    FLT(scene_geometry, height, OPT),
-    FLT(scene_geometry, width, OPT),
-    FLT(scene_geometry, depth, OPT),
-    FLT(scene_geometry, radius, OPT),
-    FLT(scene_geometry, length, OPT),
-    FLT(scene_geometry, fill, OPT),
-    ENM(scene_geometry, periodic, periodic_axes),
-    ENM(scene_geometry, lid, on_off),
-    FLT(scene_geometry, runout, OPT),
-    FLT(scene_geometry, outlet_width, OPT),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_schema_field_t kinematics_fields[] = {
-    ENM(scene_kinematics, velocity, kin_types),
-    FLT(scene_kinematics, gamma0, OPT),
-    FLT(scene_kinematics, period, OPT),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_schema_field_t grains_fields[] = {
-    FLT(scene_grains, d_small, OPT),
-    FLT(scene_grains, d_large, OPT),
-    CYAML_FIELD_END,
-};
-
-/* V and D are required only for the constant model: require_model_keys(). */
-static const cyaml_schema_field_t segregation_fields[] = {
-    ENM(scene_segregation, enabled, on_off),
-    ENM(scene_segregation, flux, seg_fluxes),
-    FLT(scene_segregation, A, OPT),
-    FLT(scene_segregation, kappa, OPT),
-    ENM(scene_segregation, model, seg_models),
-    FLT(scene_segregation, V, OPT),
-    FLT(scene_segregation, D, OPT),
-    FLT(scene_segregation, chi_V, OPT),
-    FLT(scene_segregation, chi_D, OPT),
-    ENM(scene_segregation, scheme, seg_schemes),
-    ENM(scene_segregation, renormalize, on_off),
-    FLT(scene_segregation, drift_tol, OPT),
-    CYAML_FIELD_STRING_PTR("every", OPT, struct scene_segregation, every, 0, CYAML_UNLIMITED),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_schema_field_t initial_fields[] = {
-    FLT(scene_initial, C_below, OPT),
-    FLT(scene_initial, C_above, OPT),
-    FLT(scene_initial, split, OPT),
-    ENM(scene_initial, stress, init_stresses),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_schema_field_t material_fields[] = {
-    ENM(scene_material, model, mat_models),
-    FLT(scene_material, eta, OPT),
-    FLT(scene_material, E, OPT),
-    FLT(scene_material, nu, OPT),
-    FLT(scene_material, rho_s, OPT),
-    FLT(scene_material, mu_s, OPT),
-    FLT(scene_material, mu_d, OPT),
-    FLT(scene_material, I0, OPT),
-    FLT(scene_material, lambda, OPT),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_schema_field_t flow_fields[] = {
-    FLT(scene_flow, alpha_av, OPT),
-    CYAML_FIELD_UINT("shepard_every", OPT, struct scene_flow, shepard_every),
-    FLT(scene_flow, damping, OPT),
-    FLT(scene_flow, damping_until, OPT),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_schema_field_t walls_fields[] = {
-    ENM(scene_walls, slip, slips),
-    ENM(scene_walls, side_slip, slips),
-    FLT(scene_walls, gate_open, OPT),
-    FLT(scene_walls, rpm, OPT),
-    ENM(scene_walls, direction, rot_dirs),
-    CYAML_FIELD_SEQUENCE_FIXED("velocity", OPT, struct scene_walls, velocity, &gravity_entry, 3),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_strval_t cwall_shapes[] = {{"segment", CWALL_SEGMENT}, {"cylinder", CWALL_CYLINDER}};
-static const cyaml_strval_t cwall_motions[] = {
-    {"fixed", CWALL_FIXED}, {"translating", CWALL_TRANSLATING}, {"turning", CWALL_TURNING}};
-static const cyaml_strval_t region_shapes[] = {{"box", REGION_BOX}, {"sector", REGION_SECTOR}, {"fill", REGION_FILL}};
-
-static const cyaml_schema_field_t cwall_fields[] = {
-    CYAML_FIELD_STRING_PTR("name", OPT, struct scene_wall, name, 1, 32),
-    ENM(scene_wall, shape, cwall_shapes),
-    CYAML_FIELD_SEQUENCE_FIXED("from", OPT, struct scene_wall, from, &gravity_entry, 2),
-    CYAML_FIELD_SEQUENCE_FIXED("to", OPT, struct scene_wall, to, &gravity_entry, 2),
-    CYAML_FIELD_SEQUENCE_FIXED("centre", OPT, struct scene_wall, centre, &gravity_entry, 2),
-    FLT(scene_wall, radius, OPT),
-    ENM(scene_wall, slip, slips),
-    ENM(scene_wall, motion, cwall_motions),
-    CYAML_FIELD_SEQUENCE_FIXED("velocity", OPT, struct scene_wall, velocity, &gravity_entry, 3),
-    FLT(scene_wall, rpm, OPT),
-    ENM(scene_wall, direction, rot_dirs),
-    FLT(scene_wall, open_at, OPT),
-    CYAML_FIELD_UINT("priority", OPT, struct scene_wall, priority),
-    CYAML_FIELD_END,
-};
-static const cyaml_schema_value_t cwall_entry = {CYAML_VALUE_MAPPING(CYAML_FLAG_DEFAULT, struct scene_wall, cwall_fields)};
-
-static const cyaml_schema_field_t region_fields[] = {
-    ENM(scene_region, shape, region_shapes),
-    CYAML_FIELD_SEQUENCE_FIXED("lo", OPT, struct scene_region, lo, &gravity_entry, 2),
-    CYAML_FIELD_SEQUENCE_FIXED("hi", OPT, struct scene_region, hi, &gravity_entry, 2),
-    CYAML_FIELD_SEQUENCE_FIXED("centre", OPT, struct scene_region, centre, &gravity_entry, 2),
-    FLT(scene_region, r_in, OPT),
-    FLT(scene_region, r_out, OPT),
-    FLT(scene_region, from_deg, OPT),
-    FLT(scene_region, to_deg, OPT),
-    FLT(scene_region, level, OPT),
-    FLT(scene_region, floor, OPT),
-    FLT(scene_region, C, OPT),
-    CYAML_FIELD_END,
-};
-static const cyaml_schema_value_t region_entry = {
-    CYAML_VALUE_MAPPING(CYAML_FLAG_DEFAULT, struct scene_region, region_fields)};
-
-/* Lists of mappings: the walk names an entry Section:key:K (K from 1). */
-static const cyaml_schema_field_t container_fields[] = {
-    CYAML_FIELD_SEQUENCE("walls", OPT | CYAML_FLAG_POINTER, struct scene_container, walls, &cwall_entry, 0,
-                         SCENE_WALLS_MAX),
-    CYAML_FIELD_SEQUENCE("regions", OPT | CYAML_FLAG_POINTER, struct scene_container, regions, &region_entry, 0,
-                         SCENE_REGIONS_MAX),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_schema_field_t output_fields[] = {
-    FLT(scene_output, dt, REQ),
-    FLT(scene_output, diag_dt, OPT), /* default dt/20, set after loading */
-    ENM(scene_output, snapshots, on_off),
-    FLT(scene_output, checkpoint_dt, OPT),
-    CYAML_FIELD_END,
-};
-
-
-static const cyaml_schema_field_t physics_fields[] = {
-    CYAML_FIELD_SEQUENCE_FIXED("gravity", OPT, struct scene_physics, gravity, &gravity_entry, 3),
-    FLT(scene_physics, rho, OPT),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_schema_field_t parallel_fields[] = {
-    ENM(scene_parallel, method, part_methods),
-    ENM(scene_parallel, axis, slab_axes),
-    CYAML_FIELD_UINT("balance_every", OPT, struct scene_parallel, balance_every),
-    FLT(scene_parallel, balance_threshold, OPT),
-    CYAML_FIELD_END,
-};
-
-static const cyaml_schema_field_t outlet_fields[] = {
-    ENM(scene_outlet, enabled, on_off),
-    FLT(scene_outlet, below, OPT),
-    CYAML_FIELD_END,
-};
+/* The schema from the key table (scene_keys.h): one array of fields per
+ * list entry and per section, then the sections. */
+#define ENTRY(name, st, title) static const cyaml_schema_field_t name##_fields[] = {
+#define END_ENTRY(name, st)                                                                                   \
+    CYAML_FIELD_END                                                                                            \
+    }                                                                                                          \
+    ;                                                                                                          \
+    static const cyaml_schema_value_t name##_entry = {                                                         \
+        CYAML_VALUE_MAPPING(CYAML_FLAG_DEFAULT, struct st, name##_fields)};
+#define SECTION(sec, m, st) static const cyaml_schema_field_t m##_fields[] = {
+#define END_SECTION(m)                                                                                        \
+    CYAML_FIELD_END                                                                                            \
+    }                                                                                                          \
+    ;
+#define KF(sec, m, st, k, req, def, lo, hi, open, when, doc) CYAML_FIELD_FLOAT(#k, req, struct st, k),
+#define KE(sec, m, st, k, strs, def, doc) ENM(st, k, strs),
+#define KU(sec, m, st, k, def, doc) CYAML_FIELD_UINT(#k, OPT, struct st, k),
+#define KS(sec, m, st, k, mn, mx, def, doc) CYAML_FIELD_STRING_PTR(#k, OPT, struct st, k, mn, mx),
+#define KV(sec, m, st, k, n, def, doc) CYAML_FIELD_SEQUENCE_FIXED(#k, OPT, struct st, k, &gravity_entry, n),
+#define KL(sec, m, st, k, entry, max, doc) \
+    CYAML_FIELD_SEQUENCE(#k, OPT | CYAML_FLAG_POINTER, struct st, k, &entry, 0, max),
+#define EKF(sec, st, k, doc) CYAML_FIELD_FLOAT(#k, OPT, struct st, k),
+#define EKE(sec, st, k, strs, doc) ENM(st, k, strs),
+#define EKU(sec, st, k, doc) CYAML_FIELD_UINT(#k, OPT, struct st, k),
+#define EKS(sec, st, k, mn, mx, doc) CYAML_FIELD_STRING_PTR(#k, OPT, struct st, k, mn, mx),
+#define EKV(sec, st, k, n, doc) CYAML_FIELD_SEQUENCE_FIXED(#k, OPT, struct st, k, &gravity_entry, n),
+#include "scene_keys.h"
+#undef ENTRY
+#undef END_ENTRY
+#undef SECTION
+#undef END_SECTION
+#define ENTRY(name, st, title)
+#define END_ENTRY(name, st)
+#define END_SECTION(m)
+#undef KF
+#undef KE
+#undef KU
+#undef KS
+#undef KV
+#undef KL
+#undef EKF
+#undef EKE
+#undef EKU
+#undef EKS
+#undef EKV
+#define EKF(sec, st, k, doc)
+#define EKE(sec, st, k, strs, doc)
+#define EKU(sec, st, k, doc)
+#define EKS(sec, st, k, mn, mx, doc)
+#define EKV(sec, st, k, n, doc)
 
 static const cyaml_schema_field_t scene_fields[] = {
-    SEC("Run", run, run_fields),
-    SEC("Geometry", geometry, geometry_fields),
-    SEC("Kinematics", kinematics, kinematics_fields),
-    SEC("Grains", grains, grains_fields),
-    SEC("Segregation", segregation, segregation_fields),
-    SEC("Initial", initial, initial_fields),
-    SEC("Output", output, output_fields),
-    SEC("Physics", physics, physics_fields),
-    SEC("Material", material, material_fields),
-    SEC("Flow", flow, flow_fields),
-    SEC("Walls", walls, walls_fields),
-    SEC("Parallel", parallel, parallel_fields),
-    SEC("Outlet", outlet, outlet_fields),
-    SEC("Container", container, container_fields),
+#define SECTION(sec, m, st) SEC(sec, m, m##_fields),
+#define KF(sec, m, st, k, req, def, lo, hi, open, when, doc)
+#define KE(sec, m, st, k, strs, def, doc)
+#define KU(sec, m, st, k, def, doc)
+#define KS(sec, m, st, k, mn, mx, def, doc)
+#define KV(sec, m, st, k, n, def, doc)
+#define KL(sec, m, st, k, entry, max, doc)
+#include "scene_keys.h"
+#undef SECTION
     CYAML_FIELD_END,
 };
+#define SECTION(sec, m, st)
 
 static const cyaml_schema_value_t scene_schema = {
     CYAML_VALUE_MAPPING(CYAML_FLAG_POINTER, struct scene, scene_fields)};
@@ -271,84 +116,22 @@ struct scene_default {
     const char *section, *key, *value;
 };
 
+/* The keys with a default (value NULL: none; add_defaults skips them). */
 static const struct scene_default scene_defaults[] = {
-    {"Run", "cfl_diffusion", "0.1"},
-    {"Run", "cfl_segregation", "0.2"},
-    {"Run", "cfl_kinematic", "1"},
-    {"Run", "cfl_flow", "0.1"},
-    {"Run", "dt_max", "1e30"},
-    {"Run", "progress_s", "10"},
-    {"Run", "max_steps", "0"},
-    {"Run", "max_wall_time", "0"},
-    {"Output", "snapshots", "on"},
-    {"Output", "checkpoint_dt", "0"},
-    {"Run", "backend", "auto"},
-    {"Geometry", "type", "shearbox"},
-    {"Geometry", "dim", "2"},
-    {"Geometry", "h_factor", "1.5"},
-    {"Geometry", "height", "0.087"},
-    {"Geometry", "width", "0.037"},
-    {"Geometry", "depth", "0.037"},
-    {"Geometry", "radius", "0.035"},
-    {"Geometry", "length", "0.02"},
-    {"Geometry", "fill", "0.42"},
-    {"Geometry", "periodic", "none"},
-    {"Geometry", "lid", "off"},
-    {"Geometry", "runout", "0"},
-    {"Geometry", "outlet_width", "0"},
-    {"Kinematics", "velocity", "oscillatory_shear"},
-    {"Kinematics", "gamma0", "0.5773502691896257"}, /* tan 30 deg */
-    {"Kinematics", "period", "13"},
-    {"Grains", "d_small", "0.004"},
-    {"Grains", "d_large", "0.008"},
-    {"Segregation", "enabled", "on"},
-    {"Segregation", "flux", "symmetric"},
-    {"Segregation", "A", "1.6"},
-    {"Segregation", "kappa", "0.89"},
-    {"Segregation", "model", "constant"},
-    {"Segregation", "chi_V", "0.11"},
-    {"Segregation", "chi_D", "0.0307"},
-    {"Segregation", "scheme", "conservative"},
-    {"Segregation", "renormalize", "on"},
-    {"Segregation", "drift_tol", "1e-3"},
-    {"Segregation", "every", "auto"},
-    {"Initial", "C_below", "0"},
-    {"Initial", "C_above", "1"},
-    {"Initial", "split", "0.5"},
-    {"Initial", "stress", "geostatic"},
-    {"Physics", "gravity", "[0, -9.81, 0]"},
-    {"Physics", "rho", "1500"},
-    {"Material", "model", "granular"},
-    {"Material", "eta", "0.001"},
-    {"Material", "E", "1e7"},
-    {"Material", "nu", "0.3"},
-    {"Material", "rho_s", "2500"},
-    {"Material", "mu_s", "0.382"},
-    {"Material", "mu_d", "0.682"},
-    {"Material", "I0", "0.279"},
-    {"Material", "lambda", "0.001"},
-    {"Flow", "alpha_av", "0.1"},
-    {"Flow", "shepard_every", "30"},
-    {"Flow", "damping", "0"},
-    {"Flow", "damping_until", "0"},
-    {"Walls", "slip", "no_slip"},
-    {"Walls", "gate_open", "0"},
-    {"Walls", "side_slip", "free_slip"},
-    {"Walls", "rpm", "0"},
-    {"Walls", "direction", "clockwise"},
-    {"Walls", "velocity", "[0, 0, 0]"},
-    {"Parallel", "method", "slabs"},
-    {"Outlet", "enabled", "off"},
-    {"Outlet", "below", "0"},
-    {"Parallel", "axis", "auto"},
-    {"Parallel", "balance_every", "200"},
-    {"Parallel", "balance_threshold", "0.1"},
+#undef KF
+#undef KE
+#undef KU
+#undef KS
+#undef KV
+#define KF(sec, m, st, k, req, def, lo, hi, open, when, doc) {sec, #k, def},
+#define KE(sec, m, st, k, strs, def, doc) {sec, #k, def},
+#define KU(sec, m, st, k, def, doc) {sec, #k, def},
+#define KS(sec, m, st, k, mn, mx, def, doc) {sec, #k, def},
+#define KV(sec, m, st, k, n, def, doc) {sec, #k, def},
+#include "scene_keys.h"
 };
 
 /* ---- ranges of the double parameters ----------------------------------------- */
-
-enum { ALWAYS, IF_CONSTANT, IF_SHEAR_RATE };   /* which Segregation:model checks it */
-enum { CLOSED = 0, LO_OPEN = 1, HI_OPEN = 2 }; /* bound kinds, ORed */
 
 struct scene_range {
     const char *name; /* Section:key */
@@ -357,65 +140,19 @@ struct scene_range {
     int open, when;
 };
 
-/* clang-format off */
-#define RNG(sec, m, key, lo, hi, open, when) \
-    {sec ":" #key, offsetof(struct scene, m.key), lo, hi, open, when}
-/* clang-format on */
-#define POS(sec, m, key) RNG(sec, m, key, 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS)
-#define UNIT(sec, m, key) RNG(sec, m, key, 0, 1, CLOSED, ALWAYS)
-#define CFL(key) RNG("Run", run, key, 0, 1, LO_OPEN, ALWAYS)
-
+/* The numbers with a range (when NO_RANGE: none; check_ranges skips them). */
 static const struct scene_range scene_ranges[] = {
-    POS("Run", run, t_end),
-    CFL(cfl_diffusion),
-    CFL(cfl_segregation),
-    CFL(cfl_kinematic),
-    RNG("Run", run, cfl_flow, 0, 10, LO_OPEN, ALWAYS), /* above 1 only to find the stability limit */
-    POS("Run", run, dt_max),
-    POS("Run", run, progress_s),
-    RNG("Run", run, max_wall_time, 0, INFINITY, HI_OPEN, ALWAYS),
-    POS("Geometry", geometry, dr),
-    RNG("Geometry", geometry, h_factor, 1, 3, CLOSED, ALWAYS),
-    POS("Geometry", geometry, height),
-    POS("Geometry", geometry, width),
-    POS("Geometry", geometry, depth),
-    POS("Geometry", geometry, radius),
-    POS("Geometry", geometry, length),
-    RNG("Geometry", geometry, fill, 0, 1, LO_OPEN | HI_OPEN, ALWAYS),
-    RNG("Kinematics", kinematics, gamma0, 0, INFINITY, HI_OPEN, ALWAYS),
-    POS("Kinematics", kinematics, period),
-    POS("Grains", grains, d_small),
-    POS("Grains", grains, d_large),
-    POS("Segregation", segregation, A),
-    RNG("Segregation", segregation, kappa, 0, 1, HI_OPEN, ALWAYS),
-    RNG("Segregation", segregation, V, 0, INFINITY, HI_OPEN, IF_CONSTANT),
-    RNG("Segregation", segregation, D, 0, INFINITY, LO_OPEN | HI_OPEN, IF_CONSTANT),
-    RNG("Segregation", segregation, chi_V, 0, INFINITY, HI_OPEN, IF_SHEAR_RATE),
-    RNG("Segregation", segregation, chi_D, 0, INFINITY, LO_OPEN | HI_OPEN, IF_SHEAR_RATE),
-    POS("Segregation", segregation, drift_tol),
-    UNIT("Initial", initial, C_below),
-    UNIT("Initial", initial, C_above),
-    UNIT("Initial", initial, split),
-    POS("Output", output, dt),
-    POS("Output", output, diag_dt),
-    RNG("Output", output, checkpoint_dt, 0, INFINITY, HI_OPEN, ALWAYS),
-    POS("Physics", physics, rho),
-    RNG("Geometry", geometry, outlet_width, 0, INFINITY, HI_OPEN, ALWAYS),
-    RNG("Geometry", geometry, runout, 0, INFINITY, HI_OPEN, ALWAYS),
-    RNG("Walls", walls, gate_open, 0, INFINITY, HI_OPEN, ALWAYS),
-    POS("Material", material, eta),
-    POS("Material", material, E),
-    RNG("Material", material, nu, 0, 0.5, HI_OPEN, ALWAYS),
-    POS("Material", material, rho_s),
-    RNG("Material", material, mu_s, 0, INFINITY, HI_OPEN, ALWAYS),
-    RNG("Material", material, mu_d, 0, INFINITY, HI_OPEN, ALWAYS),
-    POS("Material", material, I0),
-    RNG("Material", material, lambda, 0, INFINITY, HI_OPEN, ALWAYS),
-    RNG("Flow", flow, alpha_av, 0, INFINITY, HI_OPEN, ALWAYS),
-    RNG("Flow", flow, damping, 0, INFINITY, HI_OPEN, ALWAYS),
-    RNG("Flow", flow, damping_until, 0, INFINITY, HI_OPEN, ALWAYS),
-    RNG("Walls", walls, rpm, 0, INFINITY, HI_OPEN, ALWAYS),
-    POS("Parallel", parallel, balance_threshold),
+#undef KF
+#undef KE
+#undef KU
+#undef KS
+#undef KV
+#define KF(sec, m, st, k, req, def, lo, hi, open, when, doc) {sec ":" #k, offsetof(struct scene, m.k), lo, hi, open, when},
+#define KE(sec, m, st, k, strs, def, doc)
+#define KU(sec, m, st, k, def, doc)
+#define KS(sec, m, st, k, mn, mx, def, doc)
+#define KV(sec, m, st, k, n, def, doc)
+#include "scene_keys.h"
 };
 
 /* ---- parse context and error messages ------------------------------------------ */
@@ -1112,6 +849,7 @@ static int add_defaults(struct scene_ctx *c)
     char name[SCENE_NAME], why[160];
     for (size_t i = 0; i < ARRAY_LEN(scene_defaults); ++i) {
         const struct scene_default *d = &scene_defaults[i];
+        if (!d->value) continue; /* required, or no default */
         snprintf(name, sizeof name, "%s:%s", d->section, d->key);
         if (leaf_find(c, name)) continue;
         const char *comp[2] = {d->section, d->key};
@@ -1210,7 +948,8 @@ static int check_ranges(struct scene_ctx *c, const struct scene *s)
     int constant = s->segregation.model == SEG_MODEL_CONSTANT;
     for (size_t i = 0; i < ARRAY_LEN(scene_ranges); ++i) {
         const struct scene_range *r = &scene_ranges[i];
-        if ((r->when == IF_CONSTANT && !constant) || (r->when == IF_SHEAR_RATE && constant)) continue;
+        if (r->when == NO_RANGE || (r->when == IF_CONSTANT && !constant) || (r->when == IF_SHEAR_RATE && constant))
+            continue;
         if (r->when != ALWAYS && !s->segregation.enabled) continue;
         double v;
         memcpy(&v, (const char *)s + r->offset, sizeof v);

@@ -291,6 +291,11 @@ int scene_key_line(const struct scene *s, const char *section, const char *key);
 const char *scene_key_where(const struct scene *s, const char *section, const char *key, char *buf,
                             size_t n);
 
+/* Every key of the scene file, documented from the key table
+ * (src/scene_keys.h), as Markdown to f (sphseg --keys, docs/keys.md). */
+#include <stdio.h>
+void scene_keys_markdown(FILE *f);
+
 /* Free what scene_load/scene_parse allocated; *s is zeroed. */
 void scene_free(struct scene *s);
 

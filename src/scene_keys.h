@@ -1,0 +1,287 @@
+/* scene_keys.h — every key of the scene file, declared once (no include
+ * guard: src/scene.c includes it once per use, defining the row macros):
+ * the libcyaml schema, the defaults, the ranges of the numbers, the
+ * documentation (sphseg --keys, docs/keys.md) and so the echo
+ * (used_params.yml) all come from these rows.
+ *
+ *   SECTION(Name, member of struct scene, its struct) ... END_SECTION(member)
+ *   KF(Section, member, struct, key, REQ|OPT, default, lo, hi, open, when, doc)  a number; a range
+ *      lo..hi (open: LO_OPEN, HI_OPEN, CLOSED), checked when `when` (ALWAYS, IF_CONSTANT,
+ *      IF_SHEAR_RATE; NO_RANGE: none)
+ *   KE(..., key, names, default, doc)  one of the names     KU(..., key, default, doc)  an unsigned
+ *   KS(..., key, min, max, default, doc)  a string           KV(..., key, n, default, doc)  n numbers
+ *   KL(..., key, entry, max, doc)  a list of mappings, each entry's keys in ENTRY(entry, struct,
+ *      Name) ... END_ENTRY(entry, struct), rows EKF, EKE, EKU, EKS, EKV (no default: zero, and no
+ *      range: the checks of scene.c check_container)
+ * A default is YAML text, NULL for a required key or one without a default.
+ * A new key is one row here and its member in struct scene (scene.h). */
+#ifndef SPHSEG_SCENE_KEYS_NAMES /* once per translation unit: the names of the enumerated keys */
+#define SPHSEG_SCENE_KEYS_NAMES
+static const cyaml_strval_t geom_types[] = {
+    {"shearbox", GEOM_SHEARBOX}, {"column", GEOM_COLUMN}, {"drum", GEOM_DRUM}, {"container", GEOM_CONTAINER}};
+static const cyaml_strval_t kin_types[] = {
+    {"rest", KIN_REST}, {"oscillatory_shear", KIN_OSCILLATORY_SHEAR}, {"computed", KIN_COMPUTED}};
+static const cyaml_strval_t slips[] = {{"no_slip", SLIP_NO}, {"free_slip", SLIP_FREE}};
+static const cyaml_strval_t rot_dirs[] = {{"clockwise", ROT_CLOCKWISE},
+                                          {"counterclockwise", ROT_COUNTERCLOCKWISE}};
+static const cyaml_strval_t init_stresses[] = {{"zero", INIT_STRESS_ZERO},
+                                               {"geostatic", INIT_STRESS_GEOSTATIC}};
+static const cyaml_strval_t seg_fluxes[] = {{"symmetric", SEG_FLUX_SYMMETRIC},
+                                            {"asymmetric", SEG_FLUX_ASYMMETRIC}};
+static const cyaml_strval_t seg_models[] = {{"constant", SEG_MODEL_CONSTANT},
+                                            {"shear_rate", SEG_MODEL_SHEAR_RATE}};
+static const cyaml_strval_t seg_schemes[] = {
+    {"paper", SEG_SCHEME_PAPER}, {"direct", SEG_SCHEME_DIRECT}, {"conservative", SEG_SCHEME_CONSERVATIVE}};
+static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
+static const cyaml_strval_t part_methods[] = {{"slabs", PART_SLABS}, {"metis", PART_METIS}};
+static const cyaml_strval_t periodic_axes[] = {
+    {"none", PERIODIC_NONE}, {"x", PERIODIC_X}, {"z", PERIODIC_Z}, {"xz", PERIODIC_XZ}};
+static const cyaml_strval_t mat_models[] = {{"granular", MAT_GRANULAR}, {"newtonian", MAT_NEWTONIAN}};
+static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
+
+static const cyaml_strval_t cwall_shapes[] = {{"segment", CWALL_SEGMENT}, {"cylinder", CWALL_CYLINDER}};
+static const cyaml_strval_t cwall_motions[] = {
+    {"fixed", CWALL_FIXED}, {"translating", CWALL_TRANSLATING}, {"turning", CWALL_TURNING}};
+static const cyaml_strval_t region_shapes[] = {{"box", REGION_BOX}, {"sector", REGION_SECTOR}, {"fill", REGION_FILL}};
+enum { ALWAYS, IF_CONSTANT, IF_SHEAR_RATE, NO_RANGE }; /* which Segregation:model checks a range */
+enum { CLOSED = 0, LO_OPEN = 1, HI_OPEN = 2 };          /* bound kinds, ORed */
+#endif
+
+ENTRY(cwall, scene_wall, "Container:walls")
+    EKS("Container:walls", scene_wall, name, 1, 32,
+       "for the log and the snapshot header Walls; default wallK (K its place in the list)")
+    EKE("Container:walls", scene_wall, shape, cwall_shapes,
+       "segment | cylinder; default segment")
+    EKV("Container:walls", scene_wall, from, 2,
+       "segment: its ends (x, y), m; the material lies on its left going from -> to, so a closed container lists its walls counter-clockwise")
+    EKV("Container:walls", scene_wall, to, 2,
+       "segment: its ends (x, y), m; the material lies on its left going from -> to, so a closed container lists its walls counter-clockwise")
+    EKV("Container:walls", scene_wall, centre, 2,
+       "cylinder: its axis (along z) at (x, y), m")
+    EKF("Container:walls", scene_wall, radius,
+       "cylinder: inner radius, m; the material inside")
+    EKE("Container:walls", scene_wall, slip, slips,
+       "no_slip (4.1) | free_slip (4.2); default no_slip")
+    EKE("Container:walls", scene_wall, motion, cwall_motions,
+       "fixed | translating | turning (a cylinder about its axis); default fixed")
+    EKV("Container:walls", scene_wall, velocity, 3,
+       "translating: m/s; default [0, 0, 0]")
+    EKF("Container:walls", scene_wall, rpm,
+       "turning: rev/min, >= 0")
+    EKE("Container:walls", scene_wall, direction, rot_dirs,
+       "turning: clockwise | counterclockwise (seen with y up); default clockwise")
+    EKF("Container:walls", scene_wall, open_at,
+       "s, >= 0: the wall is a gate, removed at this time; absent: it stays")
+    EKU("Container:walls", scene_wall, priority,
+       "a lattice site behind two walls is a dummy of the one of higher priority, else of the one it lies further behind (a box's base: 1, keeping its corners); default 0; a gate's are taken last")
+END_ENTRY(cwall, scene_wall)
+ENTRY(region, scene_region, "Container:regions")
+    EKE("Container:regions", scene_region, shape, region_shapes,
+       "box | sector | fill; default box")
+    EKV("Container:regions", scene_region, lo, 2,
+       "box: lower-left and upper-right corners (x, y), m")
+    EKV("Container:regions", scene_region, hi, 2,
+       "box: lower-left and upper-right corners (x, y), m")
+    EKV("Container:regions", scene_region, centre, 2,
+       "sector: centre (x, y), m")
+    EKF("Container:regions", scene_region, r_in,
+       "sector: radii, m, 0 <= r_in < r_out")
+    EKF("Container:regions", scene_region, r_out,
+       "sector: radii, m, 0 <= r_in < r_out")
+    EKF("Container:regions", scene_region, from_deg,
+       "sector: counter-clockwise from from_deg to to_deg, degrees from +x")
+    EKF("Container:regions", scene_region, to_deg,
+       "sector: counter-clockwise from from_deg to to_deg, degrees from +x")
+    EKF("Container:regions", scene_region, level,
+       "fill: everything inside the walls below y = level, m")
+    EKF("Container:regions", scene_region, floor,
+       "fill: and at or above y = floor, m; absent: no lower bound")
+    EKF("Container:regions", scene_region, C,
+       "initial small-grain concentration, [0, 1]; default 0")
+END_ENTRY(region, scene_region)
+SECTION("Run", run, scene_run)
+    KF("Run", run, scene_run, t_end, REQ, NULL, 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "s, required")
+    KF("Run", run, scene_run, cfl_diffusion, OPT, "0.1", 0, 1, LO_OPEN, ALWAYS,
+      "dt <= cfl_diffusion h^2 / D_max; default 0.1, stable < 1/7")
+    KF("Run", run, scene_run, cfl_segregation, OPT, "0.2", 0, 1, LO_OPEN, ALWAYS,
+      "dt <= cfl_segregation h / max|d(VF)/dC|; default 0.2")
+    KF("Run", run, scene_run, cfl_kinematic, OPT, "1", 0, 1, LO_OPEN, ALWAYS,
+      "dt <= cfl_kinematic h / |u|_max; default 1 (time resolution of the moving geometry, not stability)")
+    KF("Run", run, scene_run, cfl_flow, OPT, "0.1", 0, 10, LO_OPEN, ALWAYS,
+      "chi_CFL of (3.19): dt <= chi min(sqrt(h/a_max), h/c_s); default 0.1")
+    KF("Run", run, scene_run, dt_max, OPT, "1e30", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "s, upper bound on dt; default 1e30 (none)")
+    KF("Run", run, scene_run, progress_s, OPT, "10", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "wall seconds between progress lines; default 10")
+    KU("Run", run, scene_run, max_steps, "0",
+      "stop after this many steps (writing a last snapshot); 0 = no limit (default)")
+    KF("Run", run, scene_run, max_wall_time, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "wall s: write a checkpoint and stop (exit 0) before the next step would pass it (src/checkpoint.h); default 0 = no limit")
+    KS("Run", run, scene_run, backend, 0, CYAML_UNLIMITED, "auto",
+      "\"auto\" (default: gpu when built with CUDA and a device is present) | \"cpu\" | \"gpu\"")
+END_SECTION(run)
+SECTION("Geometry", geometry, scene_geometry)
+    KE("Geometry", geometry, scene_geometry, type, geom_types, "shearbox",
+      "shearbox | column | drum | container (the walls and regions of the Container section); default shearbox")
+    KU("Geometry", geometry, scene_geometry, dim, "2",
+      "2, or 3 for the column, the drum and a container; default 2")
+    KF("Geometry", geometry, scene_geometry, dr, REQ, NULL, 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "initial particle spacing, m, required")
+    KF("Geometry", geometry, scene_geometry, h_factor, OPT, "1.5", 1, 3, CLOSED, ALWAYS,
+      "h = h_factor dr; default 1.5 (lattice moments within 0.5 %, tests/test_kernel.c)")
+    KF("Geometry", geometry, scene_geometry, height, OPT, "0.087", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "material height H, m; default 0.087")
+    KF("Geometry", geometry, scene_geometry, width, OPT, "0.037", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "box width, m; default 0.037")
+    KF("Geometry", geometry, scene_geometry, depth, OPT, "0.037", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "3D column and container: extent along z, m; default 0.037")
+    KF("Geometry", geometry, scene_geometry, radius, OPT, "0.035", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "drum: inner radius R, m; default 0.035")
+    KF("Geometry", geometry, scene_geometry, length, OPT, "0.02", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "3D drum: length along the axis (z) between the end walls, m; default 0.02")
+    KF("Geometry", geometry, scene_geometry, fill, OPT, "0.42", 0, 1, LO_OPEN | HI_OPEN, ALWAYS,
+      "drum: filling level R_f = (H + R)/2R (paper §6), in (0,1); default 0.42")
+    KE("Geometry", geometry, scene_geometry, periodic, periodic_axes, "none",
+      "column: the axes without walls, where the material continues periodically (enum periodic_axes: none | x | z | xz; the period is the width along x, the depth along z, from 0); default none")
+    KE("Geometry", geometry, scene_geometry, lid, on_off, "off",
+      "column: on | off: a rigid wall over the material at y = height (a channel between the base and the lid, with the base's slip); default off")
+    KF("Geometry", geometry, scene_geometry, runout, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "column: the floor continues this far past the material (x from width to width + runout), closed by a side wall there; the material is held at x = width by a gate until Walls:gate_open; default 0 (no runout, no gate)")
+    KF("Geometry", geometry, scene_geometry, outlet_width, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "column: an opening of this width (m) in the base, centred on x = width/2 (3D: a square opening, also centred on z = depth/2), through which material falls; default 0 (none)")
+END_SECTION(geometry)
+SECTION("Kinematics", kinematics, scene_kinematics)
+    KE("Kinematics", kinematics, scene_kinematics, velocity, kin_types, "oscillatory_shear",
+      "rest | oscillatory_shear | computed; default oscillatory_shear")
+    KF("Kinematics", kinematics, scene_kinematics, gamma0, OPT, "0.5773502691896257", 0, INFINITY, HI_OPEN, ALWAYS,
+      "shear amplitude (tan of max wall angle); default tan 30 deg")
+    KF("Kinematics", kinematics, scene_kinematics, period, OPT, "13", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "T, s; default 13")
+END_SECTION(kinematics)
+SECTION("Grains", grains, scene_grains)
+    KF("Grains", grains, scene_grains, d_small, OPT, "0.004", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "d^S, m; default 0.004")
+    KF("Grains", grains, scene_grains, d_large, OPT, "0.008", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "d^L, m; default 0.008; > d_small")
+END_SECTION(grains)
+SECTION("Segregation", segregation, scene_segregation)
+    KE("Segregation", segregation, scene_segregation, enabled, on_off, "on",
+      "on | off: solve the concentration equation; default on")
+    KE("Segregation", segregation, scene_segregation, flux, seg_fluxes, "symmetric",
+      "symmetric (2.8) | asymmetric (2.9); default symmetric")
+    KF("Segregation", segregation, scene_segregation, A, OPT, "1.6", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "eq. (2.9); default 1.6")
+    KF("Segregation", segregation, scene_segregation, kappa, OPT, "0.89", 0, 1, HI_OPEN, ALWAYS,
+      "eq. (2.9), in [0,1); default 0.89")
+    KE("Segregation", segregation, scene_segregation, model, seg_models, "constant",
+      "constant | shear_rate (2.7); default constant")
+    KF("Segregation", segregation, scene_segregation, V, OPT, NULL, 0, INFINITY, HI_OPEN, IF_CONSTANT,
+      "m/s, constant model")
+    KF("Segregation", segregation, scene_segregation, D, OPT, NULL, 0, INFINITY, LO_OPEN | HI_OPEN, IF_CONSTANT,
+      "m^2/s, constant model")
+    KF("Segregation", segregation, scene_segregation, chi_V, OPT, "0.11", 0, INFINITY, HI_OPEN, IF_SHEAR_RATE,
+      "eq. (2.7b), shear_rate model; default 0.11")
+    KF("Segregation", segregation, scene_segregation, chi_D, OPT, "0.0307", 0, INFINITY, LO_OPEN | HI_OPEN, IF_SHEAR_RATE,
+      "eq. (2.7a), shear_rate model; default 0.0307")
+    KE("Segregation", segregation, scene_segregation, scheme, seg_schemes, "conservative",
+      "paper | direct | conservative; default conservative")
+    KE("Segregation", segregation, scene_segregation, renormalize, on_off, "on",
+      "on | off: conservative scheme's symmetric kernel renormalisation (restores consistency where the support is cut); default on")
+    KF("Segregation", segregation, scene_segregation, drift_tol, OPT, "1e-3", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "relative drift of sum C_i V_i that triggers a warning; default 1e-3")
+    KS("Segregation", segregation, scene_segregation, every, 0, CYAML_UNLIMITED, "auto",
+      "auto | K >= 1: with computed flow, C advances once every K flow steps (integrate.c); default auto")
+END_SECTION(segregation)
+SECTION("Initial", initial, scene_initial)
+    KF("Initial", initial, scene_initial, C_below, OPT, "0", 0, 1, CLOSED, ALWAYS,
+      "C for y/H <= split; default 0")
+    KF("Initial", initial, scene_initial, C_above, OPT, "1", 0, 1, CLOSED, ALWAYS,
+      "C for y/H > split; default 1")
+    KF("Initial", initial, scene_initial, split, OPT, "0.5", 0, 1, CLOSED, ALWAYS,
+      "split height as a fraction of H; default 0.5")
+    KE("Initial", initial, scene_initial, stress, init_stresses, "geostatic",
+      "zero | geostatic (sigma_yy = -rho g depth, sigma_xx = sigma_zz = K0 sigma_yy, K0 = nu/(1-nu), then returned to the yield cone); default geostatic")
+END_SECTION(initial)
+SECTION("Output", output, scene_output)
+    KF("Output", output, scene_output, dt, REQ, NULL, 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "s between snapshots, required")
+    KF("Output", output, scene_output, diag_dt, OPT, NULL, 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "s between diagnostics rows; default dt/20")
+    KE("Output", output, scene_output, snapshots, on_off, "on",
+      "on | off: write snapshot files (off: benchmarks, diagnostics only); default on")
+    KF("Output", output, scene_output, checkpoint_dt, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "s of simulated time between checkpoints (OUTDIR/checkpoint.h5); default 0 = none")
+END_SECTION(output)
+SECTION("Physics", physics, scene_physics)
+    KV("Physics", physics, scene_physics, gravity, 3, "[0, -9.81, 0]",
+      "m/s^2; default (0, -9.81, 0); 2D lives in the x-y plane")
+    KF("Physics", physics, scene_physics, rho, OPT, "1500", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "bulk density, kg/m^3 (eqs. 2.3-2.4; paper Table 1); default 1500")
+END_SECTION(physics)
+SECTION("Material", material, scene_material)
+    KE("Material", material, scene_material, model, mat_models, "granular",
+      "granular | newtonian; default granular")
+    KF("Material", material, scene_material, eta, OPT, "0.001", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "newtonian: dynamic viscosity, Pa s; default 1e-3")
+    KF("Material", material, scene_material, E, OPT, "1e7", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "Young's modulus, Pa; default 1e7 (newtonian: with nu, the bulk modulus K = E / (3 (1 - 2 nu)) and the sound speed sqrt(K / rho))")
+    KF("Material", material, scene_material, nu, OPT, "0.3", 0, 0.5, HI_OPEN, ALWAYS,
+      "Poisson's ratio, [0, 0.5); default 0.3")
+    KF("Material", material, scene_material, rho_s, OPT, "2500", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "intrinsic grain density, kg/m^3; default 2500")
+    KF("Material", material, scene_material, mu_s, OPT, "0.382", 0, INFINITY, HI_OPEN, ALWAYS,
+      "static friction; default 0.382")
+    KF("Material", material, scene_material, mu_d, OPT, "0.682", 0, INFINITY, HI_OPEN, ALWAYS,
+      "dynamic friction, >= mu_s; default 0.682")
+    KF("Material", material, scene_material, I0, OPT, "0.279", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "reference inertial number; default 0.279")
+    KF("Material", material, scene_material, lambda, OPT, "0.001", 0, INFINITY, HI_OPEN, ALWAYS,
+      "regularization of (2.14), 1/s; default 0.001")
+END_SECTION(material)
+SECTION("Flow", flow, scene_flow)
+    KF("Flow", flow, scene_flow, alpha_av, OPT, "0.1", 0, INFINITY, HI_OPEN, ALWAYS,
+      "artificial viscosity coefficient (3.10); default 0.1; 0 = off")
+    KU("Flow", flow, scene_flow, shepard_every, "30",
+      "Shepard filter (3.12) every N steps; default 30; 0 = off")
+    KF("Flow", flow, scene_flow, damping, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "velocity damping -zeta u added to (3.9), 1/s, for settling (dynamic relaxation); default 0")
+    KF("Flow", flow, scene_flow, damping_until, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "damping acts while t < damping_until, s; default 0")
+END_SECTION(flow)
+SECTION("Walls", walls, scene_walls)
+    KE("Walls", walls, scene_walls, slip, slips, "no_slip",
+      "box base and drum wall: no_slip (4.1) | free_slip (4.2); default no_slip")
+    KE("Walls", walls, scene_walls, side_slip, slips, "free_slip",
+      "box side walls; default free_slip")
+    KF("Walls", walls, scene_walls, gate_open, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "s: the gate of a column with a runout (Geometry:runout) is removed at this time, >= 0; default 0 (at the start)")
+    KF("Walls", walls, scene_walls, rpm, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "drum rotation speed, rev/min, >= 0; default 0")
+    KE("Walls", walls, scene_walls, direction, rot_dirs, "clockwise",
+      "clockwise | counterclockwise (seen with y up); default clockwise")
+    KV("Walls", walls, scene_walls, velocity, 3, "[0, 0, 0]",
+      "box walls (shear box excepted): prescribed translation velocity, m/s, of the whole container; default [0, 0, 0]")
+END_SECTION(walls)
+SECTION("Parallel", parallel, scene_parallel)
+    KE("Parallel", parallel, scene_parallel, method, part_methods, "slabs",
+      "slabs (default) | metis: METIS k-way parts of the coarse-cell graph")
+    KE("Parallel", parallel, scene_parallel, axis, slab_axes, "auto",
+      "auto (the longest extent of the particles) | x | y | z; default auto")
+    KU("Parallel", parallel, scene_parallel, balance_every, "200",
+      "steps between load-balance checks; 0 = never; default 200")
+    KF("Parallel", parallel, scene_parallel, balance_threshold, OPT, "0.1", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "move the slab bounds when the slowest rank's compute time exceeds the mean by more than this fraction; default 0.1")
+END_SECTION(parallel)
+SECTION("Outlet", outlet, scene_outlet)
+    KE("Outlet", outlet, scene_outlet, enabled, on_off, "off",
+      "on | off; default off")
+    KF("Outlet", outlet, scene_outlet, below, OPT, "0", 0, 0, 0, NO_RANGE,
+      "the plane's height y, m; default 0")
+END_SECTION(outlet)
+SECTION("Container", container, scene_container)
+    KL("Container", container, scene_container, walls, cwall_entry, SCENE_WALLS_MAX,
+      "Geometry:type container: its walls, a list of segments and cylinders in the x-y plane (Container:walls:K keys below; inputs/hopper_2d.yml)")
+    KL("Container", container, scene_container, regions, region_entry, SCENE_REGIONS_MAX,
+      "Geometry:type container: where the material starts, a list of boxes, sectors and fills, each with its C (Container:regions:K keys below)")
+END_SECTION(container)
