@@ -1064,8 +1064,12 @@ static int check_container(struct scene_ctx *c, struct scene *s)
             return fail_at(c, AT("to"), "a segment must be at least 2 dr long (from and to too close)");
         if (w->shape == CWALL_CYLINDER && !(w->radius >= 8 * dr))
             return fail_at(c, AT("radius"), "must be >= 8 dr = %.4g m, got %.4g", 8 * dr, w->radius);
-        if (w->motion == CWALL_TURNING && w->shape != CWALL_CYLINDER)
-            return fail_at(c, AT("motion"), "only a cylinder turns (about its own axis)");
+        if (w->motion == CWALL_TURNING && w->shape == CWALL_SEGMENT)
+            return fail_at(c, AT("motion"), "only a cylinder turns (about its own axis), or a 3D container's ends");
+        if (w->shape == CWALL_ENDS && s->geometry.dim != 3)
+            return fail_at(c, AT("shape"), "ends: the end walls of a 3D container (Geometry:dim 3)");
+        for (unsigned j = 0; j < i && w->shape == CWALL_ENDS; ++j)
+            if (k->walls[j].shape == CWALL_ENDS) return fail_at(c, AT("shape"), "ends given twice (also wall %u)", j + 1);
         if (w->motion != CWALL_TURNING && w->rpm != 0) return fail_at(c, AT("rpm"), "needs motion turning");
         if (!(w->rpm >= 0)) return fail_at(c, AT("rpm"), "must be >= 0, got %.4g", w->rpm);
         if (w->motion != CWALL_TRANSLATING && (v[0] != 0 || v[1] != 0 || v[2] != 0))
@@ -1087,7 +1091,7 @@ static int check_container(struct scene_ctx *c, struct scene *s)
         for (unsigned j = 0; j < i; ++j)
             if (!strcmp(k->walls[j].name, w->name))
                 return fail_at(c, AT("name"), "'%s' names wall %u already", w->name, j + 1);
-        if (s->geometry.dim == 3 && (!strcmp(w->name, "zlo") || !strcmp(w->name, "zhi")))
+        if (s->geometry.dim == 3 && (!strcmp(w->name, "end_lo") || !strcmp(w->name, "end_hi")))
             return fail_at(c, AT("name"), "'%s' is the name of an end wall of a 3D container", w->name);
 #undef AT
     }
@@ -1127,8 +1131,8 @@ static int check_special(struct scene_ctx *c, struct scene *s)
     if (!(s->material.mu_s <= s->material.mu_d))
         return fail_at(c, "Material:mu_d", "must be >= Material:mu_s");
     int box = s->geometry.type == GEOM_SHEARBOX, vel = s->kinematics.velocity;
-    if (vel == KIN_OSCILLATORY_SHEAR && !box)
-        return fail_at(c, "Kinematics:velocity", "oscillatory_shear needs Geometry:type shearbox");
+    if (vel == KIN_OSCILLATORY_SHEAR && !box && s->geometry.type != GEOM_CONTAINER)
+        return fail_at(c, "Kinematics:velocity", "oscillatory_shear needs Geometry:type shearbox or container");
     if (vel == KIN_COMPUTED && box)
         return fail_at(c, "Kinematics:velocity",
                        "computed needs Geometry:type column or drum (the shear box's walls are prescribed)");

@@ -180,20 +180,23 @@ struct scene_outlet {
  * its material, in the x-y plane; a 3D container is that section extruded
  * along z over Geometry:depth, closed by end walls at z = 0 and z = depth
  * (setup_container.c). */
-enum cwall_shape { CWALL_SEGMENT = 0, CWALL_CYLINDER = 1 };
+enum cwall_shape { CWALL_SEGMENT = 0, CWALL_CYLINDER = 1, CWALL_ENDS = 2 };
 enum cwall_motion { CWALL_FIXED = 0, CWALL_TRANSLATING = 1, CWALL_TURNING = 2 };
 enum region_shape { REGION_BOX = 0, REGION_SECTOR = 1, REGION_FILL = 2 };
 
 /* One entry of Container:walls. */
 struct scene_wall {
     char *name;               /* for the log and the snapshot header Walls; default wallK (K its place in the list) */
-    enum cwall_shape shape;   /* segment | cylinder; default segment */
+    enum cwall_shape shape;   /* segment | cylinder | ends (3D: the end walls z = 0 and z = depth, which
+                               * take this entry's slip and motion; without one they are fixed and slip
+                               * as Walls:side_slip); default segment */
     double from[2], to[2];    /* segment: its ends (x, y), m; the material lies on its left going from -> to,
                                * so a closed container lists its walls counter-clockwise */
     double centre[2];         /* cylinder: its axis (along z) at (x, y), m */
     double radius;            /* cylinder: inner radius, m; the material inside */
     enum wall_slip slip;      /* no_slip (4.1) | free_slip (4.2); default no_slip */
-    enum cwall_motion motion; /* fixed | translating | turning (a cylinder about its axis); default fixed */
+    enum cwall_motion motion; /* fixed | translating | turning (a cylinder, or the ends, about the axis
+                               * along z through centre); default fixed */
     double velocity[3];       /* translating: m/s; default [0, 0, 0] */
     double rpm;               /* turning: rev/min, >= 0 */
     enum rot_dir direction;   /* turning: clockwise | counterclockwise (seen with y up); default clockwise */

@@ -39,7 +39,8 @@ static const cyaml_strval_t periodic_axes[] = {
 static const cyaml_strval_t mat_models[] = {{"granular", MAT_GRANULAR}, {"newtonian", MAT_NEWTONIAN}};
 static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
 
-static const cyaml_strval_t cwall_shapes[] = {{"segment", CWALL_SEGMENT}, {"cylinder", CWALL_CYLINDER}};
+static const cyaml_strval_t cwall_shapes[] = {
+    {"segment", CWALL_SEGMENT}, {"cylinder", CWALL_CYLINDER}, {"ends", CWALL_ENDS}};
 static const cyaml_strval_t cwall_motions[] = {
     {"fixed", CWALL_FIXED}, {"translating", CWALL_TRANSLATING}, {"turning", CWALL_TURNING}};
 static const cyaml_strval_t region_shapes[] = {{"box", REGION_BOX}, {"sector", REGION_SECTOR}, {"fill", REGION_FILL}};
@@ -51,19 +52,19 @@ ENTRY(cwall, scene_wall, "Container:walls")
     EKS("Container:walls", scene_wall, name, 1, 32,
        "for the log and the snapshot header Walls; default wallK (K its place in the list)")
     EKE("Container:walls", scene_wall, shape, cwall_shapes,
-       "segment | cylinder; default segment")
+       "segment | cylinder | ends (3D: the end walls z = 0 and z = depth, which take this entry's slip and motion; without one they are fixed and slip as Walls:side_slip); default segment")
     EKV("Container:walls", scene_wall, from, 2,
        "segment: its ends (x, y), m; the material lies on its left going from -> to, so a closed container lists its walls counter-clockwise")
     EKV("Container:walls", scene_wall, to, 2,
        "segment: its ends (x, y), m; the material lies on its left going from -> to, so a closed container lists its walls counter-clockwise")
     EKV("Container:walls", scene_wall, centre, 2,
-       "cylinder: its axis (along z) at (x, y), m")
+       "cylinder: its axis (along z) at (x, y), m; ends turning: the axis they turn about")
     EKF("Container:walls", scene_wall, radius,
        "cylinder: inner radius, m; the material inside")
     EKE("Container:walls", scene_wall, slip, slips,
        "no_slip (4.1) | free_slip (4.2); default no_slip")
     EKE("Container:walls", scene_wall, motion, cwall_motions,
-       "fixed | translating | turning (a cylinder about its axis); default fixed")
+       "fixed | translating | turning (a cylinder, or the ends, about the axis along z through centre); default fixed")
     EKV("Container:walls", scene_wall, velocity, 3,
        "translating: m/s; default [0, 0, 0]")
     EKF("Container:walls", scene_wall, rpm,

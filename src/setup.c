@@ -480,36 +480,45 @@ static void setup_check_size(const struct scene *sc)
                     need / 1073741824.0, comm_size(), have / 1073741824.0);
 }
 
-void setup_contexts(sim_t *s)
+/* Each module's context from its own keys; setup_contexts puts them
+ * together (the walls from the container's builder). */
+
+/* The concentration equation (seg.h): Segregation, Grains, gravity's direction. */
+static seg_params seg_params_of(const struct scene *sc)
 {
-    const struct scene *sc = s->sc;
-    setup_check_size(sc);
     const struct scene_segregation *g = &sc->segregation;
-    s->seg.k = sph_make((int)sc->geometry.dim, (real)(sc->geometry.h_factor * sc->geometry.dr),
-                        (real)sc->geometry.dr);
-    seg_params *sp = &s->seg.sp;
+    seg_params sp;
+    memset(&sp, 0, sizeof sp);
     int asym = g->flux == SEG_FLUX_ASYMMETRIC;
-    sp->A = (real)(asym ? g->A : 1.0);
-    sp->kappa = (real)(asym ? g->kappa : 0.0);
-    sp->shear_model = g->model == SEG_MODEL_SHEAR_RATE;
-    sp->V = (real)g->V, sp->D = (real)g->D;
-    sp->chi_V = (real)g->chi_V, sp->chi_D = (real)g->chi_D;
-    sp->d_small = (real)sc->grains.d_small, sp->d_large = (real)sc->grains.d_large;
+    sp.A = (real)(asym ? g->A : 1.0);
+    sp.kappa = (real)(asym ? g->kappa : 0.0);
+    sp.shear_model = g->model == SEG_MODEL_SHEAR_RATE;
+    sp.V = (real)g->V, sp.D = (real)g->D;
+    sp.chi_V = (real)g->chi_V, sp.chi_D = (real)g->chi_D;
+    sp.d_small = (real)sc->grains.d_small, sp.d_large = (real)sc->grains.d_large;
     const double *gv = sc->physics.gravity;
     double gn = sqrt(gv[0] * gv[0] + gv[1] * gv[1] + gv[2] * gv[2]);
-    for (int d = 0; d < 3; ++d) sp->ghat[d] = (real)(gv[d] / gn);
-    s->seg.scheme = (int)g->scheme;
-    s->seg.renorm = g->renormalize;
-    s->hcsr = g->enabled && g->scheme != SEG_SCHEME_CONSERVATIVE;
-    s->kin.type = (int)sc->kinematics.velocity;
-    s->kin.gamma0 = sc->kinematics.gamma0;
-    s->kin.omega = 2.0 * M_PI / sc->kinematics.period;
-    s->seg_on = g->enabled;
-    s->flow_on = sc->kinematics.velocity == KIN_COMPUTED;
+    for (int d = 0; d < 3; ++d) sp.ghat[d] = (real)(gv[d] / gn);
+    return sp;
+}
 
-    flow_ctx *f = &s->flow;
+/* The prescribed motion (kin.h): Kinematics. */
+static kin_params kin_params_of(const struct scene *sc)
+{
+    kin_params k;
+    memset(&k, 0, sizeof k);
+    k.type = (int)sc->kinematics.velocity;
+    k.gamma0 = sc->kinematics.gamma0;
+    k.omega = 2.0 * M_PI / sc->kinematics.period;
+    return k;
+}
+
+/* The granular flow (flow.h) but its walls: Material, Physics, Flow, the
+ * kernel and the segregation's grains (mu(I)'s d_avg). */
+static void flow_ctx_of(const struct scene *sc, const sph_ctx *k, const seg_params *sp, flow_ctx *f)
+{
     const struct scene_material *m = &sc->material;
-    f->k = s->seg.k;
+    f->k = *k;
     stress_moduli((real)m->E, (real)m->nu, &f->m.G, &f->m.K);
     f->nu = m->model == MAT_NEWTONIAN ? (real)(m->eta / sc->physics.rho) : R(0.0);
     if (m->model == MAT_NEWTONIAN) f->m.G = 0; /* a fluid: pressure alone, the viscous force apart */
@@ -519,19 +528,37 @@ void setup_contexts(sim_t *s)
     f->rho = (real)sc->physics.rho;
     f->cs = stress_sound_speed(f->m.G, f->m.K, f->rho);
     f->alpha_av = (real)sc->flow.alpha_av;
-    for (int d = 0; d < 3; ++d) f->g[d] = (real)gv[d];
+    for (int d = 0; d < 3; ++d) f->g[d] = (real)sc->physics.gravity[d];
     f->sp = *sp;
-    wall_geom *w = &f->w;
+}
+
+void setup_contexts(sim_t *s)
+{
+    const struct scene *sc = s->sc;
+    setup_check_size(sc);
+    const struct scene_segregation *g = &sc->segregation;
+    s->seg.k = sph_make((int)sc->geometry.dim, (real)(sc->geometry.h_factor * sc->geometry.dr),
+                        (real)sc->geometry.dr);
+    s->seg.sp = seg_params_of(sc);
+    s->seg.scheme = (int)g->scheme;
+    s->seg.renorm = g->renormalize;
+    s->hcsr = g->enabled && g->scheme != SEG_SCHEME_CONSERVATIVE;
+    s->kin = kin_params_of(sc);
+    s->seg_on = g->enabled;
+    s->flow_on = sc->kinematics.velocity == KIN_COMPUTED;
+
+    flow_ctx_of(sc, &s->seg.k, &s->seg.sp, &s->flow);
+    wall_geom *w = &s->flow.w;
     memset(w, 0, sizeof *w);
     w->periodic = (int)sc->geometry.periodic;
     setup_builder_of(sc)->walls(s);
 
-    step_ctx *st = &s->step_c;
+    step_ctx *st = &s->step_c; /* the driver's per-particle checks (step.h) */
     st->h = s->seg.k.h;
     st->gkin = kin_max_shear_rate(&s->kin);
     st->flow_on = s->flow_on, st->seg_on = s->seg_on;
     st->kin = s->kin;
-    st->sp = *sp;
+    st->sp = s->seg.sp;
     st->w = *w;
     st->outlet = sc->outlet.enabled;
     st->outlet_below = sc->outlet.below;

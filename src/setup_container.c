@@ -19,9 +19,10 @@
  * material's side of the nearest wall.
  *
  * 3D: the plane extruded along z over nz = round(depth/dr) lattice planes,
- * closed by end walls zlo (z = 0) and zhi (z = nz dr), nl planes of dummies
- * each, under every site inside the walls; a wall's dummy column runs
- * through them, a corner site going to the wall it lies further behind. */
+ * closed by end walls end_lo (z = 0) and end_hi (z = nz dr), nl planes of dummies
+ * each, under every site inside the walls (inside a cylinder: the drum's
+ * polar discs instead); a wall's dummy column runs through them, a corner
+ * site going to the wall it lies further behind. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -34,6 +35,7 @@ typedef struct ctr_lattice {
     double dr;
     long i0, j0, ni, nj, nl, nz; /* origin, size, dummy layers, z planes (1 in 2D) */
     int nw;                      /* the scene's walls: primitives 1..nw (the end walls follow in 3D) */
+    unsigned *ent;               /* ent[k]: the Container:walls entry of primitive k + 1 */
     int *site;                   /* per site: > 0 wall id of a dummy, < 0 -(region + 1) of material, 0 empty */
 } ctr_lattice;
 
@@ -117,6 +119,18 @@ static int ctr_cylinder_band(const sim_t *s, const ctr_lattice *L, double x, dou
     return 0;
 }
 
+/* Within a cylinder or dr/2 past it (r <= R + dr/2): in 3D its end walls
+ * there are polar discs, its rings continued inward to the axis (as the
+ * drum's: a lattice disc would leave holes at r = R). */
+static int ctr_in_cylinder(const sim_t *s, const ctr_lattice *L, double x, double y)
+{
+    for (int k = 0; k < L->nw; ++k) {
+        const wall_prim *q = &s->flow.w.prim[k];
+        if (q->shape == WALL_CYLINDER && hypot(x - q->p[0], y - q->p[1]) <= q->radius + 0.5 * L->dr) return 1;
+    }
+    return 0;
+}
+
 /* Does region r hold the site (x, y)? */
 static int ctr_in_region(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg, const struct scene_region *r,
                          double x, double y)
@@ -134,15 +148,33 @@ static int ctr_in_region(const sim_t *s, const ctr_lattice *L, const ctr_seg *se
     }
 }
 
+/* The motion of scene wall w onto primitive q. */
+static void ctr_motion(wall_prim *q, const struct scene_wall *w)
+{
+    if (w->motion == CWALL_TRANSLATING) {
+        q->move = WALL_TRANSLATE;
+        for (int d = 0; d < 3; ++d) q->u[d] = (real)w->velocity[d];
+    } else if (w->motion == CWALL_TURNING) {
+        q->move = WALL_ROTATE;
+        q->omega = w->rpm * 2.0 * M_PI / 60.0 * (w->direction == ROT_CLOCKWISE ? -1.0 : 1.0);
+        q->c[0] = (real)w->centre[0], q->c[1] = (real)w->centre[1];
+    }
+}
+
 void container_walls(sim_t *s)
 {
     const struct scene *sc = s->sc;
     const struct scene_container *k = &sc->container;
     const double dr = sc->geometry.dr, nl = ceil(2.0 * sc->geometry.h_factor - 1e-9);
+    const struct scene_wall *ends = NULL; /* a 3D container's end walls, when listed (shape ends) */
     for (unsigned i = 0; i < k->walls_count; ++i) {
         const struct scene_wall *w = &k->walls[i];
         wall_prim *q;
         int slip = w->slip == SLIP_FREE;
+        if (w->shape == CWALL_ENDS) {
+            ends = w;
+            continue;
+        }
         if (w->shape == CWALL_CYLINDER) {
             q = wall_add_prim(s, w->name, WALL_CYLINDER, slip, 1, WALL_CLAIM_SIDE + (int)w->priority);
             q->p[0] = (real)w->centre[0], q->p[1] = (real)w->centre[1], q->radius = (real)w->radius;
@@ -167,20 +199,15 @@ void container_walls(sim_t *s)
             q->t_hi = (real)(join_b ? len + nl * dr : len);
             if (w->gate) q->open_at = w->open_at;
         }
-        if (w->motion == CWALL_TRANSLATING) {
-            q->move = WALL_TRANSLATE;
-            for (int d = 0; d < 3; ++d) q->u[d] = (real)w->velocity[d];
-        } else if (w->motion == CWALL_TURNING) {
-            q->move = WALL_ROTATE;
-            q->omega = w->rpm * 2.0 * M_PI / 60.0 * (w->direction == ROT_CLOCKWISE ? -1.0 : 1.0);
-            q->c[0] = (real)w->centre[0], q->c[1] = (real)w->centre[1];
-        }
+        ctr_motion(q, w);
     }
     if (sc->geometry.dim == 3) {
+        /* the end walls: as the entry of shape ends, else fixed, slipping as a column's side walls */
         double D = (double)lround(sc->geometry.depth / dr) * dr;
-        int ss = sc->walls.side_slip == SLIP_FREE; /* the end walls slip as a column's side walls */
-        wall_plane(s, "zlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
-        wall_plane(s, "zhi", ss, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1);
+        int ss = ends ? ends->slip == SLIP_FREE : sc->walls.side_slip == SLIP_FREE;
+        wall_prim *lo = wall_plane(s, "end_lo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
+        wall_prim *hi = wall_plane(s, "end_hi", ss, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1);
+        if (ends) ctr_motion(lo, ends), ctr_motion(hi, ends);
     }
 }
 
@@ -190,6 +217,45 @@ static const char *ctr_where(const struct scene *sc, const char *list, unsigned 
     char key[48];
     snprintf(key, sizeof key, "%s:%u", list, K + 1);
     return scene_key_where(sc, "Container", key, buf, n);
+}
+
+/* A wall that no other wall joins must have material within 2h of one of
+ * its dummies at the start (a cylinder: inside it or within 2h): a lone
+ * wall far from everything is a misplaced one (a coordinate in mm, a sign).
+ * A wall joined to another may stand apart (the end wall of a runout). */
+static void ctr_check_near(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg)
+{
+    const double h2 = 2 * s->sc->geometry.h_factor * L->dr;
+    const long reach = (long)ceil(h2 / L->dr);
+    char *near = calloc((size_t)L->nw + 1, 1);
+    if (!near) error_exit(1, "out of memory");
+    for (long j = 0; j < L->nj; ++j) /* each material site marks the walls of the dummies around it */
+        for (long i = 0; i < L->ni; ++i) {
+            if (L->site[j * L->ni + i] >= 0) continue;
+            double x = site_x(L, i), y = site_y(L, j);
+            for (int k = 0; k < L->nw; ++k) {
+                const wall_prim *q = &s->flow.w.prim[k];
+                if (q->shape == WALL_CYLINDER && hypot(x - q->p[0], y - q->p[1]) <= q->radius + h2) near[k + 1] = 1;
+            }
+            for (long dj = -reach; dj <= reach; ++dj)
+                for (long di = -reach; di <= reach; ++di) {
+                    long jj = j + dj, ii = i + di;
+                    if (jj < 0 || jj >= L->nj || ii < 0 || ii >= L->ni || hypot(di, dj) * L->dr > h2) continue;
+                    int c = L->site[jj * L->ni + ii];
+                    if (c > 0) near[c] = 1;
+                }
+        }
+    char where[512];
+    for (int k = 0; k < L->nw; ++k) {
+        const wall_prim *q = &s->flow.w.prim[k];
+        double len = hypot(seg[k].bx - seg[k].ax, seg[k].by - seg[k].ay);
+        int joined = q->shape == WALL_PLANE && (q->t_lo < 0 || q->t_hi > len + 1e-9 * L->dr);
+        if (!near[k + 1] && !joined)
+            input_error("%s: Container:walls:%u: no material within 2h = %.4g m of it at the start and no wall joins "
+                        "it: is it where it should be?", ctr_where(s->sc, "walls", L->ent[k], where, sizeof where),
+                        L->ent[k] + 1, h2);
+    }
+    free(near);
 }
 
 /* Classify every site of the plane (L->site); exits 2 on overlapping
@@ -229,8 +295,9 @@ static void ctr_classify(const sim_t *s, ctr_lattice *L, const ctr_seg *seg)
                         "walls", ctr_where(sc, "regions", r, where, sizeof where), r + 1, L->dr);
     for (int w = 1; w <= L->nw; ++w)
         if (!dums[w] && s->flow.w.prim[w - 1].shape != WALL_CYLINDER) /* a cylinder's are rings */
-            input_error("%s: Container:walls:%d: has no dummy particle (another wall lies over it)",
-                        ctr_where(sc, "walls", (unsigned)(w - 1), where, sizeof where), w);
+            input_error("%s: Container:walls:%u: has no dummy particle (another wall lies over it)",
+                        ctr_where(sc, "walls", L->ent[w - 1], where, sizeof where), L->ent[w - 1] + 1);
+    ctr_check_near(s, L, seg);
     free(held);
     free(dums);
 }
@@ -263,8 +330,8 @@ static size_t ctr_place(sim_t *s, particles_t *p, const ctr_lattice *L, const ct
         for (long i = 0; i < L->ni; ++i) {
             int c = L->site[j * L->ni + i];
             double x = site_x(L, i), y = site_y(L, j), depth = 0;
-            if (c <= 0 && !(d3 && (ctr_inside(s, L, seg, x, y) || ctr_cylinder_band(s, L, x, y))))
-                continue; /* no dummy here */
+            if (c <= 0 && !(d3 && ctr_inside(s, L, seg, x, y) && !ctr_in_cylinder(s, L, x, y)))
+                continue; /* no dummy here (inside a cylinder: its polar end discs, below) */
             if (c > 0) ctr_dummy_wall(s, L, x, y, &depth);
             for (long q = -nl; q < nz + nl; ++q) {
                 int w = c, beyond = q < 0 || q >= nz;
@@ -281,19 +348,28 @@ static size_t ctr_place(sim_t *s, particles_t *p, const ctr_lattice *L, const ct
             }
         }
     /* each cylinder's nl rings of dummies at radii R + (l + 1/2) dr, round(2 pi r / dr) each (as the
-     * drum), in every z plane; beyond the end planes a corner goes to the wall it lies further behind */
+     * drum), in every z plane; beyond the end planes also the rings continued inward to the axis (the
+     * end walls' polar discs), a corner going to the wall it lies further behind */
     for (int k = 0; k < L->nw; ++k) {
         const wall_prim *cq = &s->flow.w.prim[k];
         if (cq->shape != WALL_CYLINDER) continue;
+        long l_axis = (long)floor(-cq->radius / dr - 0.5) + 1; /* the innermost ring with radius > 0 */
         for (long q = -nl; q < nz + nl; ++q)
-            for (long l = 0; l < L->nl; ++l) {
-                double r = cq->radius + (l + 0.5) * dr, dz = (q < 0 ? -q - 0.5 : q - nz + 0.5) * dr;
-                int w = (q < 0 || q >= nz) && dz > (l + 0.5) * dr ? (q < 0 ? zlo : zhi) : k + 1;
+            for (long l = q < 0 || q >= nz ? l_axis : 0; l < L->nl; ++l) {
+                double r = cq->radius + (l + 0.5) * dr;
                 long m = lround(2 * M_PI * r / dr);
                 for (long a = 0; a < m; ++a, ++n)
                     if (p) {
-                        setup_put(p, n, cq->p[0] + r * cos(2 * M_PI * a / m), cq->p[1] + r * sin(2 * M_PI * a / m),
-                                  d3 ? (q + 0.5) * dr : 0, KIND_DUMMY, vol, 0);
+                        double x = cq->p[0] + r * cos(2 * M_PI * a / m), y = cq->p[1] + r * sin(2 * M_PI * a / m);
+                        double z = d3 ? (q + 0.5) * dr : 0;
+                        int w = k + 1;
+                        if (q < 0 || q >= nz) { /* beyond an end: the wall it lies further behind, by the
+                                                 * arithmetic of wall_id_at (the drum's own rule) */
+                            const real X[3] = {(real)x, (real)y, (real)z};
+                            int e = q < 0 ? zlo : zhi;
+                            if (wall_prim_depth(&s->flow.w.prim[e - 1], X) > wall_prim_depth(cq, X)) w = e;
+                        }
+                        setup_put(p, n, x, y, z, KIND_DUMMY, vol, 0);
                         setup_put_wall(p, n, w);
                     }
             }
@@ -310,14 +386,16 @@ void container_place(sim_t *s)
     L.dr = sc->geometry.dr;
     L.nl = (long)ceil(2.0 * sc->geometry.h_factor - 1e-9);
     L.nz = sc->geometry.dim == 3 ? lround(sc->geometry.depth / L.dr) : 1;
-    L.nw = (int)k->walls_count;
     ctr_seg *seg = calloc(k->walls_count, sizeof *seg);
-    if (!seg) error_exit(1, "out of memory");
+    L.ent = calloc(k->walls_count, sizeof *L.ent);
+    if (!seg || !L.ent) error_exit(1, "out of memory");
     /* the lattice: the walls' box, and the regions' boxes, with nl + 1 sites to spare */
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (unsigned i = 0; i < k->walls_count; ++i) {
         const struct scene_wall *w = &k->walls[i];
-        seg[i] = (ctr_seg){w->from[0], w->from[1], w->to[0], w->to[1]};
+        if (w->shape == CWALL_ENDS) continue; /* the end walls of 3D: no primitive of its own */
+        L.ent[L.nw] = i;
+        seg[L.nw++] = (ctr_seg){w->from[0], w->from[1], w->to[0], w->to[1]};
         for (int a = 0; a < 2; ++a) {
             double l = w->shape == CWALL_CYLINDER ? w->centre[a] - w->radius : fmin(w->from[a], w->to[a]);
             double h = w->shape == CWALL_CYLINDER ? w->centre[a] + w->radius : fmax(w->from[a], w->to[a]);
@@ -357,5 +435,6 @@ void container_place(sim_t *s)
                         scene_key_where(sc, "Outlet", "below", where, sizeof where), sc->outlet.below, ymin);
     }
     free(L.site);
+    free(L.ent);
     free(seg);
 }

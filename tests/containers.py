@@ -44,6 +44,21 @@ COLUMN_AS_CONTAINER = [
     " {name: xhi, from: [0.05, 0], to: [0.05, 0.1075], slip: free_slip},"
     " {name: xlo, from: [0, 0.1075], to: [0, 0], slip: free_slip}]",
     "Container:regions=[{lo: [0, 0], hi: [0.05, 0.1]}]"]
+# drum_3d.yml (R 35 mm, R_f 0.42: H = -0.0056 m, split at -R + 0.5 (H + R) = -0.0203 m, C 0.5
+# both) 12 mm long, its end walls turning with the cylinder
+DRUM3D_AS_CONTAINER = [
+    "Geometry:type=container", "Geometry:depth=0.012",
+    "Container:walls=[{name: drum, shape: cylinder, centre: [0, 0], radius: 0.035, motion: turning, rpm: 5},"
+    " {name: ends, shape: ends, slip: no_slip, motion: turning, rpm: 5}]",
+    "Container:regions=[{shape: fill, level: -0.0203, C: 0.5}, {shape: fill, floor: -0.0203, level: -0.0056, C: 0.5}]"]
+# shearbox_2d.yml's box (21 x 50 sites of dr = 1.74 mm, side walls 53 rows high), C 0 below half
+# its height and 1 above, under the same prescribed oscillatory shear
+SHEARBOX_AS_CONTAINER = [
+    "Geometry:type=container",
+    "Container:walls=[{name: base, from: [0, 0], to: [0.03654, 0], priority: 1},"
+    " {name: xhi, from: [0.03654, 0], to: [0.03654, 0.09222], slip: free_slip},"
+    " {name: xlo, from: [0, 0.09222], to: [0, 0], slip: free_slip}]",
+    "Container:regions=[{lo: [0, 0], hi: [0.03654, 0.0435], C: 0}, {lo: [0, 0.0435], hi: [0.03654, 0.087], C: 1}]"]
 # drum_2d_EN.yml as a turning cylinder filled to H = (2 R_f - 1) R =
 # 0.00637 m, in two layers split at -R + 0.5 (H + R) = -0.014315 m (both
 # C = 0.11, as the scene's Initial section)

@@ -13,11 +13,19 @@ Container:regions, src/setup_container.c):
     across rank counts; a column falling from zero stress amplifies
     round-off by about 1e4 every 30 steps after that, so longer runs are not
     compared);
+  - the shear box written as a container (SHEARBOX_AS_CONTAINER) under the
+    same prescribed shear: the same particles, positions bit for bit, C to
+    round-off (1e-10) after 200 steps;
+  - the 3D drum written as a container (a turning cylinder and turning ends,
+    DRUM3D_AS_CONTAINER; its end walls the drum's polar discs) has the same
+    particles and walls; its material is numbered row by row rather than
+    plane by plane, so particles are matched by their initial position, and
+    the fields agree to round-off (1e-10) after 30 steps;
   - inputs/hopper_2d.yml at dr = 2 mm: the walls listed (header Walls), each
     region's C at the start (0, 1, 0 by layer), the material held by the
     gate until 0.05 s and flowing out of the opening after, the sum C V of
     the inside plus the outflow conserved to 1e-12, nothing beyond a wall;
-  - its 3D extrusion sets up and runs 20 steps, with end walls zlo, zhi.
+  - its 3D extrusion sets up and runs 20 steps, with end walls end_lo, end_hi.
 
   python3 tests/validate_container.py --sphseg build/sphseg --work /tmp/v
 """
@@ -33,7 +41,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 sys.path.insert(0, HERE)
 import snap  # noqa: E402
-from containers import COLUMN_AS_CONTAINER, DRUM_AS_CONTAINER, HOPPER, HOPPER_3D  # noqa: E402
+from containers import (COLUMN_AS_CONTAINER, DRUM3D_AS_CONTAINER, DRUM_AS_CONTAINER, HOPPER, HOPPER_3D,  # noqa: E402
+                        SHEARBOX_AS_CONTAINER)
 
 INPUTS = os.path.join(HERE, "..", "inputs")
 TOL = 1e-10
@@ -112,6 +121,44 @@ def main():
           "the same material IDs: %s; largest field difference %.1e of its scale (tolerance %.0e)" % (
               same_ids, worst, TOL))
 
+    # 2b. the shear box as a container: prescribed positions, C from sums in another order
+    base = ["Run:max_steps=200", "Output:dt=1e3"]
+    run(a.sphseg, "shearbox_2d.yml", os.path.join(w, "shear"), base)
+    run(a.sphseg, "shearbox_2d.yml", os.path.join(w, "shear_c"), base + SHEARBOX_AS_CONTAINER)
+    A, B = snaps(os.path.join(w, "shear")), snaps(os.path.join(w, "shear_c"))
+    wa, wb = wall_of_dummies(A[0]), wall_of_dummies(B[0])
+    x, y = by_id(A[-1]), by_id(B[-1])
+    m, mb = x["Kind"] == 0, y["Kind"] == 0
+    same_ids = np.array_equal(x["ParticleIDs"][m], y["ParticleIDs"][mb])
+    same_x = same_ids and np.array_equal(x["Coordinates"][m], y["Coordinates"][mb])
+    dc = np.abs(x["Concentration"][m] - y["Concentration"][mb]).max() if same_ids else np.inf
+    check("shear box as a container", wa == wb and same_x and dc <= TOL and A[-1]["Step"] == B[-1]["Step"] == 200,
+          "%d dummies, the same walls: %s; material positions equal: %s; largest C difference %.1e (tolerance %.0e)"
+          % (len(wb), wa == wb, same_x, dc, TOL))
+
+    # 2c. the 3D drum as a container: matched by initial position
+    base = ["Geometry:dr=0.002", "Geometry:length=0.012", "Run:max_steps=30", "Output:dt=1e3"]
+    run(a.sphseg, "drum_3d.yml", os.path.join(w, "drum3d"), base)
+    run(a.sphseg, "drum_3d.yml", os.path.join(w, "drum3d_c"), base + DRUM3D_AS_CONTAINER)
+    A, B = snaps(os.path.join(w, "drum3d")), snaps(os.path.join(w, "drum3d_c"))
+    wa, wb = wall_of_dummies(A[0]), wall_of_dummies(B[0])
+    same_walls = wa == wb
+    key = lambda s: {tuple(np.round(p / 1e-9).astype(np.int64)): i for p, i in zip(
+        np.asarray(s["Coordinates"]), np.asarray(s["ParticleIDs"]))}
+    ka, kb = key(A[0]), key(B[0])
+    worst = np.inf
+    if set(ka) == set(kb):
+        ia = {i: n for n, i in enumerate(np.asarray(A[-1]["ParticleIDs"]))}
+        ib = {i: n for n, i in enumerate(np.asarray(B[-1]["ParticleIDs"]))}
+        ra = np.array([ia[ka[p]] for p in ka])
+        rb = np.array([ib[kb[p]] for p in ka])
+        worst = max(np.abs(np.asarray(A[-1][f])[ra] - np.asarray(B[-1][f])[rb]).max() /
+                    max(np.abs(np.asarray(A[-1][f])[ra]).max(), 1e-300)
+                    for f in ("Coordinates", "Velocities", "Stress", "Concentration"))
+    check("3D drum as a container", same_walls and set(ka) == set(kb) and worst <= TOL,
+          "the same %d particles: %s, the same wall for each of %d dummies: %s; largest field difference after 30 "
+          "steps %.1e of its scale (tolerance %.0e)" % (len(ka), set(ka) == set(kb), len(wb), same_walls, worst, TOL))
+
     # 3. the hopper
     out = os.path.join(w, "hopper")
     log = run(a.sphseg, "hopper_2d.yml", out, HOPPER + ["Run:t_end=0.25"])
@@ -154,7 +201,7 @@ def main():
     ids = snap.wall_ids(S[0])
     dw = np.asarray(S[0]["Wall"])[np.asarray(S[0]["Kind"]) == 1]
     per_wall = {n: int(np.sum(dw == k)) for n, k in ids.items()}
-    check("3D hopper", "zlo" in ids and "zhi" in ids and all(v > 0 for v in per_wall.values()) and len(S) == 2,
+    check("3D hopper", "end_lo" in ids and "end_hi" in ids and all(v > 0 for v in per_wall.values()) and len(S) == 2,
           "dummies per wall %s; %d snapshots" % (per_wall, len(S)))
     sys.exit(0 if ok else 1)
 
