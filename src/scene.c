@@ -984,8 +984,8 @@ static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g)
         fmt_double(b, sizeof b, g->depth);
         return fail_at(c, "Geometry:depth", "must be >= 4*dr = %s, got %s", a, b);
     }
-    if (g->periodic != PERIODIC_NONE && g->type != GEOM_COLUMN)
-        return fail_at(c, "Geometry:periodic", "needs Geometry:type column (the walls of a %s are fixed)",
+    if (g->periodic != PERIODIC_NONE && g->type != GEOM_COLUMN && g->type != GEOM_CONTAINER)
+        return fail_at(c, "Geometry:periodic", "needs Geometry:type column or container (the walls of a %s are fixed)",
                        g->type == GEOM_DRUM ? "drum" : "shear box");
     if ((g->periodic & PERIODIC_Z) && g->dim != 3)
         return fail_at(c, "Geometry:periodic", "z needs Geometry:dim 3");
@@ -1114,8 +1114,10 @@ static int check_container(struct scene_ctx *c, struct scene *s)
             return fail_at(c, AT("to_deg"), "an empty sector: from_deg equals to_deg");
 #undef AT
     }
-    if (s->geometry.periodic != PERIODIC_NONE)
-        return fail_at(c, "Geometry:periodic", "needs Geometry:type column (a container's walls are listed)");
+    for (unsigned i = 0; i < k->walls_count; ++i)
+        if (k->walls[i].shape == CWALL_ENDS && (s->geometry.periodic & PERIODIC_Z))
+            return fail_at(c, "Geometry:periodic", "z: a container periodic along z has no end walls (Container:walls:%u "
+                           "is of shape ends)", i + 1);
     if (s->geometry.dim == 3 && s->geometry.depth < 4 * dr)
         return fail_at(c, "Geometry:depth", "must be >= 4*dr = %.4g, got %.4g", 4 * dr, s->geometry.depth);
     if (s->geometry.dim == 3 && k->walls_count > SCENE_WALLS_MAX)

@@ -47,7 +47,7 @@ struct scene_geometry {
     double dr;           /* initial particle spacing, m, required */
     double h_factor;     /* h = h_factor * dr; default 1.5 (lattice moments within 0.5 %, tests/test_kernel.c) */
     double height;       /* material height H, m; default 0.087 */
-    double width;        /* box width, m; default 0.037 */
+    double width;        /* box width, m; a container periodic along x: the period; default 0.037 */
     double depth;        /* 3D column and container: extent along z, m; default 0.037 */
     double radius;       /* drum: inner radius R, m; default 0.035 */
     double length;       /* 3D drum: length along the axis (z) between the end walls, m; default 0.02 */
@@ -60,7 +60,7 @@ struct scene_geometry {
     double outlet_width; /* column: an opening of this width (m) in the base, centred on x = width/2
                           * (3D: a square opening, also centred on z = depth/2), through which material
                           * falls; default 0 (none) */
-    unsigned periodic;   /* column: the axes without walls, where the material continues periodically
+    unsigned periodic;   /* column or container: the axes without walls, where the material continues periodically
                           * (enum periodic_axes: none | x | z | xz; the period is the width along x,
                           * the depth along z, from 0); default none */
 };

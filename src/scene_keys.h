@@ -134,7 +134,7 @@ SECTION("Geometry", geometry, scene_geometry)
     KF("Geometry", geometry, scene_geometry, height, OPT, "0.087", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "material height H, m; default 0.087")
     KF("Geometry", geometry, scene_geometry, width, OPT, "0.037", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
-      "box width, m; default 0.037")
+      "box width, m; a container periodic along x: the period; default 0.037")
     KF("Geometry", geometry, scene_geometry, depth, OPT, "0.037", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "3D column and container: extent along z, m; default 0.037")
     KF("Geometry", geometry, scene_geometry, radius, OPT, "0.035", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
@@ -144,7 +144,7 @@ SECTION("Geometry", geometry, scene_geometry)
     KF("Geometry", geometry, scene_geometry, fill, OPT, "0.42", 0, 1, LO_OPEN | HI_OPEN, ALWAYS,
       "drum: filling level R_f = (H + R)/2R (paper §6), in (0,1); default 0.42")
     KE("Geometry", geometry, scene_geometry, periodic, periodic_axes, "none",
-      "column: the axes without walls, where the material continues periodically (enum periodic_axes: none | x | z | xz; the period is the width along x, the depth along z, from 0); default none")
+      "column or container: the axes without walls, where the material continues periodically (none | x | z | xz; the period is Geometry:width along x, Geometry:depth along z, from 0, at least 6 supports 2h; a container's walls and regions must lie within it, and a 3D container periodic in z has no end walls); default none")
     KE("Geometry", geometry, scene_geometry, lid, on_off, "off",
       "column: on | off: a rigid wall over the material at y = height (a channel between the base and the lid, with the base's slip); default off")
     KF("Geometry", geometry, scene_geometry, runout, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,

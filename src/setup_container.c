@@ -201,7 +201,10 @@ void container_walls(sim_t *s)
         }
         ctr_motion(q, w);
     }
-    if (sc->geometry.dim == 3) {
+    /* a periodic axis: the period is Geometry:width along x, Geometry:depth along z, from 0, whole dr */
+    s->flow.w.period[0] = (real)((double)lround(sc->geometry.width / dr) * dr);
+    s->flow.w.period[2] = (real)((double)lround(sc->geometry.depth / dr) * dr);
+    if (sc->geometry.dim == 3 && !(sc->geometry.periodic & PERIODIC_Z)) {
         /* the end walls: as the entry of shape ends, else fixed, slipping as a column's side walls */
         double D = (double)lround(sc->geometry.depth / dr) * dr;
         int ss = ends ? ends->slip == SLIP_FREE : sc->walls.side_slip == SLIP_FREE;
@@ -285,6 +288,15 @@ static void ctr_classify(const sim_t *s, ctr_lattice *L, const ctr_seg *seg)
                 input_error("%s: Container:regions:%d: reaches behind the walls at (%.6g, %.6g) m%s%s",
                             ctr_where(sc, "regions", (unsigned)reg, where, sizeof where), reg + 1, x, y,
                             w ? ", into the dummies of wall " : "", w ? s->wall_name[w - 1] : "");
+            double per = (double)s->flow.w.period[0];
+            if ((s->sc->geometry.periodic & PERIODIC_X) && (w || reg >= 0) && !(x > 0 && x < per)) {
+                if (w)
+                    input_error("%s: Container:walls:%u: reaches past the period [0, %.6g) m of the periodic x axis "
+                                "(at x = %.6g m); its images continue it", ctr_where(sc, "walls", L->ent[w - 1], where,
+                                sizeof where), L->ent[w - 1] + 1, per, x);
+                input_error("%s: Container:regions:%d: reaches past the period [0, %.6g) m of the periodic x axis (at "
+                            "x = %.6g m)", ctr_where(sc, "regions", (unsigned)reg, where, sizeof where), reg + 1, per, x);
+            }
             L->site[j * L->ni + i] = w ? w : reg >= 0 ? -(reg + 1) : 0;
             if (reg >= 0) held[reg]++;
             dums[w]++;
@@ -311,7 +323,7 @@ static size_t ctr_place(sim_t *s, particles_t *p, const ctr_lattice *L, const ct
     const struct scene_container *k = &s->sc->container;
     const int d3 = s->sc->geometry.dim == 3;
     const double dr = L->dr, vol = d3 ? dr * dr * dr : dr * dr;
-    const long nl = d3 ? L->nl : 0, nz = L->nz;
+    const long nl = d3 && !(s->sc->geometry.periodic & PERIODIC_Z) ? L->nl : 0, nz = L->nz; /* end-wall layers */
     const int zlo = L->nw + 1, zhi = L->nw + 2; /* the end walls' ids in 3D */
     size_t n = 0;
     *top = -INFINITY;
@@ -330,7 +342,7 @@ static size_t ctr_place(sim_t *s, particles_t *p, const ctr_lattice *L, const ct
         for (long i = 0; i < L->ni; ++i) {
             int c = L->site[j * L->ni + i];
             double x = site_x(L, i), y = site_y(L, j), depth = 0;
-            if (c <= 0 && !(d3 && ctr_inside(s, L, seg, x, y) && !ctr_in_cylinder(s, L, x, y)))
+            if (c <= 0 && !(nl && ctr_inside(s, L, seg, x, y) && !ctr_in_cylinder(s, L, x, y)))
                 continue; /* no dummy here (inside a cylinder: its polar end discs, below) */
             if (c > 0) ctr_dummy_wall(s, L, x, y, &depth);
             for (long q = -nl; q < nz + nl; ++q) {

@@ -37,13 +37,14 @@ HOPPER = ["Geometry:dr=0.002"]
 HOPPER_3D = ["Geometry:dim=3", "Geometry:depth=0.024", "Geometry:dr=0.004"]
 # column_2d.yml's box at dr = 2.5 mm as a list of walls: the base keeps its
 # corners (priority 1), as the built-in column's does; side walls as high as
-# the built-in ones (the material plus nl = 3 layers)
+# the built-in ones (the material plus nl = 3 layers); C 0 below half the
+# height and 1 above (Initial's defaults; mu(I)'s grain size reads C)
 COLUMN_AS_CONTAINER = [
     "Geometry:type=container",
     "Container:walls=[{name: base, from: [0, 0], to: [0.05, 0], priority: 1},"
     " {name: xhi, from: [0.05, 0], to: [0.05, 0.1075], slip: free_slip},"
     " {name: xlo, from: [0, 0.1075], to: [0, 0], slip: free_slip}]",
-    "Container:regions=[{lo: [0, 0], hi: [0.05, 0.1]}]"]
+    "Container:regions=[{lo: [0, 0], hi: [0.05, 0.05], C: 0}, {lo: [0, 0.05], hi: [0.05, 0.1], C: 1}]"]
 # drum_3d.yml (R 35 mm, R_f 0.42: H = -0.0056 m, split at -R + 0.5 (H + R) = -0.0203 m, C 0.5
 # both) 12 mm long, its end walls turning with the cylinder
 DRUM3D_AS_CONTAINER = [
@@ -51,6 +52,11 @@ DRUM3D_AS_CONTAINER = [
     "Container:walls=[{name: drum, shape: cylinder, centre: [0, 0], radius: 0.035, motion: turning, rpm: 5},"
     " {name: ends, shape: ends, slip: no_slip, motion: turning, rpm: 5}]",
     "Container:regions=[{shape: fill, level: -0.0203, C: 0.5}, {shape: fill, floor: -0.0203, level: -0.0056, C: 0.5}]"]
+# CHUTE as a container: the base alone, periodic along x over Geometry:width (0.05 m), C 0 below
+# half the layer and 1 above (use with CHUTE)
+CHUTE_AS_CONTAINER = [
+    "Geometry:type=container", "Container:walls=[{name: base, from: [0, 0], to: [0.05, 0]}]",
+    "Container:regions=[{lo: [0, 0], hi: [0.05, 0.015], C: 0}, {lo: [0, 0.015], hi: [0.05, 0.03], C: 1}]"]
 # shearbox_2d.yml's box (21 x 50 sites of dr = 1.74 mm, side walls 53 rows high), C 0 below half
 # its height and 1 above, under the same prescribed oscillatory shear
 SHEARBOX_AS_CONTAINER = [

@@ -21,6 +21,10 @@ Container:regions, src/setup_container.c):
     particles and walls; its material is numbered row by row rather than
     plane by plane, so particles are matched by their initial position, and
     the fields agree to round-off (1e-10) after 30 steps;
+  - the chute (CHUTE: a layer on a 40-degree incline, periodic along x)
+    written as a container (its base alone, Geometry:periodic x,
+    CHUTE_AS_CONTAINER) has the same particles and walls; matched by initial
+    position, the fields agree to round-off (1e-10) after 30 steps;
   - inputs/hopper_2d.yml at dr = 2 mm: the walls listed (header Walls), each
     region's C at the start (0, 1, 0 by layer), the material held by the
     gate until 0.05 s and flowing out of the opening after, the sum C V of
@@ -41,8 +45,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 sys.path.insert(0, HERE)
 import snap  # noqa: E402
-from containers import (COLUMN_AS_CONTAINER, DRUM3D_AS_CONTAINER, DRUM_AS_CONTAINER, HOPPER, HOPPER_3D,  # noqa: E402
-                        SHEARBOX_AS_CONTAINER)
+from containers import (CHUTE, CHUTE_AS_CONTAINER, COLUMN_AS_CONTAINER, DRUM3D_AS_CONTAINER,  # noqa: E402
+                        DRUM_AS_CONTAINER, HOPPER, HOPPER_3D, SHEARBOX_AS_CONTAINER)
 
 INPUTS = os.path.join(HERE, "..", "inputs")
 TOL = 1e-10
@@ -83,6 +87,33 @@ def wall_of_dummies(s):
     return {tuple(p): names[int(w)] for p, w in zip(pos, np.asarray(s["Wall"])[d])}
 
 
+def matched(sphseg, w, name, scene, base, inst):
+    """A built-in scene and its container version: the same particles (by
+    initial position) and the same wall for each dummy; the fields after the
+    run within TOL of their scale."""
+    tag = name.split()[0].lower()
+    run(sphseg, scene, os.path.join(w, tag), base)
+    run(sphseg, scene, os.path.join(w, tag + "_c"), base + inst)
+    A, B = snaps(os.path.join(w, tag)), snaps(os.path.join(w, tag + "_c"))
+    wa, wb = wall_of_dummies(A[0]), wall_of_dummies(B[0])
+    same_walls = wa == wb
+    key = lambda s: {tuple(np.round(p / 1e-9).astype(np.int64)): i for p, i in zip(
+        np.asarray(s["Coordinates"]), np.asarray(s["ParticleIDs"]))}
+    ka, kb = key(A[0]), key(B[0])
+    worst = np.inf
+    if set(ka) == set(kb):
+        ia = {i: n for n, i in enumerate(np.asarray(A[-1]["ParticleIDs"]))}
+        ib = {i: n for n, i in enumerate(np.asarray(B[-1]["ParticleIDs"]))}
+        ra = np.array([ia[ka[p]] for p in ka])
+        rb = np.array([ib[kb[p]] for p in ka])
+        worst = max(np.abs(np.asarray(A[-1][f])[ra] - np.asarray(B[-1][f])[rb]).max() /
+                    max(np.abs(np.asarray(A[-1][f])[ra]).max(), 1e-300)
+                    for f in ("Coordinates", "Velocities", "Stress", "Concentration"))
+    check("%s as a container" % name, same_walls and set(ka) == set(kb) and worst <= TOL,
+          "the same %d particles: %s, the same wall for each of %d dummies: %s; largest field difference after 30 "
+          "steps %.1e of its scale (tolerance %.0e)" % (len(ka), set(ka) == set(kb), len(wb), same_walls, worst, TOL))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--sphseg", required=True)
@@ -116,7 +147,7 @@ def main():
     m = x["Kind"] == 0
     same_ids = np.array_equal(x["ParticleIDs"][m], y["ParticleIDs"][y["Kind"] == 0])
     worst = max(np.abs(x[f][m] - y[f][y["Kind"] == 0]).max() / max(np.abs(x[f][m]).max(), 1e-300)
-                for f in ("Coordinates", "Velocities", "Stress"))
+                for f in ("Coordinates", "Velocities", "Stress", "Concentration"))
     check("column as a container: material after 30 steps", same_ids and worst <= TOL,
           "the same material IDs: %s; largest field difference %.1e of its scale (tolerance %.0e)" % (
               same_ids, worst, TOL))
@@ -136,28 +167,12 @@ def main():
           "%d dummies, the same walls: %s; material positions equal: %s; largest C difference %.1e (tolerance %.0e)"
           % (len(wb), wa == wb, same_x, dc, TOL))
 
-    # 2c. the 3D drum as a container: matched by initial position
-    base = ["Geometry:dr=0.002", "Geometry:length=0.012", "Run:max_steps=30", "Output:dt=1e3"]
-    run(a.sphseg, "drum_3d.yml", os.path.join(w, "drum3d"), base)
-    run(a.sphseg, "drum_3d.yml", os.path.join(w, "drum3d_c"), base + DRUM3D_AS_CONTAINER)
-    A, B = snaps(os.path.join(w, "drum3d")), snaps(os.path.join(w, "drum3d_c"))
-    wa, wb = wall_of_dummies(A[0]), wall_of_dummies(B[0])
-    same_walls = wa == wb
-    key = lambda s: {tuple(np.round(p / 1e-9).astype(np.int64)): i for p, i in zip(
-        np.asarray(s["Coordinates"]), np.asarray(s["ParticleIDs"]))}
-    ka, kb = key(A[0]), key(B[0])
-    worst = np.inf
-    if set(ka) == set(kb):
-        ia = {i: n for n, i in enumerate(np.asarray(A[-1]["ParticleIDs"]))}
-        ib = {i: n for n, i in enumerate(np.asarray(B[-1]["ParticleIDs"]))}
-        ra = np.array([ia[ka[p]] for p in ka])
-        rb = np.array([ib[kb[p]] for p in ka])
-        worst = max(np.abs(np.asarray(A[-1][f])[ra] - np.asarray(B[-1][f])[rb]).max() /
-                    max(np.abs(np.asarray(A[-1][f])[ra]).max(), 1e-300)
-                    for f in ("Coordinates", "Velocities", "Stress", "Concentration"))
-    check("3D drum as a container", same_walls and set(ka) == set(kb) and worst <= TOL,
-          "the same %d particles: %s, the same wall for each of %d dummies: %s; largest field difference after 30 "
-          "steps %.1e of its scale (tolerance %.0e)" % (len(ka), set(ka) == set(kb), len(wb), same_walls, worst, TOL))
+    # 2c, 2d. the 3D drum and the periodic chute as containers: matched by initial position
+    for name, scene, base, inst in [
+            ("3D drum", "drum_3d.yml", ["Geometry:dr=0.002", "Geometry:length=0.012"], DRUM3D_AS_CONTAINER),
+            ("chute (periodic x)", "column_2d.yml", CHUTE, CHUTE_AS_CONTAINER)]:
+        matched(a.sphseg, w, name, scene, base + ["Run:max_steps=30", "Output:dt=1e3"], inst)
+
 
     # 3. the hopper
     out = os.path.join(w, "hopper")

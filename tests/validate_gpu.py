@@ -38,7 +38,8 @@ TOL_C1 = 1e-4
 
 # name, scene, steps, overrides
 sys.path.insert(0, HERE)
-from containers import CHANNEL, CHUTE, CHUTE_3D, COLLAPSE, FILM, HOPPER, HOPPER_3D, SILO  # noqa: E402
+from containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
+                        SILO)
 
 CASES = [
     ("shearbox", "shearbox_2d.yml", 40, []),
@@ -71,6 +72,7 @@ CASES = [
     # a container described as data (Geometry:type container): a gated hopper that discharges
     ("hopper", "hopper_2d.yml", 2400, HOPPER),
     ("hopper_3d", "hopper_2d.yml", 40, HOPPER_3D),
+    ("chute_container", "column_2d.yml", 400, CHUTE + CHUTE_AS_CONTAINER),
 ]
 # (Segregation:every = 1: C with the flow in every step; K > 1: in windows of
 # K steps, closed 5-9 times in these runs, the last one left open at

@@ -68,7 +68,8 @@ TOL = 1e-10     # CPU, any scheme, across rank counts
 TOL_GPU = 1e-8  # GPU runs, and the GPU against the CPU
 TOL_C1 = 1e-4   # GPU runs of the paper scheme
 DRUM = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:shepard_every=20"]
-from containers import CHANNEL, CHUTE, CHUTE_3D, COLLAPSE, FILM, HOPPER, HOPPER_3D, SILO  # noqa: E402
+from containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
+                        SILO)
 
 # name, scene, steps, overrides, what must happen on several ranks
 CASES = [
@@ -106,6 +107,8 @@ CASES = [
     # a container described as data (Geometry:type container): a gated hopper that discharges
     ("hopper", "hopper_2d.yml", 2400, HOPPER, "outflow"),
     ("hopper_3d", "hopper_2d.yml", 40, HOPPER_3D, None),
+    # a container periodic along x: the chute's layer on its base alone
+    ("chute_container", "column_2d.yml", 2000, CHUTE + CHUTE_AS_CONTAINER + ["Parallel:axis=x"], "wrap"),
     ("column_3d_metis", "column_2d.yml", 30, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.05",
                                               "Geometry:depth=0.05", "Geometry:height=0.1",
                                               "Parallel:method=metis"], None),
