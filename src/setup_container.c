@@ -144,7 +144,9 @@ static int ctr_in_region(const sim_t *s, const ctr_lattice *L, const ctr_seg *se
         double rel = fmod(fmod(a - r->from_deg, 360.0) + 360.0, 360.0);
         return span == 0 ? 1 : rel < span; /* a full turn when to - from is a multiple of 360 */
     }
-    default: return y < r->level && (!r->has_floor || y >= r->floor) && ctr_inside(s, L, seg, x, y);
+    default: /* a fill of a container periodic along x stays within the period */
+        if ((s->sc->geometry.periodic & PERIODIC_X) && !(x > 0 && x < (double)s->flow.w.period[0])) return 0;
+        return y < r->level && (!r->has_floor || y >= r->floor) && ctr_inside(s, L, seg, x, y);
     }
 }
 
@@ -418,6 +420,7 @@ void container_place(sim_t *s)
         const struct scene_region *g = &k->regions[r];
         if (g->shape == REGION_BOX)
             for (int a = 0; a < 2; ++a) lo[a] = fmin(lo[a], g->lo[a]), hi[a] = fmax(hi[a], g->hi[a]);
+        if (g->shape == REGION_FILL) hi[1] = fmax(hi[1], g->level); /* a fill may rise above the walls */
         if (g->shape == REGION_SECTOR)
             for (int a = 0; a < 2; ++a) lo[a] = fmin(lo[a], g->centre[a] - g->r_out), hi[a] = fmax(hi[a], g->centre[a] + g->r_out);
     }
