@@ -28,7 +28,9 @@ SILO = ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:outlet_width=0.0
 COLLAPSE = ["Geometry:dr=0.0025", "Geometry:height=0.05", "Geometry:runout=0.1", "Walls:gate_open=0.01",
             "Material:E=1e5", "Flow:damping_until=0.01"]
 # CHANNEL   plane Poiseuille flow of the Newtonian fluid between the base and a lid,
-#           periodic along x, driven by a body force of 2 m/s^2 (validate_channel.py)
+#           periodic along x, driven by a body force of 2 m/s^2: inputs/poiseuille_2d.yml
+#           (bit-identical; validate_channel.py runs the scene), kept here for
+#           validate_mpi and validate_gpu
 CHANNEL = ["Material:model=newtonian", "Material:eta=1.5", "Material:E=1800", "Geometry:periodic=x",
            "Geometry:lid=on", "Geometry:dr=0.0005", "Geometry:height=0.01", "Geometry:width=0.01",
            "Physics:gravity=[2,0,0]", "Flow:alpha_av=0", "Flow:damping_until=0", "Initial:stress=zero"]

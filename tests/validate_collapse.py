@@ -1,0 +1,65 @@
+"""Granular column collapse (inputs/collapse_2d.yml) at a CI size against the
+experimental laws of two-dimensional columns (Lube, Huppert, Sparks &
+Freundt 2005, Phys. Rev. E 72, 041301): runout (L_inf - L0)/L0 = 1.2 a for
+a < 2.3, final height H_inf = H0 for a < 1.15 and a^(2/5) L0 above
+(tools/collapse_study.py, docs/validation.md "Column collapse").
+
+L0 = 2 cm at dr = 1 mm (L0/dr = 20, as the study's aspect sweep).
+  a = 0.5: the model agrees with the law: measured runout 0.97 and final
+           height 0.95 of Lube's (H100); tolerance 15 % on each.
+  a = 2:   the model runs out farther than the experiments: measured 1.66
+           times Lube's runout and 0.76 times the final height at this
+           resolution (1.9 times the runout when converged, L0/dr = 80; the
+           model's static friction is atan k_mu(mu_s) = 19.3 degrees, a lower
+           angle than the experiments' grains, and a friction of 30 degrees
+           brings it to 1.37, docs/validation.md). Held within 12 % of those
+           measured ratios, so that a change of the collapse shows.
+Both: the front has stopped (it moves < 5 mm/s at the end) and no material
+is lost.
+"""
+import argparse
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "tools"))
+import batch  # noqa: E402
+import collapse_study as cs  # noqa: E402
+
+# a: (runout / Lube, height / Lube) expected, tolerance (relative)
+EXPECT = {0.5: ((1.0, 1.0), 0.15), 2.0: ((1.66, 0.76), 0.12)}
+CREEP = 0.005  # m/s
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sphseg", required=True)
+    ap.add_argument("--work", required=True)
+    a = ap.parse_args()
+    cases = [cs.case("a%g" % av, av) for av in EXPECT]
+    recs = batch.run_all(cases, a.sphseg, a.work, jobs=1, limit_s=600)
+    ok = True
+    for c in cases:
+        if recs[c.name]["rc"] != 0:
+            print("FAIL %s: sphseg ended with %s" % (c.name, recs[c.name]["rc"]))
+            print(open(os.path.join(a.work, c.name + ".log")).read()[-2000:])
+            sys.exit(1)
+        cs.reduce_run(os.path.join(a.work, c.name), c.meta["dr"])
+        f = cs.load(a.work, c.name)
+        av, L0 = c.meta["a"], c.meta["L0"]
+        run, hf = (f["front"][-1] - L0) / L0, f["height_at_wall"][-1] / L0
+        (want_r, want_h), tol = EXPECT[av]
+        rr, rh = run / float(cs.lube_runout(av)), hf / float(cs.lube_height(av))
+        creep = abs(f["front"][-1] - f["front"][-2]) / (f["t"][-1] - f["t"][-2])
+        good = (abs(rr / want_r - 1) <= tol and abs(rh / want_h - 1) <= tol and creep < CREEP
+                and f["n"][-1] == f["n"][0])
+        ok &= good
+        print("%s a = %g: runout %.2f L0 (Lube %.2f: ratio %.2f, expected %.2f +- %.0f %%), final height %.2f L0 "
+              "(Lube %.2f: ratio %.2f, expected %.2f), front moving %.1f mm/s at t = %.2f s, %d particles" % (
+                  "ok  " if good else "FAIL", av, run, cs.lube_runout(av), rr, want_r, 100 * tol, hf,
+                  cs.lube_height(av), rh, want_h, 1e3 * creep, f["t"][-1], f["n"][-1]))
+    sys.exit(0 if ok else 1)
+
+
+if __name__ == "__main__":
+    main()
