@@ -92,11 +92,13 @@ def gravity(theta_deg):
     return "[%.6f,%.6f,0]" % (G * math.sin(t), -G * math.cos(t))
 
 
-def case(name, theta=25.0, H=0.02, dr=0.0005, alpha=0.1, t_end=3.0, seg=None, E=1e5, **extra):
+def case(name, theta=25.0, H=0.02, dr=0.0005, alpha=0.1, t_end=3.0, seg=None, E=1e5, dim=2, **extra):
     over = {"Geometry:dr": dr, "Geometry:height": H, "Geometry:width": round(20 * dr, 9),
             "Physics:gravity": gravity(theta), "Flow:alpha_av": alpha, "Run:t_end": t_end,
             "Output:dt": 0.1, "Output:diag_dt": 0.05, "Run:progress_s": 1e9, "Material:E": E}
-    meta = {"theta": theta, "H": H, "dr": dr, "alpha": alpha, "t_end": t_end, "E": E, "seg": 0}
+    if dim == 3:  # periodic along the slope (x) and across it (z), 20 dr each way
+        over.update({"Geometry:dim": 3, "Geometry:depth": round(20 * dr, 9), "Geometry:periodic": "xz"})
+    meta = {"theta": theta, "H": H, "dr": dr, "alpha": alpha, "t_end": t_end, "E": E, "seg": 0, "dim": dim}
     if seg:
         V, D, phi0 = seg
         over.update({"Segregation:enabled": "on", "Segregation:flux": "symmetric", "Segregation:model": "constant",
@@ -112,7 +114,7 @@ SEG = (0.04, 2e-4, 0.5)  # V, D, phi0: Pe = V cos(25) H / D = 3.6 at H = 2 cm
 def cases(which):
     """The study's runs. The layer relaxes to its steady state with the time
     constant of the linearised mu(I) viscosity, about H^2 / (2.5 nu) with
-    nu = k_mu'(mu) mu'(I) I d sqrt(p rho_s) / (rho gdot) at the base: 0.45 s
+    nu = k_mu'(mu) mu'(I) d sqrt(p rho_s) / rho at the base: 0.45 s
     for H = 1 cm at 25 degrees (1.25 s for 2 cm, growing as H^1.5), so the
     velocity runs are 1 cm deep and 4 s long (9 time constants)."""
     c = []
@@ -128,6 +130,9 @@ def cases(which):
         # 20 rows or more across the layer (H / dr = 10 loses its lattice rows)
         c.append(case("H5", H=0.005, dr=0.00025, t_end=4.0, alpha=0.0))
         c.append(case("H15", H=0.015, dr=0.0005, t_end=5.0, alpha=0.0))
+    if which in ("full", "3d"):  # the 3D layer (8000 particles) and its 2D twin, E 1e4 for a 3x longer step
+        for dim in (3, 2):
+            c.append(case("dim%d_H5" % dim, H=0.005, dr=0.00025, alpha=0.0, E=1e4, t_end=0.6, dim=dim))
     if which in ("full", "seg"):
         for dr in (0.002, 0.001, 0.0005):
             c.append(case("seg_dr%g" % (dr * 1e3), dr=dr, seg=SEG))
@@ -190,8 +195,9 @@ def summarise(out, name, row):
     times = sorted(prof)
     last = prof[times[-1]]
     before = prof[min(times, key=lambda t: abs(t - (times[-1] - 0.5)))]
-    ref = bagnold(last["y"], theta, H)
-    uref_top = float(bagnold(H, theta, H)) if np.isfinite(inertial_number(theta)) else math.inf
+    steady = np.isfinite(inertial_number(theta))
+    ref = bagnold(last["y"], theta, H) if steady else np.full(len(last["y"]), np.nan)
+    uref_top = float(bagnold(H, theta, H)) if steady else math.inf
     mean = float(np.average(last["u"], weights=last["n"]))
     mean_before = float(np.average(before["u"], weights=before["n"]))
     res = {"t": times[-1], "u_top": float(last["u"].max()), "u_mean": mean, "u_mean_before": mean_before,
@@ -302,6 +308,17 @@ def cmd_report(a):
         ax[2].set_xlabel("H (cm)"), ax[2].set_ylabel("depth-mean u (m/s), 25$^\\circ$"), ax[2].legend()
         fig.tight_layout()
         fig.savefig(os.path.join(a.docs, "validation_chute_regimes.png"), dpi=110)
+    dims = sorted((n for n in S if n.startswith("dim")), key=lambda n: -int(runs[n]["dim"]))
+    if dims:
+        P("")
+        P("| dim | particles | t (s) | depth-mean u (m/s) | analytic | error of the mean | profile error above the "
+          "first row | first row's slip | wall (s) | backend | steps |")
+        P("|---|---|---|---|---|---|---|---|---|---|---|")
+        for n in dims:
+            r, s = runs[n], S[n]
+            P("| %s | %s | %.1f | %.4f | %.4f | %+.1f %% | %.1f %% | %+.1f %% | %s | %s | %s |" % (
+                r["dim"], r["material"], s["t"], s["u_mean"], s["u_ref_mean"], 100 * (s["u_mean"] / s["u_ref_mean"] - 1),
+                100 * s["err_profile"], 100 * s["err_base"], r["wall_s"], r.get("backend", ""), r["steps"]))
     seg = sorted((n for n in S if n.startswith("seg")), key=lambda n: -float(runs[n]["dr"]))
     if seg:
         P("")
@@ -338,7 +355,7 @@ def main(argv=None):
     r.add_argument("--sphseg", required=True)
     r.add_argument("--out", required=True)
     r.add_argument("--backend")
-    r.add_argument("--set", default="full", help="full | resolution | regimes | seg (comma-separated)")
+    r.add_argument("--set", default="full", help="full | resolution | regimes | 3d | seg (comma-separated)")
     r.add_argument("--only", help="comma-separated patterns (regular expressions) of case names; runs in their order")
     r.add_argument("--jobs", type=int, default=4)
     r.add_argument("--limit-s", type=float, default=540.0)
