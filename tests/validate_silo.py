@@ -42,13 +42,9 @@ def main():
     cases = [ss.case("W%g" % (W * 1e3), W, H=0.05, t_end=0.4) for W in (0.008, 0.016)]
     for c in cases:
         c.over["Output:dt"] = 0.4
-    recs = batch.run_all(cases, a.sphseg, a.work, jobs=1, limit_s=600)
+    recs = batch.run_cases_or_exit(cases, a.sphseg, a.work, limit_s=600)
     ok, Q = True, {}
     for c in cases:
-        if recs[c.name]["rc"] != 0:
-            print("FAIL %s: sphseg ended with %s" % (c.name, recs[c.name]["rc"]))
-            print(open(os.path.join(a.work, c.name + ".log")).read()[-2000:])
-            sys.exit(1)
         d = ss.outflow(a.work, c.name)
         n0 = int(recs[c.name]["material"])
         q, (t0, t1) = ss.rate(d, 0.001, n0)

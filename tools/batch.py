@@ -81,16 +81,87 @@ def run_all(cases, sphseg, root, backend=None, jobs=4, limit_s=540.0, deadline_s
             if on_done:
                 on_done(c, rec)
     print("batch: %d cases in %.1f s" % (len(cases), time.time() - t_start), file=log, flush=True)
+    write_runs(root, done, [c.name for c in cases])
+    return done
+
+
+def write_runs(root, records, order):
+    """root/runs.csv: the records ({name: row}) in the order of the names
+    given, with the union of their columns."""
     keys = []
-    for r in done.values():
+    for r in records.values():
         keys += [k for k in r if k not in keys]
     with open(os.path.join(root, "runs.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=keys)
         w.writeheader()
-        for c in cases:
-            if c.name in done:
-                w.writerow(done[c.name])
-    return done
+        for n in order:
+            if n in records:
+                w.writerow(records[n])
+
+
+def select(cases, only):
+    """The cases whose names match one of the comma-separated regular
+    expressions of `only` (all when None), in the order of the first pattern
+    each matches."""
+    if not only:
+        return list(cases)
+    keys = only.split(",")
+    first = lambda c: min([i for i, k in enumerate(keys) if re.search(k, c.name)] or [len(keys)])
+    return sorted((c for c in cases if first(c) < len(keys)), key=first)
+
+
+def load_runs(outs, needs):
+    """The runs of several run folders merged: ({name: runs.csv row},
+    {name: its folder}), keeping those whose folder holds the file `needs`."""
+    runs, where = {}, {}
+    for out in outs:
+        for n, r in read_runs(out).items():
+            if os.path.exists(os.path.join(out, n, needs)):
+                runs[n], where[n] = r, out
+    return runs, where
+
+
+def run_cases_or_exit(cases, sphseg, work, limit_s=900):
+    """For the tests: the cases one at a time; exits the script with FAIL and
+    the run's last output when one fails. Returns run_all's records."""
+    recs = run_all(cases, sphseg, work, jobs=1, limit_s=limit_s)
+    for c in cases:
+        if recs[c.name]["rc"] != 0:
+            print("FAIL %s: sphseg ended with %s" % (c.name, recs[c.name]["rc"]))
+            print(open(os.path.join(work, c.name + ".log")).read()[-2000:])
+            sys.exit(1)
+    return recs
+
+
+def study_main(doc, sets, cases_of, on_done, cmd_report, jobs=1, argv=None):
+    """The command line the validation studies share: `run` (the cases of
+    --set through `cases_of`, picked by --only, on_done(args, case, record)
+    as each ends) and `report` (cmd_report(args) over --out folders)."""
+    import argparse
+    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("run")
+    r.add_argument("--sphseg", required=True)
+    r.add_argument("--out", required=True)
+    r.add_argument("--backend")
+    r.add_argument("--set", default="full", help="full | " + " | ".join(sets) + " (comma-separated)")
+    r.add_argument("--only", help="comma-separated patterns (regular expressions) of case names; runs in their order")
+    r.add_argument("--jobs", type=int, default=jobs)
+    r.add_argument("--limit-s", type=float, default=540.0)
+    r.add_argument("--deadline-s", type=float, help="end every run by then, start none after")
+    r.add_argument("--keep", action="store_true", help="keep the snapshots")
+    p = sub.add_parser("report")
+    p.add_argument("--out", required=True, nargs="+", help="the run folders (several: their cases merged)")
+    p.add_argument("--docs", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "docs"))
+    p.add_argument("--table", help="also write the tables (markdown) here")
+    a = ap.parse_args(argv)
+    if a.cmd == "report":
+        return cmd_report(a)
+    todo = select([c for w in a.set.split(",") for c in cases_of(w)], a.only)
+    for c in todo:
+        c.meta["backend"] = a.backend or "cpu"
+    run_all(todo, a.sphseg, a.out, backend=a.backend, jobs=a.jobs, limit_s=a.limit_s, deadline_s=a.deadline_s,
+            on_done=lambda c, rec: on_done(a, c, rec))
 
 
 def read_runs(root):

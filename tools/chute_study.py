@@ -33,11 +33,9 @@ along the slope is uniform and drops out).
 `run` reduces each run's snapshots to row profiles (profiles.csv: t, y, u, C
 of each lattice row) and deletes the snapshots unless --keep.
 """
-import argparse
 import csv
 import math
 import os
-import re
 import shutil
 import sys
 
@@ -167,24 +165,14 @@ def load_profiles(outdir):
     return {t: a[a["t"] == t] for t in np.unique(a["t"])}
 
 
-def cmd_run(a):
-    todo = [c for w in a.set.split(",") for c in cases(w)]
-    if a.only:
-        keys = a.only.split(",")
-        first = lambda c: min([i for i, k in enumerate(keys) if re.search(k, c.name)] or [len(keys)])
-        todo = sorted((c for c in todo if first(c) < len(keys)), key=first)  # in --only's order
-    for c in todo:
-        c.meta["backend"] = a.backend or "cpu"
-
-    def reduce(c, rec):
-        d = os.path.join(a.out, c.name)
-        if os.path.isdir(d):
-            n = reduce_run(d, float(c.over["Geometry:dr"]), a.keep)
-            for extra in ("checkpoint", "restart"):
-                shutil.rmtree(os.path.join(d, extra), ignore_errors=True)
-            print("%s: %d row records" % (c.name, n), flush=True)
-    batch.run_all(todo, a.sphseg, a.out, backend=a.backend, jobs=a.jobs, limit_s=a.limit_s,
-                  deadline_s=a.deadline_s, on_done=reduce)
+def reduce_done(a, c, rec):
+    """After each run: its snapshots to profiles.csv; restart files dropped."""
+    d = os.path.join(a.out, c.name)
+    if os.path.isdir(d):
+        n = reduce_run(d, float(c.over["Geometry:dr"]), a.keep)
+        for extra in ("checkpoint", "restart"):
+            shutil.rmtree(os.path.join(d, extra), ignore_errors=True)
+        print("%s: %d row records" % (c.name, n), flush=True)
 
 
 def summarise(out, name, row):
@@ -215,11 +203,7 @@ def cmd_report(a):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    runs, where = {}, {}
-    for out in a.out:
-        for n, r in batch.read_runs(out).items():
-            if os.path.exists(os.path.join(out, n, "profiles.csv")):
-                runs[n], where[n] = r, out
+    runs, where = batch.load_runs(a.out, "profiles.csv")
     S = {n: summarise(where[n], n, r) for n, r in runs.items()}
     lines = []
     P = lines.append
@@ -349,24 +333,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = ap.add_subparsers(dest="cmd", required=True)
-    r = sub.add_parser("run")
-    r.add_argument("--sphseg", required=True)
-    r.add_argument("--out", required=True)
-    r.add_argument("--backend")
-    r.add_argument("--set", default="full", help="full | resolution | regimes | 3d | seg (comma-separated)")
-    r.add_argument("--only", help="comma-separated patterns (regular expressions) of case names; runs in their order")
-    r.add_argument("--jobs", type=int, default=4)
-    r.add_argument("--limit-s", type=float, default=540.0)
-    r.add_argument("--deadline-s", type=float, help="end every run by then, start none after")
-    r.add_argument("--keep", action="store_true", help="keep the snapshots")
-    p = sub.add_parser("report")
-    p.add_argument("--out", required=True, nargs="+", help="the run folders (several: their cases merged)")
-    p.add_argument("--docs", default=os.path.join(HERE, "..", "docs"))
-    p.add_argument("--table", help="also write the tables (markdown) here")
-    a = ap.parse_args(argv)
-    cmd_run(a) if a.cmd == "run" else cmd_report(a)
+    batch.study_main(__doc__, ("resolution", "regimes", "3d", "seg"), cases, reduce_done, cmd_report, jobs=4, argv=argv)
 
 
 if __name__ == "__main__":

@@ -21,7 +21,6 @@ material at the wall (x < 2 dr). The flow stops within a few sqrt(H0 / g)
   python3 tools/collapse_study.py run --sphseg build/sphseg --out out/collapse_study [--backend gpu]
   python3 tools/collapse_study.py report --out out/collapse_study --docs docs
 """
-import argparse
 import csv
 import math
 import os
@@ -103,21 +102,10 @@ def reduce_run(outdir, dr, keep=False):
     return len(rows)
 
 
-def cmd_run(a):
-    todo = [c for w in a.set.split(",") for c in cases(w)]
-    if a.only:
-        keys = a.only.split(",")
-        first = lambda c: min([i for i, k in enumerate(keys) if re.search(k, c.name)] or [len(keys)])
-        todo = sorted((c for c in todo if first(c) < len(keys)), key=first)
-    for c in todo:
-        c.meta["backend"] = a.backend or "cpu"
-
-    def reduce(c, rec):
-        d = os.path.join(a.out, c.name)
-        if os.path.isdir(d):
-            print("%s: %d snapshots reduced" % (c.name, reduce_run(d, float(c.over["Geometry:dr"]), a.keep)), flush=True)
-    batch.run_all(todo, a.sphseg, a.out, backend=a.backend, jobs=a.jobs, limit_s=a.limit_s,
-                  deadline_s=a.deadline_s, on_done=reduce)
+def reduce_done(a, c, rec):
+    d = os.path.join(a.out, c.name)
+    if os.path.isdir(d):
+        print("%s: %d snapshots reduced" % (c.name, reduce_run(d, float(c.over["Geometry:dr"]), a.keep)), flush=True)
 
 
 def load(out, name):
@@ -128,11 +116,7 @@ def cmd_report(a):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    runs, where = {}, {}
-    for out in a.out:
-        for n, r in batch.read_runs(out).items():
-            if os.path.exists(os.path.join(out, n, "front.csv")):
-                runs[n], where[n] = r, out
+    runs, where = batch.load_runs(a.out, "front.csv")
     lines = []
     P = lines.append
     asp = sorted((n for n in runs if re.fullmatch(r"a[0-9.]+", n)), key=lambda n: float(runs[n]["a"]))
@@ -204,24 +188,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = ap.add_subparsers(dest="cmd", required=True)
-    r = sub.add_parser("run")
-    r.add_argument("--sphseg", required=True)
-    r.add_argument("--out", required=True)
-    r.add_argument("--backend")
-    r.add_argument("--set", default="full", help="full | aspect | resolution (comma-separated)")
-    r.add_argument("--only", help="comma-separated patterns (regular expressions) of case names; runs in their order")
-    r.add_argument("--jobs", type=int, default=1)
-    r.add_argument("--limit-s", type=float, default=540.0)
-    r.add_argument("--deadline-s", type=float)
-    r.add_argument("--keep", action="store_true")
-    p = sub.add_parser("report")
-    p.add_argument("--out", required=True, nargs="+")
-    p.add_argument("--docs", default=os.path.join(HERE, "..", "docs"))
-    p.add_argument("--table")
-    a = ap.parse_args(argv)
-    cmd_run(a) if a.cmd == "run" else cmd_report(a)
+    batch.study_main(__doc__, ("aspect", "resolution"), cases, reduce_done, cmd_report, argv=argv)
 
 
 if __name__ == "__main__":

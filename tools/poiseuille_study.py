@@ -353,15 +353,7 @@ def main():
     if cases:
         done = batch.run_all(cases, tok[0], out, jobs=a.jobs, limit_s=a.limit_s)
         old.update({k_: {kk: str(v) for kk, v in r.items()} for k_, r in done.items()})
-        keys = []
-        for r in old.values():
-            keys += [kk for kk in r if kk not in keys]
-        with open(os.path.join(out, "runs.csv"), "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=keys)
-            w.writeheader()
-            for n in rows:
-                if "rows%d" % n in old:
-                    w.writerow(old["rows%d" % n])
+        batch.write_runs(out, old, ["rows%d" % n for n in rows])
         print("runs: %.1f s" % (time.time() - t0))
     res = analyse(out, rows, a.t_end)
     if not res:

@@ -20,7 +20,7 @@ opening opens to the time half of the fill has left.
   python3 tools/silo_study.py run --sphseg build/sphseg --out out/silo_study [--backend gpu]
   python3 tools/silo_study.py report --out out/silo_study --docs docs
 """
-import argparse
+import glob
 import math
 import os
 import re
@@ -79,33 +79,18 @@ def rate(d, dr, n0):
     return float(np.polyfit(t[m], n[m], 1)[0] * RHO * dr * dr), (T0, float(end))
 
 
-def cmd_run(a):
-    todo = [c for w in a.set.split(",") for c in cases(w)]
-    if a.only:
-        keys = a.only.split(",")
-        first = lambda c: min([i for i, k in enumerate(keys) if re.search(k, c.name)] or [len(keys)])
-        todo = sorted((c for c in todo if first(c) < len(keys)), key=first)
-    for c in todo:
-        c.meta["backend"] = a.backend or "cpu"
-
-    def tidy(c, rec):
-        import glob
+def tidy_done(a, c, rec):
+    """After each run: the snapshots go (the rates come from diagnostics.csv)."""
+    if not a.keep:
         for p in glob.glob(os.path.join(a.out, c.name, "snapshot_*.h5")):
-            if not a.keep:
-                os.remove(p)
-    batch.run_all(todo, a.sphseg, a.out, backend=a.backend, jobs=a.jobs, limit_s=a.limit_s,
-                  deadline_s=a.deadline_s, on_done=tidy)
+            os.remove(p)
 
 
 def cmd_report(a):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    runs, where = {}, {}
-    for out in a.out:
-        for n, r in batch.read_runs(out).items():
-            if os.path.exists(os.path.join(out, n, "diagnostics.csv")):
-                runs[n], where[n] = r, out
+    runs, where = batch.load_runs(a.out, "diagnostics.csv")
     lines = []
     P = lines.append
     Q = {}
@@ -203,24 +188,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = ap.add_subparsers(dest="cmd", required=True)
-    r = sub.add_parser("run")
-    r.add_argument("--sphseg", required=True)
-    r.add_argument("--out", required=True)
-    r.add_argument("--backend")
-    r.add_argument("--set", default="full", help="full | beverloo | height | resolution | mixed (comma-separated)")
-    r.add_argument("--only", help="comma-separated patterns (regular expressions) of case names; runs in their order")
-    r.add_argument("--jobs", type=int, default=1)
-    r.add_argument("--limit-s", type=float, default=540.0)
-    r.add_argument("--deadline-s", type=float)
-    r.add_argument("--keep", action="store_true")
-    p = sub.add_parser("report")
-    p.add_argument("--out", required=True, nargs="+")
-    p.add_argument("--docs", default=os.path.join(HERE, "..", "docs"))
-    p.add_argument("--table")
-    a = ap.parse_args(argv)
-    cmd_run(a) if a.cmd == "run" else cmd_report(a)
+    batch.study_main(__doc__, ("beverloo", "height", "resolution", "mixed"), cases, tidy_done, cmd_report, argv=argv)
 
 
 if __name__ == "__main__":
