@@ -268,8 +268,9 @@ static void parallel_report(const halo_t *h, const particles_t *p)
         message("slab decomposition along %c over %d ranks: %lld to %lld particles per rank, ghosts %d cells "
                 "of 2h deep", "xyz"[h->axis], h->size, nmin, nmax, h->depth);
     if (h->per)
-        message("periodic along %s%s: images %d cells of 2h deep across each period boundary, %d channel(s) on "
-                "the busiest rank", h->per & 1 ? "x" : "", h->per & 4 ? "z" : "", h->depth, nbmax);
+        message("periodic along %s%s%s: images %d cells of 2h deep across each period boundary, %d channel(s) on "
+                "the busiest rank", h->per & 1 ? "x" : "", h->per & 2 ? "y" : "", h->per & 4 ? "z" : "", h->depth,
+                nbmax);
 }
 
 static void parallel_start(sim_t *s, const ckpt_run *rs)
@@ -285,7 +286,7 @@ static void parallel_start(sim_t *s, const ckpt_run *rs)
     halo_init(s->halo, p->dim, R(2.0) * s->seg.k.h, method, axis, arr, narr);
     halo_set_depth(s->halo, s->be->ghost_depth);
     if (per) { /* the periods are the container's, whole dr (setup_contexts) */
-        const real lo[3] = {0, 0, 0}, len[3] = {s->flow.w.period[0], 0, s->flow.w.period[2]};
+        const real lo[3] = {0, 0, 0}, len[3] = {s->flow.w.period[0], s->flow.w.period[1], s->flow.w.period[2]};
         halo_set_periodic(s->halo, per, lo, len);
     }
     /* METIS parts are coarse cells as wide as the ghost depth: a cut saved

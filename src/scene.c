@@ -989,13 +989,16 @@ static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g)
                        g->type == GEOM_DRUM ? "drum" : "shear box");
     if ((g->periodic & PERIODIC_Z) && g->dim != 3)
         return fail_at(c, "Geometry:periodic", "z needs Geometry:dim 3");
+    if ((g->periodic & PERIODIC_Y) && g->type != GEOM_CONTAINER)
+        return fail_at(c, "Geometry:periodic", "y needs Geometry:type container (a column has a base across y)");
     /* a period must hold the ghost layers of both sides (mpi/halo.h): 3 cells
      * of 2h each way on the GPU, so 6 supports; shorter would need images of
      * images */
-    for (int d = 0; d < 3; d += 2) {
-        double len = d == 0 ? g->width : g->depth, need = SCENE_PERIOD_SUPPORTS * 2 * g->h_factor * g->dr;
+    for (int d = 0; d < 3; ++d) {
+        double len = d == 0 ? g->width : d == 1 ? g->height : g->depth;
+        double need = SCENE_PERIOD_SUPPORTS * 2 * g->h_factor * g->dr;
         if (!(g->periodic & (1u << d)) || len >= need) continue;
-        return fail_at(c, d == 0 ? "Geometry:width" : "Geometry:depth",
+        return fail_at(c, d == 0 ? "Geometry:width" : d == 1 ? "Geometry:height" : "Geometry:depth",
                        "a periodic axis needs a period of at least %d supports 2h = %.4g m, got %.4g",
                        SCENE_PERIOD_SUPPORTS, need, len);
     }
@@ -1062,8 +1065,15 @@ static int check_container(struct scene_ctx *c, struct scene *s)
             return fail_at(c, AT(""), "a value is not finite");
         if (w->shape == CWALL_SEGMENT && hypot(w->to[0] - w->from[0], w->to[1] - w->from[1]) < 2 * dr)
             return fail_at(c, AT("to"), "a segment must be at least 2 dr long (from and to too close)");
-        if (w->shape == CWALL_CYLINDER && !(w->radius >= 8 * dr))
+        if (w->shape == CWALL_CYLINDER && w->material == CWALL_INSIDE && !(w->radius >= 8 * dr))
             return fail_at(c, AT("radius"), "must be >= 8 dr = %.4g m, got %.4g", 8 * dr, w->radius);
+        /* a post: its dummies fill it, so it may be small; but a radius under 2 dr
+         * is not resolved by the lattice around it */
+        if (w->shape == CWALL_CYLINDER && w->material == CWALL_OUTSIDE && !(w->radius >= 2 * dr))
+            return fail_at(c, AT("radius"), "a post (material outside) must be >= 2 dr = %.4g m, got %.4g", 2 * dr,
+                           w->radius);
+        if (w->shape != CWALL_CYLINDER && w->material == CWALL_OUTSIDE)
+            return fail_at(c, AT("material"), "outside: only a cylinder (a post) has its material outside");
         if (w->motion == CWALL_TURNING && w->shape == CWALL_SEGMENT)
             return fail_at(c, AT("motion"), "only a cylinder turns (about its own axis), or a 3D container's ends");
         if (w->shape == CWALL_ENDS && s->geometry.dim != 3)
@@ -1112,6 +1122,10 @@ static int check_container(struct scene_ctx *c, struct scene *s)
             return fail_at(c, AT("floor"), "must lie below level, got floor %.4g, level %.4g", r->floor, r->level);
         if (r->shape == REGION_SECTOR && r->from_deg == r->to_deg)
             return fail_at(c, AT("to_deg"), "an empty sector: from_deg equals to_deg");
+        if (r->shape == REGION_COLUMN && s->geometry.dim != 3)
+            return fail_at(c, AT("shape"), "column: an upright column of a 3D container (Geometry:dim 3)");
+        if (r->shape == REGION_COLUMN && !(r->r_out > 0))
+            return fail_at(c, AT("r_out"), "a column's radius must be > 0, got %.4g", r->r_out);
 #undef AT
     }
     for (unsigned i = 0; i < k->walls_count; ++i)
@@ -1183,6 +1197,9 @@ static int check_special(struct scene_ctx *c, struct scene *s)
                        "at the start), got %.4g", s->outlet.below);
     if (s->geometry.periodic != PERIODIC_NONE && vel != KIN_COMPUTED)
         return fail_at(c, "Geometry:periodic", "needs Kinematics:velocity computed");
+    if ((s->geometry.periodic & PERIODIC_Y) && s->initial.stress == INIT_STRESS_GEOSTATIC)
+        return fail_at(c, "Initial:stress", "geostatic needs a free surface above the material; a container periodic "
+                       "along y has none (Geometry:periodic)");
     if (strcmp(backend, "cpu") != 0 && strcmp(backend, "gpu") != 0 && strcmp(backend, "auto") != 0)
         return fail_at(c, "Run:backend", "expected auto, cpu or gpu, got '%.40s'", backend);
     return 0;

@@ -14,7 +14,10 @@ enum seg_model { SEG_MODEL_CONSTANT = 0, SEG_MODEL_SHEAR_RATE = 1 };
 enum seg_scheme { SEG_SCHEME_PAPER = 0, SEG_SCHEME_DIRECT = 1, SEG_SCHEME_CONSERVATIVE = 2 };
 enum geom_type { GEOM_SHEARBOX = 0, GEOM_COLUMN = 1, GEOM_DRUM = 2, GEOM_CONTAINER = 3 };
 /* Geometry:periodic, one bit per axis (bit d: axis d). */
-enum periodic_axes { PERIODIC_NONE = 0, PERIODIC_X = 1, PERIODIC_Z = 4, PERIODIC_XZ = 5 };
+enum periodic_axes {
+    PERIODIC_NONE = 0, PERIODIC_X = 1, PERIODIC_Y = 2, PERIODIC_XY = 3, PERIODIC_Z = 4, PERIODIC_XZ = 5,
+    PERIODIC_YZ = 6, PERIODIC_XYZ = 7
+};
 /* rest and oscillatory_shear prescribe the velocity (no momentum or stress
  * solved); computed solves the granular flow (momentum 3.9, stress 2.16). */
 enum kin_type { KIN_REST = 0, KIN_OSCILLATORY_SHEAR = 1, KIN_COMPUTED = 2 };
@@ -107,6 +110,9 @@ struct scene_initial {
     enum init_stress stress; /* zero | geostatic (sigma_yy = -rho g depth, sigma_xx = sigma_zz
                               * = K0 sigma_yy, K0 = nu/(1-nu), then returned to the yield
                               * cone); default geostatic */
+    double pressure;         /* Pa, >= 0: a uniform pressure added to that initial stress of the material
+                              * (a Newtonian fluid's background pressure, which keeps its pressure above
+                              * the tension cut-off where the flow lowers it); default 0 */
 };
 
 /* The mu(I) elastoplastic material (paper §2.3, Table 1), or a Newtonian
@@ -182,7 +188,9 @@ struct scene_outlet {
  * (setup_container.c). */
 enum cwall_shape { CWALL_SEGMENT = 0, CWALL_CYLINDER = 1, CWALL_ENDS = 2 };
 enum cwall_motion { CWALL_FIXED = 0, CWALL_TRANSLATING = 1, CWALL_TURNING = 2 };
-enum region_shape { REGION_BOX = 0, REGION_SECTOR = 1, REGION_FILL = 2 };
+/* a cylinder's material: inside it (a drum) or outside (a post, an obstacle) */
+enum cwall_side { CWALL_INSIDE = 0, CWALL_OUTSIDE = 1 };
+enum region_shape { REGION_BOX = 0, REGION_SECTOR = 1, REGION_FILL = 2, REGION_COLUMN = 3 };
 
 /* One entry of Container:walls. */
 struct scene_wall {
@@ -193,7 +201,9 @@ struct scene_wall {
     double from[2], to[2];    /* segment: its ends (x, y), m; the material lies on its left going from -> to,
                                * so a closed container lists its walls counter-clockwise */
     double centre[2];         /* cylinder: its axis (along z) at (x, y), m */
-    double radius;            /* cylinder: inner radius, m; the material inside */
+    double radius;            /* cylinder: radius, m */
+    enum cwall_side material; /* cylinder: inside (a drum) | outside (a post: its dummies fill it from the
+                               * radius inward); default inside */
     enum wall_slip slip;      /* no_slip (4.1) | free_slip (4.2); default no_slip */
     enum cwall_motion motion; /* fixed | translating | turning (a cylinder, or the ends, about the axis
                                * along z through centre); default fixed */
@@ -210,13 +220,15 @@ struct scene_wall {
 /* One entry of Container:regions: where the material is at the start and
  * its C. Regions must not overlap and must lie inside the walls. */
 struct scene_region {
-    enum region_shape shape; /* box | sector | fill; default box */
+    enum region_shape shape; /* box | sector | fill | column (3D: an upright circular column, its axis along y
+                              * through centre = (x, z), radius r_out, from floor (default 0) up to level);
+                              * default box */
     double lo[2], hi[2];     /* box: lower-left and upper-right corners (x, y), m */
-    double centre[2];        /* sector: centre (x, y), m */
-    double r_in, r_out;      /* sector: radii, m, 0 <= r_in < r_out */
+    double centre[2];        /* sector: centre (x, y), m; column: its axis at (x, z), m */
+    double r_in, r_out;      /* sector: radii, m, 0 <= r_in < r_out; column: r_out its radius */
     double from_deg, to_deg; /* sector: counter-clockwise from from_deg to to_deg, degrees from +x */
-    double level;            /* fill: everything inside the walls below y = level, m */
-    double floor;            /* fill: and at or above y = floor, m; absent: no lower bound */
+    double level;            /* fill: everything inside the walls below y = level, m; column: its top */
+    double floor;            /* fill, column: and at or above y = floor, m; absent: no lower bound */
     int has_floor;           /* set by the checks: floor was given */
     double C;                /* initial small-grain concentration, [0, 1]; default 0 */
 };

@@ -35,7 +35,8 @@ static const cyaml_strval_t seg_schemes[] = {
 static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
 static const cyaml_strval_t part_methods[] = {{"slabs", PART_SLABS}, {"metis", PART_METIS}};
 static const cyaml_strval_t periodic_axes[] = {
-    {"none", PERIODIC_NONE}, {"x", PERIODIC_X}, {"z", PERIODIC_Z}, {"xz", PERIODIC_XZ}};
+    {"none", PERIODIC_NONE}, {"x", PERIODIC_X}, {"y", PERIODIC_Y}, {"xy", PERIODIC_XY}, {"z", PERIODIC_Z},
+    {"xz", PERIODIC_XZ}, {"yz", PERIODIC_YZ}, {"xyz", PERIODIC_XYZ}};
 static const cyaml_strval_t mat_models[] = {{"granular", MAT_GRANULAR}, {"newtonian", MAT_NEWTONIAN}};
 static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
 
@@ -43,7 +44,9 @@ static const cyaml_strval_t cwall_shapes[] = {
     {"segment", CWALL_SEGMENT}, {"cylinder", CWALL_CYLINDER}, {"ends", CWALL_ENDS}};
 static const cyaml_strval_t cwall_motions[] = {
     {"fixed", CWALL_FIXED}, {"translating", CWALL_TRANSLATING}, {"turning", CWALL_TURNING}};
-static const cyaml_strval_t region_shapes[] = {{"box", REGION_BOX}, {"sector", REGION_SECTOR}, {"fill", REGION_FILL}};
+static const cyaml_strval_t cwall_sides[] = {{"inside", CWALL_INSIDE}, {"outside", CWALL_OUTSIDE}};
+static const cyaml_strval_t region_shapes[] = {
+    {"box", REGION_BOX}, {"sector", REGION_SECTOR}, {"fill", REGION_FILL}, {"column", REGION_COLUMN}};
 enum { ALWAYS, IF_CONSTANT, IF_SHEAR_RATE, NO_RANGE }; /* which Segregation:model checks a range */
 enum { CLOSED = 0, LO_OPEN = 1, HI_OPEN = 2 };          /* bound kinds, ORed */
 #endif
@@ -60,7 +63,9 @@ ENTRY(cwall, scene_wall, "Container:walls")
     EKV("Container:walls", scene_wall, centre, 2,
        "cylinder: its axis (along z) at (x, y), m; ends turning: the axis they turn about")
     EKF("Container:walls", scene_wall, radius,
-       "cylinder: inner radius, m; the material inside")
+       "cylinder: radius, m")
+    EKE("Container:walls", scene_wall, material, cwall_sides,
+       "cylinder: inside (a drum) | outside (a post: its dummies fill it from the radius inward); default inside")
     EKE("Container:walls", scene_wall, slip, slips,
        "no_slip (4.1) | free_slip (4.2); default no_slip")
     EKE("Container:walls", scene_wall, motion, cwall_motions,
@@ -78,25 +83,25 @@ ENTRY(cwall, scene_wall, "Container:walls")
 END_ENTRY(cwall, scene_wall)
 ENTRY(region, scene_region, "Container:regions")
     EKE("Container:regions", scene_region, shape, region_shapes,
-       "box | sector | fill; default box")
+       "box | sector | fill | column (3D: an upright circular column, its axis along y through centre = (x, z), radius r_out, from floor (default 0) up to level); default box")
     EKV("Container:regions", scene_region, lo, 2,
        "box: lower-left and upper-right corners (x, y), m")
     EKV("Container:regions", scene_region, hi, 2,
        "box: lower-left and upper-right corners (x, y), m")
     EKV("Container:regions", scene_region, centre, 2,
-       "sector: centre (x, y), m")
+       "sector: centre (x, y), m; column: its axis at (x, z), m")
     EKF("Container:regions", scene_region, r_in,
-       "sector: radii, m, 0 <= r_in < r_out")
+       "sector: radii, m, 0 <= r_in < r_out; column: r_out its radius")
     EKF("Container:regions", scene_region, r_out,
-       "sector: radii, m, 0 <= r_in < r_out")
+       "sector: radii, m, 0 <= r_in < r_out; column: r_out its radius")
     EKF("Container:regions", scene_region, from_deg,
        "sector: counter-clockwise from from_deg to to_deg, degrees from +x")
     EKF("Container:regions", scene_region, to_deg,
        "sector: counter-clockwise from from_deg to to_deg, degrees from +x")
     EKF("Container:regions", scene_region, level,
-       "fill: everything inside the walls below y = level, m")
+       "fill: everything inside the walls below y = level, m; column: its top")
     EKF("Container:regions", scene_region, floor,
-       "fill: and at or above y = floor, m; absent: no lower bound")
+       "fill, column: and at or above y = floor, m; absent: no lower bound")
     EKF("Container:regions", scene_region, C,
        "initial small-grain concentration, [0, 1]; default 0")
 END_ENTRY(region, scene_region)
@@ -132,7 +137,7 @@ SECTION("Geometry", geometry, scene_geometry)
     KF("Geometry", geometry, scene_geometry, h_factor, OPT, "1.5", 1, 3, CLOSED, ALWAYS,
       "h = h_factor dr; default 1.5 (lattice moments within 0.5 %, tests/test_kernel.c)")
     KF("Geometry", geometry, scene_geometry, height, OPT, "0.087", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
-      "material height H, m; default 0.087")
+      "material height H, m; a container periodic along y: the period; default 0.087")
     KF("Geometry", geometry, scene_geometry, width, OPT, "0.037", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "box width, m; a container periodic along x: the period; default 0.037")
     KF("Geometry", geometry, scene_geometry, depth, OPT, "0.037", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
@@ -144,7 +149,7 @@ SECTION("Geometry", geometry, scene_geometry)
     KF("Geometry", geometry, scene_geometry, fill, OPT, "0.42", 0, 1, LO_OPEN | HI_OPEN, ALWAYS,
       "drum: filling level R_f = (H + R)/2R (paper §6), in (0,1); default 0.42")
     KE("Geometry", geometry, scene_geometry, periodic, periodic_axes, "none",
-      "column or container: the axes without walls, where the material continues periodically (none | x | z | xz; the period is Geometry:width along x, Geometry:depth along z, from 0, at least 6 supports 2h; a container's walls and regions must lie within it, and a 3D container periodic in z has no end walls); default none")
+      "column or container: the axes without walls, where the material continues periodically (none | x | y | xy | z | xz | yz | xyz; y and the z ones need a container, z needs dim 3; the period is Geometry:width along x, Geometry:height along y, Geometry:depth along z, from 0, at least 6 supports 2h; a container's walls and regions must lie within it, and a 3D container periodic in z has no end walls); default none")
     KE("Geometry", geometry, scene_geometry, lid, on_off, "off",
       "column: on | off: a rigid wall over the material at y = height (a channel between the base and the lid, with the base's slip); default off")
     KF("Geometry", geometry, scene_geometry, runout, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
@@ -203,6 +208,8 @@ SECTION("Initial", initial, scene_initial)
       "split height as a fraction of H; default 0.5")
     KE("Initial", initial, scene_initial, stress, init_stresses, "geostatic",
       "zero | geostatic (sigma_yy = -rho g depth, sigma_xx = sigma_zz = K0 sigma_yy, K0 = nu/(1-nu), then returned to the yield cone); default geostatic")
+    KF("Initial", initial, scene_initial, pressure, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "Pa, >= 0: a uniform pressure added to that initial stress of the material (a Newtonian fluid's background pressure, which keeps its pressure above the tension cut-off where the flow lowers it); default 0")
 END_SECTION(initial)
 SECTION("Output", output, scene_output)
     KF("Output", output, scene_output, dt, REQ, NULL, 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,

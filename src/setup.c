@@ -235,12 +235,18 @@ static void setup_drum(sim_t *s)
  * y = surface_y (gravity along -y): sigma_yy = -rho |g| depth, sigma_xx =
  * sigma_zz = K0 sigma_yy with K0 = nu / (1 - nu) (uniaxial strain), returned
  * to the yield cone with mu = mu_s (at rest). It only shortens the elastic
- * transient of a start from zero stress. */
+ * transient of a start from zero stress. Initial:pressure adds a uniform
+ * pressure to the zero or geostatic stress. */
 static void setup_stress(sim_t *s)
 {
     const struct scene *sc = s->sc;
     particles_t *p = &s->p;
-    if (sc->initial.stress != INIT_STRESS_GEOSTATIC) return;
+    const double p0 = sc->initial.pressure;
+    if (sc->initial.stress != INIT_STRESS_GEOSTATIC) {
+        for (size_t i = 0; i < p->n && p0 > 0; ++i)
+            if (p->kind[i] == KIND_MATERIAL) p->sig[0][i] = p->sig[1][i] = p->sig[2][i] = (real)-p0;
+        return;
+    }
     const double *gv = sc->physics.gravity;
     int fluid = sc->material.model == MAT_NEWTONIAN; /* hydrostatic: K0 = 1, no shear stress */
     double gn = sqrt(gv[0] * gv[0] + gv[1] * gv[1]), K0 = fluid ? 1.0 : sc->material.nu / (1 - sc->material.nu);
@@ -252,6 +258,7 @@ static void setup_stress(sim_t *s)
         sg[1] = (real)(-sc->physics.rho * gn * depth);
         sg[0] = sg[2] = (real)(K0 * sg[1]);
         stress_return_map(sg, kmu);
+        for (int q = 0; q < 3; ++q) sg[q] -= (real)p0;
         for (int q = 0; q < 6; ++q) p->sig[q][i] = sg[q];
     }
 }
@@ -439,7 +446,7 @@ char *wall_list(const sim_t *s, int longer, char *buf, size_t n)
         const wall_prim *q = &s->flow.w.prim[i];
         k += (size_t)snprintf(buf + k, n - k, "%s%d %s", i ? ", " : "", i + 1, s->wall_name[i]);
         if (longer && k < n)
-            k += (size_t)snprintf(buf + k, n - k, " (%s, %s, %s%s)", q->shape == WALL_CYLINDER ? "cylinder" : "plane",
+            k += (size_t)snprintf(buf + k, n - k, " (%s, %s, %s%s)", q->shape == WALL_PLANE ? "plane" : q->outside ? "post" : "cylinder",
                                   q->slip ? "free slip" : "no slip", move[q->move], q->open_at >= 0 ? ", a gate" : "");
     }
     return buf;

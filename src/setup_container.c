@@ -8,7 +8,8 @@
  * the lattice sites that lie behind it by at most nl = ceil(2h/dr) layers
  * and whose projection falls on it, past an end by nl dr where another
  * segment joins there (the corner), not past a free end or an end where
- * only a gate joins (an opening stays open). A cylinder's are the sites within nl dr outside its radius. A site
+ * only a gate joins (an opening stays open). A cylinder's are nl rings outside its radius; a post's (a
+ * cylinder with the material outside) rings inside its radius, down to its axis. A site
  * that two walls want goes to the one it lies further behind, a gate's last
  * (wall_id_at's rule), so a dummy of a permanent wall stays when a gate
  * opens.
@@ -48,7 +49,8 @@ static double ctr_depth(const wall_prim *q, double x, double y, int *within)
 {
     if (q->shape == WALL_CYLINDER) {
         *within = 1;
-        return hypot(x - q->p[0], y - q->p[1]) - q->radius;
+        double d = hypot(x - q->p[0], y - q->p[1]) - q->radius;
+        return q->outside ? -d : d;
     }
     double dx = x - q->p[0], dy = y - q->p[1], s = q->t[0] * dx + q->t[1] * dy;
     *within = s >= q->t_lo && s <= q->t_hi;
@@ -91,6 +93,7 @@ static int ctr_inside(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg, 
         double dist, depth;
         if (q->shape == WALL_CYLINDER) {
             depth = hypot(x - q->p[0], y - q->p[1]) - q->radius;
+            if (q->outside) depth = -depth;
             dist = fabs(depth);
         } else {
             const ctr_seg *g = &seg[k];
@@ -106,8 +109,9 @@ static int ctr_inside(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg, 
 }
 
 /* Within dr/2 of a cylinder, on either side (r in (R - dr/2, R + dr/2]):
- * its first ring of dummies lies at R + dr/2, so such a site holds no
- * material (as in the drum), but an end wall covers it in 3D. */
+ * its first ring of dummies lies at R + dr/2 (a post's at R - dr/2), so
+ * such a site holds no material (as in the drum), but an end wall covers
+ * it in 3D. */
 static int ctr_cylinder_band(const sim_t *s, const ctr_lattice *L, double x, double y)
 {
     for (int k = 0; k < L->nw; ++k) {
@@ -121,12 +125,15 @@ static int ctr_cylinder_band(const sim_t *s, const ctr_lattice *L, double x, dou
 
 /* Within a cylinder or dr/2 past it (r <= R + dr/2): in 3D its end walls
  * there are polar discs, its rings continued inward to the axis (as the
- * drum's: a lattice disc would leave holes at r = R). */
+ * drum's: a lattice disc would leave holes at r = R). Not a post: the end
+ * walls under the material around it are lattice planes, and its own rings
+ * run through the end planes. */
 static int ctr_in_cylinder(const sim_t *s, const ctr_lattice *L, double x, double y)
 {
     for (int k = 0; k < L->nw; ++k) {
         const wall_prim *q = &s->flow.w.prim[k];
-        if (q->shape == WALL_CYLINDER && hypot(x - q->p[0], y - q->p[1]) <= q->radius + 0.5 * L->dr) return 1;
+        if (q->shape == WALL_CYLINDER && !q->outside && hypot(x - q->p[0], y - q->p[1]) <= q->radius + 0.5 * L->dr)
+            return 1;
     }
     return 0;
 }
@@ -144,10 +151,22 @@ static int ctr_in_region(const sim_t *s, const ctr_lattice *L, const ctr_seg *se
         double rel = fmod(fmod(a - r->from_deg, 360.0) + 360.0, 360.0);
         return span == 0 ? 1 : rel < span; /* a full turn when to - from is a multiple of 360 */
     }
-    default: /* a fill of a container periodic along x stays within the period */
+    case REGION_COLUMN: /* its section's strip here; ctr_in_column cuts it along z (ctr_place) */
+        return fabs(x - r->centre[0]) < r->r_out && y < r->level && (!r->has_floor || y >= r->floor) &&
+               ctr_inside(s, L, seg, x, y);
+    default: /* a fill of a container periodic along x or y stays within the period */
         if ((s->sc->geometry.periodic & PERIODIC_X) && !(x > 0 && x < (double)s->flow.w.period[0])) return 0;
+        if ((s->sc->geometry.periodic & PERIODIC_Y) && !(y > 0 && y < (double)s->flow.w.period[1])) return 0;
         return y < r->level && (!r->has_floor || y >= r->floor) && ctr_inside(s, L, seg, x, y);
     }
+}
+
+/* Does the material site (x, y) of region c (< 0, as L->site) hold material
+ * in the z plane at z? Every plane but a column's outside its radius. */
+static int ctr_in_column(const struct scene_container *k, int c, double x, double z)
+{
+    const struct scene_region *r = &k->regions[-c - 1];
+    return r->shape != REGION_COLUMN || hypot(x - r->centre[0], z - r->centre[1]) < r->r_out;
 }
 
 /* The motion of scene wall w onto primitive q. */
@@ -180,6 +199,7 @@ void container_walls(sim_t *s)
         if (w->shape == CWALL_CYLINDER) {
             q = wall_add_prim(s, w->name, WALL_CYLINDER, slip, 1, WALL_CLAIM_SIDE + (int)w->priority);
             q->p[0] = (real)w->centre[0], q->p[1] = (real)w->centre[1], q->radius = (real)w->radius;
+            q->outside = w->material == CWALL_OUTSIDE;
         } else {
             double ex = w->to[0] - w->from[0], ey = w->to[1] - w->from[1], len = hypot(ex, ey);
             q = wall_plane(s, w->name, slip, !w->gate, w->gate ? WALL_CLAIM_LAST : WALL_CLAIM_SIDE + (int)w->priority, w->from[0],
@@ -203,8 +223,10 @@ void container_walls(sim_t *s)
         }
         ctr_motion(q, w);
     }
-    /* a periodic axis: the period is Geometry:width along x, Geometry:depth along z, from 0, whole dr */
+    /* a periodic axis: the period is Geometry:width along x, Geometry:height along y, Geometry:depth along z,
+     * from 0, whole dr */
     s->flow.w.period[0] = (real)((double)lround(sc->geometry.width / dr) * dr);
+    s->flow.w.period[1] = (real)((double)lround(sc->geometry.height / dr) * dr);
     s->flow.w.period[2] = (real)((double)lround(sc->geometry.depth / dr) * dr);
     if (sc->geometry.dim == 3 && !(sc->geometry.periodic & PERIODIC_Z)) {
         /* the end walls: as the entry of shape ends, else fixed, slipping as a column's side walls */
@@ -240,7 +262,9 @@ static void ctr_check_near(const sim_t *s, const ctr_lattice *L, const ctr_seg *
             double x = site_x(L, i), y = site_y(L, j);
             for (int k = 0; k < L->nw; ++k) {
                 const wall_prim *q = &s->flow.w.prim[k];
-                if (q->shape == WALL_CYLINDER && hypot(x - q->p[0], y - q->p[1]) <= q->radius + h2) near[k + 1] = 1;
+                if (q->shape == WALL_CYLINDER && (q->outside ? fabs(hypot(x - q->p[0], y - q->p[1]) - q->radius)
+                                                             : hypot(x - q->p[0], y - q->p[1]) - q->radius) <= h2)
+                    near[k + 1] = 1;
             }
             for (long dj = -reach; dj <= reach; ++dj)
                 for (long di = -reach; di <= reach; ++di) {
@@ -290,14 +314,16 @@ static void ctr_classify(const sim_t *s, ctr_lattice *L, const ctr_seg *seg)
                 input_error("%s: Container:regions:%d: reaches behind the walls at (%.6g, %.6g) m%s%s",
                             ctr_where(sc, "regions", (unsigned)reg, where, sizeof where), reg + 1, x, y,
                             w ? ", into the dummies of wall " : "", w ? s->wall_name[w - 1] : "");
-            double per = (double)s->flow.w.period[0];
-            if ((s->sc->geometry.periodic & PERIODIC_X) && (w || reg >= 0) && !(x > 0 && x < per)) {
+            for (int a = 0; a < 2; ++a) {
+                double per = (double)s->flow.w.period[a], xa = a ? y : x;
+                if (!((s->sc->geometry.periodic >> a & 1) && (w || reg >= 0) && !(xa > 0 && xa < per))) continue;
                 if (w)
-                    input_error("%s: Container:walls:%u: reaches past the period [0, %.6g) m of the periodic x axis "
-                                "(at x = %.6g m); its images continue it", ctr_where(sc, "walls", L->ent[w - 1], where,
-                                sizeof where), L->ent[w - 1] + 1, per, x);
-                input_error("%s: Container:regions:%d: reaches past the period [0, %.6g) m of the periodic x axis (at "
-                            "x = %.6g m)", ctr_where(sc, "regions", (unsigned)reg, where, sizeof where), reg + 1, per, x);
+                    input_error("%s: Container:walls:%u: reaches past the period [0, %.6g) m of the periodic %c axis "
+                                "(at %c = %.6g m); its images continue it", ctr_where(sc, "walls", L->ent[w - 1], where,
+                                sizeof where), L->ent[w - 1] + 1, per, "xy"[a], "xy"[a], xa);
+                input_error("%s: Container:regions:%d: reaches past the period [0, %.6g) m of the periodic %c axis (at "
+                            "%c = %.6g m)", ctr_where(sc, "regions", (unsigned)reg, where, sizeof where), reg + 1, per,
+                            "xy"[a], "xy"[a], xa);
             }
             L->site[j * L->ni + i] = w ? w : reg >= 0 ? -(reg + 1) : 0;
             if (reg >= 0) held[reg]++;
@@ -333,7 +359,7 @@ static size_t ctr_place(sim_t *s, particles_t *p, const ctr_lattice *L, const ct
         for (long q = 0; q < nz; ++q)
             for (long i = 0; i < L->ni; ++i) {
                 int c = L->site[j * L->ni + i];
-                if (c >= 0) continue;
+                if (c >= 0 || !ctr_in_column(k, c, site_x(L, i), (q + 0.5) * dr)) continue;
                 double y = site_y(L, j);
                 if (p) setup_put(p, n, site_x(L, i), y, d3 ? (q + 0.5) * dr : 0, KIND_MATERIAL, vol, k->regions[-c - 1].C);
                 *top = fmax(*top, y + 0.5 * dr);
@@ -363,15 +389,18 @@ static size_t ctr_place(sim_t *s, particles_t *p, const ctr_lattice *L, const ct
         }
     /* each cylinder's nl rings of dummies at radii R + (l + 1/2) dr, round(2 pi r / dr) each (as the
      * drum), in every z plane; beyond the end planes also the rings continued inward to the axis (the
-     * end walls' polar discs), a corner going to the wall it lies further behind */
+     * end walls' polar discs), a corner going to the wall it lies further behind. A post's nl rings
+     * lie at R - (l + 1/2) dr, those with radius > 0, in every plane (its end-plane corners alike). */
     for (int k = 0; k < L->nw; ++k) {
         const wall_prim *cq = &s->flow.w.prim[k];
         if (cq->shape != WALL_CYLINDER) continue;
         long l_axis = (long)floor(-cq->radius / dr - 0.5) + 1; /* the innermost ring with radius > 0 */
+        long l_end = cq->outside ? (long)fmin((double)L->nl, floor(cq->radius / dr - 0.5) + 1) : L->nl;
         for (long q = -nl; q < nz + nl; ++q)
-            for (long l = q < 0 || q >= nz ? l_axis : 0; l < L->nl; ++l) {
-                double r = cq->radius + (l + 0.5) * dr;
+            for (long l = !cq->outside && (q < 0 || q >= nz) ? l_axis : 0; l < l_end; ++l) {
+                double r = cq->outside ? cq->radius - (l + 0.5) * dr : cq->radius + (l + 0.5) * dr;
                 long m = lround(2 * M_PI * r / dr);
+                if (m < 1) m = 1;
                 for (long a = 0; a < m; ++a, ++n)
                     if (p) {
                         double x = cq->p[0] + r * cos(2 * M_PI * a / m), y = cq->p[1] + r * sin(2 * M_PI * a / m);
@@ -421,8 +450,25 @@ void container_place(sim_t *s)
         if (g->shape == REGION_BOX)
             for (int a = 0; a < 2; ++a) lo[a] = fmin(lo[a], g->lo[a]), hi[a] = fmax(hi[a], g->hi[a]);
         if (g->shape == REGION_FILL) hi[1] = fmax(hi[1], g->level); /* a fill may rise above the walls */
+        if (g->shape == REGION_COLUMN)
+            lo[0] = fmin(lo[0], g->centre[0] - g->r_out), hi[0] = fmax(hi[0], g->centre[0] + g->r_out),
+            hi[1] = fmax(hi[1], g->level);
         if (g->shape == REGION_SECTOR)
             for (int a = 0; a < 2; ++a) lo[a] = fmin(lo[a], g->centre[a] - g->r_out), hi[a] = fmax(hi[a], g->centre[a] + g->r_out);
+    }
+    char where[512];
+    for (int a = 0; a < 2; ++a) { /* a periodic axis: the whole period, and every cylinder's rings within it */
+        if (!(sc->geometry.periodic >> a & 1)) continue;
+        double per = (double)s->flow.w.period[a];
+        lo[a] = fmin(lo[a], 0.0), hi[a] = fmax(hi[a], per);
+        for (int q = 0; q < L.nw; ++q) {
+            const wall_prim *cq = &s->flow.w.prim[q];
+            double reach = cq->radius + (cq->outside ? 0.0 : L.nl * L.dr);
+            if (cq->shape == WALL_CYLINDER && !(cq->p[a] - reach >= 0 && cq->p[a] + reach <= per))
+                input_error("%s: Container:walls:%u: the cylinder%s reaches past the period [0, %.6g) m of the "
+                            "periodic %c axis; its images continue it", ctr_where(sc, "walls", L.ent[q], where,
+                            sizeof where), L.ent[q] + 1, cq->outside ? "" : " and its dummies", per, "xy"[a]);
+        }
     }
     L.i0 = (long)floor(lo[0] / L.dr) - L.nl - 1, L.j0 = (long)floor(lo[1] / L.dr) - L.nl - 1;
     L.ni = (long)ceil(hi[0] / L.dr) + L.nl + 1 - L.i0, L.nj = (long)ceil(hi[1] / L.dr) + L.nl + 1 - L.j0;
@@ -444,7 +490,6 @@ void container_place(sim_t *s)
         double ymin = INFINITY;
         for (size_t i = 0; i < setup_count(n_mat); ++i) ymin = fmin(ymin, (double)s->p.x[1][i]);
         ymin = comm_min(ymin);
-        char where[512];
         if (ymin < sc->outlet.below)
             input_error("%s: Outlet:below: %.4g m lies above material at y = %.4g m at the start",
                         scene_key_where(sc, "Outlet", "below", where, sizeof where), sc->outlet.below, ymin);

@@ -14,6 +14,7 @@ for scene in "$here"/../inputs/*.yml; do
     # the 3D drum at its default resolution holds 1.7e5 particles: coarser here
     extra=()
     [ "$name" = drum_3d ] && extra=(-P Geometry:dr=0.002 -P Geometry:length=0.01)
+    [ "$name" = collapse_3d ] && extra=(-P Geometry:dr=0.002)
     if "$bin" "$scene" -o "$tmp/$name" --backend cpu -P Run:max_steps=5 -P Output:snapshots=off \
         -P Run:progress_s=1e9 "${extra[@]}" >"$tmp/$name.log" 2>&1 && grep -q '^done: 5 steps' "$tmp/$name.log"; then
         echo "PASS $name"

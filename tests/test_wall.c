@@ -145,9 +145,38 @@ static void test_wall_ids(void **st)
     assert_int_equal(wall_id_at(&g, far), 0);
 }
 
+/* A cylinder of radius R about (0.05, 0.05) with the material inside (a
+ * drum) and the same with the material outside (a post): normals, depths,
+ * the claim of a dummy and the "beyond" test change side, the rest not. */
+static void test_post(void **st)
+{
+    (void)st;
+    wall_geom w;
+    memset(&w, 0, sizeof w);
+    w.n = 1;
+    wall_prim *q = &w.prim[0];
+    q->shape = WALL_CYLINDER, q->bound = 1, q->claim = WALL_CLAIM_SIDE, q->radius = (real)0.01;
+    q->p[0] = q->p[1] = (real)0.05;
+    const real in[3] = {(real)0.052, (real)0.05, 0}, out[3] = {(real)0.065, (real)0.05, 0};
+    const double ind[3] = {0.052, 0.05, 0}, outd[3] = {0.065, 0.05, 0};
+    real n[3];
+    for (int side = 0; side < 2; ++side) {
+        q->outside = side;
+        const real *mat = side ? out : in, *dum = side ? in : out; /* a material point and a dummy's */
+        const double *matd = side ? outd : ind, *dumd = side ? ind : outd;
+        assert_true(wall_prim_depth(q, mat) < 0 && wall_prim_depth(q, dum) > 0);
+        assert_true(fabs((double)wall_prim_depth(q, dum) - (side ? 0.008 : 0.005)) < RT(1e-9));
+        wall_prim_normal(q, dum, n); /* into the material: towards the axis in a drum, away in a post */
+        assert_true(fabs((double)n[0] - (side ? 1.0 : -1.0)) < RT(1e-12) && n[1] == 0);
+        assert_true(wall_id_at(&w, dum) == 1 && wall_id_at(&w, mat) == 0);
+        assert_true(wall_beyond(&w, dumd, 0, 0.001) && !wall_beyond(&w, matd, 0, 0.001));
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_hydrostatic_dummy), cmocka_unit_test(test_velocity),
-                                       cmocka_unit_test(test_shepard_constant), cmocka_unit_test(test_wall_ids)};
+                                       cmocka_unit_test(test_shepard_constant), cmocka_unit_test(test_wall_ids),
+                                       cmocka_unit_test(test_post)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -73,6 +73,8 @@ CASES = [
     ("hopper", "hopper_2d.yml", 2400, HOPPER),
     ("hopper_3d", "hopper_2d.yml", 40, HOPPER_3D),
     ("chute_container", "column_2d.yml", 400, CHUTE + CHUTE_AS_CONTAINER),
+    # a post in a cell periodic along x and y: Stokes flow through a lattice of cylinders
+    ("cylinders", "cylinders_2d.yml", 400, ["Geometry:dr=0.0005"]),
 ]
 # (Segregation:every = 1: C with the flow in every step; K > 1: in windows of
 # K steps, closed 5-9 times in these runs, the last one left open at

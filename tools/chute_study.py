@@ -128,9 +128,14 @@ def cases(which):
         # 20 rows or more across the layer (H / dr = 10 loses its lattice rows)
         c.append(case("H5", H=0.005, dr=0.00025, t_end=4.0, alpha=0.0))
         c.append(case("H15", H=0.015, dr=0.0005, t_end=5.0, alpha=0.0))
-    if which in ("full", "3d"):  # the 3D layer (8000 particles) and its 2D twin, E 1e4 for a 3x longer step
+    if which in ("full", "3d"):
+        # the 3D layer at 20, 30 and 40 rows (8 000 to 64 000 particles) and its 2D
+        # twins, E 1e4 for a 3x longer step; dim3_H5 / dim2_H5 are the 20-row pair
         for dim in (3, 2):
             c.append(case("dim%d_H5" % dim, H=0.005, dr=0.00025, alpha=0.0, E=1e4, t_end=0.6, dim=dim))
+            for rows in (30, 40):
+                c.append(case("dim%d_H5_rows%d" % (dim, rows), H=0.005, dr=round(0.005 / rows, 9), alpha=0.0,
+                              E=1e4, t_end=0.6, dim=dim))
     if which in ("full", "seg"):
         for dr in (0.002, 0.001, 0.0005):
             c.append(case("seg_dr%g" % (dr * 1e3), dr=dr, seg=SEG))
@@ -292,17 +297,39 @@ def cmd_report(a):
         ax[2].set_xlabel("H (cm)"), ax[2].set_ylabel("depth-mean u (m/s), 25$^\\circ$"), ax[2].legend()
         fig.tight_layout()
         fig.savefig(os.path.join(a.docs, "validation_chute_regimes.png"), dpi=110)
-    dims = sorted((n for n in S if n.startswith("dim")), key=lambda n: -int(runs[n]["dim"]))
+    dims = sorted((n for n in S if n.startswith("dim")), key=lambda n: (-int(runs[n]["dim"]), -float(runs[n]["dr"])))
     if dims:
         P("")
-        P("| dim | particles | t (s) | depth-mean u (m/s) | analytic | error of the mean | profile error above the "
-          "first row | first row's slip | wall (s) | backend | steps |")
-        P("|---|---|---|---|---|---|---|---|---|---|---|")
+        P("| dim | rows | particles | t (s) | depth-mean u (m/s) | analytic | error of the mean | profile error above "
+          "the first row | first row's slip | wall (s) | backend | steps |")
+        P("|---|---|---|---|---|---|---|---|---|---|---|---|")
         for n in dims:
             r, s = runs[n], S[n]
-            P("| %s | %s | %.1f | %.4f | %.4f | %+.1f %% | %.1f %% | %+.1f %% | %s | %s | %s |" % (
-                r["dim"], r["material"], s["t"], s["u_mean"], s["u_ref_mean"], 100 * (s["u_mean"] / s["u_ref_mean"] - 1),
-                100 * s["err_profile"], 100 * s["err_base"], r["wall_s"], r.get("backend", ""), r["steps"]))
+            P("| %s | %.0f | %s | %.1f | %.4f | %.4f | %+.1f %% | %.1f %% | %+.1f %% | %s | %s | %s |" % (
+                r["dim"], float(r["H"]) / float(r["dr"]), r["material"], s["t"], s["u_mean"], s["u_ref_mean"],
+                100 * (s["u_mean"] / s["u_ref_mean"] - 1), 100 * s["err_profile"], 100 * s["err_base"], r["wall_s"],
+                r.get("backend", ""), r["steps"]))
+        for dim in ("3", "2"):
+            ns = [n for n in dims if runs[n]["dim"] == dim]
+            if len(ns) >= 3:
+                h = [float(runs[n]["dr"]) for n in ns]
+                P("")
+                P("dim %s: observed order of the profile error %.2f, of the depth-mean's error %.2f (%d resolutions)" % (
+                    dim, batch.observed_order(h, [S[n]["err_profile"] for n in ns]),
+                    batch.observed_order(h, [S[n]["err_mean"] for n in ns]), len(ns)))
+        if any(runs[n]["dim"] == "3" for n in dims):
+            fig, ax = plt.subplots(figsize=(5, 4.2))
+            for n in dims:
+                r, s = runs[n], S[n]
+                H = float(r["H"])
+                ax.plot(s["u"] / s["u_ref_top"], s["y"] / H, "o-" if r["dim"] == "3" else "x:", ms=3,
+                        label="%sD, %.0f rows, %s" % (r["dim"], H / float(r["dr"]), r.get("backend", "")))
+            zeta = np.linspace(0, 1, 100)
+            ax.plot(1 - (1 - zeta) ** 1.5, zeta, "k-", label="Bagnold")
+            ax.set_xlabel("u / u_surface (analytic)"), ax.set_ylabel("z / H"), ax.legend(fontsize=7)
+            ax.set_title("3D chute, 25$^\\circ$, H = 5 mm")
+            fig.tight_layout()
+            fig.savefig(os.path.join(a.docs, "validation_chute_3d.png"), dpi=110)
     seg = sorted((n for n in S if n.startswith("seg")), key=lambda n: -float(runs[n]["dr"]))
     if seg:
         P("")

@@ -18,7 +18,8 @@
  *
  * Shapes: a plane (a point p on it and the unit normal n into the
  * material; a box face, a base, a gate, a lid) and a cylinder about an axis
- * along z through p of radius `radius`, the material inside (a drum).
+ * along z through p of radius `radius`, the material inside (a drum) or,
+ * with `outside` set, outside it (a post: an obstacle in the flow).
  * Motions: fixed; translating at u; rotating at omega (rad/s,
  * counter-clockwise positive seen with y up) about the z axis through c,
  * for a plane only with a normal along z (the end walls of a drum), which
@@ -46,9 +47,10 @@ typedef struct wall_prim {
     int bound;       /* 1: material beyond it by more than h has left the container (step_outside);
                       * 0 for a wall with an opening (an outlet's base), a gate, a lid */
     int claim;       /* enum wall_claim */
+    int outside;     /* cylinder: 1 the material outside it (a post), 0 inside (a drum) */
     real p[3];       /* plane: a point of it; cylinder: a point of its axis (along z), m */
     real n[3];       /* plane: unit normal, pointing into the material */
-    real radius;     /* cylinder: inner radius, m */
+    real radius;     /* cylinder: radius, m */
     real u[3];       /* translating: velocity, m/s */
     real c[3];       /* rotating: a point of the axis (along z), m */
     double omega;    /* rotating: angular velocity, rad/s, counter-clockwise > 0 */
@@ -107,14 +109,16 @@ HD_INLINE void wall_velocity_at(const wall_prim *q, const real x[3], real uw[3])
 
 /* Unit normal (into the material) of primitive q at its point x, and
  * whether q is free-slip: a plane's own normal (a rotating plane's is along
- * the axis, which the rotation keeps); a cylinder's towards its axis. */
+ * the axis, which the rotation keeps); a cylinder's towards its axis, a
+ * post's away from it. */
 HD_INLINE int wall_prim_normal(const wall_prim *q, const real x[3], real n[3])
 {
     n[0] = n[1] = n[2] = 0;
     if (q->shape == WALL_CYLINDER) {
         real dx = q->p[0] - x[0], dy = q->p[1] - x[1];
         real r = (real)sqrt((double)(dx * dx + dy * dy));
-        if (r > 0) n[0] = dx / r, n[1] = dy / r;
+        if (q->outside) r = -r;
+        if (r != 0) n[0] = dx / r, n[1] = dy / r;
     } else {
         n[0] = q->n[0], n[1] = q->n[1], n[2] = q->n[2];
     }
@@ -128,12 +132,13 @@ HD_INLINE int wall_normal_of(const wall_geom *w, int id, const real x[3], real n
 
 /* How far the reference-frame point x lies beyond primitive q (negative:
  * on the material's side): along -n from a plane, radially out of a
- * cylinder. */
+ * cylinder, radially into a post. */
 HD_INLINE real wall_prim_depth(const wall_prim *q, const real x[3])
 {
     if (q->shape == WALL_CYLINDER) {
         real dx = q->p[0] - x[0], dy = q->p[1] - x[1];
-        return (real)sqrt((double)(dx * dx + dy * dy)) - q->radius;
+        real d = (real)sqrt((double)(dx * dx + dy * dy)) - q->radius;
+        return q->outside ? -d : d;
     }
     return -(q->n[0] * (x[0] - q->p[0]) + q->n[1] * (x[1] - q->p[1]) + q->n[2] * (x[2] - q->p[2]));
 }
@@ -186,8 +191,10 @@ HD_INLINE int wall_beyond(const wall_geom *w, const double x[3], double t, doubl
         if (q->move == WALL_TRANSLATE)
             for (int a = 0; a < 3; ++a) y[a] -= q->u[a] * t;
         double d, s = 0;
-        if (q->shape == WALL_CYLINDER) d = hypot(y[0] - q->p[0], y[1] - q->p[1]) - q->radius;
-        else {
+        if (q->shape == WALL_CYLINDER) {
+            d = hypot(y[0] - q->p[0], y[1] - q->p[1]) - q->radius;
+            if (q->outside) d = -d;
+        } else {
             d = -(q->n[0] * (y[0] - q->p[0]) + q->n[1] * (y[1] - q->p[1]) + q->n[2] * (y[2] - q->p[2]));
             s = q->t[0] * (y[0] - q->p[0]) + q->t[1] * (y[1] - q->p[1]) + q->t[2] * (y[2] - q->p[2]);
         }

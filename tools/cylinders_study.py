@@ -1,0 +1,206 @@
+"""Stokes flow through a square lattice of cylinders (inputs/cylinders_2d.yml)
+against the drag of Sangani & Acrivos (1982): resolution, background
+pressure and solid fraction.
+
+Reference. One cell L x L of a square array of cylinders of radius a, solid
+fraction phi = pi a^2 / L^2, driven by a body force f on the fluid. Sangani &
+Acrivos (1982, Int. J. Multiphase Flow 8, 193) give the drag per unit length
+F = 4 pi mu U / K(phi), with the small-phi expansion
+
+    K = -ln(phi)/2 - 0.738 + phi - 0.887 phi^2 + 2.038 phi^3
+
+and, from their numerical solution, F / (mu U) = 15.56, 24.83, 51.53, 102.9
+at phi = 0.05, 0.1, 0.2, 0.3 (their table 1). U is the superficial velocity,
+the flow rate over the whole cell (L^-2 sum_i u_x,i V_i over the fluid). A
+body force f on the fluid is a mean pressure gradient rho f, so in steady
+flow F = rho f L^2 and U = f L^2 / (nu F/(mu U)).
+
+The measure is U over time from the snapshots (every 0.01 s), reduced at
+the end of each run into series.csv (t, U, the mean v_y and the pressure
+range); its mean over [T1, t_end] is compared
+with the reference. The Stokes start-up decays within about (L/2 pi)^2/nu =
+2.5 ms, so what changes after 0.05 s is the particles' arrangement.
+
+  python3 tools/cylinders_study.py run --sphseg build/sphseg --out out/cylinders [--backend gpu] [--set ...]
+  python3 tools/cylinders_study.py report --out out/cylinders --docs docs
+"""
+import csv
+import glob
+import math
+import os
+import shutil
+import sys
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import batch  # noqa: E402
+
+SCENE = os.path.join(HERE, "..", "inputs", "cylinders_2d.yml")
+L, F, NU = 0.01, 2.0, 1e-3  # the scene's cell, body force and kinematic viscosity
+T1 = 0.2  # s: the window's start
+SA_TABLE = {0.05: 15.56, 0.1: 24.83, 0.2: 51.53, 0.3: 102.9}  # Sangani & Acrivos (1982), table 1
+
+
+def drag_sa(phi):
+    """F / (mu U) of a square array: the table where it has phi, else the expansion."""
+    for p, v in SA_TABLE.items():
+        if abs(p - phi) < 1e-9:
+            return v
+    K = -0.5 * math.log(phi) - 0.738 + phi - 0.887 * phi ** 2 + 2.038 * phi ** 3
+    return 4 * math.pi / K
+
+
+def u_ref(phi):
+    return F * L * L / (NU * drag_sa(phi))
+
+
+def case(name, rows=40, phi=math.pi * 0.04, p0=30.0, t_end=0.5, **meta):
+    a = L * math.sqrt(phi / math.pi)
+    dr = round(L / rows, 12)
+    over = {"Geometry:dr": dr, "Run:t_end": t_end, "Output:dt": 0.01, "Output:diag_dt": 0.01,
+            "Run:progress_s": 1e9, "Initial:pressure": p0,
+            "Container:walls": "[{name: post, shape: cylinder, centre: [0.005, 0.005], radius: %.9g, "
+                               "material: outside}]" % a}
+    return batch.Case(name, SCENE, over, rows=rows, phi=phi, a=a, p0=p0, t_end=t_end, dr=dr, **meta)
+
+
+def cases(which):
+    c = []
+    if which in ("full", "resolution"):
+        for rows in (20, 40, 80):
+            c.append(case("res%d" % rows, rows=rows))
+        c.append(case("res160", rows=160, t_end=0.3))
+    if which in ("full", "pressure"):
+        for p0 in (0.0, 100.0, 300.0):  # 30 is res40
+            c.append(case("p%g" % p0, p0=p0))
+    if which in ("full", "fraction"):
+        for phi in (0.05, 0.1, 0.2, 0.3):
+            c.append(case("phi%g" % phi, phi=phi))
+    return c
+
+
+def reduce_run(d, keep=False):
+    """series.csv of run folder d from its snapshots; returns the rows."""
+    sys.path.insert(0, HERE)
+    import snap
+    rows = []
+    for fn in snap.list_snapshots(d):
+        s = snap.read_snapshot(fn)
+        m = np.asarray(s["Kind"]) == 0
+        u, V = np.asarray(s["Velocities"]), np.asarray(s["Volume"])
+        sig = np.asarray(s["Stress"])
+        p = -(sig[m, 0] + sig[m, 1] + sig[m, 2]) / 3
+        rows.append({"t": float(s["Time"]), "U": float((u[m, 0] * V[m]).sum() / L ** 2),
+                     "V": float((u[m, 1] * V[m]).sum() / L ** 2), "p_min": float(p.min()), "p_max": float(p.max())})
+    with open(os.path.join(d, "series.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    if not keep:
+        for fn in glob.glob(os.path.join(d, "snapshot_*.h5")):
+            os.remove(fn)
+    for extra in ("checkpoint", "restart"):
+        shutil.rmtree(os.path.join(d, extra), ignore_errors=True)
+    return rows
+
+
+def reduce_done(a, c, rec):
+    d = os.path.join(a.out, c.name)
+    if rec["rc"] == 0:
+        print("%s: %d times" % (c.name, len(reduce_run(d, a.keep))), flush=True)
+
+
+def read_series(d):
+    with open(os.path.join(d, "series.csv")) as f:
+        r = list(csv.DictReader(f))
+    return {k: np.array([float(x[k]) for x in r]) for k in r[0]}
+
+
+def summarise(d, row):
+    s = read_series(d)
+    phi = float(row["phi"])
+    ref = u_ref(phi)
+    w = s["t"] >= T1 - 1e-9
+    i05 = int(np.argmin(np.abs(s["t"] - 0.05)))
+    return {"ref": ref, "mean": s["U"][w].mean() / ref - 1, "lo": s["U"][w].min() / ref - 1,
+            "hi": s["U"][w].max() / ref - 1, "early": s["U"][i05] / ref - 1, "t": s["t"], "U": s["U"] / ref,
+            "vy": np.abs(s["V"]).max() / ref, "p_min": s["p_min"].min(), "drag": F * L * L / (NU * s["U"][w].mean())}
+
+
+def cmd_report(a):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    runs, where = batch.load_runs(a.out, "series.csv")
+    S = {n: summarise(os.path.join(where[n], n), r) for n, r in runs.items()}
+    lines = []
+    P = lines.append
+    fig, ax = plt.subplots(1, 3, figsize=(15, 4.4))
+    res = sorted((n for n in S if n.startswith("res")), key=lambda n: int(runs[n]["rows"]))
+    if res:
+        P("| L/dr | a/dr | particles | U / U_SA at 0.05 s | mean over [%.1f s, t_end] | its range | t_end (s) | "
+          "wall (s) | backend | steps |" % T1)
+        P("|---|---|---|---|---|---|---|---|---|---|")
+        for n in res:
+            r, s = runs[n], S[n]
+            P("| %s | %.0f | %s | %+.1f %% | %+.1f %% | %+.1f to %+.1f %% | %s | %s | %s | %s |" % (
+                r["rows"], float(r["a"]) / float(r["dr"]), r["material"], 100 * s["early"], 100 * s["mean"],
+                100 * s["lo"], 100 * s["hi"], r["t_end"], r["wall_s"], r.get("backend", ""), r["steps"]))
+            ax[0].plot(s["t"], s["U"], label="L/dr = %s" % r["rows"])
+        h = [float(runs[n]["dr"]) for n in res]
+        P("")
+        P("observed order of |mean error|: %.2f; of |error at 0.05 s|: %.2f" % (
+            batch.observed_order(h, [abs(S[n]["mean"]) for n in res]),
+            batch.observed_order(h, [abs(S[n]["early"]) for n in res])))
+        ax[0].set_title("resolution, background pressure 30 Pa")
+    pres = sorted((n for n in S if n.startswith("p") and not n.startswith("phi")) , key=lambda n: float(runs[n]["p0"]))
+    pres += [n for n in res if runs[n]["rows"] == "40"]
+    pres = sorted(set(pres), key=lambda n: float(runs[n]["p0"]))
+    if len(pres) > 1:
+        P("")
+        P("| background pressure (Pa) | lowest pressure (Pa) | U / U_SA at 0.05 s | mean over [%.1f s, t_end] | "
+          "its range | wall (s) |" % T1)
+        P("|---|---|---|---|---|---|")
+        for n in pres:
+            r, s = runs[n], S[n]
+            P("| %g | %.1f | %+.1f %% | %+.1f %% | %+.1f to %+.1f %% | %s |" % (
+                float(r["p0"]), s["p_min"], 100 * s["early"], 100 * s["mean"], 100 * s["lo"], 100 * s["hi"],
+                r["wall_s"]))
+            ax[1].plot(s["t"], s["U"], label="p0 = %g Pa" % float(r["p0"]))
+        ax[1].set_title("background pressure, L/dr = 40")
+    frac = sorted((n for n in S if n.startswith("phi")), key=lambda n: float(runs[n]["phi"]))
+    if frac:
+        P("")
+        P("| phi | F/(mu U), Sangani & Acrivos | SPH (mean over the window) | error of U | U at 0.05 s |")
+        P("|---|---|---|---|---|")
+        for n in frac:
+            r, s = runs[n], S[n]
+            P("| %g | %.2f | %.2f | %+.1f %% | %+.1f %% |" % (float(r["phi"]), drag_sa(float(r["phi"])), s["drag"],
+                                                             100 * s["mean"], 100 * s["early"]))
+        ph = np.linspace(0.03, 0.35, 100)
+        ax[2].semilogy(ph, [4 * math.pi / (-0.5 * math.log(p) - 0.738 + p - 0.887 * p * p + 2.038 * p ** 3)
+                            for p in ph], "k-", label="Sangani & Acrivos, expansion")
+        ax[2].semilogy(list(SA_TABLE), list(SA_TABLE.values()), "ks", mfc="none", label="their table 1")
+        ax[2].semilogy([float(runs[n]["phi"]) for n in frac], [S[n]["drag"] for n in frac], "o",
+                       label="SPH, L/dr = 40, window mean")
+        ax[2].set_xlabel("solid fraction $\\phi$"), ax[2].set_ylabel("F / ($\\mu$ U)"), ax[2].legend(fontsize=8)
+    for k in (0, 1):
+        ax[k].axhline(1, color="k", lw=0.8)
+        ax[k].set_xlabel("t (s)"), ax[k].set_ylabel("U / U (Sangani & Acrivos)"), ax[k].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(a.docs, "validation_cylinders.png"), dpi=100)
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if a.table:
+        open(a.table, "w").write(text)
+
+
+def main(argv=None):
+    batch.study_main(__doc__, ("resolution", "pressure", "fraction"), cases, reduce_done, cmd_report, jobs=4,
+                     argv=argv)
+
+
+if __name__ == "__main__":
+    main()
