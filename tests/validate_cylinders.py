@@ -5,10 +5,12 @@ periodic along x and y (tools/cylinders_study.py, docs/validation.md
 
 Reference: the superficial velocity U of Sangani & Acrivos (1982) for a
 square array at solid fraction phi = 0.126, U = f L^2 K(phi) / (4 pi nu) =
-6.60 mm/s. L/dr = 20 (340 fluid particles, the post 4 dr in radius), 0.5 s.
-  - U averaged over [0.2, 0.5] s within 15 % of U (measured +8.4 % on the
-    development machine; the study's finer runs and the background pressure
-    move it by as much, docs/validation.md);
+6.60 mm/s. L/dr = 20 (340 fluid particles, the post 4 dr in radius), 2 s.
+  - U averaged over [1, 2] s, where it is statistically steady, within 10 %
+    of the reference (measured +5.4 % on the development machine; the
+    study's mean over the same window, sampled twice as often, +4.6 % with a
+    standard deviation of 1.3 %, and -1.8 % at L/dr = 40; the background pressure moves it
+    by as much, docs/validation.md);
   - the flow has the symmetry of the cell: the mean v_y under 1 % of U;
   - no fluid particle enters the post (r > a at every snapshot), the post's
     dummies lie inside it, and the fluid stays inside the period [0, L)^2.
@@ -25,7 +27,7 @@ import batch  # noqa: E402
 import cylinders_study as cs  # noqa: E402
 import snap  # noqa: E402
 
-TOL_U, TOL_VY = 0.15, 0.01
+TOL_U, TOL_VY = 0.10, 0.01
 
 
 def main():
@@ -34,7 +36,7 @@ def main():
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
     c = cs.case("res20", rows=20)
-    c.over["Output:dt"] = 0.05
+    c.over["Output:dt"] = 0.1
     batch.run_cases_or_exit([c], a.sphseg, a.work, limit_s=600)
     d = os.path.join(a.work, c.name)
     ok, R = True, c.meta["a"]
