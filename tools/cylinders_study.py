@@ -159,6 +159,12 @@ def cmd_report(a):
         P("observed order of |mean error|: %.2f (%d resolutions); of |error at 0.05 s|: %.2f (%d)" % (
             batch.observed_order(hw, [abs(S[n]["mean"]) for n in res if np.isfinite(S[n]["mean"])]), len(hw),
             batch.observed_order(h, [abs(S[n]["early"]) for n in res]), len(h)))
+        m = [S[n]["mean"] for n in res if np.isfinite(S[n]["mean"])]
+        if len(m) >= 3:  # successive changes of the window mean (its error changes sign) and their limit
+            d1, d2 = m[-2] - m[-3], m[-1] - m[-2]
+            p = math.log(abs(d1 / d2)) / math.log(2) if d2 != 0 and d1 != 0 else math.nan
+            P("window mean: changes %+.1f, %+.1f %% between the last three resolutions, order %.2f, Richardson "
+              "limit %+.1f %%" % (100 * d1, 100 * d2, p, 100 * (m[-1] + d2 / (2 ** p - 1)) if p > 0 else math.nan))
         ax[0].set_title("resolution, background pressure 30 Pa")
         ax[0].axvline(T1, color="0.6", ls=":")
     pres = sorted((n for n in S if n.startswith("p") and not n.startswith("phi")) , key=lambda n: float(runs[n]["p0"]))
