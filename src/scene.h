@@ -202,8 +202,8 @@ struct scene_wall {
                                * so a closed container lists its walls counter-clockwise */
     double centre[2];         /* cylinder: its axis (along z) at (x, y), m */
     double radius;            /* cylinder: radius, m */
-    enum cwall_side material; /* cylinder: inside (a drum) | outside (a post: its dummies fill it from the
-                               * radius inward); default inside */
+    enum cwall_side material; /* cylinder: inside (a drum) | outside (a post: its dummies are nl rings
+                               * inside its radius); default inside */
     enum wall_slip slip;      /* no_slip (4.1) | free_slip (4.2); default no_slip */
     enum cwall_motion motion; /* fixed | translating | turning (a cylinder, or the ends, about the axis
                                * along z through centre); default fixed */

@@ -65,7 +65,7 @@ ENTRY(cwall, scene_wall, "Container:walls")
     EKF("Container:walls", scene_wall, radius,
        "cylinder: radius, m")
     EKE("Container:walls", scene_wall, material, cwall_sides,
-       "cylinder: inside (a drum) | outside (a post: its dummies fill it from the radius inward); default inside")
+       "cylinder: inside (a drum) | outside (a post: its dummies are nl rings inside its radius); default inside")
     EKE("Container:walls", scene_wall, slip, slips,
        "no_slip (4.1) | free_slip (4.2); default no_slip")
     EKE("Container:walls", scene_wall, motion, cwall_motions,

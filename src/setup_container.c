@@ -9,7 +9,7 @@
  * and whose projection falls on it, past an end by nl dr where another
  * segment joins there (the corner), not past a free end or an end where
  * only a gate joins (an opening stays open). A cylinder's are nl rings outside its radius; a post's (a
- * cylinder with the material outside) rings inside its radius, down to its axis. A site
+ * cylinder with the material outside) nl rings inside its radius (fewer in a post under nl dr). A site
  * that two walls want goes to the one it lies further behind, a gate's last
  * (wall_id_at's rule), so a dummy of a permanent wall stays when a gate
  * opens.
