@@ -241,23 +241,22 @@ static void setup_stress(sim_t *s)
 {
     const struct scene *sc = s->sc;
     particles_t *p = &s->p;
+    const int geostatic = sc->initial.stress == INIT_STRESS_GEOSTATIC;
     const double p0 = sc->initial.pressure;
-    if (sc->initial.stress != INIT_STRESS_GEOSTATIC) {
-        for (size_t i = 0; i < p->n && p0 > 0; ++i)
-            if (p->kind[i] == KIND_MATERIAL) p->sig[0][i] = p->sig[1][i] = p->sig[2][i] = (real)-p0;
-        return;
-    }
+    if (!geostatic && !(p0 > 0)) return; /* zero stress */
     const double *gv = sc->physics.gravity;
     int fluid = sc->material.model == MAT_NEWTONIAN; /* hydrostatic: K0 = 1, no shear stress */
     double gn = sqrt(gv[0] * gv[0] + gv[1] * gv[1]), K0 = fluid ? 1.0 : sc->material.nu / (1 - sc->material.nu);
     real kmu = fluid ? R(0.0) : stress_kmu((real)sc->material.mu_s);
     for (size_t i = 0; i < p->n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
-        double depth = fmax(0.0, s->surface_y - (double)p->x[1][i]);
         real sg[6] = {0, 0, 0, 0, 0, 0};
-        sg[1] = (real)(-sc->physics.rho * gn * depth);
-        sg[0] = sg[2] = (real)(K0 * sg[1]);
-        stress_return_map(sg, kmu);
+        if (geostatic) {
+            double depth = fmax(0.0, s->surface_y - (double)p->x[1][i]);
+            sg[1] = (real)(-sc->physics.rho * gn * depth);
+            sg[0] = sg[2] = (real)(K0 * sg[1]);
+            stress_return_map(sg, kmu);
+        }
         for (int q = 0; q < 3; ++q) sg[q] -= (real)p0;
         for (int q = 0; q < 6; ++q) p->sig[q][i] = sg[q];
     }

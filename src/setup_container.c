@@ -43,14 +43,21 @@ typedef struct ctr_lattice {
 static double site_x(const ctr_lattice *L, long i) { return (L->i0 + i + 0.5) * L->dr; }
 static double site_y(const ctr_lattice *L, long j) { return (L->j0 + j + 0.5) * L->dr; }
 
+/* Depth behind cylinder q (wall_prim_depth, in double, as wall_beyond):
+ * radially out of a drum, radially into a post. */
+static double ctr_cyl_depth(const wall_prim *q, double x, double y)
+{
+    double d = hypot(x - q->p[0], y - q->p[1]) - q->radius;
+    return q->outside ? -d : d;
+}
+
 /* Depth behind primitive q (wall_prim_depth, in double) and whether the
  * point falls within its extent. */
 static double ctr_depth(const wall_prim *q, double x, double y, int *within)
 {
     if (q->shape == WALL_CYLINDER) {
         *within = 1;
-        double d = hypot(x - q->p[0], y - q->p[1]) - q->radius;
-        return q->outside ? -d : d;
+        return ctr_cyl_depth(q, x, y);
     }
     double dx = x - q->p[0], dy = y - q->p[1], s = q->t[0] * dx + q->t[1] * dy;
     *within = s >= q->t_lo && s <= q->t_hi;
@@ -92,8 +99,7 @@ static int ctr_inside(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg, 
         const wall_prim *q = &s->flow.w.prim[k];
         double dist, depth;
         if (q->shape == WALL_CYLINDER) {
-            depth = hypot(x - q->p[0], y - q->p[1]) - q->radius;
-            if (q->outside) depth = -depth;
+            depth = ctr_cyl_depth(q, x, y);
             dist = fabs(depth);
         } else {
             const ctr_seg *g = &seg[k];
@@ -262,9 +268,9 @@ static void ctr_check_near(const sim_t *s, const ctr_lattice *L, const ctr_seg *
             double x = site_x(L, i), y = site_y(L, j);
             for (int k = 0; k < L->nw; ++k) {
                 const wall_prim *q = &s->flow.w.prim[k];
-                if (q->shape == WALL_CYLINDER && (q->outside ? fabs(hypot(x - q->p[0], y - q->p[1]) - q->radius)
-                                                             : hypot(x - q->p[0], y - q->p[1]) - q->radius) <= h2)
-                    near[k + 1] = 1;
+                /* a drum: material inside it or within 2h; a post: within 2h of it */
+                double d = q->shape == WALL_CYLINDER ? ctr_cyl_depth(q, x, y) : INFINITY;
+                if (q->outside ? fabs(d) <= h2 : d <= h2) near[k + 1] = 1;
             }
             for (long dj = -reach; dj <= reach; ++dj)
                 for (long di = -reach; di <= reach; ++di) {

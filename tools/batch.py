@@ -164,6 +164,16 @@ def study_main(doc, sets, cases_of, on_done, cmd_report, jobs=1, argv=None):
             on_done=lambda c, rec: on_done(a, c, rec))
 
 
+def report_tables(a, lines):
+    """The end of a study's report: its tables (markdown lines) printed, and
+    written to a.table where --table was given."""
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if a.table:
+        with open(a.table, "w") as f:
+            f.write(text)
+
+
 def read_runs(root):
     """root/runs.csv as {name: row}."""
     with open(os.path.join(root, "runs.csv")) as f:

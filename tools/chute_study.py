@@ -353,10 +353,7 @@ def cmd_report(a):
         fig.savefig(os.path.join(a.docs, "validation_chute_segregation.png"), dpi=110)
         P("")
         P("observed order of the MAE: %.2f" % batch.observed_order([float(runs[n]["dr"]) for n in seg], errs))
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if a.table:
-        open(a.table, "w").write(text)
+    batch.report_tables(a, lines)
 
 
 def main(argv=None):

@@ -179,10 +179,7 @@ def cmd_report(a):
         ax[2].set_title("final deposits")
     fig.tight_layout()
     fig.savefig(os.path.join(a.docs, "validation_collapse3d.png"), dpi=100)
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if a.table:
-        open(a.table, "w").write(text)
+    batch.report_tables(a, lines)
 
 
 def main(argv=None):

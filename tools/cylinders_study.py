@@ -85,7 +85,6 @@ def cases(which):
 
 def reduce_run(d, keep=False):
     """series.csv of run folder d from its snapshots; returns the rows."""
-    sys.path.insert(0, HERE)
     import snap
     rows = []
     for fn in snap.list_snapshots(d):
@@ -153,12 +152,9 @@ def cmd_report(a):
                 100 * s["sd"], 100 * s["lo"], 100 * s["hi"], r["t_end"], r["wall_s"], r.get("backend", ""),
                 r["steps"]))
             ax[0].plot(s["t"], s["U"], label="L/dr = %s" % r["rows"])
-        h = [float(runs[n]["dr"]) for n in res]
-        hw = [float(runs[n]["dr"]) for n in res if np.isfinite(S[n]["mean"])]
         P("")
-        P("observed order of |mean error|: %.2f (%d resolutions); of |error at 0.05 s|: %.2f (%d)" % (
-            batch.observed_order(hw, [abs(S[n]["mean"]) for n in res if np.isfinite(S[n]["mean"])]), len(hw),
-            batch.observed_order(h, [abs(S[n]["early"]) for n in res]), len(h)))
+        P("observed order of the error at 0.05 s: %.2f (%d resolutions)" % (
+            batch.observed_order([float(runs[n]["dr"]) for n in res], [abs(S[n]["early"]) for n in res]), len(res)))
         m = [S[n]["mean"] for n in res if np.isfinite(S[n]["mean"])]
         if len(m) >= 3:  # successive changes of the window mean (its error changes sign) and their limit
             d1, d2 = m[-2] - m[-3], m[-1] - m[-2]
@@ -167,9 +163,9 @@ def cmd_report(a):
               "limit %+.1f %%" % (100 * d1, 100 * d2, p, 100 * (m[-1] + d2 / (2 ** p - 1)) if p > 0 else math.nan))
         ax[0].set_title("resolution, background pressure 30 Pa")
         ax[0].axvline(T1, color="0.6", ls=":")
-    pres = sorted((n for n in S if n.startswith("p") and not n.startswith("phi")) , key=lambda n: float(runs[n]["p0"]))
-    pres += [n for n in res if runs[n]["rows"] == "40"]
-    pres = sorted(set(pres), key=lambda n: float(runs[n]["p0"]))
+    # the background-pressure runs and the 40-row run of the resolution set (30 Pa)
+    pres = sorted({n for n in S if (n.startswith("p") and not n.startswith("phi"))
+                   or (n in res and runs[n]["rows"] == "40")}, key=lambda n: float(runs[n]["p0"]))
     if len(pres) > 1:
         P("")
         P("| background pressure (Pa) | lowest pressure (Pa) | U / U_SA at 0.05 s | mean over [%.1f s, t_end] | "
@@ -204,10 +200,7 @@ def cmd_report(a):
         ax[k].set_xlabel("t (s)"), ax[k].set_ylabel("U / U (Sangani & Acrivos)"), ax[k].legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(os.path.join(a.docs, "validation_cylinders.png"), dpi=100)
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if a.table:
-        open(a.table, "w").write(text)
+    batch.report_tables(a, lines)
 
 
 def main(argv=None):

@@ -181,10 +181,7 @@ def cmd_report(a):
                                                     list(zip(frac, 0.5 * (t[win:] + t[:-win])))[::40])))
     fig.tight_layout()
     fig.savefig(os.path.join(a.docs, "validation_silo.png"), dpi=110)
-    text = "\n".join(lines) + "\n"
-    print(text)
-    if a.table:
-        open(a.table, "w").write(text)
+    batch.report_tables(a, lines)
 
 
 def main(argv=None):
