@@ -1,5 +1,6 @@
 # sphseg — the only build entry. Targets:
-#   make deps    install the Debian packages the build and tests need (when missing)
+#   make deps    install the Debian packages the build, unit tests and tools need (when missing)
+#   make deps-test  those and what the whole suite uses (ParaView's pvbatch, xvfb: tests/test_paraview.sh)
 #   make         build build/sphseg with $(MPICC)
 #   make run     deps, build, and the default scene inputs/shearbox_2d.yml -> out/shearbox_2d/
 #   make test    unit, validation and bad-input tests; ends with "N passed, N failed"
@@ -95,7 +96,7 @@ HEADERS  := $(wildcard src/*.h src/physics/*.h mpi/*.h)
 UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint test_stages test_position
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
 
-.PHONY: all deps run test test-slurm unit bench clean format test-mutants
+.PHONY: all deps deps-test run test test-slurm unit bench clean format test-mutants
 all: $(BUILD)/sphseg
 
 $(BUILD)/obj/%.o: %.c $(HEADERS)
@@ -115,6 +116,9 @@ $(BUILD)/tests/%: tests/%.c $(CORE_OBJ) $(HEADERS)
 
 deps:
 	@bash tools/deps.sh
+
+deps-test:
+	@bash tools/deps.sh --tests
 
 run: deps all
 	$(BUILD)/sphseg inputs/shearbox_2d.yml -o out/shearbox_2d --overwrite

@@ -17,12 +17,25 @@ sphseg_threads() { # ranks on this machine
     fi
 }
 
+# Whether srun binds tasks to CPUs on this cluster: the TaskPlugin of
+# "scontrol show config" names task/affinity or task/cgroup. Where it names
+# neither (task/none) srun warns about --cpu-bind and binds nothing. No
+# answer from scontrol counts as yes. Asked once per shell.
+sphseg_cpu_binding() {
+    if [ -z "${sphseg_task_plugin+set}" ]; then
+        sphseg_task_plugin=$(scontrol show config 2>/dev/null | sed -n 's/^TaskPlugin *= *//p') || true
+    fi
+    [ -z "$sphseg_task_plugin" ] || [[ $sphseg_task_plugin == *affinity* || $sphseg_task_plugin == *cgroup* ]]
+}
+
 # launch=(...): the command prefix that starts NRANKS ranks, one GPU each.
 # Under SLURM: srun --mpi=$SRUN_MPI (default pmix: Debian's and most Open
 # MPI builds need it under srun; SRUN_MPI= leaves the site's MpiDefault)
-# with one GPU per task (GPUS=0: none) and CPU/GPU binding (SRUN_FLAGS adds
-# to it). Without: $MPIRUN (default "mpirun --oversubscribe --bind-to
-# none", plus --allow-run-as-root for root) -np NRANKS. --bind-to none: Open
+# with one GPU per task (GPUS=0: none), GPU binding and --cpu-bind=$CPU_BIND
+# (default cores; only where the cluster binds, see sphseg_cpu_binding;
+# CPU_BIND= leaves it out everywhere); SRUN_FLAGS adds to it. Without:
+# $MPIRUN (default "mpirun --oversubscribe --bind-to none", plus
+# --allow-run-as-root for root) -np NRANKS. --bind-to none: Open
 # MPI binds each of one or two ranks to a single core by default, which puts
 # all of a rank's OpenMP threads on that core (measured: a 16-thread rank ran
 # at one core's speed on the 16-core GPU machine).
@@ -35,7 +48,8 @@ sphseg_launcher() { # nranks
         if [ "${GPUS:-1}" = 1 ]; then
             launch+=(--gpus-per-task=1 --gpu-bind="${GPU_BIND:-closest}")
         fi
-        launch+=(--cpu-bind="${CPU_BIND:-cores}")
+        local bind=${CPU_BIND-cores}
+        if [ -n "$bind" ] && sphseg_cpu_binding; then launch+=(--cpu-bind="$bind"); fi
         if [ -n "${SRUN_FLAGS:-}" ]; then
             read -r -a extra <<<"$SRUN_FLAGS"
             launch+=("${extra[@]}")

@@ -3,7 +3,9 @@
 # The #SBATCH lines apply to every job of the chain (each job runs this same
 # script with --step). The submission passes --time=TIME and, with GPUS=1
 # (the default), --gpus-per-task=1 (GPUS=0 for a CPU partition, with
-# SRUN: no GPU flags either); TIME sets Run:max_wall_time.
+# SRUN: no GPU flags either); TIME sets Run:max_wall_time; SBATCH_FLAGS
+# (e.g. "--cpus-per-task=2 --mem=4G --partition=NAME") overrides the lines
+# below.
 #SBATCH --job-name=sphseg_chain
 #SBATCH --nodes=1
 #SBATCH --ntasks=1
@@ -24,8 +26,11 @@
 # checkpoint and exits 0 before SLURM kills the job; SIGUSR1 120 s before
 # the limit (--signal) or a SIGTERM (scancel, preemption) also make it
 # checkpoint and exit 0. Job k+1 starts only if job k succeeded (sbatch
-# --dependency=afterok:<job k>). TIME - MARGIN > 0 is checked before any
-# job is submitted; the script may be started from any directory.
+# --dependency=afterok:<job k>). TIME - MARGIN > 0, and (sbatch
+# --test-only) that the cluster could ever start such a job, are checked
+# before any job is submitted (exit 2, saying what to set), rather than
+# leave the chain pending for ever (reason PartitionConfig); the script may
+# be started from any directory.
 #
 #   bash jobs/restart_chain.sh [SPHSEG_ARGS...]     (login node: submits K jobs)
 #   bash jobs/restart_chain.sh [SPHSEG_ARGS...]     (no sbatch: K steps in a loop here)
@@ -40,8 +45,9 @@ TIME=${TIME:-24:00:00}      # each job's time limit ([D-]HH:MM:SS, = --time abov
 MARGIN=${MARGIN:-600}       # seconds kept free for the checkpoint and exit
 OUTDIR=${OUTDIR:-}          # default out/<scene>_chain_<date-time>; the same for all jobs
 # NP (ranks; default 1; SLURM: the job's tasks), MAX_WALL (seconds; overrides
-# TIME - MARGIN), SBATCH_FLAGS (extra sbatch flags), DRYRUN=1 (print the
-# commands instead of running or submitting), SPHSEG, MPIRUN, SRUN_FLAGS,
+# TIME - MARGIN), SBATCH_FLAGS (extra sbatch flags), SUBMIT_CHECK=0 (skip
+# both checks below), DRYRUN=1 (print the commands instead of
+# running or submitting), SPHSEG, MPIRUN, SRUN_FLAGS, CPU_BIND,
 # OMP_NUM_THREADS as in jobs/README.md.
 # -----------------------------------------------------------------------------
 set -euo pipefail
@@ -89,6 +95,44 @@ chain_step() { # sphseg args...
     if [ "${DRYRUN:-0}" = 1 ]; then echo "+ ${cmd[*]}"; else sphseg_run "${cmd[@]}"; fi
 }
 
+# Could SLURM ever start a job of the chain? Before submitting: sbatch
+# --test-only with the first job's arguments (more CPUs, memory or GPUs than
+# a node of the partition has: the jobs would pend for ever, reason
+# PartitionConfig). --test-only lets pass the partition's MaxTime and
+# MaxMemPerNode (SLURM 22.05), so the first job's pending reason is read
+# once it is submitted, and that job cancelled if it can never start. Both
+# print SLURM's answer, what a job asks for and what to set, and exit 2.
+chain_check() { # sbatch arguments of the first job (options, script, its arguments)...
+    [ "${SUBMIT_CHECK:-1}" = 0 ] && return 0
+    if [ "${DRYRUN:-0}" = 1 ]; then echo "+ sbatch --test-only $*"; fi
+    local out
+    out=$(sbatch --test-only "$@" 2>&1) && return 0
+    chain_advice "a job of the chain could never start (sbatch --test-only); nothing submitted" "$out" "$@"
+}
+chain_check_pending() { # jobid, sbatch arguments of that job...
+    [ "${SUBMIT_CHECK:-1}" = 0 ] && return 0
+    local reason
+    reason=$(squeue -h -j "$1" -o %r 2>/dev/null) || return 0
+    case $reason in PartitionConfig | PartitionTimeLimit | PartitionNodeLimit | MaxMemPerLimit) ;; *) return 0 ;; esac
+    scancel "$1" || true
+    chain_advice "job $1 would pend for ever (reason $reason): cancelled, nothing else submitted" "" "${@:2}"
+}
+chain_advice() { # what happened, SLURM's answer, sbatch arguments...
+    local a asked=()
+    for a in "${@:3}"; do # the command line's options, less the bookkeeping
+        [ "$a" = "$self" ] && break
+        case $a in --parsable | --export=* | --chdir=* | --output=* | --error=*) ;; *) asked+=("$a") ;; esac
+    done
+    {
+        echo "restart_chain: $1:"
+        if [ -n "$2" ]; then sed 's/^/    /' <<<"$2"; fi
+        echo "  each job asks for $(sed -n 's/^#SBATCH \(--\(nodes\|ntasks\|cpus-per-task\|mem[a-z-]*\|gpus[a-z-]*\|gres\|partition\|account\)=[^ ]*\).*/\1/p' "$self" | tr '\n' ' ')(#SBATCH lines of $self), then ${asked[*]}"
+        echo "  ask for what your partition has (sinfo -o '%P %c %m %l %G': CPUs and memory in MB per node, time limit, GPUs), e.g."
+        echo "    SBATCH_FLAGS=\"--cpus-per-task=2 --mem=4G\" (add --partition=NAME, --account=NAME as needed), GPUS=0 on a CPU partition, TIME within the partition's limit"
+    } >&2
+    exit 2
+}
+
 sphseg_check_binary
 if [ "${1:-}" = --step ]; then # a job of the chain
     shift
@@ -97,12 +141,14 @@ elif command -v sbatch >/dev/null && [ -z "${NO_SLURM:-}" ]; then # submit the c
     OUTDIR=$(mkdir -p "$(dirname "$OUTDIR")" && cd "$(dirname "$OUTDIR")" && pwd)/$(basename "$OUTDIR")
     read -r -a flags <<<"${SBATCH_FLAGS:-}"
     if [ "${GPUS:-1}" = 1 ]; then flags+=(--gpus-per-task=1); fi
+    opts=(--time="$TIME" --chdir="$root"
+        --export="ALL,SCENE=$SCENE,OUTDIR=$OUTDIR,TIME=$TIME,MARGIN=$MARGIN,GPUS=${GPUS:-1}")
+    chain_check "${opts[@]}" ${flags[@]+"${flags[@]}"} "$self" --step "$@"
     dep=()
     for k in $(seq 1 "$K"); do
-        cmd=(sbatch --parsable --time="$TIME" --chdir="$root"
-            --export="ALL,SCENE=$SCENE,OUTDIR=$OUTDIR,TIME=$TIME,MARGIN=$MARGIN,GPUS=${GPUS:-1}"
-            ${dep[@]+"${dep[@]}"} ${flags[@]+"${flags[@]}"} "$self" --step "$@")
+        cmd=(sbatch --parsable "${opts[@]}" ${dep[@]+"${dep[@]}"} ${flags[@]+"${flags[@]}"} "$self" --step "$@")
         if [ "${DRYRUN:-0}" = 1 ]; then echo "+ ${cmd[*]}"; jid=DRYRUN$k; else jid=$("${cmd[@]}"); jid=${jid%%;*}; fi
+        if [ "$k" = 1 ] && [ "${DRYRUN:-0}" != 1 ]; then chain_check_pending "$jid" "${cmd[@]:1}"; fi
         echo "restart_chain: job $k/$K: $jid${dep[*]:+ (${dep[*]})}"
         dep=(--dependency="afterok:$jid")
     done

@@ -83,7 +83,9 @@ static hid_t ckpt_write_rows(hid_t loc, const char *name, hid_t ftype, hid_t mty
     H5CHECK(mspace = H5Screate_simple(1, &mdims, NULL));
     H5CHECK(dset = H5Dcreate2(loc, name, ftype, fspace, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
     dxpl = ckpt_select_rows(fspace, mspace, start, count);
-    if (ntot > 0) H5CHECK(H5Dwrite(dset, mtype, mspace, fspace, dxpl, buf));
+    char what[80];
+    snprintf(what, sizeof what, "the dataset %s", name);
+    if (ntot > 0) io_write_rows(dset, mtype, mspace, fspace, dxpl, buf, what);
     H5CHECK(H5Pclose(dxpl));
     H5CHECK(H5Sclose(mspace));
     H5CHECK(H5Sclose(fspace));
@@ -255,12 +257,15 @@ static int ckpt_hash_words(int fd, uint64_t w0, uint64_t w1, uint64_t size, uint
 }
 
 /* Collective: the checksum of path's bytes past the user block (size bytes
- * in all), each rank hashing an even share; -1 if a rank could not read. */
+ * in all), each rank hashing an even share; -1 if a rank could not read it
+ * or it is no longer a regular file (opened non-blocking: a FIFO put in its
+ * place never hangs a rank). */
 static int ckpt_hash_file(const char *path, uint64_t size, uint64_t *sum)
 {
     uint64_t nw = size > CKPT_USERBLOCK ? (size - CKPT_USERBLOCK + 7) / 8 : 0, h = 0;
     uint64_t r = (uint64_t)comm_rank(), P = (uint64_t)comm_size();
-    int fd = open(path, O_RDONLY), bad = fd < 0;
+    struct stat st;
+    int fd = open(path, O_RDONLY | O_NONBLOCK), bad = fd < 0 || fstat(fd, &st) != 0 || !S_ISREG(st.st_mode);
     if (!bad) bad = ckpt_hash_words(fd, nw * r / P, nw * (r + 1) / P, size, &h) != 0;
     if (fd >= 0) close(fd);
     MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD));
@@ -281,64 +286,127 @@ static uint64_t ckpt_get64(const unsigned char *b)
     return v;
 }
 
-/* Collective, after the file is closed: hash it and write the seal into its
- * user block (rank 0), then flush it to the disk. */
-static void ckpt_seal_file(const char *tmp, const sim_t *s)
+/* The check word of a seal (bytes 48..55): a chained splitmix64 hash of its
+ * first six words (magic, format, size, sum, step, time bits), never 0 (0
+ * marks a legacy seal, checkpoint.h). Every change to one word changes it:
+ * each step is a bijection of the running hash. */
+static uint64_t ckpt_seal_check(const unsigned char *b)
 {
-    struct stat st;
-    uint64_t size = 0, sum;
-    if (comm_rank() == 0) {
-        if (stat(tmp, &st) != 0) io_write_failed("cannot stat it");
-        size = (uint64_t)st.st_size;
-    }
-    MPICHECK(MPI_Bcast(&size, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD));
-    if (ckpt_hash_file(tmp, size, &sum) != 0) io_write_failed("cannot read it back to checksum it");
-    if (comm_rank() != 0) return;
+    uint64_t h = 0;
+    for (int k = 0; k < 6; ++k)
+        h = ckpt_mix(h ^ (ckpt_get64(b + 8 * k) + (uint64_t)(k + 1) * UINT64_C(0x9E3779B97F4A7C15)));
+    return h ? h : 1;
+}
+
+/* Rank 0: the seal into tmp's user block, flushed to the disk; 0 or -1
+ * (errno says why). */
+static int ckpt_write_seal(const char *tmp, const sim_t *s, uint64_t size, uint64_t sum)
+{
     unsigned char b[64] = "SPHSEGCK";
     double t = s->t;
     uint64_t tbits;
     memcpy(&tbits, &t, 8);
     ckpt_put64(b + 8, CKPT_FORMAT), ckpt_put64(b + 16, size), ckpt_put64(b + 24, sum);
     ckpt_put64(b + 32, (uint64_t)s->step), ckpt_put64(b + 40, tbits);
-    int fd = open(tmp, O_WRONLY);
-    if (fd < 0 || pwrite(fd, b, sizeof b, 0) != (ssize_t)sizeof b || fsync(fd) != 0)
-        io_write_failed("cannot write its checksum");
-    if (close(fd) != 0) io_write_failed("cannot close it");
+    ckpt_put64(b + 48, ckpt_seal_check(b));
+    int fd = open(tmp, O_WRONLY), bad = fd < 0 || pwrite(fd, b, sizeof b, 0) != (ssize_t)sizeof b || fsync(fd) != 0;
+    int err = errno;
+    if (fd >= 0 && close(fd) != 0 && !bad) bad = 1, err = errno;
+    errno = err;
+    return bad ? -1 : 0;
+}
+
+/* Collective, after the file is closed: hash it and write the seal into its
+ * user block (rank 0), then flush it to the disk. */
+static void ckpt_seal_file(const char *tmp, const sim_t *s)
+{
+    struct stat st;
+    uint64_t size = 0, sum;
+    int bad = comm_rank() == 0 && stat(tmp, &st) != 0;
+    if (comm_rank() == 0 && !bad) size = (uint64_t)st.st_size;
+    io_write_agree(bad, "cannot stat it");
+    MPICHECK(MPI_Bcast(&size, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD));
+    io_write_agree(ckpt_hash_file(tmp, size, &sum) != 0, "cannot read it back to checksum it"); /* agreed already */
+    if (comm_rank() == 0) bad = ckpt_write_seal(tmp, s, size, sum);
+    io_write_agree(bad, "cannot write its checksum");
+}
+
+/* Rank 0: read path's seal into b (64 bytes) without blocking on a FIFO or
+ * a device: the type is looked at before the open (stat), the open is
+ * non-blocking and its fstat is checked again (the name may have been
+ * replaced in between). 0, or why it cannot be read (1: errno says, 2: not
+ * a regular file, 3: no seal). */
+static int ckpt_read_seal(const char *path, unsigned char *b, struct stat *st)
+{
+    if (stat(path, st) != 0) return 1;
+    if (!S_ISREG(st->st_mode)) return 2;
+    int fd = open(path, O_RDONLY | O_NONBLOCK), bad = 0;
+    if (fd < 0 || fstat(fd, st) != 0) bad = 1;
+    else if (!S_ISREG(st->st_mode)) bad = 2;
+    else if (pread(fd, b, 64, 0) != 64 || memcmp(b, "SPHSEGCK", 8) != 0) bad = 3;
+    int err = errno;
+    if (fd >= 0) close(fd);
+    errno = err;
+    return bad;
+}
+
+/* The seal's own words: their check (a legacy seal's is 0: accepted, its
+ * step and time are checked against /Header by ckpt_read), the reserved
+ * word, the size. 0, or 1 with why. */
+static int ckpt_check_seal(const unsigned char *b, const struct stat *st, char *why, size_t n)
+{
+    uint64_t check = ckpt_get64(b + 48);
+    if ((check != 0 && check != ckpt_seal_check(b)) || ckpt_get64(b + 56) != 0)
+        return snprintf(why, n, "damaged: its checksum block is corrupted (the seal's words do not match their "
+                        "check)"), 1;
+    if (ckpt_get64(b + 16) != (uint64_t)st->st_size)
+        return snprintf(why, n, "damaged: %llu bytes long, written as %llu (cut short or extended)",
+                        (unsigned long long)st->st_size, (unsigned long long)ckpt_get64(b + 16)), 1;
+    if (ckpt_get64(b + 8) != CKPT_FORMAT)
+        return snprintf(why, n, "checkpoint format %llu; this sphseg reads format %d",
+                        (unsigned long long)ckpt_get64(b + 8), CKPT_FORMAT), 1;
+    return 0;
 }
 
 int ckpt_verify(const char *path, ckpt_seal *seal, char *why, size_t n)
 {
     unsigned char b[64] = {0};
     int bad = 0;
-    struct stat st;
+    struct stat st = {0};
     if (comm_rank() == 0) {
-        int fd = open(path, O_RDONLY);
-        if (fd < 0 || fstat(fd, &st) != 0) bad = 1;
-        else if (!S_ISREG(st.st_mode)) bad = 2;
-        else if (pread(fd, b, sizeof b, 0) != (ssize_t)sizeof b || memcmp(b, "SPHSEGCK", 8) != 0) bad = 3;
-        else if (ckpt_get64(b + 16) != (uint64_t)st.st_size) bad = 4;
+        bad = ckpt_read_seal(path, b, &st);
         if (bad == 1) snprintf(why, n, "cannot read it: %s", strerror(errno));
-        if (fd >= 0) close(fd);
+        if (bad == 2) snprintf(why, n, "not a regular file");
+        if (bad == 3) snprintf(why, n, "not a sphseg checkpoint (no checksum block; a snapshot, a damaged file, "
+                               "or a checkpoint of sphseg 0.1)");
+        if (!bad) bad = 4 * ckpt_check_seal(b, &st, why, n);
     }
     MPICHECK(MPI_Bcast(&bad, 1, MPI_INT, 0, MPI_COMM_WORLD));
+    if (bad) { /* rank 0's reason, on every rank */
+        MPICHECK(MPI_Bcast(why, (int)n, MPI_CHAR, 0, MPI_COMM_WORLD));
+        return bad == 1 ? -1 : 1;
+    }
     MPICHECK(MPI_Bcast(b, sizeof b, MPI_UNSIGNED_CHAR, 0, MPI_COMM_WORLD));
     seal->size = ckpt_get64(b + 16), seal->sum = ckpt_get64(b + 24), seal->step = (long long)ckpt_get64(b + 32);
     uint64_t tbits = ckpt_get64(b + 40), sum = 0;
     memcpy(&seal->time, &tbits, 8);
-    if (bad == 2) snprintf(why, n, "not a regular file");
-    if (bad == 3) snprintf(why, n, "not a sphseg checkpoint (no checksum block; a snapshot, a damaged file, or a "
-                           "checkpoint of sphseg 0.1)");
-    if (bad == 4) snprintf(why, n, "damaged: %llu bytes long, written as %llu (cut short or extended)",
-                           (unsigned long long)st.st_size, (unsigned long long)seal->size);
-    if (bad) return bad == 1 ? -1 : 1;
-    if (ckpt_get64(b + 8) != CKPT_FORMAT)
-        return snprintf(why, n, "checkpoint format %llu; this sphseg reads format %d",
-                        (unsigned long long)ckpt_get64(b + 8), CKPT_FORMAT), 1;
+    seal->legacy = ckpt_get64(b + 48) == 0;
     if (ckpt_hash_file(path, seal->size, &sum) != 0) return snprintf(why, n, "cannot read it through"), 1;
     if (sum != seal->sum)
         return snprintf(why, n, "damaged: its checksum does not match its contents (the file changed after "
                         "it was written)"), 1;
     return 0;
+}
+
+/* The bytes of a checkpoint's datasets, their object headers (1 kB each:
+ * one dataset per particle array) and scene text; io_create_file adds a
+ * margin for the rest of HDF5's metadata. */
+static double ckpt_bytes(const sim_t *s, const ckpt_run *r, long long ntot, const char *scene_text)
+{
+    const halo_t *h = s->halo;
+    double nv = h && h->method == HALO_METIS ? (double)h->cg_n[0] * h->cg_n[1] * h->cg_n[2] : 0;
+    return (double)ntot * (double)part_bytes_per_particle() + 16.0 * r->nsnap + 4 * nv +
+           8.0 * (2 * comm_size() + 1) + 1024.0 * (double)part_narrays() + (double)strlen(scene_text ? scene_text : "");
 }
 
 double ckpt_write(const char *outdir, const sim_t *s, const ckpt_run *r, const char *scene_text)
@@ -351,7 +419,7 @@ double ckpt_write(const char *outdir, const sim_t *s, const ckpt_run *r, const c
     MPICHECK(MPI_Allreduce(&n, &ntot, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD));
     MPICHECK(MPI_Exscan(&n, &offset, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD));
     if (comm_rank() == 0) offset = 0; /* MPI_Exscan leaves rank 0's result undefined */
-    hid_t file = io_create_file(tmp, CKPT_USERBLOCK);
+    hid_t file = io_create_file(tmp, CKPT_USERBLOCK, ckpt_bytes(s, r, ntot, scene_text));
     ckpt_write_header(file, s, ntot, scene_text);
     ckpt_write_run(file, r);
     ckpt_write_decomp(file, s->halo);

@@ -6,13 +6,24 @@
  * OUTDIR/checkpoint_prev.h5), written collectively by all ranks with
  * parallel HDF5 (MPI-IO) to checkpoint.h5.tmp, sealed, then renamed:
  *   user block    the first CKPT_USERBLOCK bytes, which HDF5 skips: the seal,
- *                 "SPHSEGCK", then little-endian uint64 format (CKPT_FORMAT),
- *                 file size, checksum, step, and the bits of the double time.
- *                 The checksum is sum over the 8-byte little-endian words w_i
- *                 (i = 1, 2, ...; the last zero-padded) of the bytes past the
- *                 user block of mix(w_i + i * 0x9E3779B97F4A7C15) mod 2^64,
- *                 mix being splitmix64's finaliser: a reader refuses a changed,
- *                 cut or extended file before HDF5 reads any of it;
+ *                 eight 8-byte words at bytes 0..63, the rest zero:
+ *                   0  "SPHSEGCK"        32  step
+ *                   8  format            40  the bits of the double time
+ *                  16  file size         48  check
+ *                  24  checksum          56  0 (reserved)
+ *                 all but the first little-endian uint64. The checksum is the
+ *                 sum over the 8-byte little-endian words w_i (i = 1, 2, ...;
+ *                 the last zero-padded) of the bytes past the user block of
+ *                 mix(w_i + i * G) mod 2^64, G = 0x9E3779B97F4A7C15, mix
+ *                 being splitmix64's finaliser; the check covers the seal
+ *                 itself: h = 0, then h = mix(h ^ (v_k + (k + 1) * G)) for the
+ *                 words v_0..v_5 at bytes 0..47 (mod 2^64), and 1 where that
+ *                 gives 0. A reader refuses a changed, cut or extended file,
+ *                 or a changed seal (a flipped step would choose the wrong
+ *                 checkpoint), before HDF5 reads any of it; a seal whose check
+ *                 is 0 was written before the check existed (format 3
+ *                 all the same) and is taken as a legacy seal, its step and
+ *                 time then checked against /Header's by ckpt_read;
  *   /Header       attributes Code ("sphseg"), Version, Checkpoint (CKPT_FORMAT),
  *                 Precision ("double" | "single"), RealBytes, Dimension,
  *                 NumRanks, NumPart_Total, NumArrays, Time, Step, Dt, Amax,
@@ -77,16 +88,21 @@ typedef struct ckpt_seal {
     long long step;
     double time;
     unsigned long long size, sum;
+    int legacy; /* its check word is 0: written before the check existed */
 } ckpt_seal;
-/* Collective: 0 when path is a sealed checkpoint of this format whose
- * checksum matches its bytes (seal filled in); -1 when it cannot be read, 1
- * when it is not a checkpoint or damaged; why says so (every rank). */
+/* Collective: 0 when path is a sealed checkpoint of this format whose seal
+ * check and checksum match its bytes (seal filled in); -1 when it cannot be
+ * read, 1 when it is not a regular file (a FIFO is refused without opening
+ * it for a blocking read), not a checkpoint or damaged; why says so (every
+ * rank). */
 int ckpt_verify(const char *path, ckpt_seal *seal, char *why, size_t n);
 
 /* Collective (src/checkpoint_read.c): load the particles (s->p, allocated
  * here) and s->t, step, dt, amax, n_material from file, and r. file may be
  * a directory: its newest valid checkpoint (checkpoint.h5 or
- * checkpoint_prev.h5) is taken, and its name written to chosen. A file that
+ * checkpoint_prev.h5) is taken, and its name written to chosen (a warning
+ * says why the other was passed over, unless it is just the older one or
+ * absent). A file whose seal's step or time is not its /Header's, or that
  * is missing, damaged (checksum), not a sphseg checkpoint, of another
  * precision, dimension, store layout, of a scene whose state-defining keys
  * differ (each named), or whose contents are out of range stops every rank

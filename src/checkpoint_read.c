@@ -190,38 +190,59 @@ static void *ckpt_read_all(hid_t loc, const char *name, H5T_class_t cls, hid_t m
 
 /* ---- choosing and opening ---------------------------------------------------------- */
 
-/* file, or in a directory the valid checkpoint with the latest step. */
-static void ckpt_choose(const char *arg, char *chosen, size_t n)
+/* In directory dir, the valid checkpoint of the later step (checkpoint.h5
+ * on a tie). A warning (rank 0) says why the other was passed over whenever
+ * it is there and not merely the older one: damaged, unreadable, not a
+ * checkpoint, or checkpoint.h5 with the earlier step. */
+static void ckpt_choose_dir(const char *dir, char *chosen, size_t n, ckpt_seal *seal)
+{
+    static const char *name[2] = {"checkpoint.h5", "checkpoint_prev.h5"};
+    char why[2][600], path[2][CKPT_PATH_MAX];
+    ckpt_seal sl[2];
+    int rc[2];
+    for (int k = 0; k < 2; ++k) {
+        snprintf(path[k], sizeof path[k], "%s/%s", dir, name[k]);
+        rc[k] = ckpt_verify(path[k], &sl[k], why[k], sizeof why[k]);
+    }
+    if (rc[0] && rc[1])
+        ckpt_bad("no valid checkpoint in it: checkpoint.h5: %s; checkpoint_prev.h5: %s", why[0], why[1]);
+    int best = rc[0] ? 1 : rc[1] ? 0 : sl[1].step > sl[0].step, other = 1 - best;
+    if (!rc[0] && !rc[1] && best == 1)
+        snprintf(why[0], sizeof why[0], "step %lld, older than checkpoint_prev.h5 (step %lld)", sl[0].step,
+                 sl[1].step);
+    int tell = best == 1; /* checkpoint.h5 passed over: always said */
+    struct stat st;       /* checkpoint_prev.h5 not there (the run's first checkpoint) is no news */
+    if (best == 0 && rc[1] != 0) tell = lstat(path[1], &st) == 0 || errno != ENOENT;
+    if (tell && comm_rank() == 0)
+        warning("--restart %s: %s: %s; taking %s (step %lld)", dir, name[other], why[other], name[best],
+                sl[best].step);
+    snprintf(chosen, n, "%s", path[best]);
+    *seal = sl[best];
+}
+
+/* file, or in a directory the valid checkpoint with the latest step; its
+ * seal. */
+static void ckpt_choose(const char *arg, char *chosen, size_t n, ckpt_seal *seal)
 {
     struct stat st;
     int dir = stat(arg, &st) == 0 && S_ISDIR(st.st_mode);
     MPICHECK(MPI_Bcast(&dir, 1, MPI_INT, 0, MPI_COMM_WORLD));
-    char why[2][600], path[2][CKPT_PATH_MAX];
-    ckpt_seal seal[2];
-    if (!dir) {
-        snprintf(chosen, n, "%s", arg);
-        if (ckpt_verify(arg, &seal[0], why[0], sizeof why[0]) == 0) return;
-        const char *slash = strrchr(arg, '/');
-        int dlen = slash ? (int)(slash - arg) : 1;
-        snprintf(path[1], sizeof path[1], "%.*s/checkpoint_prev.h5", dlen, slash ? arg : ".");
-        int prev = strcmp(path[1], arg) != 0 && access(path[1], F_OK) == 0;
-        MPICHECK(MPI_Bcast(&prev, 1, MPI_INT, 0, MPI_COMM_WORLD));
-        if (prev)
-            ckpt_bad("%s (%s is beside it: --restart %.*s takes the newest valid checkpoint there)", why[0], path[1],
-                     dlen, slash ? arg : ".");
-        ckpt_bad("%s", why[0]);
+    if (dir) {
+        ckpt_choose_dir(arg, chosen, n, seal);
+        return;
     }
-    int best = -1;
-    for (int k = 0; k < 2; ++k) {
-        snprintf(path[k], sizeof path[k], "%s/%s", arg, k ? "checkpoint_prev.h5" : "checkpoint.h5");
-        if (ckpt_verify(path[k], &seal[k], why[k], sizeof why[k]) != 0) continue;
-        if (best < 0 || seal[k].step > seal[best].step) best = k;
-    }
-    if (best < 0) ckpt_bad("no valid checkpoint in it: checkpoint.h5: %s; checkpoint_prev.h5: %s", why[0], why[1]);
-    if (best == 1 && comm_rank() == 0)
-        warning("--restart %s: checkpoint.h5: %s; taking checkpoint_prev.h5 (step %lld)", arg, why[0],
-                seal[1].step);
-    snprintf(chosen, n, "%s", path[best]);
+    char why[600], prev_path[CKPT_PATH_MAX];
+    snprintf(chosen, n, "%s", arg);
+    if (ckpt_verify(arg, seal, why, sizeof why) == 0) return;
+    const char *slash = strrchr(arg, '/');
+    int dlen = slash ? (int)(slash - arg) : 1;
+    snprintf(prev_path, sizeof prev_path, "%.*s/checkpoint_prev.h5", dlen, slash ? arg : ".");
+    int prev = strcmp(prev_path, arg) != 0 && access(prev_path, F_OK) == 0;
+    MPICHECK(MPI_Bcast(&prev, 1, MPI_INT, 0, MPI_COMM_WORLD));
+    if (prev)
+        ckpt_bad("%s (%s is beside it: --restart %.*s takes the newest valid checkpoint there)", why,
+                 prev_path, dlen, slash ? arg : ".");
+    ckpt_bad("%s", why);
 }
 
 /* Open file read-only with MPI-IO, HDF5's error printing off until ckpt_close. */
@@ -239,6 +260,18 @@ static hid_t ckpt_open(const char *file)
 }
 
 /* ---- the header: this build, this scene ------------------------------------------- */
+
+/* The seal's step and time chose this file (ckpt_choose_dir): they must be
+ * /Header's (s->step, s->t), which the checksum covers. Only a legacy seal,
+ * whose own words have no check, or a crafted one can differ. */
+static void ckpt_check_seal_header(const ckpt_seal *seal, const sim_t *s)
+{
+    if (seal->step == (long long)s->step && seal->time == s->t) return;
+    ckpt_bad("damaged: its checksum block says step %lld, t = %.17g; its /Header says step %ld, t = %.17g%s",
+             seal->step, seal->time, s->step, s->t,
+             seal->legacy ? " (a seal without its own check, from an earlier sphseg: give the other checkpoint "
+                            "by name)" : "");
+}
 
 /* Check what must match this build (exit 2) and the scene (checkpoint_keys.c). */
 static void ckpt_check_header(hid_t g, const sim_t *s)
@@ -424,15 +457,17 @@ static void ckpt_read_decomp(hid_t f, int nranks, ckpt_run *r)
 
 void ckpt_read(const char *arg, sim_t *s, ckpt_run *r, char *chosen, size_t n)
 {
+    ckpt_seal seal;
     ckpt_file = arg;
-    ckpt_choose(arg, chosen, n);
+    ckpt_choose(arg, chosen, n, &seal);
     ckpt_file = chosen;
     hid_t f = ckpt_open(chosen), g = ckpt_group(f, "Header");
+    s->t = ckpt_get_double(g, "Time", 0, 1e300);
+    s->step = (long)ckpt_get_int(g, "Step", 0, 1LL << 62);
+    ckpt_check_seal_header(&seal, s);
     ckpt_check_header(g, s);
     long long ntot = ckpt_get_int(g, "NumPart_Total", 1, CKPT_MAX_PART);
     int nranks = (int)ckpt_get_int(g, "NumRanks", 1, CKPT_MAX_RANKS);
-    s->t = ckpt_get_double(g, "Time", 0, 1e300);
-    s->step = (long)ckpt_get_int(g, "Step", 0, 1LL << 62);
     s->dt = ckpt_get_double(g, "Dt", 0, 1e300);
     s->amax = ckpt_get_double(g, "Amax", 0, HUGE_VAL);
     s->win.k = (long)ckpt_get_int(g, "WindowSteps", 0, CKPT_MAX_WINDOW); /* the open concentration window */

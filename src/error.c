@@ -135,14 +135,54 @@ void input_error(const char *fmt, ...)
     exit(EXIT_BAD_INPUT);
 }
 
-void input_error_agree(const char *why)
+/* Collective: the lowest rank whose why is not NULL, its line copied to
+ * every rank; -1 when no rank has one. */
+static int error_agree_line(const char *why, char *line, size_t n)
 {
     int rank = error_rank(), first = why ? rank : 1 << 30;
     if (error_size() > 1) MPI_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-    if (first == 1 << 30) return;
-    char line[1200] = "";
-    if (rank == first) snprintf(line, sizeof line, "%s", why);
-    if (error_size() > 1) MPI_Bcast(line, (int)sizeof line, MPI_CHAR, first, MPI_COMM_WORLD);
+    if (first == 1 << 30) return -1;
+    line[0] = 0;
+    if (rank == first) snprintf(line, n, "%s", why);
+    if (error_size() > 1) MPI_Bcast(line, (int)n, MPI_CHAR, first, MPI_COMM_WORLD);
+    return first;
+}
+
+static void error_print(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+static void error_print(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    error_vprint("", fmt, ap);
+    va_end(ap);
+}
+
+/* Every rank is here: rank 0 prints, the cleanup hook runs on every rank
+ * (it may be collective: closing a parallel HDF5 file), every rank
+ * finalizes and exits with code; no MPI_Abort, so no rank is left waiting. */
+void error_agree(int code, const char *why)
+{
+    char line[4800];
+    if (error_agree_line(why, line, sizeof line) < 0) return;
+    if (error_rank() == 0) error_print("%s", line);
+    int (*fn)(void) = error_cleanup, skip = 0, init = 0, fin = 0;
+    error_cleanup = NULL;
+    if (fn) skip = fn();
+    if (skip) { /* a file HDF5 could not close: its exit handlers would try again, collectively */
+        fflush(stdout);
+        _exit(code);
+    }
+    MPI_Initialized(&init);
+    MPI_Finalized(&fin);
+    if (init && !fin) MPI_Finalize();
+    exit(code);
+}
+
+void input_error_agree(const char *why)
+{
+    char line[1200];
+    int first = error_agree_line(why, line, sizeof line);
+    if (first < 0) return;
     if (first > 0) {
         char tmp[1200];
         snprintf(tmp, sizeof tmp, "%s", line);

@@ -25,6 +25,13 @@ void input_error(const char *fmt, ...) __attribute__((format(printf, 1, 2), nore
  * print; if any rank has one, rank 0 prints the lowest such rank's line
  * ("rank r: ..." when r > 0) and every rank exits with EXIT_BAD_INPUT. */
 void input_error_agree(const char *why);
+/* Collective, for failures a rank may meet alone in a collective operation
+ * (a parallel write to a full disk): every rank passes NULL or its line; if
+ * any rank has one, rank 0 prints the lowest such rank's line once, the
+ * error_on_exit hook runs on every rank (collectively), and every rank
+ * finalizes and exits with code. Called by all ranks before the next
+ * collective call, it never leaves one rank waiting for another. */
+void error_agree(int code, const char *why);
 /* A function error_exit runs (once) before it ends the process, e.g. to
  * close an open HDF5 file and remove a half-written temporary (src/io.c);
  * it returns nonzero when MPI_Finalize must be skipped (a file HDF5 could

@@ -2,6 +2,7 @@
 #include "io.h"
 #include <errno.h>
 #include <limits.h>
+#include <math.h>
 #include <hdf5.h>
 #include <mpi.h>
 /* hdf5.h's H5F_ACC_* flags expand to its own H5CHECK macro, whose name
@@ -16,42 +17,48 @@ static unsigned io_acc_trunc(void) { return H5F_ACC_TRUNC; }
 #include <unistd.h>
 
 #define IO_PATH_MAX 4096
+#define IO_LINE_MAX 4800 /* a failed write's line: a path and a reason */
+#define IO_SPACE_MARGIN 65536.0 /* bytes of HDF5 metadata and block rounding beyond the data */
 
 /* ---- failed writes ---------------------------------------------------------- */
+
+static int io_rank(void);
 
 /* The file being written (one at a time) and its temporary name: a failed
  * write closes it and removes the temporary before the run ends, so that
  * MPI_Finalize never meets an open HDF5 file and the disk gets its space
- * back; the final names keep the last complete files. */
+ * back; the final names keep the last complete files. agreed: every rank
+ * ends together (io_write_agree), so closing, which is collective, is safe. */
 static struct {
     hid_t file;
     char tmp[IO_PATH_MAX];
-} io_open = {-1, ""};
+    int agreed;
+} io_open = {-1, "", 0};
 
 static int io_abandon(void)
 {
-    int stuck = 0, size = 1;
+    int stuck = 0, size = 1, together = 0;
     MPI_Comm_size(MPI_COMM_WORLD, &size);
+    together = size == 1 || io_open.agreed;
     if (io_open.tmp[0]) (void)truncate(io_open.tmp, 0); /* gives the space back, so HDF5 can close it */
-    if (io_open.file >= 0 && size == 1) { /* closing is collective; several ranks abort instead */
+    if (io_open.file >= 0 && together) { /* a rank failing alone aborts instead: closing is collective */
+        if (size > 1) MPI_Barrier(MPI_COMM_WORLD); /* every rank's truncation before anyone's close writes */
         H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
         stuck = H5Fclose(io_open.file) < 0;
         io_open.file = -1;
+        if (size > 1) MPI_Allreduce(MPI_IN_PLACE, &stuck, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD); /* all or none */
     }
     if (io_open.tmp[0]) unlink(io_open.tmp);
     io_open.tmp[0] = 0;
     return stuck;
 }
 
-void io_write_failed(const char *fmt, ...)
+/* The one line of a failed write: the file, what failed, why (err), and the
+ * space left on its file system. */
+static void io_fail_line(char *line, size_t n, int err, const char *what)
 {
-    int err = errno == ENOSPC || errno == EDQUOT || errno == EFBIG || errno == EIO ? errno : 0;
-    char what[600], space[160] = "";
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(what, sizeof what, fmt, ap);
-    va_end(ap);
-    char dir[IO_PATH_MAX];
+    err = err == ENOSPC || err == EDQUOT || err == EFBIG || err == EIO ? err : 0;
+    char space[160] = "", dir[IO_PATH_MAX];
     snprintf(dir, sizeof dir, "%s", io_open.tmp[0] ? io_open.tmp : ".");
     char *slash = strrchr(dir, '/');
     if (slash) *slash = 0;
@@ -60,9 +67,66 @@ void io_write_failed(const char *fmt, ...)
         double mb = 1e-6 * (double)v.f_bavail * (double)v.f_frsize;
         snprintf(space, sizeof space, "; %.4g MB free on its file system%s", mb, mb < 1 ? ": the disk is full" : "");
     }
+    snprintf(line, n, "cannot write %s: %s (%s%s); the last complete snapshot and checkpoint are kept",
+             io_open.tmp[0] ? io_open.tmp : "output", what, err ? strerror(err) : "write failed", space);
+}
+
+void io_write_failed(const char *fmt, ...)
+{
+    int err = errno;
+    char what[600], line[IO_LINE_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(what, sizeof what, fmt, ap);
+    va_end(ap);
+    io_fail_line(line, sizeof line, err, what);
     error_on_exit(io_abandon);
-    error_exit(EXIT_WRITE, "cannot write %s: %s (%s%s); the last complete snapshot and checkpoint are kept",
-               io_open.tmp[0] ? io_open.tmp : "output", what, err ? strerror(err) : "write failed", space);
+    error_exit(EXIT_WRITE, "%s", line);
+}
+
+void io_write_agree(int failed, const char *fmt, ...)
+{
+    int err = errno;
+    char what[600], line[IO_LINE_MAX];
+    if (failed) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(what, sizeof what, fmt, ap);
+        va_end(ap);
+        io_fail_line(line, sizeof line, err, what);
+    }
+    io_open.agreed = 1;
+    error_on_exit(io_abandon);
+    error_agree(EXIT_WRITE, failed ? line : NULL); /* returns only when no rank failed */
+    error_on_exit(NULL);
+    io_open.agreed = 0;
+}
+
+/* Collective, before a file of about need bytes is written to path (rank
+ * 0 looks): a file system with less room than that (and a margin for
+ * HDF5's metadata) ends the run on every rank before anything is written.
+ * A collective write that fills the disk part-way can fail on one rank
+ * only, inside HDF5 (its close then waits in different collectives on
+ * different ranks); this keeps a full disk from ever getting there. */
+static void io_check_space(const char *path, double need)
+{
+    double avail = HUGE_VAL;
+    if (io_rank() == 0) {
+        char dir[IO_PATH_MAX];
+        snprintf(dir, sizeof dir, "%s", path);
+        char *slash = strrchr(dir, '/');
+        if (slash) *slash = 0;
+        struct statvfs v;
+        if (statvfs(slash ? dir : ".", &v) == 0) avail = (double)v.f_bavail * (double)v.f_frsize;
+    }
+    MPICHECK(MPI_Bcast(&avail, 1, MPI_DOUBLE, 0, MPI_COMM_WORLD));
+    double want = need + need / 64 + IO_SPACE_MARGIN;
+    char line[IO_LINE_MAX];
+    if (avail < want)
+        snprintf(line, sizeof line, "cannot write %s: it needs about %.4g MB and its file system has %.4g MB free%s; "
+                 "the last complete snapshot and checkpoint are kept", path, 1e-6 * want, 1e-6 * avail,
+                 avail < 1e6 ? ": the disk is full" : "");
+    error_agree(EXIT_WRITE, io_rank() == 0 && avail < want ? line : NULL);
 }
 
 /* In this file every HDF5 call writes an output file: a failure is a failed
@@ -130,6 +194,9 @@ static hid_t io_file_type(enum io_type t)
 {
     return t == IO_REAL || t == IO_CREAL ? H5T_IEEE_F64LE : t == IO_UINT8 ? H5T_STD_U8LE : H5T_STD_I64LE;
 }
+
+/* Bytes of one /Topology/Vertices entry for a snapshot of n particles. */
+static int io_vertex_bytes(long long n) { return n <= INT32_MAX ? 4 : 8; }
 
 /* ---- small helpers -------------------------------------------------------- */
 
@@ -390,10 +457,11 @@ static void io_xchg_field(const struct io_xchg *x, const struct io_field *f, con
     if (x->m > 0) memcpy(out, tmp, x->m * row);
 }
 
-/* Create /Particles/<f->name> (ntot rows) and write this rank's n rows at
- * row offset, collectively; buf holds the gathered rows. */
-static void io_write_field(hid_t grp, hid_t dxpl, const struct io_field *f, const void *buf, size_t n,
-                           long long ntot, long long offset)
+/* Create grp/<f->name> (ntot rows of file type ftype) and write this rank's
+ * n rows (memory type mtype) at row offset, collectively; buf holds the
+ * gathered rows. */
+static void io_write_field_as(hid_t grp, hid_t dxpl, const struct io_field *f, hid_t mtype, hid_t ftype,
+                              const void *buf, size_t n, long long ntot, long long offset)
 {
     int rank = f->ncomp > 1 ? 2 : 1;
     hsize_t dims[2] = {(hsize_t)ntot, (hsize_t)f->ncomp};
@@ -402,20 +470,50 @@ static void io_write_field(hid_t grp, hid_t dxpl, const struct io_field *f, cons
     hid_t fspace, mspace, dset;
     H5CHECK(fspace = H5Screate_simple(rank, dims, NULL));
     H5CHECK(mspace = H5Screate_simple(rank, mdims, NULL));
-    H5CHECK(dset = H5Dcreate2(grp, f->name, io_file_type(f->type), fspace, H5P_DEFAULT, H5P_DEFAULT,
-                              H5P_DEFAULT));
+    H5CHECK(dset = H5Dcreate2(grp, f->name, ftype, fspace, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
     if (n > 0) {
         H5CHECK(H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, NULL, count, NULL));
     } else { /* this rank takes part in the collective write with nothing */
         H5CHECK(H5Sselect_none(fspace));
         H5CHECK(H5Sselect_none(mspace));
     }
-    if (ntot > 0) H5CHECK(H5Dwrite(dset, io_mem_type(f->type), mspace, fspace, dxpl, buf));
+    char name[80];
+    snprintf(name, sizeof name, "the dataset %s", f->name);
+    if (ntot > 0) io_write_rows(dset, mtype, mspace, fspace, dxpl, buf, name);
     io_attr_string(dset, "Description", f->description);
     io_attr_string(dset, "Units", f->units);
     H5CHECK(H5Dclose(dset));
     H5CHECK(H5Sclose(mspace));
     H5CHECK(H5Sclose(fspace));
+}
+
+/* /Particles/<f->name> in the types of the field table. */
+static void io_write_field(hid_t grp, hid_t dxpl, const struct io_field *f, const void *buf, size_t n,
+                           long long ntot, long long offset)
+{
+    io_write_field_as(grp, dxpl, f, io_mem_type(f->type), io_file_type(f->type), buf, n, ntot, offset);
+}
+
+/* /Topology/Vertices: 0 .. N-1, the XDMF Polyvertex connectivity (one cell
+ * per particle). XDMF readers that build cells from a topology's own data
+ * (ParaView's Xdmf3 readers, its default) find no cells without it. Stored
+ * as 32-bit integers while N fits (4 bytes a particle, 2-3 % of a snapshot),
+ * else 64-bit (io_vertex_bytes). buf holds at least m 8-byte rows. */
+static void io_write_vertices(hid_t file, hid_t dxpl, void *buf, size_t m, long long ntot, long long offset)
+{
+    int wide = io_vertex_bytes(ntot) == 8;
+    for (size_t k = 0; k < m; k++) {
+        if (wide) ((int64_t *)buf)[k] = offset + (long long)k;
+        else ((int32_t *)buf)[k] = (int32_t)(offset + (long long)k);
+    }
+    static const struct io_field vertices = {"Vertices", IO_INT64, 1, "-",
+                                             "XDMF Polyvertex connectivity: row k holds k (one cell per particle)",
+                                             NULL};
+    hid_t grp;
+    H5CHECK(grp = H5Gcreate2(file, "Topology", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    io_write_field_as(grp, dxpl, &vertices, wide ? H5T_NATIVE_INT64 : H5T_NATIVE_INT32,
+                      wide ? H5T_STD_I64LE : H5T_STD_I32LE, buf, m, ntot, offset);
+    H5CHECK(H5Gclose(grp));
 }
 
 /* /Particles: every field of the table, all N rows in global particle-ID
@@ -444,8 +542,9 @@ static void io_write_particles(hid_t file, const particles_t *p, long long ntot)
         io_xchg_field(&x, &io_fields[i], p, tmp, buf);
         io_write_field(grp, dxpl, &io_fields[i], buf, x.m, ntot, offset);
     }
-    H5CHECK(H5Pclose(dxpl));
     H5CHECK(H5Gclose(grp));
+    io_write_vertices(file, dxpl, buf, x.m, ntot, offset);
+    H5CHECK(H5Pclose(dxpl));
     free(tmp);
     free(buf);
     io_xchg_free(&x);
@@ -469,9 +568,10 @@ static void io_write_header(hid_t file, int dim, double time, long step, long lo
     H5CHECK(H5Gclose(g));
 }
 
-hid_t io_create_file(const char *path, size_t userblock)
+hid_t io_create_file(const char *path, size_t userblock, double need)
 {
     hid_t fapl, fcpl, file;
+    io_check_space(path, need + (double)userblock);
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* a failed write is one line (io_write_failed), not HDF5's stack */
     H5CHECK(fcpl = H5Pcreate(H5P_FILE_CREATE));
     if (userblock) H5CHECK(H5Pset_userblock(fcpl, (hsize_t)userblock));
@@ -480,18 +580,35 @@ hid_t io_create_file(const char *path, size_t userblock)
     H5CHECK(H5Pset_coll_metadata_write(fapl, 1));
     H5CHECK(H5Pset_all_coll_metadata_ops(fapl, 1));
     snprintf(io_open.tmp, sizeof io_open.tmp, "%s", path);
+    errno = 0;
     file = H5Fcreate(path, io_acc_trunc(), fcpl, fapl);
-    if (file < 0) io_write_failed("cannot create it (does the output directory exist?)");
+    io_write_agree(file < 0, "cannot create it (does the output directory exist?)");
     io_open.file = file;
     H5CHECK(H5Pclose(fapl));
     H5CHECK(H5Pclose(fcpl));
     return file;
 }
 
+/* errno after a call that wrote: a write inside it failed for want of
+ * space or by an I/O error, even if the call reported success (Open MPI
+ * 4.1's OMPIO collective writes on three ranks report success to HDF5
+ * after one aggregator's pwritev failed: tests/test_fulldisk.sh). */
+static int io_errno_lost_write(void) { return errno == ENOSPC || errno == EDQUOT || errno == EFBIG || errno == EIO; }
+
 void io_close_file(hid_t file)
 {
-    H5CHECK(H5Fclose(file));
-    io_open.file = -1;
+    errno = 0;
+    herr_t rc = H5Fclose(file);
+    io_open.file = -1; /* closed, or beyond closing: never closed twice */
+    io_write_agree(rc < 0 || io_errno_lost_write(), "closing it (HDF5 could not flush it)");
+}
+
+void io_write_rows(hid_t dset, hid_t mtype, hid_t mspace, hid_t fspace, hid_t dxpl, const void *buf,
+                   const char *name)
+{
+    errno = 0;
+    herr_t rc = H5Dwrite(dset, mtype, mspace, fspace, dxpl, buf);
+    io_write_agree(rc < 0 || io_errno_lost_write(), "writing %s", name);
 }
 
 void io_forget_tmp(void) { io_open.tmp[0] = 0; }
@@ -507,7 +624,10 @@ int io_write_snapshot(const char *outdir, int index, const particles_t *p, doubl
     long long n = (long long)p->n, ntot = 0;
     MPICHECK(MPI_Allreduce(&n, &ntot, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD));
 
-    hid_t file = io_create_file(tmp, 0);
+    double row = io_vertex_bytes(ntot);
+    for (int i = 0; i < io_nfields; i++) row += (double)(io_type_size(io_fields[i].type) * (size_t)io_fields[i].ncomp);
+    double text = (scene_text ? (double)strlen(scene_text) : 0) + (walls ? (double)strlen(walls) : 0);
+    hid_t file = io_create_file(tmp, 0, (double)ntot * row + text);
     io_write_header(file, p->dim, time, step, ntot, scene_text, walls, code_version);
     io_write_particles(file, p, ntot);
     io_close_file(file);
@@ -537,9 +657,10 @@ static void io_xdmf_grid(FILE *fp, int index, double time, long long n)
     fprintf(fp, "      <Grid Name=\"snapshot_%05d\" GridType=\"Uniform\">\n", index);
     fprintf(fp, "        <Time Value=\"%.17g\"/>\n", time);
     fprintf(fp,
-            "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%lld\""
-            " NodesPerElement=\"1\"/>\n",
-            n);
+            "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%lld\" NodesPerElement=\"1\">\n"
+            "          <DataItem Dimensions=\"%lld\" NumberType=\"Int\" Precision=\"%d\" Format=\"HDF\">"
+            "%s:/Topology/Vertices</DataItem>\n        </Topology>\n",
+            n, n, io_vertex_bytes(n), h5name);
     for (int i = 0; i < io_nfields; i++) {
         const struct io_field *f = &io_fields[i];
         int geom = strcmp(f->name, "Coordinates") == 0;
@@ -554,16 +675,16 @@ static void io_xdmf_grid(FILE *fp, int index, double time, long long n)
     fprintf(fp, "      </Grid>\n");
 }
 
-int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long long *npart,
-                  const unsigned char *present, int dim)
+/* Rank 0 writes OUTDIR/snapshots.xmf.tmp: 0, or 1 (cannot open it) or 2
+ * (cannot write or close it), errno telling why. */
+static int io_xdmf_file(const char *outdir, int nsnap, const double *times, const long long *npart,
+                        const unsigned char *present, int dim)
 {
-    if (io_rank() != 0) return 0;
-    char path[IO_PATH_MAX], tmp[IO_PATH_MAX];
-    io_join(path, outdir, "snapshots.xmf", "");
+    char tmp[IO_PATH_MAX];
     io_join(tmp, outdir, "snapshots.xmf", ".tmp");
     snprintf(io_open.tmp, sizeof io_open.tmp, "%s", tmp);
     FILE *fp = fopen(tmp, "w");
-    if (!fp) io_write_failed("cannot open it");
+    if (!fp) return 1;
     fprintf(fp, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
                 "<Xdmf Version=\"2.0\">\n  <Domain>\n");
     fprintf(fp, "    <Information Name=\"Dimension\" Value=\"%d\"/>\n", dim);
@@ -573,8 +694,23 @@ int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long
         if (!present || present[i]) io_xdmf_grid(fp, i, times[i], npart[i]);
     fprintf(fp, "    </Grid>\n  </Domain>\n</Xdmf>\n");
     int bad = fflush(fp) != 0 || ferror(fp);
-    if (fclose(fp) != 0 || bad) io_write_failed("fclose");
-    io_commit(tmp, path, 0);
+    int err = errno;
+    if (fclose(fp) != 0) bad = 1, err = errno;
+    errno = err;
+    return bad ? 2 : 0;
+}
+
+int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long long *npart,
+                  const unsigned char *present, int dim)
+{
+    int bad = 0;
+    if (io_rank() == 0) bad = io_xdmf_file(outdir, nsnap, times, npart, present, dim);
+    io_write_agree(bad, "%s", bad == 1 ? "cannot open it" : "cannot write or close it");
+    if (io_rank() == 0) {
+        char path[IO_PATH_MAX];
+        io_join(path, outdir, "snapshots.xmf", "");
+        io_commit(io_open.tmp, path, 0);
+    }
     io_forget_tmp();
     return 0;
 }

@@ -10,14 +10,23 @@
  *               N x 3 (vectors, z = 0 in 2D), each with string attributes
  *               Description and Units. Floating fields are stored as 64-bit
  *               IEEE doubles whatever the build precision.
+ *   /Topology/Vertices 0 .. N-1 (32-bit integers while N < 2^31, else
+ *               64-bit): the XDMF Polyvertex connectivity, one cell per
+ *               particle. ParaView's default readers (Xdmf3ReaderS/T) build
+ *               no cells without it, and its views then show nothing.
  * OUTDIR/snapshots.xmf
  *   XDMF 2 temporal collection over snapshot_00000.h5 ... (Polyvertex
- *   topology, XYZ geometry from Coordinates, every other field an attribute).
+ *   topology from /Topology/Vertices, XYZ geometry from Coordinates, every
+ *   other field an attribute).
  *
  * Both writers go to "<name>.tmp" and rename, so no half-written file ever
  * exists under a final name. A failed write (disk full, quota) ends the run
- * with status 4 (EXIT_WRITE) after closing the file and removing the
- * temporary; the functions return 0. */
+ * with status 4 (EXIT_WRITE) and one line, on every rank together, after
+ * closing the file and removing the temporary: every rank learns of a
+ * write that failed on any rank before the next collective call
+ * (io_write_agree), and a file system without room for the whole file
+ * stops the run before the file is created (io_create_file). The
+ * functions return 0. */
 #ifndef SPHSEG_IO_H
 #define SPHSEG_IO_H
 #include "particles.h"
@@ -50,11 +59,11 @@ extern const int io_nfields;
 int io_write_snapshot(const char *outdir, int index, const particles_t *p, double time, long step,
                       const char *scene_text, const char *walls, const char *code_version);
 
-/* Write OUTDIR/snapshots.xmf indexing snapshots 0 .. nsnap-1 (times[i],
- * npart[i] particles each; only those with present[i] != 0 when present is
- * not NULL: a restart into a new OUTDIR lists only the snapshots there) for
- * dimension dim (2 or 3). Only rank 0 writes; other ranks return at once,
- * so it may be called by all ranks or rank 0. */
+/* Collective: write OUTDIR/snapshots.xmf indexing snapshots 0 .. nsnap-1
+ * (times[i], npart[i] particles each; only those with present[i] != 0 when
+ * present is not NULL: a restart into a new OUTDIR lists only the snapshots
+ * there) for dimension dim (2 or 3). Rank 0 writes; every rank learns
+ * whether it could. */
 int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long long *npart,
                   const unsigned char *present, int dim);
 
@@ -63,16 +72,25 @@ int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long
  * NULL is stored as ""); scalar attribute of file type ftype from a value of
  * memory type mtype; collective create (truncate) of path with the MPI-IO
  * driver and collective metadata (userblock: bytes reserved at the start of
- * the file, 0 or a power of two >= 512), exit status 4 if it cannot be
- * created; io_close_file closes it (a failed close is a failed write);
- * io_forget_tmp once the temporary is renamed; io_write_failed ends the run
- * with status 4 naming the file being written, what failed and the space
- * left, after closing that file and removing its temporary.
+ * the file, 0 or a power of two >= 512; need: the bytes the caller will
+ * write, for the check of free space), exit status 4 if it cannot be
+ * created or its file system has less room than need and a margin;
+ * io_close_file closes it (collective; a failed close is a failed write);
+ * io_write_rows is a collective H5Dwrite of the dataset called name, its
+ * outcome agreed; io_forget_tmp once the temporary is renamed;
+ * io_write_agree (collective) ends the run on every rank together, status
+ * 4 and one line, when any rank passes failed (errno telling why);
+ * io_write_failed ends the run from one rank with status 4 naming the file
+ * being written, what failed and the space left, after closing that file
+ * (one rank alone: the job is aborted) and removing its temporary.
  * hid_t is int64_t (HDF5 >= 1.10), so hdf5.h is not needed here. */
 void io_attr_string(int64_t loc, const char *name, const char *value);
 void io_attr_scalar(int64_t loc, const char *name, int64_t ftype, int64_t mtype, const void *val);
-int64_t io_create_file(const char *path, size_t userblock);
+int64_t io_create_file(const char *path, size_t userblock, double need);
 void io_close_file(int64_t file);
+void io_write_rows(int64_t dset, int64_t mtype, int64_t mspace, int64_t fspace, int64_t dxpl, const void *buf,
+                   const char *name);
+void io_write_agree(int failed, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void io_forget_tmp(void);
 void io_write_failed(const char *fmt, ...) __attribute__((format(printf, 1, 2), noreturn));
 

@@ -143,7 +143,7 @@ static void write_snapshot(outputs *o, sim_t *s)
     o->npart[o->n] = comm_sum_ll((long long)s->p.n);
     o->present[o->n] = 1;
     o->n++;
-    if (comm_rank() == 0) io_write_xdmf(o->dir, o->n, o->times, o->npart, o->present, s->p.dim);
+    io_write_xdmf(o->dir, o->n, o->times, o->npart, o->present, s->p.dim);
 }
 
 /* A blow-up stops the run with exit status 3 (DESIGN.md "Errors"), naming

@@ -61,6 +61,7 @@ for n in restart column steady drum drum3d mpi; do [ -f "tests/validate_$n.py" ]
 # issue 19: what a cluster does to a job
 run_one signals bash tests/test_signals.sh "$BUILD/sphseg"
 run_one fulldisk bash tests/test_fulldisk.sh "$BUILD/sphseg"
+run_one paraview bash tests/test_paraview.sh "$BUILD/sphseg"
 run_one outdir bash tests/test_outdir.sh "$BUILD/sphseg"
 run_one extremes bash tests/test_extremes.sh "$BUILD/sphseg"
 run_one restart_guard "$PYTHON" tests/test_restart_guard.py --sphseg "$BUILD/sphseg" --work "$tmp/restart_guard"

@@ -6,7 +6,8 @@
  * checkpoint_prev.h5. A checkpoint whose NumRanks differs gives each rank an
  * even contiguous share of the global rows (the restart on another rank
  * count, before the distribution step); the directory gives its newest
- * checkpoint. Runs on any rank count:
+ * checkpoint. Every one-bit flip in the seal is refused, a legacy seal
+ * (check 0) is taken, a FIFO is refused at once. Runs on any rank count:
  *   mpirun -np 2 ./test_checkpoint */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
@@ -22,6 +23,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "checkpoint.h"
@@ -75,7 +77,8 @@ static int is_checked(const particles_t *p, size_t k)
 
 /* The seal of a sphseg checkpoint (src/checkpoint.h): sum of
  * mix(w_i + i * golden) over the little-endian words past the user block,
- * written again after the file was changed on purpose. */
+ * and the check of the seal's first six words, written again after the file
+ * was changed on purpose. */
 static uint64_t mix64(uint64_t z)
 {
     z = (z ^ (z >> 30)) * UINT64_C(0xBF58476D1CE4E5B9);
@@ -101,6 +104,19 @@ static void reseal(const char *path)
     fseek(f, 16, SEEK_SET);
     fwrite(le, 1, 8, f);
     for (int b = 0; b < 8; ++b) le[b] = (unsigned char)(h >> (8 * b));
+    fwrite(le, 1, 8, f);
+    unsigned char head[48];
+    fseek(f, 0, SEEK_SET);
+    assert_int_equal(fread(head, 1, 48, f), 48);
+    uint64_t c = 0;
+    for (int k = 0; k < 6; ++k) {
+        uint64_t v = 0;
+        for (int b = 7; b >= 0; --b) v = v << 8 | head[8 * k + b];
+        c = mix64(c ^ (v + (uint64_t)(k + 1) * UINT64_C(0x9E3779B97F4A7C15)));
+    }
+    c = c ? c : 1;
+    for (int b = 0; b < 8; ++b) le[b] = (unsigned char)(c >> (8 * b));
+    fseek(f, 48, SEEK_SET);
     fwrite(le, 1, 8, f);
     fclose(f);
 }
@@ -182,6 +198,72 @@ static void test_round_trip(void **state)
     part_free(&a.p);
     part_free(&b.p);
     part_free(&c.p);
+    free(text);
+    scene_free(&sc);
+}
+
+/* Rank 0 xors byte k of path with x (then all ranks meet). */
+static void xor_byte(const char *path, long k, unsigned char x)
+{
+    if (g_rank == 0) {
+        FILE *f = fopen(path, "r+b");
+        assert_non_null(f);
+        fseek(f, k, SEEK_SET);
+        int c = fgetc(f);
+        assert_true(c != EOF);
+        fseek(f, k, SEEK_SET);
+        fputc(c ^ x, f);
+        fclose(f);
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+}
+
+/* The seal checks itself (issue 33): every one-bit flip in its 64 bytes is
+ * refused (a flipped step chose the wrong checkpoint); a legacy seal (check
+ * word 0) is taken; a FIFO is refused at once, not opened for a read that
+ * waits for a writer. */
+static void test_seal_bits(void **state)
+{
+    (void)state;
+    struct scene sc;
+    load_scene(&sc);
+    sim_t a = {0};
+    a.sc = &sc;
+    a.flow.w.n = NWALLS;
+    fill_store(&a.p, 5 + (size_t)g_rank);
+    a.t = 0.75, a.step = 10;
+    ckpt_run ra = {0};
+    char *text = scene_used_text(&sc), path[128], why[600], fifo[128];
+    ckpt_write(g_dir, &a, &ra, text);
+    snprintf(path, sizeof path, "%s/checkpoint.h5", g_dir);
+    ckpt_seal seal;
+    assert_int_equal(ckpt_verify(path, &seal, why, sizeof why), 0);
+    assert_int_equal(seal.step, 10);
+    int taken = 0;
+    for (long bit = 0; bit < 64 * 8; ++bit) {
+        xor_byte(path, bit / 8, (unsigned char)(1u << (bit % 8)));
+        if (ckpt_verify(path, &seal, why, sizeof why) == 0) ++taken, print_message("bit %ld taken\n", bit);
+        else if (bit >= 64) assert_non_null(strstr(why, "checksum block is corrupted")); /* past the magic */
+        xor_byte(path, bit / 8, (unsigned char)(1u << (bit % 8)));
+    }
+    assert_int_equal(taken, 0);
+    if (g_rank == 0) { /* a legacy seal: check word 0 */
+        FILE *f = fopen(path, "r+b");
+        assert_non_null(f);
+        fseek(f, 48, SEEK_SET);
+        for (int k = 0; k < 8; ++k) fputc(0, f);
+        fclose(f);
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    assert_int_equal(ckpt_verify(path, &seal, why, sizeof why), 0);
+    assert_int_equal(seal.step, 10);
+    snprintf(fifo, sizeof fifo, "%s/fifo.h5", g_dir);
+    if (g_rank == 0) assert_int_equal(mkfifo(fifo, 0600), 0);
+    MPI_Barrier(MPI_COMM_WORLD);
+    assert_int_equal(ckpt_verify(fifo, &seal, why, sizeof why), 1);
+    assert_string_equal(why, "not a regular file");
+    if (g_rank == 0) unlink(fifo);
+    part_free(&a.p);
     free(text);
     scene_free(&sc);
 }
@@ -270,7 +352,8 @@ int main(int argc, char **argv)
     }
     MPI_Bcast(g_dir, sizeof g_dir, MPI_CHAR, 0, MPI_COMM_WORLD);
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_round_trip),
-                                       cmocka_unit_test(test_other_rank_count)};
+                                       cmocka_unit_test(test_other_rank_count),
+                                       cmocka_unit_test(test_seal_bits)};
     int failed = cmocka_run_group_tests(tests, NULL, NULL), any = 0;
     MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     if (!any && g_rank == 0) {

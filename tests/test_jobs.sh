@@ -8,7 +8,11 @@
 # issue 19: the chain checks TIME - MARGIN before submitting, resubmits
 # itself by its full path from any directory, drops GPU flags with GPUS=0;
 # the launcher returns 0 with SRUN_FLAGS empty and passes --mpi=pmix;
-# sphseg_run passes the batch shell's signals on to sphseg.
+# sphseg_run passes the batch shell's signals on to sphseg; issue 33: the
+# chain asks sbatch --test-only first (the same arguments as its first
+# submission) and, where the job could never start, says what to set
+# (SBATCH_FLAGS) and submits nothing; the launcher passes --cpu-bind only
+# where scontrol's TaskPlugin binds (task/affinity, task/cgroup).
 set -u
 bin=${1:?usage: test_jobs.sh build/sphseg}
 PY=${PYTHON:-/usr/bin/python3}
@@ -47,8 +51,29 @@ check "done: parser without halo" "[ \"\$(sphseg_parse_log '$tmp/b.log')\" = ',2
 check "done: parser, no done line" "! sphseg_parse_log /dev/null"
 
 mkdir -p "$tmp/bin" "$tmp/chain"
-printf '#!/bin/sh\necho "$*" >>"%s/calls"\necho "$((100 + $(wc -l <"%s/calls")));cluster"\n' "$tmp" "$tmp" >"$tmp/bin/sbatch"
-chmod +x "$tmp/bin/sbatch"
+# stub sbatch: a submission is appended to calls (job ids 101, 102, ...);
+# --test-only to tests, answered as SLURM answers it: "could never start"
+# when the job asks for more CPUs per task (its script's #SBATCH line, then
+# the command line) than FAKE_CPUS (a small partition; unset: any number)
+cat >"$tmp/bin/sbatch" <<'SH'
+#!/usr/bin/env bash
+log=$(dirname "$0")/..
+case " $* " in *" --test-only "*) ;; *)
+    echo "$*" >>"$log/calls"; echo "$((100 + $(wc -l <"$log/calls")));cluster"; exit 0 ;;
+esac
+echo "$*" >>"$log/tests"
+for a in "$@"; do case $a in -*) ;; *) script=$a; break ;; esac; done
+cpus=$(sed -n 's/^#SBATCH --cpus-per-task=//p' "$script")
+for a in "$@"; do [ "$a" = "$script" ] && break; case $a in --cpus-per-task=*) cpus=${a#*=} ;; esac; done
+if [ -n "${FAKE_CPUS:-}" ] && [ "${cpus:-1}" -gt "$FAKE_CPUS" ]; then
+    echo "allocation failure: Requested node configuration is not available" >&2; exit 1 # SLURM 22.05's words
+fi
+echo "sbatch: Job 123 to start at 2030-01-01T00:00:00 using ${cpus:-1} processors on nodes n1 in partition p" >&2
+SH
+# stub squeue (a job's pending reason: FAKE_REASON, default None) and scancel (to cancels)
+printf '#!/bin/sh\necho "${FAKE_REASON:-None}"\n' >"$tmp/bin/squeue"
+printf '#!/bin/sh\necho "$*" >>"%s/cancels"\n' "$tmp" >"$tmp/bin/scancel"
+chmod +x "$tmp/bin/sbatch" "$tmp/bin/squeue" "$tmp/bin/scancel"
 PATH="$tmp/bin:$PATH" K=3 TIME=1:00:00 OUTDIR="$tmp/chain" SPHSEG="$bin" bash jobs/restart_chain.sh -P Geometry:dr=0.004 >"$tmp/chain.log" 2>&1
 check "restart_chain submits 3 jobs chained by afterok" "[ \$(wc -l <'$tmp/calls') -eq 3 ] && ! head -1 '$tmp/calls' | grep -q dependency && sed -n 2p '$tmp/calls' | grep -q -- '--dependency=afterok:101 ' && sed -n 3p '$tmp/calls' | grep -q -- '--dependency=afterok:102 ' && grep -q -- '--time=1:00:00 .*--step -P Geometry:dr=0.004' '$tmp/calls'" || cat "$tmp/chain.log"
 NO_SLURM=1 DRYRUN=1 K=1 TIME=1:00:00 OUTDIR="$tmp/chain" SPHSEG="$bin" bash jobs/restart_chain.sh >"$tmp/d1.log" 2>&1
@@ -66,13 +91,49 @@ rm -f "$tmp/calls"
 check "restart_chain: TIME - MARGIN <= 0 refused before any submission" "[ $? -eq 2 ] && [ ! -e '$tmp/calls' ] && grep -q 'nothing submitted' '$tmp/early.log'" || cat "$tmp/early.log"
 (cd /tmp && PATH="$tmp/bin:$PATH" K=1 TIME=1:00:00 GPUS=0 OUTDIR="$tmp/chain2" SPHSEG="$bin" bash "$OLDPWD/jobs/restart_chain.sh" >"$tmp/cpu.log" 2>&1)
 check "restart_chain from another directory, GPUS=0: the script by its full path, --chdir, no GPU flag" "grep -q -- '--chdir=$PWD .*$PWD/jobs/restart_chain.sh --step' '$tmp/calls' && ! grep -q gpus '$tmp/calls'" || cat "$tmp/calls" "$tmp/cpu.log"
-launcher_is() { # expected, env assignments...: sphseg_launcher under SLURM (set -e) gives expected
-    (set -e; export SLURM_JOB_ID=1 GPUS=0 "${@:2}"; sphseg_launcher 2; [ "${launch[*]}" = "$1" ])
+
+# issue 33: a partition smaller than the #SBATCH lines (8 CPUs per task):
+# the jobs would pend for ever (reason PartitionConfig); sbatch --test-only
+# says so before anything is submitted, and the advice makes it fit
+rm -f "$tmp/calls" "$tmp/tests"
+PATH="$tmp/bin:$PATH" FAKE_CPUS=2 K=2 TIME=1:00:00 OUTDIR="$tmp/chain3" SPHSEG="$bin" \
+    bash jobs/restart_chain.sh -P Geometry:dr=0.004 >"$tmp/small.log" 2>&1
+check "restart_chain on a 2-CPU partition: --test-only fails -> exit 2, advice names SBATCH_FLAGS, nothing submitted" \
+    "[ $? -eq 2 ] && [ -s '$tmp/tests' ] && [ ! -e '$tmp/calls' ] && grep -q 'Requested node configuration is not available' '$tmp/small.log' && grep -q 'SBATCH_FLAGS=\"--cpus-per-task=2 --mem=4G\"' '$tmp/small.log' && grep -q -- '--partition' '$tmp/small.log'" ||
+    cat "$tmp/small.log"
+rm -f "$tmp/calls" "$tmp/tests"
+PATH="$tmp/bin:$PATH" FAKE_CPUS=2 K=2 TIME=1:00:00 OUTDIR="$tmp/chain3" SPHSEG="$bin" SBATCH_FLAGS="--cpus-per-task=2 --mem=4G" \
+    bash jobs/restart_chain.sh -P Geometry:dr=0.004 >"$tmp/fits.log" 2>&1
+check "restart_chain with that advice: --test-only with the first submission's arguments, then the 2 jobs" \
+    "[ $? -eq 0 ] && [ -s '$tmp/tests' ] && [ \$(wc -l <'$tmp/tests') -eq 1 ] && [ \$(wc -l <'$tmp/calls') -eq 2 ] && [ \"\$(sed 's/^--test-only //' '$tmp/tests')\" = \"\$(head -1 '$tmp/calls' | sed 's/^--parsable //')\" ] && grep -q -- '--cpus-per-task=2 --mem=4G .*restart_chain.sh --step -P Geometry:dr=0.004\$' '$tmp/tests'" ||
+    cat "$tmp/fits.log" "$tmp/tests" "$tmp/calls"
+# a limit --test-only lets pass (SLURM 22.05: the partition's MaxTime): the
+# first job pends with reason PartitionTimeLimit -> cancelled, no second job
+rm -f "$tmp/calls" "$tmp/tests"
+PATH="$tmp/bin:$PATH" FAKE_REASON=PartitionTimeLimit K=2 TIME=1:00:00 OUTDIR="$tmp/chain3" SPHSEG="$bin" \
+    bash jobs/restart_chain.sh >"$tmp/maxtime.log" 2>&1
+check "restart_chain: first job pending for ever (PartitionTimeLimit) -> cancelled, exit 2, advice, no second job" \
+    "[ $? -eq 2 ] && [ \$(wc -l <'$tmp/calls') -eq 1 ] && [ \"\$(cat '$tmp/cancels')\" = 101 ] && grep -q 'reason PartitionTimeLimit' '$tmp/maxtime.log' && grep -q 'SBATCH_FLAGS=' '$tmp/maxtime.log' && grep -q 'TIME within' '$tmp/maxtime.log'" ||
+    cat "$tmp/maxtime.log"
+
+# stub scontrol: "scontrol show config" with TaskPlugin task/<dir name>
+for p in none affinity cgroup; do
+    mkdir -p "$tmp/task_$p"
+    printf '#!/bin/sh\nprintf "TaskPlugin              = task/%s\\nTaskPluginParam         = (null type)\\n"\n' "$p" >"$tmp/task_$p/scontrol"
+    chmod +x "$tmp/task_$p/scontrol"
+done
+launcher_is() { # expected, env assignments...: sphseg_launcher under SLURM (set -e, task/affinity) gives expected
+    (set -e; export PATH="$tmp/task_affinity:$PATH" SLURM_JOB_ID=1 GPUS=0 "${@:2}"; sphseg_launcher 2; [ "${launch[*]}" = "$1" ])
 }
 check "sphseg_launcher under SLURM, SRUN_FLAGS empty: status 0 (set -e), --mpi=pmix" \
     "launcher_is 'srun --ntasks=2 --cpus-per-task=1 --mpi=pmix --cpu-bind=cores' SRUN_FLAGS="
 check "sphseg_launcher: SRUN_MPI= leaves the site's default, SRUN_FLAGS appended" \
     "launcher_is 'srun --ntasks=2 --cpus-per-task=1 --cpu-bind=cores --exclusive -l' SRUN_MPI= 'SRUN_FLAGS=--exclusive -l'"
+check "sphseg_launcher: --cpu-bind only where TaskPlugin binds (task/none: left out; task/cgroup, task/affinity: cores; CPU_BIND=: left out)" \
+    "launcher_is 'srun --ntasks=2 --cpus-per-task=1 --mpi=pmix' PATH='$tmp/task_none:$PATH' &&
+     launcher_is 'srun --ntasks=2 --cpus-per-task=1 --mpi=pmix --cpu-bind=cores' PATH='$tmp/task_cgroup:$PATH' &&
+     launcher_is 'srun --ntasks=2 --cpus-per-task=1 --mpi=pmix --cpu-bind=cores' &&
+     launcher_is 'srun --ntasks=2 --cpus-per-task=1 --mpi=pmix' CPU_BIND="
 # the batch shell gets the signal (--signal=B:USR1, scancel): sphseg_run passes it on as SIGUSR1
 bash -c "source jobs/common.sh; OMP_NUM_THREADS=1 sphseg_run '$bin' inputs/shearbox_2d.yml -o '$tmp/fwd' -P Run:t_end=5000 -P Output:dt=100 -P Run:progress_s=0.01" >"$tmp/fwd.log" 2>&1 &
 pid=$!

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""What a restart refuses (issue 19, defects 5, 6, 7): every refusal is
-exit status 2 and one "sphseg: error: --restart ..." line, in bounded time,
-on 1, 2 and 3 ranks; never exit 0 on a damaged file, 1, a crash or a hang.
+"""What a restart refuses (issue 19, defects 5, 6, 7; issue 33, defects 3,
+4): every refusal is exit status 2 and one "sphseg: error: --restart ..."
+line, in bounded time, on 1, 2 and 3 ranks; never exit 0 on a damaged file,
+1, a crash or a hang.
 
 - foreign scenes: a checkpoint restarted with another dr, or the drum's
   with the shear box scene and the reverse, is refused naming each
@@ -16,7 +17,20 @@ on 1, 2 and 3 ranks; never exit 0 on a damaged file, 1, a crash or a hang.
   datasets, absurd counts... each refused with a located reason;
 - several ranks: a bad row that only the last rank reads (Kind 255 in the
   last particle), and a byte-damaged file, end every rank with one line
-  from rank 0 within the time limit, on 2 and 3 ranks.
+  from rank 0 within the time limit, on 2 and 3 ranks;
+- the seal checks itself (issue 33, defect 3): one bit flipped in
+  checkpoint_prev.h5's seal step (3 -> 11, past checkpoint.h5's 6) no longer
+  wins over checkpoint.h5, and the warning says why it was passed over; the
+  same flip in checkpoint.h5 gives checkpoint_prev.h5 with a reason; a flip
+  in any other seal word (format, size, sum, step, time, check, reserved) is
+  refused alone and passed over beside a good checkpoint.h5; legacy seals
+  (check word 0) are taken, but one whose step disagrees with /Header is
+  refused, and a legacy checkpoint.h5 older than checkpoint_prev.h5 says so;
+- FIFOs (issue 33, defect 4): --restart FIFO, and a DIR whose checkpoint.h5
+  is a FIFO, exit 2 with one line at once on 1 and 3 ranks, not blocked in
+  open() (a run past 60 s is a failure; the test then opens the FIFO for
+  writing so that the blocked ranks end); a FIFO checkpoint_prev.h5 beside a
+  good checkpoint.h5 is passed over.
 
     /usr/bin/python3 tests/test_restart_guard.py --sphseg build/sphseg --work DIR [--mutants 300]
 """
@@ -52,10 +66,11 @@ def run(cmd, timeout=120):
     t0 = time.time()
     env = dict(os.environ, OMP_NUM_THREADS="1")
     try:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
+        p = subprocess.run(cmd, capture_output=True, text=True, errors="replace", timeout=timeout, env=env)
         return p.returncode, p.stdout, p.stderr, time.time() - t0
-    except subprocess.TimeoutExpired as e:
-        return "timeout", e.stdout or "", e.stderr or "", time.time() - t0
+    except subprocess.TimeoutExpired as e:  # its output comes undecoded
+        text = [x.decode(errors="replace") if isinstance(x, bytes) else x or "" for x in (e.stdout, e.stderr)]
+        return "timeout", text[0], text[1], time.time() - t0
 
 
 def refused(res, what, limit=60):
@@ -162,6 +177,158 @@ def mutate_bytes(src, dst, rng):
     open(dst, "wb").write(data)
 
 
+# ---- issue 33: the seal's own words; FIFOs ---------------------------------
+
+SEAL_WORDS = ["magic", "format", "size", "sum", "step", "time", "check", "reserved"]
+
+
+def seal_word(path, name):
+    with open(path, "rb") as f:
+        f.seek(8 * SEAL_WORDS.index(name))
+        return int.from_bytes(f.read(8), "little")
+
+
+def flip_seal(path, name, bit):
+    """Flip one bit of a seal word in place."""
+    k = 8 * SEAL_WORDS.index(name) + bit // 8
+    with open(path, "r+b") as f:
+        f.seek(k)
+        b = f.read(1)[0] ^ (1 << (bit % 8))
+        f.seek(k)
+        f.write(bytes([b]))
+
+
+def pair(work, name, src, legacy=False):
+    """A directory holding copies of src's checkpoint.h5 and checkpoint_prev.h5
+    (legacy: both sealed as before the check existed, check word 0)."""
+    d = os.path.join(work, name)
+    os.makedirs(d)
+    for f in ("checkpoint.h5", "checkpoint_prev.h5"):
+        shutil.copy(os.path.join(src, f), d)
+        if legacy:
+            reseal(os.path.join(d, f), legacy=True)
+    return d
+
+
+def took(res, path):
+    """The restart ran (exit 0) from path; the warnings it gave."""
+    rc, out, err, dt = res
+    warns = [l for l in err.splitlines() if l.startswith("sphseg: warning: --restart")]
+    return rc == 0 and f"restart from {path}: step" in out, warns, f"rc {rc}, {dt:.1f} s\n{err}\n{out[-400:]}"
+
+
+def test_seal_flips(sp, work, src, run_ok):
+    """Defect 3: a flipped seal step chooses no checkpoint; every reason is said."""
+    cur, prev = seal_word(src + "/checkpoint.h5", "step"), seal_word(src + "/checkpoint_prev.h5", "step")
+    up = cur.bit_length()  # prev's step with this bit set passes checkpoint.h5's
+    d = pair(work, "flip_prev", src)
+    flip_seal(d + "/checkpoint_prev.h5", "step", up)
+    ok, warns, why = took(restart(sp, work, d, extra=run_ok), d + "/checkpoint.h5")
+    check(f"seal: checkpoint_prev.h5's step flipped ({prev} -> {prev ^ 1 << up}, past {cur}): checkpoint.h5 "
+          "taken, the warning says why checkpoint_prev.h5 was passed over", ok and len(warns) == 1 and
+          "checkpoint_prev.h5: damaged: its checksum block is corrupted" in warns[0], why)
+    d = pair(work, "flip_cur", src)
+    flip_seal(d + "/checkpoint.h5", "step", up)
+    ok, warns, why = took(restart(sp, work, d, extra=run_ok), d + "/checkpoint_prev.h5")
+    check("seal: checkpoint.h5's step flipped: checkpoint_prev.h5 taken, with the reason",
+          ok and len(warns) == 1 and "checkpoint.h5: damaged: its checksum block is corrupted" in warns[0]
+          and "taking checkpoint_prev.h5" in warns[0], why)
+
+
+def test_seal_legacy(sp, work, src, run_ok):
+    """Legacy seals (check 0): taken; /Header's step stands behind their step."""
+    cur, prev = seal_word(src + "/checkpoint.h5", "step"), seal_word(src + "/checkpoint_prev.h5", "step")
+    d = pair(work, "legacy", src, legacy=True)
+    ok, warns, why = took(restart(sp, work, d, extra=run_ok), d + "/checkpoint.h5")
+    check("seal: legacy seals (check 0) are taken: checkpoint.h5, no warning", ok and not warns, why)
+    d = pair(work, "legacy_flip_prev", src, legacy=True)
+    flip_seal(d + "/checkpoint_prev.h5", "step", cur.bit_length())
+    ok, why = refused(restart(sp, work, d, extra=run_ok), "legacy prev flipped")
+    check("seal: a legacy checkpoint_prev.h5 whose seal step is flipped past checkpoint.h5's: refused, "
+          "its seal and /Header disagree", ok and f"says step {prev ^ 1 << cur.bit_length()}" in why
+          and f"/Header says step {prev}" in why, why)
+    low = cur.bit_length() - 1  # clearing checkpoint.h5's top bit puts it below checkpoint_prev.h5's step
+    d = pair(work, "legacy_flip_cur", src, legacy=True)
+    flip_seal(d + "/checkpoint.h5", "step", low)
+    ok, warns, why = took(restart(sp, work, d, extra=run_ok), d + "/checkpoint_prev.h5")
+    check(f"seal: a legacy checkpoint.h5 whose step reads {cur ^ 1 << low} < {prev}: checkpoint_prev.h5 taken, "
+          "the warning says checkpoint.h5 is older", cur ^ 1 << low < prev and ok and len(warns) == 1 and
+          f"checkpoint.h5: step {cur ^ 1 << low}, older than checkpoint_prev.h5 (step {prev})" in warns[0], why)
+
+
+def test_seal_words(sp, work, src, run_ok):
+    """A bit flipped in each seal word: refused alone, passed over beside a good checkpoint.h5."""
+    jobs = []
+    for k, name in enumerate(SEAL_WORDS[1:]):
+        bit = (5 + 11 * k) % 64  # a different bit in each word
+        one = os.path.join(work, f"word_{name}.h5")
+        shutil.copy(src + "/checkpoint.h5", one)
+        flip_seal(one, name, bit)
+        d = pair(work, f"word_{name}", src)
+        flip_seal(d + "/checkpoint_prev.h5", name, bit)
+        jobs.append((name, bit, one, d))
+
+    def one_job(j):
+        name, bit, one, d = j
+        return refused(restart(sp, work, one, extra=run_ok, timeout=60), name), took(
+            restart(sp, work, d, extra=run_ok, timeout=60), d + "/checkpoint.h5")
+    with concurrent.futures.ThreadPoolExecutor(2) as ex:
+        res = list(ex.map(one_job, jobs))
+    for (name, bit, one, d), ((ok1, why1), (ok2, warns, why2)) in zip(jobs, res):
+        check(f"seal: {name} word, bit {bit} flipped: refused alone (checksum block corrupted)",
+              ok1 and "damaged: its checksum block is corrupted" in why1, why1)
+        check(f"seal: {name} word, bit {bit} flipped in checkpoint_prev.h5: passed over, saying why",
+              ok2 and len(warns) == 1 and "checkpoint_prev.h5: damaged: its checksum block" in warns[0], why2)
+
+
+def restart_fifo(sp, work, target, fifo, np_=1, extra=(), timeout=60):
+    """restart(), but a run blocked past timeout on fifo is released (the FIFO
+    opened for writing and closed: the blocked open returns) and then killed,
+    so that no rank is left behind; its result is then "timeout"."""
+    out = os.path.join(work, "r_%d" % random.randrange(1 << 30))
+    cmd = ([] if np_ == 1 else MPI + ["-np", str(np_)]) + [sp, SHEAR, "-o", out, "--restart", target] + list(extra)
+    t0 = time.time()
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, errors="replace",
+                         start_new_session=True, env=dict(os.environ, OMP_NUM_THREADS="1"))
+    try:
+        o, e = p.communicate(timeout=timeout)
+        return p.returncode, o, e, time.time() - t0
+    except subprocess.TimeoutExpired:
+        try:
+            os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+        except OSError:
+            pass
+        try:
+            o, e = p.communicate(timeout=20)
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, 9)
+            o, e = p.communicate()
+        return "timeout", o, e, time.time() - t0
+
+
+def test_fifos(sp, work, src, run_ok):
+    """Defect 4: a FIFO given to --restart, or named checkpoint.h5 in its
+    directory, is refused at once: no rank waits in open() for a writer."""
+    fifo = os.path.join(work, "fifo.h5")
+    os.mkfifo(fifo)
+    d = os.path.join(work, "fifo_dir")
+    os.makedirs(d)
+    os.mkfifo(d + "/checkpoint.h5")
+    for n in (1, 3):
+        ok, why = refused(restart_fifo(sp, work, fifo, fifo, n, run_ok), f"FIFO, {n} rank(s)")
+        check(f"--restart FIFO on {n} rank(s): exit 2, one line, not a regular file",
+              ok and "not a regular file" in why, why)
+        ok, why = refused(restart_fifo(sp, work, d, d + "/checkpoint.h5", n, run_ok), f"DIR/FIFO, {n} rank(s)")
+        check(f"--restart DIR whose checkpoint.h5 is a FIFO, {n} rank(s): exit 2, one line",
+              ok and "checkpoint.h5: not a regular file" in why, why)
+    d = pair(work, "fifo_prev", src)
+    os.remove(d + "/checkpoint_prev.h5")
+    os.mkfifo(d + "/checkpoint_prev.h5")
+    ok, warns, why = took(restart_fifo(sp, work, d, d + "/checkpoint_prev.h5", 1, run_ok), d + "/checkpoint.h5")
+    check("--restart DIR whose checkpoint_prev.h5 is a FIFO: checkpoint.h5 taken, the FIFO passed over",
+          ok and len(warns) == 1 and "checkpoint_prev.h5: not a regular file" in warns[0], why)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--sphseg", required=True)
@@ -233,6 +400,14 @@ def main():
         ok, why = refused(restart(sp, work, path, np_=n, extra=base + ["-P", "Run:t_end=1.5"], timeout=90),
                           f"{n} ranks damaged", limit=30)
         check(f"{n} ranks: a byte-damaged checkpoint: exit 2, one line, < 30 s", ok, why)
+
+    # issue 33: the seal checks itself (defect 3); FIFOs (defect 4)
+    run_ok = base + ["-P", "Run:t_end=1.5"]
+    src = os.path.dirname(ck[1])
+    test_seal_flips(sp, work, src, run_ok)
+    test_seal_legacy(sp, work, src, run_ok)
+    test_seal_words(sp, work, src, run_ok)
+    test_fifos(sp, work, src, run_ok)
     print(f"{len(FAILS)} failed")
     return 1 if FAILS else 0
 

@@ -6,13 +6,19 @@
 # TaskPlugin=task/none, no GPUs) under a temporary directory, and submits
 # through the real sbatch:
 #  1. jobs/drum_1rank.sbatch, a small drum and its analysis;
-#  2. a 2-rank job through srun (jobs/common.sh's launcher, --mpi=pmix);
+#  2. a 2-rank job through srun (jobs/common.sh's launcher, --mpi=pmix; no
+#     --cpu-bind under TaskPlugin=task/none, so no srun warning);
 #  3. jobs/restart_chain.sh, K = 4 jobs chained by afterok, the first two
 #     ending by Run:max_wall_time (MAX_WALL) and by SIGUSR1 to the batch
 #     shell (what --signal=B:USR1 sends), the rest reaching t_end; every
 #     snapshot of the chain is bit-identical to an uninterrupted run's;
 #  4. a job killed by its time limit (SIGTERM from slurmd: sphseg writes a
-#     checkpoint), then resumed with --restart OUTDIR to t_end.
+#     checkpoint), then resumed with --restart OUTDIR to t_end;
+#  5. (issue 33) jobs/restart_chain.sh on a partition too small for it
+#     ("small": MaxCPUsPerNode=1, MaxTime=5 min): sbatch --test-only refuses
+#     2 CPUs per task, so nothing is submitted; a TIME over its MaxTime
+#     passes --test-only, and the first job, pending for ever, is cancelled;
+#     both exit 2 and name SBATCH_FLAGS.
 # Not root, or no apt and no slurm: exit 77 (not run). The daemons are
 # stopped at the end. Needs build/sphseg (or $1) built with GPU support off
 # or on (the jobs run --backend cpu).
@@ -75,6 +81,7 @@ MinJobAge=600
 InactiveLimit=0
 NodeName=$host CPUs=$(nproc) RealMemory=$mem State=UNKNOWN
 PartitionName=debug Nodes=ALL Default=YES MaxTime=INFINITE State=UP OverSubscribe=FORCE:4
+PartitionName=small Nodes=ALL Default=NO MaxTime=5 MaxCPUsPerNode=1 State=UP
 EOF
 slurmctld || { echo "test_slurm: slurmctld does not start: not run"; cat "$work/slurmctld.log"; exit 77; }
 slurmd || { echo "test_slurm: slurmd does not start: not run"; cat "$work/slurmd.log"; exit 77; }
@@ -115,8 +122,8 @@ EOF
 j=$(sbatch --parsable --ntasks=2 "${common[@]}" --time=10 -o "$work/two.out" --export="ALL,OUTDIR=$work/two" \
     "$work/two.sbatch")
 wait_job "$j" 300
-check "a 2-rank job through srun --mpi=pmix: COMPLETED, 2 ranks, done" \
-    "[ \"\$(jstate $j)\" = COMPLETED ] && grep -q 'srun --ntasks=2 .*--mpi=pmix' '$work/two.out' && grep -q '2 rank(s)' '$work/two.out' && grep -q '^done:' '$work/two.out'" ||
+check "a 2-rank job through srun --mpi=pmix: COMPLETED, 2 ranks, done; task/none: no --cpu-bind, no srun warning" \
+    "[ \"\$(jstate $j)\" = COMPLETED ] && grep -q 'srun --ntasks=2 .*--mpi=pmix' '$work/two.out' && grep -q '2 rank(s)' '$work/two.out' && grep -q '^done:' '$work/two.out' && ! grep -q 'cpu-bind\|support for cpu binding' '$work/two.out'" ||
     tail -8 "$work/two.out"
 
 # 3. the restart chain: link 1 ends by Run:max_wall_time, link 2 by --signal
@@ -183,6 +190,22 @@ wait_job "$j" 240
 check "resumed from it: COMPLETED, restart from its checkpoint, done" \
     "[ \"\$(jstate $j)\" = COMPLETED ] && grep -q '^restart from $work/limit/checkpoint.h5' '$work/resume.out' && grep -q '^done:' '$work/resume.out'" ||
     tail -5 "$work/resume.out"
+
+# 5. the chain on a partition too small for it: refused before it could pend for ever
+njobs() { squeue -h -t all -o %i | wc -l; }
+n=$(njobs)
+K=2 TIME=3:00 MARGIN=60 OUTDIR="$work/small" SBATCH_FLAGS="${common[*]} --cpus-per-task=2 --partition=small" \
+    bash jobs/restart_chain.sh >"$work/small.log" 2>&1
+check "restart_chain, 2 CPUs per task on a MaxCPUsPerNode=1 partition: --test-only refuses, exit 2, SBATCH_FLAGS named, no job" \
+    "[ $? -eq 2 ] && [ \$(njobs) -eq $n ] && grep -q 'sbatch --test-only' '$work/small.log' && grep -q 'SBATCH_FLAGS=' '$work/small.log'" ||
+    cat "$work/small.log"
+K=2 TIME=10:00 MARGIN=60 OUTDIR="$work/small" SBATCH_FLAGS="${common[*]} --partition=small" \
+    bash jobs/restart_chain.sh >"$work/maxtime.log" 2>&1
+rc=$?
+first=$(sed -n 's/.*job \([0-9]*\) would pend for ever.*/\1/p' "$work/maxtime.log")
+check "restart_chain, TIME over the partition's MaxTime: the first job (pending for ever) cancelled, exit 2, no second job" \
+    "[ $rc -eq 2 ] && [ -n '$first' ] && [ \$(njobs) -eq $((n + 1)) ] && [ \"\$(jstate ${first:-0})\" = CANCELLED ] && grep -q 'SBATCH_FLAGS=' '$work/maxtime.log'" ||
+    cat "$work/maxtime.log"
 
 echo "test_slurm: logs in $work"
 exit $fail

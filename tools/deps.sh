@@ -2,10 +2,15 @@
 # Install the Debian/Ubuntu packages sphseg's build, tests and tools need,
 # only those missing. Run as root (or with sudo available); otherwise it
 # prints the apt-get command to run and exits 1.
+#   bash tools/deps.sh          build, unit tests, tools   (make deps)
+#   bash tools/deps.sh --tests  also what the whole test suite uses: ParaView's
+#                               pvbatch under xvfb (tests/test_paraview.sh;
+#                               about 1 GB with its Qt)      (make deps-test)
 set -euo pipefail
 pkgs=(build-essential pkg-config libopenmpi-dev openmpi-bin libhdf5-openmpi-dev libmetis-dev
       libcyaml-dev libyaml-dev libcmocka-dev python3 python3-numpy python3-scipy python3-h5py
       python3-matplotlib python3-yaml)
+if [ "${1:-}" = --tests ]; then pkgs+=(paraview python3-paraview xvfb xauth); fi
 missing=()
 for p in "${pkgs[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
