@@ -91,7 +91,7 @@ CORE_SRC := src/error.c src/scene.c src/scene_doc.c src/particles.c src/nbr.c sr
             src/backend_cpu.c src/integrate.c src/diag.c src/io.c src/checkpoint.c \
             src/checkpoint_read.c src/checkpoint_keys.c src/outdir.c src/stages.c mpi/comm.c mpi/halo.c
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
-HEADERS  := $(wildcard src/*.h src/physics/*.h mpi/*.h)
+HEADERS  := $(wildcard src/*.h src/core/*.h src/physics/*.h mpi/*.h)
 
 UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint test_stages test_position
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
@@ -143,7 +143,7 @@ bench: all
 	else echo "(no GPU visible: GPU benchmark skipped)"; fi
 
 format:
-	clang-format -i src/*.c src/*.h src/physics/*.h mpi/*.c mpi/*.h tests/*.c
+	clang-format -i src/*.c src/*.h src/core/*.h src/physics/*.h mpi/*.c mpi/*.h tests/*.c
 
 clean:
 	rm -rf $(BUILD)

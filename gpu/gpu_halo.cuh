@@ -312,7 +312,7 @@ static ftab fields_tab(const gpu_t *g, uint32_t f, int trim2d)
 {
     ftab t;
     t.n = 0;
-    void *ptrs[64];
+    void *ptrs[PART_NARRAYS];
     int n = stage_arrays(&g->d, f, trim2d, ptrs);
     for (int k = 0; k < n; ++k) ft_add(&t, ptrs[k], part_array_esize((size_t)part_array_find(&g->d, ptrs[k])));
     return t;

@@ -19,8 +19,8 @@
 static void cpu_refresh(sim_t *s, uint32_t fields)
 {
     if (!s->halo || !fields) return;
-    void *ptrs[64];
-    int arr[64], n = stage_arrays(&s->p, fields, 0, ptrs);
+    void *ptrs[PART_NARRAYS];
+    int arr[PART_NARRAYS], n = stage_arrays(&s->p, fields, 0, ptrs);
     for (int k = 0; k < n; ++k) arr[k] = part_array_find(&s->p, ptrs[k]);
     halo_refresh(s->halo, &s->p, arr, n);
 }

@@ -191,7 +191,9 @@ static void ckpt_write_particles(hid_t file, const particles_t *p, long long nto
  * then the new file is renamed over checkpoint.h5. checkpoint.h5 names a
  * complete checkpoint at every instant, and so does checkpoint_prev.h5 once
  * there is one; a file system without hard links falls back to two renames
- * (a moment with no checkpoint.h5; --restart OUTDIR still finds _prev). */
+ * (a moment with no checkpoint.h5; --restart OUTDIR still finds _prev).
+ * tests/test_outdir.sh kills rank 0 just before the rename over
+ * checkpoint.h5 (an LD_PRELOAD shim, tests/shim_kill.c). */
 static void ckpt_commit(const char *outdir, const char *tmp)
 {
     char path[CKPT_PATH_MAX], prev[CKPT_PATH_MAX], link_tmp[CKPT_PATH_MAX];
@@ -208,9 +210,6 @@ static void ckpt_commit(const char *outdir, const char *tmp)
             if (!told++) warning("cannot hard-link %s (%s): rotating checkpoints by renames", path, strerror(errno));
             if (rename(path, prev) != 0 && errno != ENOENT) io_write_failed("cannot rename %s to %s", path, prev);
         }
-        static int rotations; /* tests/test_outdir.sh: killed in the middle of rotation N */
-        const char *kill_at = getenv("SPHSEG_TEST_KILL_IN_ROTATION");
-        if (kill_at && ++rotations == atoi(kill_at)) raise(SIGKILL);
         if (rename(tmp, path) != 0) io_write_failed("cannot rename it to %s", path);
     }
     io_forget_tmp();

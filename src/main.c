@@ -242,7 +242,7 @@ static void check_finite(sim_t *s, diag *d)
  * (src/stages.h). */
 static int parallel_ghost_arrays(const sim_t *s, int *arr)
 {
-    void *a[64];
+    void *a[PART_NARRAYS];
     int n = stage_arrays(&s->p, stage_ghost_fields(stage_flags(s)), 0, a);
     for (int k = 0; k < n; ++k) arr[k] = part_array_find(&s->p, a[k]);
     return n;
@@ -278,7 +278,7 @@ static void parallel_start(sim_t *s, const ckpt_run *rs)
     const int per = (int)s->sc->geometry.periodic;
     if (comm_size() == 1 && !per) return; /* one rank with periodic axes: its own images (mpi/halo.h) */
     particles_t *p = &s->p;
-    int arr[HALO_MAX_ARRAYS], narr = parallel_ghost_arrays(s, arr);
+    int arr[PART_NARRAYS], narr = parallel_ghost_arrays(s, arr); /* halo_init: at most HALO_MAX_ARRAYS */
     s->halo = malloc(sizeof *s->halo);
     if (!s->halo) error_exit(1, "out of memory");
     int axis = s->sc->parallel.axis == AXIS_AUTO ? -1 : (int)s->sc->parallel.axis;

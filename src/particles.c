@@ -1,8 +1,8 @@
 /* particles.c — the structure-of-arrays particle store (see particles.h).
- * Every per-particle array is listed once in part_arrays[]; allocation,
- * release, permutation and the memory estimate all loop over that list, so
- * an array added to particles_t needs one line here (the static assertion
- * below fails until it is added). */
+ * Every per-particle array is one component of a row of PART_FIELDS
+ * (src/core/fields.h), and part_arrays[] is made from that table;
+ * allocation, release, permutation, packing and the memory estimate all
+ * loop over it, so a new field is one row of the table. */
 #include "particles.h"
 #include "error.h"
 #include <stdlib.h>
@@ -14,60 +14,18 @@ struct part_array {
     size_t size;   /* bytes per element */
 };
 
-static const struct part_array part_arrays[] = {
-    {offsetof(particles_t, x[0]), sizeof(real)},      {offsetof(particles_t, x[1]), sizeof(real)},
-    {offsetof(particles_t, x[2]), sizeof(real)},      {offsetof(particles_t, X0[0]), sizeof(real)},
-    {offsetof(particles_t, X0[1]), sizeof(real)},     {offsetof(particles_t, X0[2]), sizeof(real)},
-    {offsetof(particles_t, v[0]), sizeof(real)},      {offsetof(particles_t, v[1]), sizeof(real)},
-    {offsetof(particles_t, v[2]), sizeof(real)},      {offsetof(particles_t, vol), sizeof(real)},
-    {offsetof(particles_t, C), sizeof(creal)},        {offsetof(particles_t, C_n), sizeof(creal)},
-    {offsetof(particles_t, dCdt), sizeof(creal)},      {offsetof(particles_t, gdot), sizeof(real)},
-    {offsetof(particles_t, gsum), sizeof(real)},
-    {offsetof(particles_t, nrm[0]), sizeof(real)},    {offsetof(particles_t, nrm[1]), sizeof(real)},
-    {offsetof(particles_t, nrm[2]), sizeof(real)},    {offsetof(particles_t, psi), sizeof(real)},
-    {offsetof(particles_t, segV), sizeof(real)},     {offsetof(particles_t, segQ), sizeof(real)},
-    {offsetof(particles_t, segD), sizeof(real)},
-    {offsetof(particles_t, sig[0]), sizeof(real)},
-    {offsetof(particles_t, sig[1]), sizeof(real)},
-    {offsetof(particles_t, sig[2]), sizeof(real)},
-    {offsetof(particles_t, sig[3]), sizeof(real)},
-    {offsetof(particles_t, sig[4]), sizeof(real)},
-    {offsetof(particles_t, sig[5]), sizeof(real)},
-    {offsetof(particles_t, sig_n[0]), sizeof(real)},
-    {offsetof(particles_t, sig_n[1]), sizeof(real)},
-    {offsetof(particles_t, sig_n[2]), sizeof(real)},
-    {offsetof(particles_t, sig_n[3]), sizeof(real)},
-    {offsetof(particles_t, sig_n[4]), sizeof(real)},
-    {offsetof(particles_t, sig_n[5]), sizeof(real)},
-    {offsetof(particles_t, dsig[0]), sizeof(real)},
-    {offsetof(particles_t, dsig[1]), sizeof(real)},
-    {offsetof(particles_t, dsig[2]), sizeof(real)},
-    {offsetof(particles_t, dsig[3]), sizeof(real)},
-    {offsetof(particles_t, dsig[4]), sizeof(real)},
-    {offsetof(particles_t, dsig[5]), sizeof(real)},
-    {offsetof(particles_t, x_n[0]), sizeof(preal)},
-    {offsetof(particles_t, x_n[1]), sizeof(preal)},
-    {offsetof(particles_t, x_n[2]), sizeof(preal)},
-    {offsetof(particles_t, xr[0]), sizeof(real)},
-    {offsetof(particles_t, xr[1]), sizeof(real)},
-    {offsetof(particles_t, xr[2]), sizeof(real)},
-    {offsetof(particles_t, v_n[0]), sizeof(real)},
-    {offsetof(particles_t, v_n[1]), sizeof(real)},
-    {offsetof(particles_t, v_n[2]), sizeof(real)},
-    {offsetof(particles_t, acc[0]), sizeof(real)},
-    {offsetof(particles_t, acc[1]), sizeof(real)},
-    {offsetof(particles_t, acc[2]), sizeof(real)},
-    {offsetof(particles_t, L[0]), sizeof(real)},     {offsetof(particles_t, L[1]), sizeof(real)},
-    {offsetof(particles_t, L[2]), sizeof(real)},     {offsetof(particles_t, L[3]), sizeof(real)},
-    {offsetof(particles_t, L[4]), sizeof(real)},     {offsetof(particles_t, L[5]), sizeof(real)},
-    {offsetof(particles_t, id), sizeof(int64_t)},     {offsetof(particles_t, kind), sizeof(uint8_t)},
-    {offsetof(particles_t, bclass), sizeof(uint8_t)}, {offsetof(particles_t, wall), sizeof(uint8_t)},
-};
-#define PART_NARRAYS (sizeof part_arrays / sizeof part_arrays[0])
+#define PART_ARRAY_COMP(comp, type) {offsetof(particles_t, comp), sizeof(type)},
+#define PART_ARRAY_ROW(member, fld, type, n, trim) PART_FIELD_EACH(n, PART_ARRAY_COMP, member, type)
+static const struct part_array part_arrays[] = {PART_FIELDS(PART_ARRAY_ROW)};
+#undef PART_ARRAY_ROW
+#undef PART_ARRAY_COMP
 
-/* Every member from x onwards is one array pointer listed above. */
+/* The table makes every array member of particles_t and the list alike; past
+ * the counts at its head, particles_t holds those pointers and nothing
+ * else, one after another (a member added outside the table fails here). */
+_Static_assert(sizeof part_arrays / sizeof part_arrays[0] == PART_NARRAYS, "one entry per array");
 _Static_assert(sizeof(particles_t) == offsetof(particles_t, x) + PART_NARRAYS * sizeof(void *),
-               "particles_t changed: update part_arrays[] in particles.c");
+               "particles_t holds a member outside PART_FIELDS (src/core/fields.h)");
 
 /* Read / write the pointer member described by a. memcpy keeps this free of
  * type punning (the member is real *, int64_t * or uint8_t *). */

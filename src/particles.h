@@ -6,6 +6,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include "physics/hd.h"
+#include "core/fields.h"
 
 enum part_kind { KIND_MATERIAL = 0, KIND_DUMMY = 1 };
 
@@ -25,39 +26,18 @@ typedef struct particles {
     size_t ng;  /* ghost copies of other ranks' particles, at [n, n + ng) (mpi/halo.h);
                  * 0 on one rank */
     size_t cap; /* allocated (n + ng <= cap) */
-    real *x[3];   /* position, m */
-    real *X0[3];  /* reference (initial) position, m, for prescribed kinematics */
-    real *v[3];   /* velocity, m/s */
-    real *vol;    /* volume m_i/rho_i, m^d */
-    creal *C;     /* small-grain concentration, - (double in both precisions: hd.h) */
-    creal *C_n;   /* C at the start of the step (predictor-corrector) */
-    creal *dCdt;  /* concentration rate, 1/s */
-    real *gdot;   /* shear-rate magnitude, 1/s */
-    real *gsum;   /* concentration windows (Segregation:every): the shear rate integrated
-                   * over the open window, -; divided by its length at the window's
-                   * concentration step, where it is the window's mean shear rate, 1/s */
-    real *nrm[3]; /* HCSR normal, pointing into the material */
-    real *psi;    /* smoothed degenerate function psi~ (4.14, 4.18) */
-    real *segV;   /* segregation velocity V(C, gdot), m/s, per rate evaluation */
-    real *segQ;   /* segregation flux Q = V F(C), m/s (eq. 2.6) */
-    real *segD;   /* diffusivity D(C, gdot), m^2/s */
-    real *sig[6];   /* Cauchy stress, Pa, tension positive: xx, yy, zz, xy, xz, yz
-                     * (material: integrated; dummy: extrapolated, eq. 4.3) */
-    real *sig_n[6]; /* stress at the start of the step */
-    real *dsig[6];  /* stress rate (Jaumann elastic trial rate, C1), Pa/s;
-                     * also the Shepard filter's scratch */
-    preal *x_n[3];  /* position at the start of the step, m (double in both builds: hd.h) */
-    real *xr[3];    /* the single build's rounding remainder of x: the position is x + xr
-                     * to double precision (hd.h); 0 in the double build, m */
-    real *v_n[3];   /* velocity at the start of the step, m/s */
-    real *acc[3];   /* acceleration (3.9) with gravity, m/s^2 */
-    real *L[6];   /* renormalisation (-sum_j V_j w_ij x_ij x_ij)^-1, symmetric:
-                   * xx, yy, zz, xy, xz, yz (conservative scheme) */
-    int64_t *id;  /* global particle ID */
-    uint8_t *kind;   /* enum part_kind */
-    uint8_t *bclass; /* enum part_bclass */
-    uint8_t *wall;   /* a dummy's wall (enum wall_id, src/physics/wall.h), set by setup; 0 for material */
+    /* the arrays, one member per row of PART_FIELDS (src/core/fields.h); an
+     * array is declared there and nowhere else */
+#define PART_MEMBER(member, fld, type, n, trim) type *member PART_FIELD_DIMS(n);
+    PART_FIELDS(PART_MEMBER)
+#undef PART_MEMBER
 } particles_t;
+
+/* The store's arrays: one per component of each field, in the table's
+ * order (x[0], x[1], x[2], X0[0], ...). */
+#define PART_NCOMP(member, fld, type, n, trim) +(n)
+enum { PART_NARRAYS = 0 PART_FIELDS(PART_NCOMP) };
+#undef PART_NCOMP
 
 void part_alloc(particles_t *p, int dim, size_t cap);
 void part_free(particles_t *p);

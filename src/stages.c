@@ -195,47 +195,42 @@ const stage_sched *stage_schedule(unsigned flags)
     return m;
 }
 
+/* Each field's bit, component count and what a trimmed 2D list keeps of
+ * it, in the table's order: the store's arrays are its components in turn. */
+static const struct {
+    uint32_t bit;
+    int n, keep2d;
+    const char *name;
+} stage_fields[] = {
+#define STAGE_FIELD(member, fld, type, n, trim) {FLD_##fld, n, PART_FIELD_KEEP2D(trim, n), #member},
+    PART_FIELDS(STAGE_FIELD)
+#undef STAGE_FIELD
+};
+_Static_assert(sizeof stage_fields / sizeof stage_fields[0] == FLD_NFIELDS, "one bit per field");
+_Static_assert(FLD_NFIELDS <= 31, "the field bits are an int enum and a uint32_t mask");
+/* a VEC row is a 3-vector, a SYM row a symmetric tensor of 6 */
+#define STAGE_TRIM_OK(member, fld, type, n, trim) &&PART_FIELD_KEEP2D(trim, n) > 0
+_Static_assert(1 PART_FIELDS(STAGE_TRIM_OK), "a VEC field has 3 components, a SYM field 6");
+#undef STAGE_TRIM_OK
+
 int stage_arrays(const particles_t *p, uint32_t f, int trim2d, void **ptrs)
 {
+    const int trim = trim2d && p->dim == 2;
     int n = 0;
-    const int nd = trim2d && p->dim == 2 ? 2 : 3, ns = trim2d && p->dim == 2 ? 4 : 6;
-#define ADD3(a, k)                                                                                                 \
-    for (int d_ = 0; d_ < (k); ++d_) ptrs[n++] = (void *)(a)[d_]
-    if (f & FLD_X) ADD3(p->x, nd);
-    if (f & FLD_X0) ADD3(p->X0, 3);
-    if (f & FLD_V) ADD3(p->v, nd);
-    if (f & FLD_VOL) ptrs[n++] = p->vol;
-    if (f & FLD_C) ptrs[n++] = p->C;
-    if (f & FLD_CN) ptrs[n++] = p->C_n;
-    if (f & FLD_DCDT) ptrs[n++] = p->dCdt;
-    if (f & FLD_GDOT) ptrs[n++] = p->gdot;
-    if (f & FLD_GSUM) ptrs[n++] = p->gsum;
-    if (f & FLD_NRM) ADD3(p->nrm, nd);
-    if (f & FLD_PSI) ptrs[n++] = p->psi;
-    if (f & FLD_SEGC) ptrs[n++] = p->segV, ptrs[n++] = p->segQ, ptrs[n++] = p->segD;
-    if (f & FLD_SIG) ADD3(p->sig, ns);
-    if (f & FLD_SIGN) ADD3(p->sig_n, ns);
-    if (f & FLD_DSIG) ADD3(p->dsig, ns);
-    if (f & FLD_XN) ADD3(p->x_n, nd);
-    if (f & FLD_VN) ADD3(p->v_n, nd);
-    if (f & FLD_ACC) ADD3(p->acc, nd);
-    if (f & FLD_L) ADD3(p->L, 6);
-    if (f & FLD_ID) ptrs[n++] = p->id;
-    if (f & FLD_KIND) ptrs[n++] = p->kind;
-    if (f & FLD_BCLASS) ptrs[n++] = p->bclass;
-    if (f & FLD_WALL) ptrs[n++] = p->wall;
-#undef ADD3
+    for (size_t i = 0, k = 0; i < FLD_NFIELDS; k += (size_t)stage_fields[i].n, ++i)
+        if (f & stage_fields[i].bit)
+            for (int d = 0; d < (trim ? stage_fields[i].keep2d : stage_fields[i].n); ++d)
+                ptrs[n++] = part_array_get(p, k + (size_t)d);
     return n;
 }
 
 const char *stage_fields_str(uint32_t f, char *buf, size_t len)
 {
-    static const char *name[FLD_NFIELDS] = {"x",   "X0",   "v",    "vol", "C",   "C_n", "dCdt", "gdot",
-                                            "gsum", "nrm", "psi",  "seg", "sig", "sig_n", "dsig", "x_n",
-                                            "v_n", "acc", "L",    "id",  "kind", "bclass", "wall"};
     size_t o = 0;
     buf[0] = 0;
-    for (int k = 0; k < FLD_NFIELDS; ++k)
-        if (f & (1u << k)) o += (size_t)snprintf(buf + o, o < len ? len - o : 0, "%s%s", o ? ", " : "", name[k]);
+    for (int k = 0; k < FLD_NFIELDS; ++k) {
+        if (!(f & stage_fields[k].bit)) continue;
+        o += (size_t)snprintf(buf + o, o < len ? len - o : 0, "%s%s", o ? ", " : "", stage_fields[k].name);
+    }
     return buf;
 }

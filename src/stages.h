@@ -15,15 +15,17 @@
 #include <stdint.h>
 #include "particles.h"
 
-/* Fields of the store, as bits (a field may be several arrays: x is 3). */
+/* Fields of the store, as bits: FLD_<FLD> for each row of PART_FIELDS
+ * (src/core/fields.h), in its order (a field may be several arrays: x is 3). */
+#define STAGE_FIELD_POS(member, fld, type, n, trim) FLD_POS_##fld,
+enum stage_field_pos { PART_FIELDS(STAGE_FIELD_POS) FLD_NFIELDS };
+#undef STAGE_FIELD_POS
+#define STAGE_FIELD_BIT(member, fld, type, n, trim) FLD_##fld = 1u << FLD_POS_##fld,
 enum stage_field {
-    FLD_X = 1u << 0, FLD_X0 = 1u << 1, FLD_V = 1u << 2, FLD_VOL = 1u << 3, FLD_C = 1u << 4, FLD_CN = 1u << 5,
-    FLD_DCDT = 1u << 6, FLD_GDOT = 1u << 7, FLD_GSUM = 1u << 8, FLD_NRM = 1u << 9, FLD_PSI = 1u << 10,
-    FLD_SEGC = 1u << 11, /* segV, segQ, segD */
-    FLD_SIG = 1u << 12, FLD_SIGN = 1u << 13, FLD_DSIG = 1u << 14, FLD_XN = 1u << 15, FLD_VN = 1u << 16,
-    FLD_ACC = 1u << 17, FLD_L = 1u << 18, FLD_ID = 1u << 19, FLD_KIND = 1u << 20, FLD_BCLASS = 1u << 21,
-    FLD_WALL = 1u << 22, FLD_NFIELDS = 23
+    PART_FIELDS(STAGE_FIELD_BIT)              /* then the unions: */
+    FLD_SEGC = FLD_SEGV | FLD_SEGQ | FLD_SEGD /* the segregation coefficients V, Q, D */
 };
+#undef STAGE_FIELD_BIT
 
 /* What the run solves, as bits: a stage runs when all of its `when` bits
  * are set and none of its `unless` bits. */
@@ -120,12 +122,13 @@ typedef struct stage_sched {
 const stage_sched *stage_schedule(unsigned flags);
 
 /* The arrays of the fields as pointers of p (host or device: the same
- * members), in the order of particles.h; trim2d leaves out the z
- * components (x, v, normal) and the xz, yz stresses of a 2D store.
- * Returns how many (at most 64). */
+ * members), in the store's order (part_array_get); trim2d leaves out of a
+ * 2D store what the table's trim column says: the z components of the
+ * vectors (x, v, normal, ...) and the xz, yz stresses. Returns how many
+ * (at most PART_NARRAYS). */
 int stage_arrays(const particles_t *p, uint32_t fields, int trim2d, void **ptrs);
 
-/* "x, v, sig" for messages and tests. */
+/* "x, v, sig" for messages and tests: the fields' member names. */
 const char *stage_fields_str(uint32_t fields, char *buf, size_t len);
 
 #endif

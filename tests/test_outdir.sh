@@ -6,10 +6,11 @@
 #    snapshot stays beside the new ones);
 #  - a run holds OUTDIR/sphseg.lock: a second run into it exits 2 at once;
 #    the lock of a killed run (SIGKILL) is gone with it;
-#  - killed between the two steps of the checkpoint rotation
-#    (SPHSEG_TEST_KILL_IN_ROTATION=2: rank 0 kills itself after linking the
-#    first checkpoint to checkpoint_prev.h5, before the second is renamed
-#    to checkpoint.h5), OUTDIR still has checkpoint.h5, and
+#  - killed between the two steps of the checkpoint rotation (a test-only
+#    LD_PRELOAD shim, tests/shim_kill.c, with SHIM_KILL=/checkpoint.h5:2:
+#    rank 0 is killed after linking the first checkpoint to
+#    checkpoint_prev.h5, just before the second is renamed to
+#    checkpoint.h5), OUTDIR still has checkpoint.h5, and
 #    --restart OUTDIR continues;
 #  - --restart OUTDIR takes the newest valid checkpoint: checkpoint_prev.h5
 #    when checkpoint.h5 is damaged; both damaged: exit 2 naming both.
@@ -49,10 +50,13 @@ check "after the first was killed (SIGKILL), its lock is gone" "[ $? -eq 0 ]" ||
 
 # killed in the middle of the rotation: checkpoint.h5 is still there
 o=$tmp/rot
-SPHSEG_TEST_KILL_IN_ROTATION=2 "$bin" $scene -o "$o" "${short[@]}" >"$tmp/rot.log" 2>&1
-rc=$?
+rc=none
+if cc -O2 -shared -fPIC -o "$tmp/shim_kill.so" tests/shim_kill.c -ldl; then
+    SHIM_KILL=/checkpoint.h5:2 LD_PRELOAD="$tmp/shim_kill.so" "$bin" $scene -o "$o" "${short[@]}" >"$tmp/rot.log" 2>&1
+    rc=$?
+fi
 check "killed between linking checkpoint_prev.h5 and renaming the new checkpoint: checkpoint.h5 exists" \
-    "[ $rc -eq 137 ] && [ -f '$o/checkpoint.h5' ] && [ -f '$o/checkpoint_prev.h5' ]" || ls "$o"
+    "[ $rc = 137 ] && [ -f '$o/checkpoint.h5' ] && [ -f '$o/checkpoint_prev.h5' ]" || { echo "exit $rc"; ls "$o"; }
 "$bin" $scene -o "$o" --restart "$o" "${short[@]}" >"$tmp/rot2.log" 2>&1
 check "--restart OUTDIR continues from it" "[ $? -eq 0 ] && grep -q '^restart from $o/checkpoint.h5: step 10,' '$tmp/rot2.log'" || cat "$tmp/rot2.log"
 

@@ -20,7 +20,9 @@
  *    shear box (its GPU list carried v too, which no stage reads of a ghost
  *    without computed flow);
  *  - stage_arrays: the z components and the xz, yz stresses left out of a
- *    trimmed 2D list;
+ *    trimmed 2D list; every field's bit together gives the whole store in
+ *    its order (the field table, src/core/fields.h, makes both); FLD_SEGC
+ *    is segV, segQ, segD;
  *  - every field refreshed is one the ghosts carry. */
 #include "testutil.h"
 #include "stages.h"
@@ -135,15 +137,33 @@ static void test_arrays(void **st)
     (void)st;
     particles_t p;
     part_alloc(&p, 2, 4);
-    void *a[64];
+    void *a[PART_NARRAYS];
     assert_int_equal(stage_arrays(&p, FLD_X | FLD_SIG, 1, a), 2 + 4);
     assert_ptr_equal(a[1], p.x[1]);
     assert_ptr_equal(a[2 + 3], p.sig[3]);
     assert_int_equal(stage_arrays(&p, FLD_X | FLD_SIG, 0, a), 3 + 6);
     assert_int_equal(stage_arrays(&p, FLD_SEGC | FLD_L | FLD_KIND, 0, a), 3 + 6 + 1);
     assert_ptr_equal(a[9], p.kind);
-    char buf[128];
+    assert_ptr_equal(a[0], p.segV);
+    assert_ptr_equal(a[1], p.segQ);
+    assert_ptr_equal(a[2], p.segD);
+    char buf[512];
     assert_string_equal(stage_fields_str(FLD_X | FLD_GDOT | FLD_BCLASS, buf, sizeof buf), "x, gdot, bclass");
+    assert_string_equal(stage_fields_str(FLD_SEGC | FLD_SIGN, buf, sizeof buf), "segV, segQ, segD, sig_n");
+    /* all the fields: the store's arrays in order, and 2D trims only x, v,
+     * nrm, x_n, xr, v_n, acc (z) and sig, sig_n, dsig (xz, yz) */
+    const uint32_t all = (1u << FLD_NFIELDS) - 1;
+    assert_int_equal(stage_arrays(&p, all, 0, a), (int)part_narrays());
+    for (size_t k = 0; k < part_narrays(); ++k) assert_ptr_equal(a[k], part_array_get(&p, k));
+    assert_int_equal(stage_arrays(&p, all, 1, a), (int)part_narrays() - 7 - 3 * 2);
+    assert_int_equal(stage_arrays(&p, FLD_X0 | FLD_L, 1, a), 3 + 6);
+    assert_ptr_equal(a[2], p.X0[2]);
+    assert_ptr_equal(a[8], p.L[5]);
+    assert_int_equal(stage_arrays(&p, FLD_XR | FLD_DSIG, 1, a), 4 + 2); /* in the store's order */
+    assert_ptr_equal(a[0], p.dsig[0]);
+    assert_ptr_equal(a[3], p.dsig[3]);
+    assert_ptr_equal(a[4], p.xr[0]);
+    assert_ptr_equal(a[5], p.xr[1]);
     part_free(&p);
 }
 

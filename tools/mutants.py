@@ -150,6 +150,15 @@ MUTANTS = [
      [('r->small0 = ckpt_get_double(file, g, "SmallVolume0");',
        'r->small0 = 1.000001 * ckpt_get_double(file, g, "SmallVolume0");')],
      "a restart's conservation reference is off"),
+    ("ckpt_rotation_moves", "checkpoints", "src/checkpoint.c",
+     [("if (link(path, link_tmp) == 0) {", "if (rename(path, link_tmp) == 0) {")],
+     "the rotation moves checkpoint.h5 aside instead of linking it: a kill before the next rename leaves none"),
+    ("ckpt_rotation_reversed", "checkpoints", "src/checkpoint.c",
+     [('        if (rename(tmp, path) != 0) io_write_failed("cannot rename it to %s", path);\n', ""),
+      ("        if (unlink(link_tmp) != 0 && errno != ENOENT)",
+       '        if (rename(tmp, path) != 0) io_write_failed("cannot rename it to %s", path);\n'
+       "        if (unlink(link_tmp) != 0 && errno != ENOENT)")],
+     "the rotation renames the new checkpoint first, then links it: _prev is the same file, no fallback"),
     # ---- I/O
     ("io_velocity_field", "I/O", "src/io.c",
      [("IO_ARRAY(io_v, p->v[c])", "IO_ARRAY(io_v, p->x[c])")],
