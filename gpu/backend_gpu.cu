@@ -21,7 +21,7 @@
  * (grid_list_fill, in the cell scan's order) that every neighbour loop reads.
  *
  * Verlet skin: the list holds the particles within 2h + skin (skin =
- * GPU_SKIN h) and is kept, with the store's order and cells, for as long as
+ * Run:list_skin h, default 0.1 h) and is kept, with the store's order and cells, for as long as
  * no particle can have moved skin/2 since the build: gpu_check measures the
  * largest displacement since the build (D) and in the last step (d) and
  * marks the list stale when D + 2 d > skin / 2, or for every stage when
@@ -161,6 +161,8 @@ static void gpu_finish(sim_t *s)
     gpu_settle(s, g);
     CK(cudaStreamSynchronize(g->st));
     if (s->halo) hx_resolve(g, s->halo);
+    message("gpu: %ld neighbour-list builds in %ld steps (Run:list_skin %.3g h: one build in %.1f steps)", g->builds,
+            s->step, (double)(g->skin / s->seg.k.h), g->builds ? (double)s->step / (double)g->builds : 0.0);
     if (prof.on) {
         double tot = 0;
         for (int k = 0; k < P_NPROF; ++k) tot += prof.ms[k];

@@ -122,7 +122,8 @@ static gpu_t *gpu_get(sim_t *s)
     const particles_t *h = &s->p;
     size_t n = h->n, na = part_narrays();
     if (na > PERM_MAX) error_exit(1, "backend_gpu: %zu particle arrays > PERM_MAX", na);
-    g->nl_cap = grid_list_cap(h->dim, (1 + 0.5 * GPU_SKIN) * (double)(s->seg.k.h / s->seg.k.dr));
+    const double skin = s->sc->run.list_skin; /* Run:list_skin, in units of h */
+    g->nl_cap = grid_list_cap(h->dim, (1 + 0.5 * skin) * (double)(s->seg.k.h / s->seg.k.dr));
     if (s->halo) {
         g->hx = (dhalo *)calloc(1, sizeof *g->hx);
         if (!g->hx) error_exit(1, "out of memory");
@@ -134,9 +135,9 @@ static gpu_t *gpu_get(sim_t *s)
     }
     g->team = gpu_team_size(h->dim, n);
     message("gpu: device %d of %d, %s, %.1f GiB; %zu MiB of particle arrays (two sets), %zu MiB of neighbour "
-            "list (%u per particle), %d threads per particle in neighbour loops%s", g->dev, ndev, prop.name,
-            (double)prop.totalGlobalMem / (1u << 30), 2 * n * part_bytes_per_particle() >> 20,
-            (n * g->nl_cap * sizeof(unsigned)) >> 20, g->nl_cap, g->team,
+            "list (%u per particle, skin %.3g h), %d threads per particle in neighbour loops%s", g->dev, ndev,
+            prop.name, (double)prop.totalGlobalMem / (1u << 30), 2 * n * part_bytes_per_particle() >> 20,
+            (n * g->nl_cap * sizeof(unsigned)) >> 20, g->nl_cap, skin, g->team,
             !g->hx ? "" : g->hx->cuda_aware ? "; halo: CUDA-aware MPI on device buffers"
                                             : "; halo: packed on the device, staged through pinned host memory");
     g->d = *h;
@@ -144,7 +145,7 @@ static gpu_t *gpu_get(sim_t *s)
     gpu_reserve(g, n);
     gpu_counts(g, n, 0);
     gpu_upload(g, h, 0, n);
-    g->skin = (real)(GPU_SKIN * s->seg.k.h);
+    g->skin = (real)(skin * s->seg.k.h);
     g->every = !s->flow_on; /* prescribed motion moves up to h a stage: from the first step on */
     g->dbox = (box *)dev_alloc(sizeof(box));
     g->dres = (double *)dev_alloc(STEP_NBOUNDS * sizeof(double));

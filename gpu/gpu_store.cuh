@@ -14,7 +14,6 @@
     } while (0)
 
 enum { PERM_MAX = 64, BLOCK = 128 };
-#define GPU_SKIN 0.1 /* Verlet skin, in units of h */
 #define GPU_TEAM_MAX_2D 4 /* threads per particle in the neighbour loops (gpu_team_size) */
 #define GPU_TEAM_MAX_3D 8
 #define GPU_TEAM_THREADS 2097152.0

@@ -40,6 +40,7 @@ struct scene_run {
     unsigned max_steps;     /* stop after this many steps (writing a last snapshot); 0 = no limit (default) */
     double max_wall_time;   /* wall s: write a checkpoint and stop (exit 0) before the next step would pass
                              * it (src/checkpoint.h); default 0 = no limit */
+    double list_skin;       /* GPU neighbour lists' Verlet skin, in units of h, (0, 1]; default 0.1 */
     char *backend;          /* "auto" (default: gpu when built with CUDA and a device is present) | "cpu" | "gpu" */
 };
 

@@ -75,6 +75,12 @@ CASES = [
     ("chute_container", "column_2d.yml", 400, CHUTE + CHUTE_AS_CONTAINER),
     # a post in a cell periodic along x and y: Stokes flow through a lattice of cylinders
     ("cylinders", "cylinders_2d.yml", 400, ["Geometry:dr=0.0005"]),
+    # a larger Verlet skin (Run:list_skin; the CPU ignores it): fewer list builds, longer
+    # lists, and on a periodic axis images kept longer; the same answer to round-off
+    ("drum_3d_skin", "drum_3d.yml", 40, ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025",
+                                         "Material:E=1e5", "Walls:rpm=15", "Flow:shepard_every=20",
+                                         "Segregation:every=8", "Run:list_skin=0.5"]),
+    ("chute_skin", "column_2d.yml", 400, CHUTE + ["Run:list_skin=1"]),
 ]
 # (Segregation:every = 1: C with the flow in every step; K > 1: in windows of
 # K steps, closed 5-9 times in these runs, the last one left open at

@@ -19,7 +19,13 @@ overlapped with interior work):
                                              coefficients, the list) and the split passes
   T_build = t_build * (N_r / n_build_ref) / n_build   the host exchange at a list build
                                              (measured seconds per n_build_ref particles),
-                                             once per n_build steps in a flowing drum
+                                             once per n_build steps:
+  n_build = skin h / (2 v dt) - 2            the list is rebuilt once D + 2 d > skin/2
+                                             (gpu/backend_gpu.cu), D the largest
+                                             displacement since the build, d = v dt
+                                             the last step's; --n-build overrides it
+  R(skin) = R(0.1) * L(0.1) / L(skin)        a step reads every list entry: its cost
+                                             follows the list length L ~ (2 + skin)^dim
   T_red   = 4 log2(P) lat                    the step's small allreduces
   T_halo  = T_copy + max(0, T_net - window) + T_ghost + T_build + T_red
   weak    E_w(P) = T_comp / (T_comp + T_halo)   (N_r fixed; one GPU has no halo)
@@ -33,22 +39,40 @@ ghost and step sent (k_meas = 1.0), B_pcie = 38 GB/s and B_net = 3.8 GB/s
 without overlap, t_build = 1.5 s per 1.1e7 particles. --b-net 25e9 --lat 3e-6
 model an InfiniBand cluster (assumed, not measured here).
 
-  /usr/bin/python3 tools/scaling_model.py [--check] [--b-net 25e9] [--png docs/parallel_model.png]
+  /usr/bin/python3 tools/scaling_model.py [--check] [--check-skin] [--b-net 25e9] [--png docs/parallel_model.png]
+  (fast settings: --dt 2.504e-5 --rate 3.077e8 --t-build 0.94 [--skin 0.25])
 """
 import argparse
 import math
+
+
+def list_len(skin, dim=3):
+    """Relative length of a neighbour list reaching 2h + skin h."""
+    return (2.0 + skin) ** dim
+
+
+def n_build(a):
+    """Steps between list builds: the skin over twice a step's largest displacement v dt, less 2."""
+    if a.n_build is not None:
+        return a.n_build
+    return max(1.0, a.skin * a.h / (2 * a.v_max * a.dt) - 2)
+
+
+def rate_at(a):
+    """One GPU's rate at Run:list_skin a.skin, from its measured rate at a.rate_skin."""
+    return a.rate * list_len(a.rate_skin) / list_len(a.skin)
 
 
 def halo_terms(a, P, n_r):
     sides = 2 * (P - 1) / P
     ghosts = sides * a.depth_planes * a.plane
     nbytes = a.k_meas * ghosts * (2 * a.record + 2 * 8)
-    tc = n_r / a.rate
+    tc = n_r / rate_at(a)
     t_copy = 0.0 if a.cuda_aware else 2 * nbytes / a.b_pcie
     t_net = nbytes / a.b_net + sides * 4 * a.lat
     window = 0.0 if a.no_overlap else a.f_window * tc
     t_ghost = a.f_ghost * ghosts / n_r * tc
-    t_build = a.t_build * n_r / a.n_build_ref / a.n_build if P > 1 else 0.0
+    t_build = a.t_build * n_r / a.n_build_ref / n_build(a) if P > 1 else 0.0
     t_red = 4 * math.log2(max(P, 1)) * a.lat
     th = t_copy + max(0.0, t_net - window) + t_ghost + t_build + t_red
     return tc, th, nbytes
@@ -65,11 +89,68 @@ def strong(a, N, P):
     n_r = N / P
     if P > 1 and n_r / a.plane < a.depth_planes:
         return math.nan, math.nan  # slabs thinner than the ghost depth: not allowed
-    t1 = N / a.rate
+    t1 = N / rate_at(a)
     if P == 1:
         return 1.0, 0.0
     tc, th, _ = halo_terms(a, P, n_r)
     return t1 / (P * (tc + th)), th / (tc + th)
+
+
+# 3D drum, 1.12e7 particles, fast settings (dt 2.504e-5 s), single build, 200 steps, 2 H200:
+# skin -> (list builds in 200 steps, 1-GPU rate, 2-GPU strong rate, exposed halo s on 2 GPUs)
+SKIN_RUNS = {0.1: (12, 3.0770e8, 2.2768e8, 5.617), 0.25: (5, 2.3854e8, 2.9961e8, 2.320),
+             0.5: (2, 1.7164e8, 2.9386e8, 0.726), 1.0: (1, 1.1584e8, 2.1475e8, 0.233)}
+
+
+def check_skin(a):
+    """The model's list builds and rates against the skin runs (docs/parallel_data/skin_h200x2.txt)."""
+    N, steps = 1.1236e7, 200
+    a.dt, a.rate, a.rate_skin, a.n_build = 2.504e-5, 3.077e8, 0.1, None
+    a.t_build = 0.47 * 2  # exposed seconds per list build at N/2 a rank (5.62 s / 12), per 1.1e7 particles
+    print("| skin | builds in 200 steps: model, measured | 1-GPU rate: model, measured | "
+          "2-GPU strong E_s vs 1 GPU at 0.1: model, measured |")
+    print("|---:|---|---|---|")
+    for skin, (nb, r1, r2, _) in SKIN_RUNS.items():
+        a.skin = skin
+        nbm = 1 + math.floor(steps / n_build(a))  # the first build, then one per n_build steps
+        t1 = N / a.rate  # one GPU at the best skin measured (0.1)
+        tc, th, _ = halo_terms(a, 2, N / 2)
+        print("| %.2g | %d, %d | %.3g, %.3g | %.2f, %.2f |" % (
+            skin, nbm, nb, rate_at(a), r1, t1 / (2 * (tc + th)), r2 / (2 * a.rate)))
+
+
+def plot_skin(a, png):
+    """Measured rates against the skin on 1 and 2 GPUs, beside the model (check_skin's settings)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    N = 1.1236e7
+    a.dt, a.rate, a.rate_skin, a.n_build, a.t_build = 2.504e-5, 3.077e8, 0.1, None, 0.94
+    sk = sorted(SKIN_RUNS)
+    fine = [0.05 + 0.01 * k for k in range(100)]
+    m1, m2 = [], []
+    for x in fine:
+        a.skin = x
+        tc, th, _ = halo_terms(a, 2, N / 2)
+        m1.append(rate_at(a))
+        m2.append(N / (tc + th))
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    ax.plot(sk, [SKIN_RUNS[x][1] for x in sk], "o", color="C0", label="1 GPU, measured")
+    ax.plot(sk, [SKIN_RUNS[x][2] for x in sk], "s", color="C1", label="2 GPUs (strong), measured")
+    ax.plot(fine, m1, "-", color="C0", lw=1, label="1 GPU, model: list length (2 + skin)^3")
+    ax.plot(fine, m2, "--", color="C1", lw=1, label="2 GPUs, model: + host exchange per list build")
+    for x in sk:
+        ax.annotate("%d builds" % SKIN_RUNS[x][0], (x, SKIN_RUNS[x][2]), textcoords="offset points",
+                    xytext=(4, 6), fontsize=7)
+    ax.set_xlabel("Run:list_skin (units of h)")
+    ax.set_ylabel("particle-steps/s")
+    ax.set_title("3D drum, 1.12e7 particles, fast settings, single build, 200 steps, 2 H200", fontsize=9)
+    ax.set_ylim(0, 3.6e8)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    print("wrote " + png)
 
 
 def main():
@@ -96,8 +177,19 @@ def main():
                     help="cost of a ghost in units of an owned particle's step (fitted to the 2-GPU runs)")
     ap.add_argument("--t-build", type=float, default=1.5, help="host exchange at a list build, s (measured)")
     ap.add_argument("--n-build-ref", type=float, default=1.1e7, help="particles per rank of --t-build")
-    ap.add_argument("--n-build", type=float, default=1000,
-                    help="steps between list builds (flowing drum, docs/gpu.md)")
+    ap.add_argument("--n-build", type=float, default=None,
+                    help="steps between list builds; default from --skin, --h, --v-max, --dt")
+    ap.add_argument("--skin", type=float, default=0.1, help="Run:list_skin, in units of h (default 0.1)")
+    ap.add_argument("--rate-skin", type=float, default=0.1, help="the skin at which --rate was measured")
+    ap.add_argument("--h", type=float, default=3.75e-4, help="smoothing length, m (3D drum at dr = 0.25 mm)")
+    ap.add_argument("--dt", type=float, default=3.958e-7,
+                    help="time step, s (default: Table 1, E 10 MPa, chi 0.1: about 1 280 steps between builds; "
+                         "the fast settings E 10 kPa, chi 0.2: 2.504e-5, docs/gpu.md)")
+    ap.add_argument("--v-max", type=float, default=0.037,
+                    help="largest particle speed, m/s (default: from the measured build interval, 18.2 steps at "
+                         "skin 0.1 and dt 2.504e-5 s: docs/parallel_data/skin_h200x2.txt)")
+    ap.add_argument("--check-skin", action="store_true",
+                    help="compare with the measured skin runs (1 and 2 H200, fast settings) and exit")
     ap.add_argument("--per-gpu", type=float, default=1.1e7, help="particles per GPU, weak scaling")
     ap.add_argument("--strong", type=float, nargs="+", default=[2e7, 1e8], help="total particles, strong")
     ap.add_argument("--no-overlap", action="store_true", help="refreshes not overlapped (SPHSEG_GPU_OVERLAP=0)")
@@ -105,7 +197,14 @@ def main():
     ap.add_argument("--check", action="store_true",
                     help="compare with the measured 2-GPU runs (docs/parallel.md) and exit")
     ap.add_argument("--png", default=None, help="chart to write")
+    ap.add_argument("--skin-png", default=None, help="chart of the skin runs beside the model, to write")
     a = ap.parse_args()
+    if a.check_skin or a.skin_png:
+        if a.check_skin:
+            check_skin(a)
+        if a.skin_png:
+            plot_skin(a, a.skin_png)
+        return
     if a.check:  # the model at the measured points, build term off (no list build inside the timed steps)
         a.n_build = math.inf
         rate = a.rate
