@@ -20,6 +20,7 @@
 #include "error.h"
 #include "io.h"
 #include "mpi/comm.h"
+#include "mpi/decomp.h"
 #include "outdir.h"
 #include "sim.h"
 #include "stages.h"
@@ -248,62 +249,27 @@ static int parallel_ghost_arrays(const sim_t *s, int *arr)
     return n;
 }
 
-/* Several ranks. Every rank holds an even share of the particles (built by
- * setup, or read from a checkpoint), or its own block (a restart on the
- * checkpoint's rank count). Then the decomposition (Parallel:method)
- * sends every particle to its owner — or, restarting on the same rank
- * count, takes over the checkpoint's cut, so that the run continues
- * bit-identically. */
-static void parallel_report(const halo_t *h, const particles_t *p)
-{
-    long long nmin = (long long)p->n, nmax = nmin;
-    int nbmax = h->nnb;
-    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nmin, 1, MPI_LONG_LONG, MPI_MIN, MPI_COMM_WORLD));
-    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nmax, 1, MPI_LONG_LONG, MPI_MAX, MPI_COMM_WORLD));
-    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, &nbmax, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD));
-    if (h->method == HALO_METIS)
-        message("METIS decomposition over %d ranks (coarse cells of %d x 2h): %lld to %lld particles per rank, up "
-                "to %d neighbours, ghosts %d cells of 2h deep", h->size, h->blk, nmin, nmax, nbmax, h->depth);
-    else if (h->size > 1)
-        message("slab decomposition along %c over %d ranks: %lld to %lld particles per rank, ghosts %d cells "
-                "of 2h deep", "xyz"[h->axis], h->size, nmin, nmax, h->depth);
-    if (h->per)
-        message("periodic along %s%s%s: images %d cells of 2h deep across each period boundary, %d channel(s) on "
-                "the busiest rank", h->per & 1 ? "x" : "", h->per & 2 ? "y" : "", h->per & 4 ? "z" : "", h->depth,
-                nbmax);
-}
-
+/* Several ranks, or one with periodic axes: the decomposition (mpi/decomp.h)
+ * from the scene's Parallel keys, the stage table's ghost arrays and the
+ * backend's ghost depth; restarting on the checkpoint's rank count, its cut
+ * is taken over, so that the run continues bit-identically. */
 static void parallel_start(sim_t *s, const ckpt_run *rs)
 {
     const int per = (int)s->sc->geometry.periodic;
     if (comm_size() == 1 && !per) return; /* one rank with periodic axes: its own images (mpi/halo.h) */
-    particles_t *p = &s->p;
-    int arr[PART_NARRAYS], narr = parallel_ghost_arrays(s, arr); /* halo_init: at most HALO_MAX_ARRAYS */
-    s->halo = malloc(sizeof *s->halo);
-    if (!s->halo) error_exit(1, "out of memory");
-    int axis = s->sc->parallel.axis == AXIS_AUTO ? -1 : (int)s->sc->parallel.axis;
-    int method = s->sc->parallel.method == PART_METIS ? HALO_METIS : HALO_SLABS;
-    halo_init(s->halo, p->dim, R(2.0) * s->seg.k.h, method, axis, arr, narr);
-    halo_set_depth(s->halo, s->be->ghost_depth);
-    if (per) { /* the periods are the container's, whole dr (setup_contexts) */
-        const real lo[3] = {0, 0, 0}, len[3] = {s->flow.w.period[0], s->flow.w.period[1], s->flow.w.period[2]};
-        halo_set_periodic(s->halo, per, lo, len);
-    }
-    /* METIS parts are coarse cells as wide as the ghost depth: a cut saved
-     * with other coarse cells (a backend with another depth) is re-made, and
-     * the run continues to round-off rather than bit for bit */
-    int saved = rs && rs->dec_present && rs->dec_method == method;
-    if (saved && method == HALO_METIS && rs->dec_blk != s->halo->blk) {
-        if (comm_rank() == 0)
-            message("restart: the saved METIS parts are of coarse cells %d lattice cells wide, backend %s needs %d "
-                    "(its ghost depth): partitioning again", rs->dec_blk, s->be->name, s->halo->blk);
-        saved = 0;
-    }
-    if (saved)
-        halo_restore(s->halo, method, rs->dec_axis, rs->dec_bound, rs->dec_cg, rs->dec_part);
-    else
-        halo_decompose(s->halo, p);
-    parallel_report(s->halo, p);
+    int arr[PART_NARRAYS];
+    decomp_config c = {.dim = s->p.dim, .support = R(2.0) * s->seg.k.h,
+                       .method = s->sc->parallel.method == PART_METIS ? HALO_METIS : HALO_SLABS,
+                       .axis = s->sc->parallel.axis == AXIS_AUTO ? -1 : (int)s->sc->parallel.axis,
+                       .depth = s->be->ghost_depth, .arr = arr, .narr = parallel_ghost_arrays(s, arr),
+                       .periodic = per, .backend = s->be->name};
+    for (int d = 0; d < 3; ++d) c.period[d] = s->flow.w.period[d];
+    decomp_saved saved = {0};
+    if (rs && rs->dec_present)
+        saved = (decomp_saved){.method = rs->dec_method, .axis = rs->dec_axis, .blk = rs->dec_blk,
+                               .cg = {rs->dec_cg[0], rs->dec_cg[1], rs->dec_cg[2]}, .bound = rs->dec_bound,
+                               .part = rs->dec_part};
+    s->halo = decomp_start(&c, rs && rs->dec_present ? &saved : NULL, &s->p);
 }
 
 /* Drums: settings of the computed flow outside the range measured to be accurate
