@@ -53,22 +53,33 @@ static int io_abandon(void)
     return stuck;
 }
 
+/* An errno that means a write lost data: no space, a quota, a file too
+ * large, an I/O error. */
+static int io_write_errno(int e) { return e == ENOSPC || e == EDQUOT || e == EFBIG || e == EIO; }
+
+/* Bytes free on the file system of the file path (its directory), or
+ * HUGE_VAL when that cannot be read. */
+static double io_free_bytes(const char *path)
+{
+    char dir[IO_PATH_MAX];
+    snprintf(dir, sizeof dir, "%s", path);
+    char *slash = strrchr(dir, '/');
+    if (slash) *slash = 0;
+    struct statvfs v;
+    return statvfs(slash ? dir : ".", &v) == 0 ? (double)v.f_bavail * (double)v.f_frsize : HUGE_VAL;
+}
+
 /* The one line of a failed write: the file, what failed, why (err), and the
  * space left on its file system. */
 static void io_fail_line(char *line, size_t n, int err, const char *what)
 {
-    err = err == ENOSPC || err == EDQUOT || err == EFBIG || err == EIO ? err : 0;
-    char space[160] = "", dir[IO_PATH_MAX];
-    snprintf(dir, sizeof dir, "%s", io_open.tmp[0] ? io_open.tmp : ".");
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = 0;
-    struct statvfs v;
-    if (statvfs(slash ? dir : ".", &v) == 0) {
-        double mb = 1e-6 * (double)v.f_bavail * (double)v.f_frsize;
+    char space[160] = "";
+    double mb = 1e-6 * io_free_bytes(io_open.tmp[0] ? io_open.tmp : "./output");
+    if (mb < HUGE_VAL)
         snprintf(space, sizeof space, "; %.4g MB free on its file system%s", mb, mb < 1 ? ": the disk is full" : "");
-    }
     snprintf(line, n, "cannot write %s: %s (%s%s); the last complete snapshot and checkpoint are kept",
-             io_open.tmp[0] ? io_open.tmp : "output", what, err ? strerror(err) : "write failed", space);
+             io_open.tmp[0] ? io_open.tmp : "output", what, io_write_errno(err) ? strerror(err) : "write failed",
+             space);
 }
 
 void io_write_failed(const char *fmt, ...)
@@ -110,15 +121,7 @@ void io_write_agree(int failed, const char *fmt, ...)
  * different ranks); this keeps a full disk from ever getting there. */
 static void io_check_space(const char *path, double need)
 {
-    double avail = HUGE_VAL;
-    if (io_rank() == 0) {
-        char dir[IO_PATH_MAX];
-        snprintf(dir, sizeof dir, "%s", path);
-        char *slash = strrchr(dir, '/');
-        if (slash) *slash = 0;
-        struct statvfs v;
-        if (statvfs(slash ? dir : ".", &v) == 0) avail = (double)v.f_bavail * (double)v.f_frsize;
-    }
+    double avail = io_rank() == 0 ? io_free_bytes(path) : HUGE_VAL;
     MPICHECK(MPI_Bcast(&avail, 1, MPI_DOUBLE, 0, MPI_COMM_WORLD));
     double want = need + need / 64 + IO_SPACE_MARGIN;
     char line[IO_LINE_MAX];
@@ -589,26 +592,25 @@ hid_t io_create_file(const char *path, size_t userblock, double need)
     return file;
 }
 
-/* errno after a call that wrote: a write inside it failed for want of
- * space or by an I/O error, even if the call reported success (Open MPI
- * 4.1's OMPIO collective writes on three ranks report success to HDF5
- * after one aggregator's pwritev failed: tests/test_fulldisk.sh). */
-static int io_errno_lost_write(void) { return errno == ENOSPC || errno == EDQUOT || errno == EFBIG || errno == EIO; }
 
 void io_close_file(hid_t file)
 {
     errno = 0;
     herr_t rc = H5Fclose(file);
     io_open.file = -1; /* closed, or beyond closing: never closed twice */
-    io_write_agree(rc < 0 || io_errno_lost_write(), "closing it (HDF5 could not flush it)");
+    io_write_agree(rc < 0 || io_write_errno(errno), "closing it (HDF5 could not flush it)");
 }
 
+/* A write failed when HDF5 says so, or when it leaves errno at a lost
+ * write's: Open MPI 4.1's OMPIO collective writes on three ranks report
+ * success to HDF5 after one aggregator's pwritev failed
+ * (tests/test_fulldisk.sh). */
 void io_write_rows(hid_t dset, hid_t mtype, hid_t mspace, hid_t fspace, hid_t dxpl, const void *buf,
                    const char *name)
 {
     errno = 0;
     herr_t rc = H5Dwrite(dset, mtype, mspace, fspace, dxpl, buf);
-    io_write_agree(rc < 0 || io_errno_lost_write(), "writing %s", name);
+    io_write_agree(rc < 0 || io_write_errno(errno), "writing %s", name);
 }
 
 void io_forget_tmp(void) { io_open.tmp[0] = 0; }
