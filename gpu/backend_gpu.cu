@@ -38,10 +38,13 @@
  * the view's gstart/gend are the ghost half of start/end), as on the CPU.
  * Ghosts are HALO 3 lattice cells deep (ghost_depth), so that a set made at
  * a list build still covers the 2h + 2 skin that a Verlet list needs while
- * particles move. At a build (rare in a flowing scene: the list is kept)
- * the owned arrays come to the host, mpi/halo.c migrates particles and
- * makes fresh ghosts, and everything goes back; the send and receive lists
- * follow the device sort (halo_sorted). Between builds a stage's refresh
+ * particles move. At a build the device migrates particles and makes fresh
+ * ghosts itself (gpu_exchange.cuh: the decisions of mpi/halo.c through
+ * mpi/halo_geom.h, bit for bit; the host sees counts), and the send and
+ * receive lists follow the device sort on the device (hx_sorted);
+ * SPHSEG_GPU_HOSTX=1 takes the old path through the host (the owned arrays
+ * down, halo_exchange, everything back up, halo_sorted), for measuring and
+ * comparing. Between builds a stage's refresh
  * packs only the fields it needs for the send lists on the device, stages
  * them through pinned host memory (or hands device buffers to a CUDA-aware
  * MPI), and unpacks them into the ghost slots on the device. The exchange
@@ -63,6 +66,7 @@
 #include <cuda_runtime.h>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_reduce.cuh>
+#include <cub/device/device_scan.cuh>
 #include <thrust/iterator/counting_iterator.h>
 #include <thrust/iterator/transform_iterator.h>
 extern "C" {
@@ -79,6 +83,7 @@ extern "C" {
 #include "gpu_setup.cuh"
 #include "gpu_nbr.cuh"
 #include "gpu_halo.cuh"
+#include "gpu_exchange.cuh"
 #include "gpu_step.cuh"
 
 
@@ -148,7 +153,7 @@ static void gpu_from_host(sim_t *s)
     gpu_settle(s, g);
     gpu_acc_reduce(g);
     CK(cudaStreamSynchronize(g->st));
-    gpu_reserve(g, s->p.n);
+    gpu_reserve(g, s->p.n, 0);
     gpu_counts(g, s->p.n, 0);
     gpu_upload(g, &s->p, 0, s->p.n);
     g->built = 0;
@@ -175,14 +180,18 @@ static void gpu_finish(sim_t *s)
     }
     if (g->hx) {
         dhalo *x = g->hx;
-        message("gpu halo (rank %d): %ld exchanges at list builds (%.3f s, host), %ld refreshes, %zu ghosts, "
-                "%.3f s of halo on the device timeline (exposed)", s->halo->rank, x->full, x->full_s, x->refresh,
-                g->ng, s->halo->wall_exposed);
-        void *db[] = {x->sidx, x->ridx, x->dsend, x->drecv};
-        for (size_t k = 0; k < 4; ++k)
+        message("gpu halo (rank %d): %ld exchanges at list builds (%.3f s, %s), %ld refreshes, %zu ghosts, "
+                "%.3f s of halo on the device timeline (exposed)", s->halo->rank, x->full, x->full_s,
+                x->dev ? "device" : "host", x->refresh, g->ng, s->halo->wall_exposed);
+        void *db[] = {x->sidx, x->ridx, x->dsend, x->drecv, x->gbound, x->gpart, x->gnb, x->cnt, x->off,
+                      x->pk, x->pk2, x->pv, x->keep, x->inv, x->dcnt, x->derr};
+        for (size_t k = 0; k < sizeof db / sizeof db[0]; ++k)
             if (db[k]) CK(cudaFree(db[k]));
         if (x->hsend) CK(cudaFreeHost(x->hsend));
         if (x->hrecv) CK(cudaFreeHost(x->hrecv));
+        if (x->hcnt) CK(cudaFreeHost(x->hcnt));
+        if (x->herr) CK(cudaFreeHost(x->herr));
+        free(x->sbound), free(x->spart), free(x->snb);
         for (int k = 0; k < HX_EV; ++k) CK(cudaEventDestroy(x->ev[k]));
         free(x->soff), free(x->roff), free(x->sb), free(x->rb), free(x);
     }

@@ -150,14 +150,16 @@ static void gpu_shift_images(sim_t *s, gpu_t *g, const ftab &t, int self)
     CK(cudaGetLastError());
 }
 
-/* Start a refresh of fields t of the ghosts: pack the send lists on the
- * device, stage (or hand the device buffer to a CUDA-aware MPI), post. */
-static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
+/* Pack fields t of the send lists (sidx by soff) on the device, a channel
+ * to this rank itself straight into its partner's slots (ridx by roff),
+ * stage them (or hand the device buffer to a CUDA-aware MPI) and post the
+ * exchange; shift: the periodic images' positions of the self channels
+ * moved (a refresh, the ghosts of a build; not a migration). */
+static void hx_post(sim_t *s, gpu_t *g, const ftab &t, int shift)
 {
     halo_t *h = s->halo;
     dhalo *x = g->hx;
     int m = h->nnb;
-    if (x->pending) error_exit(1, "backend_gpu: a refresh is already in flight");
     double t0 = now();
     x->sb[0] = x->rb[0] = 0;
     for (int k = 0; k < m; ++k) { /* a channel to this rank itself sends nothing through MPI */
@@ -184,7 +186,7 @@ static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
                                                                                x->dsend + x->sb[k]);
     }
     CK(cudaGetLastError());
-    gpu_shift_images(s, g, t, 1);
+    if (shift) gpu_shift_images(s, g, t, 1);
     char *sbuf = x->dsend, *rbuf = x->drecv;
     if (!x->cuda_aware) {
         x->hsend = (char *)grow_pinned(x->hsend, &x->cap_hsend, x->sb[m]);
@@ -196,19 +198,15 @@ static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
     if (x->sb[m]) CK(cudaStreamSynchronize(g->st)); /* the host buffer is read by MPI next */
     h->wall_comm += now() - t0;
     halo_post_bytes(h, sbuf, x->sb, rbuf, x->rb);
-    x->pend = t;
-    x->pending = 1;
-    x->refresh++;
 }
 
-/* Complete the refresh in flight: wait for the messages, unpack into the
- * ghost slots (and shift the periodic images' positions). The GPU's wait for them (idle) plus the copy and unpack
- * count as exposed halo time. */
-static void gpu_refresh_finish(sim_t *s, gpu_t *g)
+/* Complete the exchange hx_post posted: wait for the messages, unpack
+ * fields t into the slots ridx (by roff). The GPU's wait for them (idle)
+ * plus the copy and unpack count as exposed halo time. */
+static void hx_land(sim_t *s, gpu_t *g, const ftab &t)
 {
     halo_t *h = s->halo;
     dhalo *x = g->hx;
-    if (!x || !x->pending) return;
     int m = h->nnb;
     hx_mark(g, h, 0);
     halo_wait_bytes(h);
@@ -218,14 +216,35 @@ static void gpu_refresh_finish(sim_t *s, gpu_t *g)
         size_t cnt = x->roff[k + 1] - x->roff[k];
         int kp;
         if (cnt && !hx_self(h, k, &kp))
-            k_pack<1><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(x->pend, x->ridx + x->roff[k], cnt,
+            k_pack<1><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(t, x->ridx + x->roff[k], cnt,
                                                                                    x->drecv + x->rb[k]);
     }
     CK(cudaGetLastError());
-    gpu_shift_images(s, g, x->pend, 0);
     hx_mark(g, h, 1);
-    x->pending = 0;
     h->wall_comm += now() - t0;
+}
+
+/* Start a refresh of fields t of the ghosts: pack the send lists on the
+ * device, stage, post (hx_post); gpu_refresh_finish lands it. */
+static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
+{
+    dhalo *x = g->hx;
+    if (x->pending) error_exit(1, "backend_gpu: a refresh is already in flight");
+    hx_post(s, g, t, 1);
+    x->pend = t;
+    x->pending = 1;
+    x->refresh++;
+}
+
+/* Complete the refresh in flight: unpack into the ghost slots, shift the
+ * periodic images' positions. */
+static void gpu_refresh_finish(sim_t *s, gpu_t *g)
+{
+    dhalo *x = g->hx;
+    if (!x || !x->pending) return;
+    hx_land(s, g, x->pend);
+    gpu_shift_images(s, g, x->pend, 0);
+    x->pending = 0;
 }
 
 /* Refresh fields t of the ghosts now (no overlap). */
@@ -250,6 +269,7 @@ static void gpu_settle(sim_t *s, gpu_t *g)
 static void gpu_download(sim_t *s, gpu_t *g)
 {
     CK(cudaStreamSynchronize(g->st));
+    part_reserve(&s->p, g->n); /* the device exchange may have grown the store */
     for (size_t k = 0; k < part_narrays(); ++k)
         CK(cudaMemcpy(part_array_get(&s->p, k), part_array_get(&g->d, k), g->n * part_array_esize(k),
                       cudaMemcpyDeviceToHost));
@@ -264,12 +284,24 @@ static void gpu_full_exchange(sim_t *s, gpu_t *g)
     particles_t *hp = &s->p;
     gpu_download(s, g);
     halo_exchange(s->halo, hp);
-    gpu_reserve(g, hp->n + hp->ng);
+    gpu_reserve(g, hp->n + hp->ng, 0);
     gpu_counts(g, hp->n, hp->ng);
     gpu_upload(g, hp, 0, hp->n + hp->ng);
     double dt = now() - t0;
     g->hx->full++, g->hx->full_s += dt;
     s->halo->wall_exposed += dt;
+}
+
+/* Room for the per-channel offsets of m channels (host). */
+static void hx_offsets(dhalo *x, int m)
+{
+    free(x->soff), free(x->roff), free(x->sb), free(x->rb);
+    x->cap_nb = m + 1;
+    x->soff = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+    x->roff = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+    x->sb = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+    x->rb = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+    if (!x->soff || !x->roff || !x->sb || !x->rb) error_exit(1, "out of memory");
 }
 
 /* After the build's sort: the send lists and ghost slots to the device. */
@@ -278,15 +310,8 @@ static void gpu_halo_lists(sim_t *s, gpu_t *g)
     halo_t *h = s->halo;
     dhalo *x = g->hx;
     int m = h->nnb;
-    if (m + 1 > x->cap_nb) {
-        free(x->soff), free(x->roff), free(x->sb), free(x->rb);
-        x->cap_nb = m + 1;
-        x->soff = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
-        x->roff = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
-        x->sb = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
-        x->rb = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
-        if (!x->soff || !x->roff || !x->sb || !x->rb) error_exit(1, "out of memory");
-    }
+    x->nnb = m;
+    if (m + 1 > x->cap_nb) hx_offsets(x, m);
     x->soff[0] = x->roff[0] = 0;
     for (int k = 0; k < m; ++k) {
         x->soff[k + 1] = x->soff[k] + h->nsend[k];

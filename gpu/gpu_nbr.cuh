@@ -7,6 +7,8 @@
 
 /* ---- the neighbour build ------------------------------------------------- */
 
+static void hx_sorted(gpu_t *g, const unsigned *perm, size_t n); /* gpu_exchange.cuh */
+
 struct max_uint {
     __device__ unsigned operator()(unsigned a, unsigned b) const { return b > a ? b : a; }
 };
@@ -74,7 +76,8 @@ static void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, c
         if (k == n - 1 || sk[k + 1] != c) end[c] = k + 1;
     });
     prof_end(g->st, P_SORT);
-    if (hl) { /* the halo lists follow the particles through the sort */
+    if (hl && g->hx->dev) hx_sorted(g, perm, n); /* the halo lists follow the particles, on the device */
+    else if (hl) { /* through the host */
         unsigned *hp = (unsigned *)malloc((n ? n : 1) * sizeof(unsigned));
         size_t *pz = (size_t *)malloc((n ? n : 1) * sizeof(size_t));
         if (!hp || !pz) error_exit(1, "out of memory (%zu particles)", n);

@@ -16,28 +16,49 @@ extern "C" int gpu_devices(void)
     return n;
 }
 
-/* Per-particle device arrays for at least need particles (contents are not
- * kept: callers upload after). */
-static void gpu_reserve(gpu_t *g, size_t need)
+/* Per-particle device arrays for at least need particles. The first keep
+ * particles of the store are kept (the device exchange grows the store
+ * under its owned particles), by way of the spare set, so that at most two
+ * sets are held at once; with keep 0 nothing is (callers upload after).
+ * The work arrays (keys, lists, levels) are never kept: a build follows. */
+static void gpu_reserve(gpu_t *g, size_t need, size_t keep)
 {
     if (need <= g->cap && g->key) return;
     size_t cap = g->key ? need + need / 8 + 1024 : need; /* one rank: exactly n, as before */
     if (cap >= 0xffffffffu) error_exit(1, "backend_gpu: %zu particles on one rank: more than 2^32 - 1", cap);
     size_t na = part_narrays();
-    if (g->key) {
+    if (g->key && keep) { /* the spare set grown and filled first, then the current one */
+        for (size_t k = 0; k < na; ++k) {
+            size_t es = part_array_esize(k);
+            CK(cudaFree(part_array_get(&g->alt, k)));
+            void *q = dev_alloc(cap * es);
+            CK(cudaMemcpyAsync(q, part_array_get(&g->d, k), keep * es, cudaMemcpyDeviceToDevice, g->st));
+            part_array_set(&g->alt, k, q);
+        }
+        CK(cudaStreamSynchronize(g->st));
         for (size_t k = 0; k < na; ++k) {
             CK(cudaFree(part_array_get(&g->d, k)));
-            CK(cudaFree(part_array_get(&g->alt, k)));
+            part_array_set(&g->d, k, dev_alloc(cap * part_array_esize(k)));
         }
+        particles_t t = g->d;
+        g->d = g->alt, g->alt = t;
+    } else {
+        if (g->key)
+            for (size_t k = 0; k < na; ++k) {
+                CK(cudaFree(part_array_get(&g->d, k)));
+                CK(cudaFree(part_array_get(&g->alt, k)));
+            }
+        for (size_t k = 0; k < na; ++k) {
+            size_t bytes = cap * part_array_esize(k);
+            part_array_set(&g->d, k, dev_alloc(bytes));
+            part_array_set(&g->alt, k, dev_alloc(bytes));
+        }
+    }
+    if (g->key) {
         void *bufs[] = {g->key, g->key2, g->idx, g->idx2, g->cls, g->sums, g->nl, g->ncnt, g->amag,
                         g->xb[0], g->xb[1], g->xb[2], g->lvl, g->wact};
         for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k)
             if (bufs[k]) CK(cudaFree(bufs[k]));
-    }
-    for (size_t k = 0; k < na; ++k) {
-        size_t bytes = cap * part_array_esize(k);
-        part_array_set(&g->d, k, dev_alloc(bytes));
-        part_array_set(&g->alt, k, dev_alloc(bytes));
     }
     g->key = (unsigned *)dev_alloc(cap * sizeof(unsigned));
     g->key2 = (unsigned *)dev_alloc(cap * sizeof(unsigned));
@@ -56,6 +77,7 @@ static void gpu_reserve(gpu_t *g, size_t need)
     g->lvl = g->hx ? (uint8_t *)dev_alloc(cap) : NULL;
     g->wact = g->wskip ? (uint8_t *)dev_alloc(cap) : NULL;
     g->cap = cap;
+    g->d.cap = g->alt.cap = cap;
     g->built = 0;
 }
 
@@ -130,19 +152,23 @@ static gpu_t *gpu_get(sim_t *s)
         g->hx->cuda_aware = halo_cuda_aware();
         const char *ov = getenv("SPHSEG_GPU_OVERLAP");
         g->hx->overlap = !(ov && !strcmp(ov, "0"));
+        const char *hx = getenv("SPHSEG_GPU_HOSTX");
+        g->hx->dev = !(hx && *hx && strcmp(hx, "0"));
         s->halo->exposed_measured = 1;
         for (int k = 0; k < HX_EV; ++k) CK(cudaEventCreate(&g->hx->ev[k]));
     }
     g->team = gpu_team_size(h->dim, n);
     message("gpu: device %d of %d, %s, %.1f GiB; %zu MiB of particle arrays (two sets), %zu MiB of neighbour "
-            "list (%u per particle, skin %.3g h), %d threads per particle in neighbour loops%s", g->dev, ndev,
+            "list (%u per particle, skin %.3g h), %d threads per particle in neighbour loops%s%s", g->dev, ndev,
             prop.name, (double)prop.totalGlobalMem / (1u << 30), 2 * n * part_bytes_per_particle() >> 20,
             (n * g->nl_cap * sizeof(unsigned)) >> 20, g->nl_cap, skin, g->team,
-            !g->hx ? "" : g->hx->cuda_aware ? "; halo: CUDA-aware MPI on device buffers"
-                                            : "; halo: packed on the device, staged through pinned host memory");
+            !g->hx                  ? ""
+            : g->hx->cuda_aware     ? "; halo: packed on the device, CUDA-aware MPI on device buffers"
+                                    : "; halo: packed on the device, staged through pinned host memory",
+            !g->hx ? "" : g->hx->dev ? "; list-build exchanges on the device" : "; list-build exchanges through the host (SPHSEG_GPU_HOSTX)");
     g->d = *h;
     g->alt = *h;
-    gpu_reserve(g, n);
+    gpu_reserve(g, n, 0);
     gpu_counts(g, n, 0);
     gpu_upload(g, h, 0, n);
     g->skin = (real)(skin * s->seg.k.h);

@@ -33,11 +33,12 @@ static int gpu_exchange(sim_t *s, gpu_t *g, int exact)
         return 0;
     }
     gpu_acc_reduce(g); /* before the store is re-sorted */
-    if (s->halo) gpu_full_exchange(s, g);
+    if (s->halo && g->hx->dev) gpu_device_exchange(s, g);
+    else if (s->halo) gpu_full_exchange(s, g);
     real skin = exact ? R(0.0) : g->skin, sup = R(2.0) * s->seg.k.h + skin;
     gpu_build(g, s->halo, s->p.dim, sup, exact ? s->seg.k.support2 : sup * sup,
               s->halo && exact ? s->halo->origin : NULL);
-    if (s->halo) gpu_halo_lists(s, g);
+    if (s->halo && !g->hx->dev) gpu_halo_lists(s, g);
     g->built = 1;
     g->stale = exact; /* a list without skin is stale as soon as anything moves */
     return 1;

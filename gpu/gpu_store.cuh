@@ -30,7 +30,7 @@ struct box {
 };
 
 /* Fields of a ghost refresh: device array and element size. */
-enum { FT_MAX = 16 };
+enum { FT_MAX = PERM_MAX }; /* a migration carries every array */
 struct ftab {
     int n;
     unsigned char es[FT_MAX];
@@ -67,6 +67,20 @@ struct dhalo {
     int nev;
     long full, refresh;          /* exchanges at builds; refreshes */
     double full_s;               /* host seconds in the exchanges at builds */
+    int dev;                     /* exchanges at builds on the device (gpu_exchange.cuh); 0: through the
+                                  * host (SPHSEG_GPU_HOSTX=1) */
+    int nnb;                     /* channels of the lists held */
+    /* the device exchange: the decomposition's arrays (and host shadows), per-particle counts and
+     * offsets, the (channel, particle) pairs, the kept order, the sort's inverse, channel counts */
+    long *gbound;
+    int *gpart, *gnb;
+    void *sbound, *spart, *snb;
+    size_t cap_gbound, cap_gpart, cap_gnb;
+    unsigned *cnt, *off, *pk, *pk2, *pv, *keep, *inv;
+    size_t cap_cnt, cap_off, cap_pk, cap_pk2, cap_pv, cap_keep, cap_inv;
+    unsigned long long *dcnt, *hcnt;
+    size_t cap_hcnt;
+    int *derr, *herr;
 };
 
 typedef struct gpu {

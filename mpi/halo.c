@@ -77,10 +77,7 @@ void halo_set_periodic(halo_t *h, int mask, const real lo[3], const real len[3])
     }
 }
 
-void halo_shift_of(int code, int s[3])
-{
-    s[0] = code % 3 - 1, s[1] = code / 3 % 3 - 1, s[2] = code / 9 - 1;
-}
+void halo_shift_of(int code, int s[3]) { hg_shift_of(code, s); }
 
 void halo_image_shift(const halo_t *h, int k, double s[3])
 {
@@ -89,26 +86,14 @@ void halo_image_shift(const halo_t *h, int k, double s[3])
     for (int d = 0; d < 3; ++d) s[d] = q[d] * (double)h->plen[d];
 }
 
-/* Move owned particle i by s along axis d: the position kept to double
- * (x + xr in the single build) and the start-of-step x_n alike, so that
- * x = x_n + a u still holds within the step. */
-static void halo_move(particles_t *p, size_t i, int d, double s)
-{
-    double xd = (double)p->x[d][i] + (POS_REMAINDER ? (double)p->xr[d][i] : 0.0) + s;
-    p->x[d][i] = (real)xd;
-    if (POS_REMAINDER) p->xr[d][i] = (real)(xd - (double)p->x[d][i]);
-    p->x_n[d][i] += (preal)s;
-}
-
 void halo_wrap(const halo_t *h, particles_t *p)
 {
     for (int d = 0; d < h->dim; ++d) {
         if (!(h->per >> d & 1)) continue;
         double lo = h->plo[d], len = h->plen[d];
         for (size_t i = 0; i < p->n; ++i) {
-            double x = (double)p->x[d][i] + (POS_REMAINDER ? (double)p->xr[d][i] : 0.0);
-            if (x >= lo && x < lo + len) continue;
-            halo_move(p, i, d, -floor((x - lo) / len) * len);
+            double s = hg_wrap_shift((double)p->x[d][i] + (POS_REMAINDER ? (double)p->xr[d][i] : 0.0), lo, len);
+            if (s != 0) hg_move(&p->x[d][i], &p->xr[d][i], &p->x_n[d][i], s);
         }
     }
 }
@@ -151,108 +136,54 @@ void halo_free(halo_t *h)
 
 /* ---- who owns what ----------------------------------------------------------- */
 
+void halo_geom_of(const halo_t *h, halo_geom *g)
+{
+    memset(g, 0, sizeof *g);
+    g->rank = h->rank, g->size = h->size, g->dim = h->dim, g->axis = h->axis;
+    g->metis = h->method == HALO_METIS;
+    g->depth = h->depth, g->blk = h->blk;
+    g->per = h->per, g->nimg = h->nimg;
+    g->inv_support = R(1.0) / h->support;
+    for (int d = 0; d < 3; ++d) {
+        g->cg_n[d] = h->cg_n[d];
+        g->origin[d] = h->origin[d], g->plo[d] = h->plo[d], g->plen[d] = h->plen[d];
+        g->near_lo[d] = h->plo[d] - (real)h->depth * h->support;
+        g->near_hi[d] = h->plo[d] + h->plen[d] + (real)h->depth * h->support;
+    }
+    for (int m = 0; m < h->nimg; ++m) g->img[m] = h->img[m];
+    if (h->axis >= 0 && (h->per >> h->axis & 1)) {
+        g->pcol[0] = hg_column(g, h->axis, h->plo[h->axis]);
+        g->pcol[1] = hg_column(g, h->axis, h->plo[h->axis] + h->plen[h->axis]);
+    }
+    g->bound = h->bound, g->part = h->part;
+    g->nnb = h->nnb, g->nb = h->nb, g->nbs = h->nbs;
+}
+
 long halo_column(const halo_t *h, int d, real x)
 {
-    /* the expression grid_cell_coords uses, so both bin alike */
-    return (long)((x - h->origin[d]) * (R(1.0) / h->support));
+    halo_geom g;
+    halo_geom_of(h, &g);
+    return hg_column(&g, d, x);
 }
 
-static void halo_cell_of(const halo_t *h, const particles_t *p, size_t i, long c[3])
+static void halo_cell_of(const halo_geom *g, const particles_t *p, size_t i, long c[3])
 {
-    for (int d = 0; d < 3; ++d) c[d] = d < h->dim ? halo_column(h, d, p->x[d][i]) : 0;
-}
-
-static long halo_clamp(long v, long lo, long hi) { return v < lo ? lo : v > hi ? hi : v; }
-
-static size_t halo_coarse_index(const halo_t *h, const long c[3])
-{
-    size_t k = 0;
-    for (int d = h->dim - 1; d >= 0; --d)
-        k = k * (size_t)h->cg_n[d] + (size_t)halo_clamp(c[d] / h->blk, 0, h->cg_n[d] - 1);
-    return k;
+    for (int d = 0; d < 3; ++d) c[d] = d < g->dim ? hg_column(g, d, p->x[d][i]) : 0;
 }
 
 int halo_owner(const halo_t *h, const long c[3])
 {
-    if (h->method == HALO_METIS) return h->part[halo_coarse_index(h, c)];
-    if (c[h->axis] >= h->bound[h->rank] && c[h->axis] < h->bound[h->rank + 1]) return h->rank; /* most */
-    int lo = 0, hi = h->size - 1; /* largest r with bound[r] <= c; bound[0] is open */
-    while (lo < hi) {
-        int mid = (lo + hi + 1) / 2;
-        if (h->bound[mid] <= c[h->axis]) lo = mid;
-        else hi = mid - 1;
-    }
-    return lo;
+    halo_geom g;
+    halo_geom_of(h, &g);
+    return hg_owner(&g, c);
 }
 
-/* Add (rank r, shift code) to the targets out/code[0..n) unless it is this
- * rank unshifted or already there; returns the new count. */
-static int halo_add_target(const halo_t *h, int r, int code, int *out, int *codes, int n)
+/* Every target of owned particle i (hg_particle_targets). */
+static int halo_particle_targets(const halo_geom *g, const particles_t *p, size_t i, int *out, int *codes)
 {
-    if (r == h->rank && code == HALO_NOSHIFT) return n;
-    for (int k = 0; k < n; ++k)
-        if (out[k] == r && codes[k] == code) return n;
-    out[n] = r, codes[n] = code;
-    return n + 1;
-}
-
-/* Targets of a particle in lattice cell c, its image moved by shift code
- * (HALO_NOSHIFT: itself): the ranks other than this one (or this one, for
- * an image) owning a lattice cell within depth cells of c: the owners of
- * the 2 depth + 1 columns around c (slabs; along a periodic slab axis only
- * the columns of the period), or of the coarse cells that the box c +-
- * depth touches (at most 2^dim: blk >= depth). */
-static int halo_targets(const halo_t *h, const long c[3], int code, int *out, int *codes, int n)
-{
-    if (h->method != HALO_METIS) {
-        long a = c[h->axis], lo = a - h->depth, hi = a + h->depth;
-        if (code == HALO_NOSHIFT && lo >= h->bound[h->rank] && hi < h->bound[h->rank + 1]) return n; /* inner */
-        if (h->per >> h->axis & 1) {
-            long c0 = halo_column(h, h->axis, h->plo[h->axis]), c1 = halo_column(h, h->axis, h->plo[h->axis] + h->plen[h->axis]);
-            lo = lo < c0 ? c0 : lo, hi = hi > c1 ? c1 : hi;
-        }
-        long q[3] = {c[0], c[1], c[2]};
-        for (long k = lo; k <= hi; ++k) {
-            q[h->axis] = k;
-            n = halo_add_target(h, halo_owner(h, q), code, out, codes, n);
-        }
-        return n;
-    }
-    long lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-    for (int d = 0; d < h->dim; ++d) {
-        lo[d] = halo_clamp((c[d] - h->depth) / h->blk, 0, h->cg_n[d] - 1);
-        hi[d] = halo_clamp((c[d] + h->depth) / h->blk, 0, h->cg_n[d] - 1);
-    }
-    for (long z = lo[2]; z <= hi[2]; ++z)
-        for (long y = lo[1]; y <= hi[1]; ++y)
-            for (long x = lo[0]; x <= hi[0]; ++x)
-                n = halo_add_target(h, h->part[((size_t)z * (size_t)h->cg_n[1] + (size_t)y) * (size_t)h->cg_n[0] + (size_t)x],
-                                    code, out, codes, n);
-    return n;
-}
-
-/* Every target of owned particle i: its own (halo_targets), and on
- * periodic axes those of each image whose position lies within depth
- * cells of the period (at most 3^dim - 1 images). */
-static int halo_particle_targets(const halo_t *h, const particles_t *p, size_t i, int *out, int *codes)
-{
-    long c[3];
-    halo_cell_of(h, p, i, c);
-    int n = halo_targets(h, c, HALO_NOSHIFT, out, codes, 0);
-    for (int m = 0; m < h->nimg; ++m) {
-        int s[3], code = h->img[m], near = 1;
-        halo_shift_of(code, s);
-        long q[3] = {c[0], c[1], c[2]};
-        for (int d = 0; d < 3 && near; ++d) {
-            if (!s[d]) continue;
-            real y = p->x[d][i] + (real)s[d] * h->plen[d];
-            real lo = h->plo[d] - (real)h->depth * h->support, hi = h->plo[d] + h->plen[d] + (real)h->depth * h->support;
-            near = y > lo && y < hi;
-            q[d] = halo_column(h, d, y);
-        }
-        if (near) n = halo_targets(h, q, code, out, codes, n);
-    }
-    return n;
+    real x[3];
+    for (int d = 0; d < 3; ++d) x[d] = p->x[d][i];
+    return hg_particle_targets(g, x, out, codes);
 }
 
 /* ---- neighbours ----------------------------------------------------------------- */
@@ -408,22 +339,35 @@ static MPI_Datatype halo_record_type(size_t bytes)
 /* Send the records list[k][0..n[k]) of arrays arr to neighbour k, for every
  * k, and receive every neighbour's into h->buf[1] in neighbour order;
  * got[k] records from neighbour k. Returns the total received. */
+void halo_swap_counts(halo_t *h, const size_t *n, size_t *got)
+{
+    int m = h->nnb;
+    MPI_Request *rq = halo_calloc((size_t)(2 * m + 1), sizeof(MPI_Request));
+    long long *cs = halo_calloc((size_t)(2 * m + 1), sizeof(long long)), *cr = cs + m;
+    for (int k = 0; k < m; ++k) {
+        cs[k] = (long long)n[k];
+        MPICHECK(MPI_Irecv(&cr[k], 1, MPI_LONG_LONG, h->nb[k], halo_tag(h, k, 21, 1), MPI_COMM_WORLD, &rq[k]));
+        MPICHECK(MPI_Isend(&cs[k], 1, MPI_LONG_LONG, h->nb[k], halo_tag(h, k, 21, 0), MPI_COMM_WORLD, &rq[m + k]));
+        h->bytes += (long long)sizeof(long long), h->messages += 1;
+    }
+    double t0 = MPI_Wtime();
+    MPICHECK(MPI_Waitall(2 * m, rq, MPI_STATUSES_IGNORE));
+    h->wall_wait += MPI_Wtime() - t0;
+    for (int k = 0; k < m; ++k) got[k] = (size_t)cr[k];
+    free(rq), free(cs);
+}
+
+/* Send the records list[k][0..n[k]) of arrays arr to neighbour k, for every
+ * k, and receive every neighbour's into h->buf[1] in neighbour order;
+ * got[k] records from neighbour k. Returns the total received. */
 static size_t halo_swap(halo_t *h, const particles_t *p, size_t *const *list, const size_t *n, const int *arr,
                         int narr, size_t *got)
 {
     size_t rec = part_record_bytes(arr, narr), ns = 0, nr = 0;
     int m = h->nnb;
+    halo_swap_counts(h, n, got);
+    for (int k = 0; k < m; ++k) ns += n[k], nr += got[k];
     MPI_Request *rq = halo_calloc((size_t)(2 * m + 1), sizeof(MPI_Request));
-    long long *cs = halo_calloc((size_t)(2 * m + 1), sizeof(long long)), *cr = cs + m;
-    for (int k = 0; k < m; ++k) {
-        cs[k] = (long long)n[k], ns += n[k];
-        MPICHECK(MPI_Irecv(&cr[k], 1, MPI_LONG_LONG, h->nb[k], halo_tag(h, k, 21, 1), MPI_COMM_WORLD, &rq[k]));
-        MPICHECK(MPI_Isend(&cs[k], 1, MPI_LONG_LONG, h->nb[k], halo_tag(h, k, 21, 0), MPI_COMM_WORLD, &rq[m + k]));
-    }
-    double t0 = MPI_Wtime();
-    MPICHECK(MPI_Waitall(2 * m, rq, MPI_STATUSES_IGNORE));
-    h->wall_wait += MPI_Wtime() - t0;
-    for (int k = 0; k < m; ++k) got[k] = (size_t)cr[k], nr += got[k];
     h->buf[0] = halo_grow(h->buf[0], &h->cap_buf[0], ns * rec + 1, 1);
     h->buf[1] = halo_grow(h->buf[1], &h->cap_buf[1], nr * rec + 1, 1);
     MPI_Datatype t = halo_record_type(rec);
@@ -433,24 +377,19 @@ static size_t halo_swap(halo_t *h, const particles_t *p, size_t *const *list, co
         MPICHECK(MPI_Irecv(h->buf[1] + orr * rec, (int)got[k], t, h->nb[k], halo_tag(h, k, 22, 1), MPI_COMM_WORLD, &rq[k]));
         MPICHECK(MPI_Isend(h->buf[0] + os * rec, (int)n[k], t, h->nb[k], halo_tag(h, k, 22, 0), MPI_COMM_WORLD, &rq[m + k]));
         os += n[k], orr += got[k];
-        h->bytes += (long long)(n[k] * rec + sizeof(long long)), h->messages += 2;
+        h->bytes += (long long)(n[k] * rec), h->messages += 1;
     }
-    t0 = MPI_Wtime();
+    double t0 = MPI_Wtime();
     MPICHECK(MPI_Waitall(2 * m, rq, MPI_STATUSES_IGNORE));
     h->wall_wait += MPI_Wtime() - t0;
     MPICHECK(MPI_Type_free(&t));
-    free(rq), free(cs);
+    free(rq);
     return nr;
 }
 
 /* Channel k of (rank r, shift code), or for code < 0 the first channel to
  * r (a migrating particle, already wrapped, may travel on any). */
-static int halo_channel(const halo_t *h, int r, int code)
-{
-    for (int k = 0; k < h->nnb; ++k)
-        if (h->nb[k] == r && (code < 0 || h->nbs[k] == code)) return k;
-    return -1;
-}
+static int halo_channel(const halo_t *h, int r, int code) { return hg_channel(h->nnb, h->nb, h->nbs, r, code); }
 
 static void halo_list_add(halo_t *h, int r, int code, size_t i, const char *what)
 {
@@ -475,15 +414,24 @@ static void halo_corner(halo_t *h, const particles_t *p, real *hi)
             if (p->x[d][i] < lo[d]) lo[d] = p->x[d][i];
             if (p->x[d][i] > up[d]) up[d] = p->x[d][i];
         }
+    if (hi) {
+        double t0 = MPI_Wtime();
+        MPICHECK(MPI_Allreduce(up, hi, 3, HALO_MPI_REAL, MPI_MAX, MPI_COMM_WORLD));
+        h->wall_wait += MPI_Wtime() - t0;
+        for (int d = 0; d < 3; ++d)
+            if (h->per >> d & 1) hi[d] = h->plo[d] + h->plen[d]; /* the period's end */
+    }
+    halo_set_origin(h, lo);
+}
+
+void halo_set_origin(halo_t *h, const real lo_local[3])
+{
+    real lo[3] = {lo_local[0], lo_local[1], lo_local[2]};
     double t0 = MPI_Wtime();
     MPICHECK(MPI_Allreduce(MPI_IN_PLACE, lo, 3, HALO_MPI_REAL, MPI_MIN, MPI_COMM_WORLD));
-    if (hi) MPICHECK(MPI_Allreduce(up, hi, 3, HALO_MPI_REAL, MPI_MAX, MPI_COMM_WORLD));
     h->wall_wait += MPI_Wtime() - t0;
     for (int d = 0; d < 3; ++d) {
-        if (h->per >> d & 1) { /* fixed (halo_set_periodic); the period's end */
-            if (hi) hi[d] = h->plo[d] + h->plen[d];
-            continue;
-        }
+        if (h->per >> d & 1) continue; /* fixed (halo_set_periodic) */
         h->origin[d] = d < h->dim ? lo[d] - R(1e-6) * h->support : 0;
     }
 }
@@ -505,10 +453,12 @@ static void halo_migrate(halo_t *h, particles_t *p)
     size_t nkeep = 0;
     h->inv = halo_grow(h->inv, &h->cap_inv, p->n, sizeof(size_t)); /* keep list */
     for (int k = 0; k < h->nnb; ++k) h->nsend[k] = 0;
+    halo_geom g;
+    halo_geom_of(h, &g);
     for (size_t i = 0; i < p->n; ++i) {
         long c[3];
-        halo_cell_of(h, p, i, c);
-        int r = halo_owner(h, c);
+        halo_cell_of(&g, p, i, c);
+        int r = hg_owner(&g, c);
         if (r == h->rank) h->inv[nkeep++] = i;
         else halo_list_add(h, r, -1, i, "migration"), h->migrated++;
     }
@@ -527,8 +477,10 @@ static void halo_make_ghosts(halo_t *h, particles_t *p)
 {
     int tg[256], tc[256];
     for (int k = 0; k < h->nnb; ++k) h->nsend[k] = 0;
+    halo_geom g;
+    halo_geom_of(h, &g);
     for (size_t i = 0; i < p->n; ++i) {
-        int nt = halo_particle_targets(h, p, i, tg, tc);
+        int nt = halo_particle_targets(&g, p, i, tg, tc);
         for (int t = 0; t < nt; ++t) halo_list_add(h, tg[t], tc[t], i, "ghosts");
     }
     size_t ng = halo_swap(h, p, h->send, h->nsend, h->arr, h->narr, h->nrecv);
@@ -654,10 +606,12 @@ static void halo_route(halo_t *h, particles_t *p)
     int *cnt = halo_calloc((size_t)4 * P, sizeof(int)), *rcnt = cnt + P, *sdis = cnt + 2 * P, *rdis = cnt + 3 * P;
     size_t *order = halo_calloc(p->n + 1, sizeof(size_t));
     int *dest = halo_calloc(p->n + 1, sizeof(int));
+    halo_geom g;
+    halo_geom_of(h, &g);
     for (size_t i = 0; i < p->n; ++i) {
         long c[3];
-        halo_cell_of(h, p, i, c);
-        cnt[dest[i] = halo_owner(h, c)]++;
+        halo_cell_of(&g, p, i, c);
+        cnt[dest[i] = hg_owner(&g, c)]++;
     }
     for (int r = 1; r < P; ++r) sdis[r] = sdis[r - 1] + cnt[r - 1];
     for (size_t i = 0; i < p->n; ++i) order[sdis[dest[i]]++] = i; /* stable by destination */
@@ -705,11 +659,12 @@ static size_t halo_grid(halo_t *h, const particles_t *p)
 static double *halo_weights(halo_t *h, const particles_t *p, size_t nbin, double each)
 {
     double *w = halo_calloc(nbin, sizeof(double));
+    halo_geom g;
+    halo_geom_of(h, &g);
     for (size_t i = 0; i < p->n; ++i) {
         long c[3];
-        halo_cell_of(h, p, i, c);
-        size_t b = h->method == HALO_METIS ? halo_coarse_index(h, c)
-                                           : (size_t)halo_clamp(c[h->axis], 0, (long)nbin - 1);
+        halo_cell_of(&g, p, i, c);
+        size_t b = h->method == HALO_METIS ? hg_coarse_index(&g, c) : (size_t)hg_clamp(c[h->axis], 0, (long)nbin - 1);
         w[b] += each;
     }
     MPICHECK(MPI_Allreduce(MPI_IN_PLACE, w, (int)nbin, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD));
@@ -766,10 +721,12 @@ void halo_restore(halo_t *h, int method, int axis, const long *bound, const int 
 static long long halo_owned_after(halo_t *h, const particles_t *p)
 {
     long long m = 0;
+    halo_geom g;
+    halo_geom_of(h, &g);
     for (size_t i = 0; i < p->n; ++i) {
         long c[3];
-        halo_cell_of(h, p, i, c);
-        m += halo_owner(h, c) == h->rank;
+        halo_cell_of(&g, p, i, c);
+        m += hg_owner(&g, c) == h->rank;
     }
     return m;
 }

@@ -33,11 +33,12 @@
 #define SPHSEG_HALO_H
 #include <stddef.h>
 #include "../src/particles.h"
+#include "halo_geom.h"
 
 enum { HALO_MAX_ARRAYS = 64, HALO_DEPTH = 2 };
 /* Shift codes: (s0 + 1) + 3 (s1 + 1) + 9 (s2 + 1) for a shift of s_d in
  * {-1, 0, 1} periods along axis d; 26 - code is the opposite shift. */
-enum { HALO_NOSHIFT = 13, HALO_NCODES = 27 };
+enum { HALO_NOSHIFT = HG_NOSHIFT, HALO_NCODES = HG_NCODES };
 enum halo_method { HALO_SLABS = 0, HALO_METIS = 1 };
 
 typedef struct halo {
@@ -164,6 +165,17 @@ void halo_wait_bytes(halo_t *h);
 /* 1 if the MPI library reports CUDA-aware point-to-point transfers
  * (Open MPI's MPIX_Query_cuda_support) and SPHSEG_CUDA_AWARE is not 0. */
 int halo_cuda_aware(void);
+/* The decisions' view of h (halo_geom.h), pointing at h's arrays; a device
+ * copy points its arrays at device memory instead. */
+void halo_geom_of(const halo_t *h, halo_geom *g);
+/* Collective. The lattice origin from every rank's lower corner lo (this
+ * rank's owned particles; periodic axes keep theirs): what halo_exchange
+ * does first, for a backend that reduces its particles itself. */
+void halo_set_origin(halo_t *h, const real lo[3]);
+/* Collective among neighbours. Send n[k] to neighbour k and receive its
+ * count into got[k], for every channel: the sizes of an exchange that
+ * halo_post_bytes then carries (the GPU's device exchange). */
+void halo_swap_counts(halo_t *h, const size_t *n, size_t *got);
 /* The lattice column of coordinate x along axis d. */
 long halo_column(const halo_t *h, int d, real x);
 /* The rank owning lattice cell c (coordinates from the current origin). */

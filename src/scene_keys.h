@@ -126,8 +126,9 @@ SECTION("Run", run, scene_run)
       "wall s: write a checkpoint and stop (exit 0) before the next step would pass it (src/checkpoint.h); default 0 = no limit")
     KF("Run", run, scene_run, list_skin, OPT, "0.1", 0, 1, LO_OPEN, ALWAYS,
       "Verlet skin of the GPU backend's neighbour lists, in units of h: a list reaches 2h + skin and is rebuilt "
-      "once a particle may have moved skin/2; a larger skin means fewer rebuilds (each goes through the host on "
-      "several ranks) and longer lists (docs/parallel.md, \"Verlet skin\"); at most 1 (ghosts are 3 cells of 2h "
+      "once a particle may have moved skin/2; a larger skin means fewer rebuilds (each an exchange on several "
+      "ranks) and longer lists (docs/parallel.md, \"Verlet skin\": 0.1 is the fastest on one GPU and on two); at "
+      "most 1 (ghosts are 3 cells of 2h "
       "deep); results differ at round-off only; the CPU backend builds its lists every stage; default 0.1")
     KS("Run", run, scene_run, backend, 0, CYAML_UNLIMITED, "auto",
       "\"auto\" (default: gpu when built with CUDA and a device is present) | \"cpu\" | \"gpu\"")

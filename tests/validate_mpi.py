@@ -41,7 +41,10 @@ the CPU. Each case's one-rank GPU run is also compared with a one-rank
 multi-rank GPU path is tied to the CPU reference. Last, the GPU's overlapped
 ghost refreshes must change nothing: the 3-rank drum is run twice with them
 and once with SPHSEG_GPU_OVERLAP=0 (synchronous), load balance off (its
-decisions rest on timings), and all three are bit-identical. Without a visible GPU
+decisions rest on timings), and all three are bit-identical; so is a run whose
+list-build exchanges go through the host (SPHSEG_GPU_HOSTX=1) instead of the
+device (gpu/gpu_exchange.cuh; the logs must say which), and so are the two
+paths on a periodic METIS chute on 3 ranks and a periodic chute on 1 rank. Without a visible GPU
 (nvidia-smi -L) it prints "SKIP: no GPU visible" and exits 77.
 
 --cases NAME,NAME runs only those cases; --steps-scale F multiplies every
@@ -262,21 +265,47 @@ def main():
     print("%s 3 ranks run to run: %s" % ("ok  " if not differ else "FAIL",
                                         "bit-identical" if not differ else "differ in " + ", ".join(differ)))
     ok &= not differ
-    if gpu:  # the overlapped refreshes change nothing: bit-identical to synchronous ones, and run to run
+    if gpu:  # the overlapped refreshes change nothing: bit-identical to synchronous ones, and run to run;
+        # the list-build exchange on the device (gpu/gpu_exchange.cuh) is the host's, bit for bit
         steps = scaled(300, a.steps_scale)
         runs = {}
-        for tag, env in (("overlap", None), ("overlap_again", None), ("no_overlap", {"SPHSEG_GPU_OVERLAP": "0"})):
+        for tag, env in (("overlap", None), ("overlap_again", None), ("no_overlap", {"SPHSEG_GPU_OVERLAP": "0"}),
+                         ("host_exchange", {"SPHSEG_GPU_HOSTX": "1"})):
             out = os.path.join(a.work, "drum_EV_3_" + tag)
             # no load balance: its decisions rest on timings
-            run(a.sphseg, 3, "drum_2d_EV.yml", out, steps, DRUM + ["Parallel:balance_every=0"], a.backend, env)
+            logs = run(a.sphseg, 3, "drum_2d_EV.yml", out, steps, DRUM + ["Parallel:balance_every=0",
+                                                                         "Run:list_skin=0.1"], a.backend, env)
             runs[tag] = last(out)
-        for tag in ("overlap_again", "no_overlap"):
+            if tag in ("overlap", "host_exchange"):
+                m = re.search(r"exchanges at list builds \([0-9.]+ s, (\w+)\)", logs)
+                want = "host" if tag == "host_exchange" else "device"
+                good = m is not None and m.group(1) == want
+                print("%s drum_EV 3 ranks: list-build exchanges %s (log: %s)" % (
+                    "ok  " if good else "FAIL", "through the host" if want == "host" else "on the device",
+                    m.group(0) if m else "no line"))
+                ok &= good
+        what = {"overlap_again": "the same again", "no_overlap": "synchronous refreshes (SPHSEG_GPU_OVERLAP=0)",
+                "host_exchange": "list-build exchanges through the host (SPHSEG_GPU_HOSTX=1)"}
+        for tag in ("overlap_again", "no_overlap", "host_exchange"):
             differ = [k for k in runs["overlap"] if isinstance(runs["overlap"][k], np.ndarray)
                       and not np.array_equal(runs["overlap"][k], runs[tag][k])]
-            print("%s drum_EV 3 ranks, %d steps, GPU refreshes overlapped vs %s: %s" % (
-                "ok  " if not differ else "FAIL", steps,
-                "the same again" if tag == "overlap_again" else "synchronous (SPHSEG_GPU_OVERLAP=0)",
+            print("%s drum_EV 3 ranks, %d steps, GPU defaults vs %s: %s" % (
+                "ok  " if not differ else "FAIL", steps, what[tag],
                 "bit-identical" if not differ else "differ in " + ", ".join(differ)))
+            ok &= not differ
+        # periodic images and METIS parts: device against host exchange on 3 ranks, and on 1 rank (its own images)
+        for np_, over in ((3, CHUTE + ["Parallel:method=metis", "Geometry:height=0.07"]), (1, CHUTE)):
+            steps = scaled(600, a.steps_scale)
+            pair = {}
+            for tag, env in (("device", None), ("host", {"SPHSEG_GPU_HOSTX": "1"})):
+                out = os.path.join(a.work, "chute_%d_%s_exchange" % (np_, tag))
+                run(a.sphseg, np_, "column_2d.yml", out, steps, over + ["Run:list_skin=0.1"], a.backend, env)
+                pair[tag] = last(out)
+            differ = [k for k in pair["device"] if isinstance(pair["device"][k], np.ndarray)
+                      and not np.array_equal(pair["device"][k], pair["host"][k])]
+            print("%s chute %s %d rank%s, %d steps, list-build exchanges on the device vs through the host: %s" % (
+                "ok  " if not differ else "FAIL", "METIS" if np_ > 1 else "periodic", np_, "s" if np_ > 1 else "",
+                steps, "bit-identical" if not differ else "differ in " + ", ".join(differ)))
             ok &= not differ
     if own_work:
         if ok:
