@@ -63,6 +63,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 #include <cuda_runtime.h>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_reduce.cuh>
@@ -83,6 +84,7 @@ extern "C" {
 #include "gpu_setup.cuh"
 #include "gpu_nbr.cuh"
 #include "gpu_halo.cuh"
+#include "gpu_ipc.cuh"
 #include "gpu_exchange.cuh"
 #include "gpu_step.cuh"
 
@@ -192,6 +194,7 @@ static void gpu_finish(sim_t *s)
         if (x->hcnt) CK(cudaFreeHost(x->hcnt));
         if (x->herr) CK(cudaFreeHost(x->herr));
         free(x->sbound), free(x->spart), free(x->snb);
+        ipc_free(x);
         for (int k = 0; k < HX_EV; ++k) CK(cudaEventDestroy(x->ev[k]));
         free(x->soff), free(x->roff), free(x->sb), free(x->rb), free(x);
     }

@@ -6,6 +6,12 @@
 
 /* ---- ghost refreshes (several ranks) ------------------------------------------ */
 
+/* CUDA IPC between the ranks of one node (gpu_ipc.cuh, included after this part). */
+static void ipc_setup(sim_t *s, gpu_t *g);
+static char *ipc_send_buffer(gpu_t *g, size_t bytes);
+static void ipc_post(sim_t *s, gpu_t *g);
+static void ipc_land(sim_t *s, gpu_t *g);
+
 static size_t r8(size_t b) { return (b + 7) / 8 * 8; }
 
 /* Bytes of cnt records of t: field-major, each field's block 8-aligned. */
@@ -161,14 +167,20 @@ static void hx_post(sim_t *s, gpu_t *g, const ftab &t, int shift)
     dhalo *x = g->hx;
     int m = h->nnb;
     double t0 = now();
-    x->sb[0] = x->rb[0] = 0;
-    for (int k = 0; k < m; ++k) { /* a channel to this rank itself sends nothing through MPI */
-        int kp, self = hx_self(h, k, &kp);
-        x->sb[k + 1] = x->sb[k] + (self ? 0 : ft_bytes(t, x->soff[k + 1] - x->soff[k]));
-        x->rb[k + 1] = x->rb[k] + (self ? 0 : ft_bytes(t, x->roff[k + 1] - x->roff[k]));
+    if (x->ipc_gen != h->gen) ipc_setup(s, g); /* the channels changed (on every rank at once) */
+    x->sb[0] = x->rb[0] = x->ib[0] = x->irb[0] = 0;
+    for (int k = 0; k < m; ++k) { /* a channel to this rank itself sends nothing through MPI, an IPC one
+                                   * only its descriptor */
+        int kp, self = hx_self(h, k, &kp), mpi = !self && !x->ipc[k];
+        size_t bs = ft_bytes(t, x->soff[k + 1] - x->soff[k]), br = ft_bytes(t, x->roff[k + 1] - x->roff[k]);
+        x->sb[k + 1] = x->sb[k] + (mpi ? bs : 0);
+        x->rb[k + 1] = x->rb[k] + (mpi ? br : 0);
+        x->ib[k + 1] = x->ib[k] + (x->ipc[k] ? bs : 0);
+        x->irb[k + 1] = x->irb[k] + (x->ipc[k] ? br : 0);
     }
     x->dsend = (char *)grow_dev(x->dsend, &x->cap_dsend, x->sb[m]);
     x->drecv = (char *)grow_dev(x->drecv, &x->cap_drecv, x->rb[m]);
+    char *ibuf = x->nipc ? ipc_send_buffer(g, x->ib[m]) : NULL;
     hx_mark(g, h, 0);
     for (int k = 0; k < m; ++k) {
         size_t cnt = x->soff[k + 1] - x->soff[k];
@@ -182,8 +194,8 @@ static void hx_post(sim_t *s, gpu_t *g, const ftab &t, int shift)
                                                                                x->ridx + x->roff[kp], cnt);
             continue;
         }
-        k_pack<0><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(t, x->sidx + x->soff[k], cnt,
-                                                                               x->dsend + x->sb[k]);
+        k_pack<0><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(
+            t, x->sidx + x->soff[k], cnt, x->ipc[k] ? ibuf + x->ib[k] : x->dsend + x->sb[k]);
     }
     CK(cudaGetLastError());
     if (shift) gpu_shift_images(s, g, t, 1);
@@ -195,7 +207,10 @@ static void hx_post(sim_t *s, gpu_t *g, const ftab &t, int shift)
         sbuf = x->hsend, rbuf = x->hrecv;
     }
     hx_mark(g, h, 1);
-    if (x->sb[m]) CK(cudaStreamSynchronize(g->st)); /* the host buffer is read by MPI next */
+    /* the host buffer is read by MPI next; the IPC peers read ibuf once told, and this stream's copies
+     * out of their buffers (gpu_ipc.cuh) must have drained before they are told */
+    if (x->sb[m] || x->nipc) CK(cudaStreamSynchronize(g->st));
+    if (x->nipc) ipc_post(s, g);
     h->wall_comm += now() - t0;
     halo_post_bytes(h, sbuf, x->sb, rbuf, x->rb);
 }
@@ -212,12 +227,13 @@ static void hx_land(sim_t *s, gpu_t *g, const ftab &t)
     halo_wait_bytes(h);
     double t0 = now();
     if (!x->cuda_aware && x->rb[m]) CK(cudaMemcpyAsync(x->drecv, x->hrecv, x->rb[m], cudaMemcpyHostToDevice, g->st));
+    if (x->nipc) ipc_land(s, g);
     for (int k = 0; k < m; ++k) {
         size_t cnt = x->roff[k + 1] - x->roff[k];
         int kp;
         if (cnt && !hx_self(h, k, &kp))
-            k_pack<1><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(t, x->ridx + x->roff[k], cnt,
-                                                                                   x->drecv + x->rb[k]);
+            k_pack<1><<<(unsigned)((cnt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(
+                t, x->ridx + x->roff[k], cnt, x->ipc[k] ? x->dripc + x->irb[k] : x->drecv + x->rb[k]);
     }
     CK(cudaGetLastError());
     hx_mark(g, h, 1);
@@ -295,13 +311,15 @@ static void gpu_full_exchange(sim_t *s, gpu_t *g)
 /* Room for the per-channel offsets of m channels (host). */
 static void hx_offsets(dhalo *x, int m)
 {
-    free(x->soff), free(x->roff), free(x->sb), free(x->rb);
+    free(x->soff), free(x->roff), free(x->sb), free(x->rb), free(x->ib), free(x->irb);
     x->cap_nb = m + 1;
     x->soff = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
     x->roff = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
     x->sb = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
     x->rb = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
-    if (!x->soff || !x->roff || !x->sb || !x->rb) error_exit(1, "out of memory");
+    x->ib = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+    x->irb = (size_t *)calloc((size_t)x->cap_nb, sizeof(size_t));
+    if (!x->soff || !x->roff || !x->sb || !x->rb || !x->ib || !x->irb) error_exit(1, "out of memory");
 }
 
 /* After the build's sort: the send lists and ghost slots to the device. */

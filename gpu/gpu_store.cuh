@@ -81,6 +81,21 @@ struct dhalo {
     unsigned long long *dcnt, *hcnt;
     size_t cap_hcnt;
     int *derr, *herr;
+    /* CUDA IPC channels (gpu_ipc.cuh): which, for which channel set; two send buffers used in turn,
+     * their handles and generations; the peers' descriptors and mapped buffers; the receive buffer;
+     * the per-channel byte offsets of the IPC segments (host, nnb + 1) */
+    int *ipc, nipc, ipc_par, ipc_said;
+    long ipc_gen;
+    char *ipc_buf[2];
+    size_t ipc_cap[2];
+    cudaIpcMemHandle_t ipc_handle[2];
+    long long ipc_bgen[2], ipc_count;
+    struct ipc_desc *ipc_in;
+    struct ipc_map *map;
+    int nmap;
+    char *dripc;
+    size_t cap_dripc;
+    size_t *ib, *irb;
 };
 
 typedef struct gpu {

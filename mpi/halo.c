@@ -192,6 +192,7 @@ static int halo_particle_targets(const halo_geom *g, const particles_t *p, size_
 static void halo_set_neighbours(halo_t *h, const int *is_nb)
 {
     halo_free_lists(h);
+    h->gen++; /* on every rank at once: every caller is collective */
     h->nb = halo_calloc((size_t)h->size * HALO_NCODES, sizeof(int));
     h->nbs = halo_calloc((size_t)h->size * HALO_NCODES, sizeof(int));
     for (int r = 0; r < h->size; ++r)
@@ -815,6 +816,25 @@ void halo_wait_bytes(halo_t *h)
     h->nreq = 0;
     double dt = MPI_Wtime() - t0;
     h->wall_wait += dt, h->wall_comm += dt;
+}
+
+void halo_swap_small(halo_t *h, const void *send, void *recv, size_t bytes, const int *on)
+{
+    int m = h->nnb;
+    MPI_Request *rq = halo_calloc((size_t)(2 * m + 1), sizeof(MPI_Request));
+    for (int k = 0; k < m; ++k) rq[k] = rq[m + k] = MPI_REQUEST_NULL;
+    for (int k = 0; k < m; ++k) {
+        if (on && !on[k]) continue;
+        MPICHECK(MPI_Irecv((char *)recv + k * bytes, (int)bytes, MPI_BYTE, h->nb[k], halo_tag(h, k, 24, 1),
+                           MPI_COMM_WORLD, &rq[k]));
+        MPICHECK(MPI_Isend((const char *)send + k * bytes, (int)bytes, MPI_BYTE, h->nb[k], halo_tag(h, k, 24, 0),
+                           MPI_COMM_WORLD, &rq[m + k]));
+        h->bytes += (long long)bytes, h->messages += 1;
+    }
+    double t0 = MPI_Wtime();
+    MPICHECK(MPI_Waitall(2 * m, rq, MPI_STATUSES_IGNORE));
+    h->wall_wait += MPI_Wtime() - t0;
+    free(rq);
 }
 
 int halo_cuda_aware(void)

@@ -83,6 +83,7 @@ typedef struct halo {
     long long migrated;    /* particles this rank sent to a neighbour, in total */
     long long bytes;       /* bytes this rank sent to its neighbours (migration, ghosts, refreshes) */
     long long messages;    /* point-to-point sends of this rank, counts included */
+    long gen;              /* bumped whenever the channels are set (on every rank at once) */
     void *req;             /* MPI requests of a posted byte exchange (halo_post_bytes) */
     int nreq;
     size_t cap_req;
@@ -162,6 +163,12 @@ int halo_recut(halo_t *h, particles_t *p, double cost, double imb, double thresh
  * posted in between. */
 void halo_post_bytes(halo_t *h, const char *send, const size_t *soff, char *recv, const size_t *roff);
 void halo_wait_bytes(halo_t *h);
+/* Collective among neighbours. A record of `bytes` bytes to every
+ * neighbour k with on[k] (all with on NULL; on must be the same on both
+ * ends of a channel) from send + k bytes, and one from each into recv + k
+ * bytes: descriptors of a transfer that does not go through MPI (the GPU's
+ * CUDA IPC channels), blocking. */
+void halo_swap_small(halo_t *h, const void *send, void *recv, size_t bytes, const int *on);
 /* 1 if the MPI library reports CUDA-aware point-to-point transfers
  * (Open MPI's MPIX_Query_cuda_support) and SPHSEG_CUDA_AWARE is not 0. */
 int halo_cuda_aware(void);

@@ -299,7 +299,8 @@ def main():
             pair = {}
             for tag, env in (("device", None), ("host", {"SPHSEG_GPU_HOSTX": "1"})):
                 out = os.path.join(a.work, "chute_%d_%s_exchange" % (np_, tag))
-                run(a.sphseg, np_, "column_2d.yml", out, steps, over + ["Run:list_skin=0.1"], a.backend, env)
+                run(a.sphseg, np_, "column_2d.yml", out, steps, over + ["Run:list_skin=0.1", "Parallel:balance_every=0"],
+                    a.backend, env)
                 pair[tag] = last(out)
             differ = [k for k in pair["device"] if isinstance(pair["device"][k], np.ndarray)
                       and not np.array_equal(pair["device"][k], pair["host"][k])]
