@@ -39,8 +39,10 @@ ghost and step sent (k_meas = 1.0), B_pcie = 38 GB/s and B_net = 3.8 GB/s
 without overlap, t_build = 1.5 s per 1.1e7 particles. --b-net 25e9 --lat 3e-6
 model an InfiniBand cluster (assumed, not measured here).
 
-  /usr/bin/python3 tools/scaling_model.py [--check] [--check-skin] [--b-net 25e9] [--png docs/parallel_model.png]
-  (fast settings: --dt 2.504e-5 --rate 3.077e8 --t-build 0.94 [--skin 0.25])
+  /usr/bin/python3 tools/scaling_model.py [--check] [--check-skin] [--check-device] [--b-net 25e9]
+      [--png docs/parallel_model.png]
+  (fast settings, list-build exchange through the host: --dt 2.504e-5 --rate 3.077e8 --t-build 0.94;
+   on the device, gpu/gpu_exchange.cuh: --dt 2.504e-5 --rate 3.04e8 --t-build 0.029)
 """
 import argparse
 import math
@@ -119,6 +121,26 @@ def check_skin(a):
             skin, nbm, nb, rate_at(a), r1, t1 / (2 * (tc + th)), r2 / (2 * a.rate)))
 
 
+# The exchange at a list build on the device (gpu/gpu_exchange.cuh), two H200, 3D drum at dr 0.25 mm, single,
+# skin 0.1, 200 steps (docs/parallel_data/device_exchange_h200x2.txt): settings -> (dt, 1-GPU rate, seconds per
+# build exchange at 1.1e7 a rank, measured weak E_w, measured strong E_s at 1.12e7, or None)
+DEVICE_RUNS = {"fast": (2.504e-5, 3.0416e8, 0.345 / 12, 0.923, 0.868),
+               "Table 1": (3.958e-7, 3.2199e8, 0.082, 0.937, None)}
+
+
+def check_device(a):
+    """The model, with the device exchange's measured cost per build, against the 2-GPU runs at both
+    settings: the builds' frequency from dt and the flow speed (n_build), their cost from t_build."""
+    print("| settings | steps between builds (model) | weak E_w: model, measured | strong E_s (1.12e7): model, measured |")
+    print("|---|---:|---|---|")
+    for name, (dt, rate, tb, ew, es) in DEVICE_RUNS.items():
+        a.dt, a.rate, a.rate_skin, a.skin, a.n_build, a.t_build, a.n_build_ref = dt, rate, 0.1, 0.1, None, tb, 1.1e7
+        a.per_gpu = 1.1e7
+        mw = weak(a, 2)[0]
+        ms = strong(a, 1.1236e7, 2)[0]
+        print("| %s | %.0f | %.3f, %.3f | %.3f, %s |" % (name, n_build(a), mw, ew, ms, "%.3f" % es if es else "—"))
+
+
 def plot_skin(a, png):
     """Measured rates against the skin on 1 and 2 GPUs, beside the model (check_skin's settings)."""
     import matplotlib
@@ -188,6 +210,9 @@ def main():
     ap.add_argument("--v-max", type=float, default=0.037,
                     help="largest particle speed, m/s (default: from the measured build interval, 18.2 steps at "
                          "skin 0.1 and dt 2.504e-5 s: docs/parallel_data/skin_h200x2.txt)")
+    ap.add_argument("--check-device", action="store_true",
+                    help="compare with the 2-GPU runs whose list-build exchange runs on the device (both settings) "
+                         "and exit")
     ap.add_argument("--check-skin", action="store_true",
                     help="compare with the measured skin runs (1 and 2 H200, fast settings) and exit")
     ap.add_argument("--per-gpu", type=float, default=1.1e7, help="particles per GPU, weak scaling")
@@ -199,6 +224,9 @@ def main():
     ap.add_argument("--png", default=None, help="chart to write")
     ap.add_argument("--skin-png", default=None, help="chart of the skin runs beside the model, to write")
     a = ap.parse_args()
+    if a.check_device:
+        check_device(a)
+        return
     if a.check_skin or a.skin_png:
         if a.check_skin:
             check_skin(a)
