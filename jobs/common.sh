@@ -118,7 +118,19 @@ sphseg_rank_list() {
     echo "$out $max"
 }
 
-SCALING_COLUMNS=mode,ranks,particles,steps,wall_s,particle_steps_per_s,halo_s,io_s,scene,dr,scaled_key,scaled_value,max_steps,job
+SCALING_COLUMNS=mode,ranks,particles,steps,wall_s,particle_steps_per_s,halo_s,io_s,scene,dr,scaled_key,scaled_value,max_steps,job,settings
+
+# The keys of a named set of settings (SETTINGS of the sweeps): "scene", the
+# scene's own (Table 1's in the drums); "fast", the settings recommended for
+# large 3D drums (docs/gpu.md, "Stiffness, artificial viscosity and CFL":
+# E 10 kPa, alpha 3.162, chi_CFL 0.2).
+sphseg_settings_args() {
+    case $1 in
+    scene) ;;
+    fast) echo "-P Material:E=1e4 -P Flow:alpha_av=3.162 -P Run:cfl_flow=0.2" ;;
+    *) echo "unknown SETTINGS entry '$1' (scene | fast)" >&2; return 1 ;;
+    esac
+}
 
 # One sweep: for each P of sphseg_rank_list, run SCENE on P ranks with
 # Output:snapshots=off and Run:max_steps=$MAX_STEPS (weak: SCALE_KEY set to
@@ -126,21 +138,25 @@ SCALING_COLUMNS=mode,ranks,particles,steps,wall_s,particle_steps_per_s,halo_s,io
 # Extra arguments go to sphseg. Returns 1 if any run failed (the rest still run).
 sphseg_scaling_sweep() { # mode (weak|strong), sphseg args...
     local mode=$1; shift
-    local failed=0 P value key
+    local failed=0 P value key set
     mkdir -p "$(dirname "$CSV")" "$OUTROOT"
     [ -s "$CSV" ] || echo "$SCALING_COLUMNS" >"$CSV"
+    for set in ${SETTINGS:-scene fast}; do
+    local extra
+    extra=$(sphseg_settings_args "$set") || return 1
     for P in $(sphseg_rank_list); do
-        local args=(--overwrite -P Output:snapshots=off -P "Run:max_steps=$MAX_STEPS")
+        # shellcheck disable=SC2206 # the settings' keys: words without spaces
+        local args=(--overwrite -P Output:snapshots=off -P "Run:max_steps=$MAX_STEPS" $extra)
         key="" value=""
         if [ "$mode" = weak ]; then
             key=$SCALE_KEY
             value=$("${PYTHON:-/usr/bin/python3}" -c "import sys; print(repr(float(sys.argv[1]) * int(sys.argv[2]) ** float(sys.argv[3])))" "$SCALE_BASE" "$P" "$SCALE_POWER")
             args+=(-P "$key=$value")
         fi
-        local out=$OUTROOT/${mode}_P$P
+        local out=$OUTROOT/${mode}_${set}_P$P
         sphseg_threads "$P"
         sphseg_launcher "$P"
-        echo "$mode scaling: $P rank(s), $OMP_NUM_THREADS thread(s)/rank${key:+, $key=$value} -> $out"
+        echo "$mode scaling ($set settings): $P rank(s), $OMP_NUM_THREADS thread(s)/rank${key:+, $key=$value} -> $out"
         local rc=0
         sphseg_run "${launch[@]}" "$SPHSEG" "$SCENE" -o "$out" "$@" "${args[@]}" >"$out.log" 2>&1 || rc=$?
         if [ $rc -ne 0 ]; then
@@ -152,8 +168,9 @@ sphseg_scaling_sweep() { # mode (weak|strong), sphseg args...
         fi
         IFS=, read -r parts steps wall rate halo io <<<"$f"
         dr=$("${PYTHON:-/usr/bin/python3}" -c "import sys, yaml; print(yaml.safe_load(open(sys.argv[1]))['Geometry']['dr'])" "$out/used_params.yml" 2>/dev/null || true)
-        echo "$mode,$P,$parts,$steps,$wall,$rate,$halo,$io,$SCENE,$dr,$key,$value,$MAX_STEPS,${SLURM_JOB_ID:-local}" >>"$CSV"
+        echo "$mode,$P,$parts,$steps,$wall,$rate,$halo,$io,$SCENE,$dr,$key,$value,$MAX_STEPS,${SLURM_JOB_ID:-local},$set" >>"$CSV"
         echo "  $parts particles, $steps steps, $wall s, $rate particle-steps/s${halo:+, halo $halo s}"
+    done
     done
     return $failed
 }

@@ -23,18 +23,18 @@ unset "${!SLURM_@}" # the no-SLURM mode, even inside a job
 
 for s in jobs/*.sbatch jobs/*.sh; do check "bash -n $s" "bash -n '$s'"; done
 
-RANKS=1 SCENE=inputs/shearbox_2d.yml SCALE_KEY=Geometry:dr SCALE_BASE=0.00348 SCALE_POWER=-0.5 MAX_STEPS=5 \
+RANKS=1 SETTINGS=scene SCENE=inputs/shearbox_2d.yml SCALE_KEY=Geometry:dr SCALE_BASE=0.00348 SCALE_POWER=-0.5 MAX_STEPS=5 \
     CSV="$tmp/weak.csv" OUTROOT="$tmp/runs" SPHSEG="$bin" OMP_NUM_THREADS=1 \
     bash jobs/scaling_weak.sbatch >"$tmp/weak.log" 2>&1
 check "scaling_weak RANKS=1 exit 0" "[ $? -eq 0 ]" || cat "$tmp/weak.log"
 check "scaling_weak CSV: columns, one row, positive rate" "$PY - '$tmp/weak.csv' <<'PYEOF'
 import csv, sys
 rows = list(csv.DictReader(open(sys.argv[1])))
-want = 'mode,ranks,particles,steps,wall_s,particle_steps_per_s,halo_s,io_s,scene,dr,scaled_key,scaled_value,max_steps,job'
+want = 'mode,ranks,particles,steps,wall_s,particle_steps_per_s,halo_s,io_s,scene,dr,scaled_key,scaled_value,max_steps,job,settings'
 assert open(sys.argv[1]).readline().strip() == want, 'header'
 assert len(rows) == 1, rows
 r = rows[0]
-assert r['mode'] == 'weak' and r['ranks'] == '1' and r['steps'] == '5', r
+assert r['mode'] == 'weak' and r['ranks'] == '1' and r['steps'] == '5' and r['settings'] == 'scene', r
 assert float(r['particle_steps_per_s']) > 0 and float(r['wall_s']) > 0 and int(r['particles']) > 0, r
 assert r['scaled_key'] == 'Geometry:dr' and float(r['scaled_value']) == 0.00348 and float(r['dr']) == 0.00348, r
 assert float(r['halo_s']) == 0, r  # one rank: no halo exchange

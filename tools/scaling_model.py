@@ -175,7 +175,19 @@ def plot_skin(a, png):
     print("wrote " + png)
 
 
-def main():
+def model_for(settings, **over):
+    """The model's parameters (the defaults) at a named set of settings of the job scripts
+    (jobs/common.sh: "scene", Table 1's in the drum; "fast"), with the device exchange's
+    measured build cost (DEVICE_RUNS); over: any parameter by name."""
+    a = parser().parse_args([])
+    dt, rate, tb, _, _ = DEVICE_RUNS["fast" if settings == "fast" else "Table 1"]
+    a.dt, a.rate, a.t_build = dt, rate, tb
+    for k, v in over.items():
+        setattr(a, k, v)
+    return a
+
+
+def parser():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--rate", type=float, default=9.1e7,
                     help="one GPU's particle-steps/s (default: 3D drum, 1.1e7 particles, H200, measured, final code)")
@@ -223,7 +235,11 @@ def main():
                     help="compare with the measured 2-GPU runs (docs/parallel.md) and exit")
     ap.add_argument("--png", default=None, help="chart to write")
     ap.add_argument("--skin-png", default=None, help="chart of the skin runs beside the model, to write")
-    a = ap.parse_args()
+    return ap
+
+
+def main():
+    a = parser().parse_args()
     if a.check_device:
         check_device(a)
         return

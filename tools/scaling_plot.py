@@ -3,8 +3,10 @@
 jobs/scaling_strong.sbatch.
 
 Columns read: mode (weak|strong), ranks, particles, steps, wall_s,
-particle_steps_per_s, halo_s (may be empty). Rows of the same mode and rank
-count (repeats, several CSV files) are averaged.
+particle_steps_per_s, halo_s (may be empty), settings (the job scripts' named
+set of keys, "scene" or "fast"; "scene" where the column is missing). Rows of
+the same mode, settings and rank count (repeats, several CSV files) are
+averaged; each mode and settings is a curve of its own.
 
   weak efficiency    E_w(P) = r(P)/P / r(1)     (r: particle-steps/s; per-rank rate
                                                  relative to one rank)
@@ -19,7 +21,12 @@ The reference is the 1-rank row of the mode, or its smallest rank count when
 there is none (said in the table). Writes one PNG (three panels against ranks)
 and prints a markdown table.
 
-  /usr/bin/python3 tools/scaling_plot.py out/scaling_*.csv --png scaling.png
+--model: beside each curve, tools/scaling_model.py's prediction at its
+settings (the model's defaults, calibrated on two H200, with the device
+exchange's measured build cost; weak at the CSV's particles per rank, strong
+at its particle count).
+
+  /usr/bin/python3 tools/scaling_plot.py out/scaling_*.csv --png scaling.png [--model]
 """
 import argparse
 import csv
@@ -56,13 +63,14 @@ def read_rows(paths):
 
 
 def summarise(rows):
-    """{mode: [dict(ranks, particles, steps, wall, rate, halo, n) by ranks]}"""
+    """{"mode" or "mode (settings)": [dict(ranks, particles, steps, wall, rate, halo, n) by ranks]}"""
     groups = defaultdict(list)
     for row in rows:
-        groups[(row["mode"], int(row["ranks"]))].append(row)
+        groups[(row["mode"], row.get("settings") or "scene", int(row["ranks"]))].append(row)
+    several = len({k[1] for k in groups}) > 1
     out = defaultdict(list)
-    for (mode, p), rs in sorted(groups.items()):
-        out[mode].append(dict(
+    for (mode, settings, p), rs in sorted(groups.items()):
+        out[f"{mode} ({settings})" if several else mode].append(dict(settings=settings,
             ranks=p, n=len(rs),
             particles=mean([num(r["particles"]) for r in rs]),
             steps=mean([num(r["steps"]) for r in rs]),
@@ -72,9 +80,10 @@ def summarise(rows):
     return out
 
 
-def efficiencies(mode, pts, same_cores=False):
+def efficiencies(curve, pts, same_cores=False):
     """Adds eff (and ref, the reference rank count) to each point."""
     ref = pts[0]  # sorted by ranks: the 1-rank row when there is one
+    mode = curve.split()[0]
     for q in pts:
         if mode == "strong" and same_cores:
             q["eff"] = q["rate"] / ref["rate"]
@@ -104,7 +113,22 @@ def table(summary):
     return "\n".join(lines)
 
 
-def plot(summary, png, same_cores=False, title="sphseg scaling"):
+def model_curve(curve, pts):
+    """tools/scaling_model.py's efficiency at the curve's rank counts and settings."""
+    import os
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import scaling_model
+    mode = curve.split()[0]
+    settings = pts[0]["settings"]
+    ref = pts[0]
+    if mode == "weak":
+        a = scaling_model.model_for(settings, per_gpu=ref["particles"] / ref["ranks"])
+        return [scaling_model.weak(a, q["ranks"])[0] for q in pts]
+    a = scaling_model.model_for(settings)
+    return [scaling_model.strong(a, ref["particles"], q["ranks"])[0] for q in pts]
+
+
+def plot(summary, png, same_cores=False, title="sphseg scaling", model=False):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -113,14 +137,20 @@ def plot(summary, png, same_cores=False, title="sphseg scaling"):
              "strong": ("s-", "C1", "strong, same cores $r(P)/r(1)$" if same_cores else
                         "strong $E_s = T(1)/(P\\,T(P))$")}
     allp = sorted({q["ranks"] for pts in summary.values() for q in pts}) or [1]
-    for mode, pts in summary.items():
-        mk, col, label = style.get(mode, ("^-", "C2", mode))
+    for k, (curve, pts) in enumerate(summary.items()):
+        mode = curve.split()[0]
+        mk, _, label = style.get(mode, ("^-", "C2", mode))
+        col = "C%d" % k
+        if curve != mode:
+            label = curve
         P = [q["ranks"] for q in pts]
         ax[0].plot(P, [q["eff"] for q in pts], mk, color=col, label=label)
-        ax[1].plot(P, [q["rate"] / q["ranks"] for q in pts], mk, color=col, label=mode)
+        if model and not (mode == "strong" and same_cores):
+            ax[0].plot(P, model_curve(curve, pts), ":", color=col, lw=1.2, label=label.split(" $")[0] + ", model")
+        ax[1].plot(P, [q["rate"] / q["ranks"] for q in pts], mk, color=col, label=curve)
         share = [q["halo_share"] for q in pts]
         if any(not math.isnan(s) for s in share):
-            ax[2].plot(P, share, mk, color=col, label=mode)
+            ax[2].plot(P, share, mk, color=col, label=curve)
     ax[0].axhline(1.0, color="0.5", lw=0.8, ls="--")
     ax[0].set_ylabel("parallel efficiency")
     ax[0].set_ylim(0, 1.15 * max([1.0] + [q["eff"] for pts in summary.values() for q in pts
@@ -151,13 +181,15 @@ def main(argv=None):
     ap.add_argument("--strong-same-cores", action="store_true",
                     help="strong runs used the same cores at every P: E_s = r(P)/r(1)")
     ap.add_argument("--title", default="sphseg scaling", help="chart title (e.g. the machine and scene)")
+    ap.add_argument("--model", action="store_true",
+                    help="draw tools/scaling_model.py's prediction beside each efficiency curve")
     a = ap.parse_args(argv)
     rows = read_rows(a.csv)
     if not rows:
         sys.exit("scaling_plot: no rows in " + " ".join(a.csv))
-    summary = {mode: efficiencies(mode, pts, a.strong_same_cores) for mode, pts in summarise(rows).items()}
+    summary = {c: efficiencies(c, pts, a.strong_same_cores) for c, pts in summarise(rows).items()}
     print(table(summary))
-    plot(summary, a.png, a.strong_same_cores, a.title)
+    plot(summary, a.png, a.strong_same_cores, a.title, a.model)
     print(f"\nwrote {a.png}")
 
 
