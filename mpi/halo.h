@@ -32,7 +32,7 @@
 #ifndef SPHSEG_HALO_H
 #define SPHSEG_HALO_H
 #include <stddef.h>
-#include "../src/particles.h"
+#include "../src/core/particles.h"
 
 enum { HALO_MAX_ARRAYS = 64, HALO_DEPTH = 2 };
 /* Shift codes: (s0 + 1) + 3 (s1 + 1) + 9 (s2 + 1) for a shift of s_d in

@@ -6,7 +6,7 @@
  * slice of the 3D block is a slab whose end slabs hold the walls (16 threads:
  * the busiest slice had 1.32 times the mean material and 2.7 times the mean
  * dummies). Each index's result is its own, so any schedule gives the same bits. */
-#include "error.h"
+#include "core/error.h"
 #include "sim.h"
 #include "stages.h"
 

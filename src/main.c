@@ -17,7 +17,7 @@
 #include <unistd.h>
 #include "checkpoint.h"
 #include "diag.h"
-#include "error.h"
+#include "core/error.h"
 #include "io.h"
 #include "mpi/comm.h"
 #include "mpi/decomp.h"

@@ -19,7 +19,7 @@
  * echo in scene_write.c. */
 #define _POSIX_C_SOURCE 200809L
 #include "scene_ctx.h"
-#include "error.h"
+#include "core/error.h"
 
 #include <ctype.h>
 #include <math.h>

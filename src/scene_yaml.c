@@ -6,7 +6,7 @@
  * moved to Grains; and the edited document emitted as text for libcyaml. */
 #define _POSIX_C_SOURCE 200809L
 #include "scene_ctx.h"
-#include "error.h"
+#include "core/error.h"
 
 #include <errno.h>
 #include <stdio.h>
