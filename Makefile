@@ -87,7 +87,7 @@ endif
 override CFLAGS += $(HDF5_CFLAGS) $(CYAML_CFLAGS) $(METIS_CFLAGS)
 LIBS   := $(HDF5_LIBS) $(CYAML_LIBS) $(METIS_LIBS) $(LDLIBS)
 
-CORE_SRC := src/error.c src/scene.c src/scene_doc.c src/particles.c src/nbr.c src/bound.c src/setup.c src/setup_container.c \
+CORE_SRC := src/core/error.c src/scene.c src/scene_yaml.c src/scene_walk.c src/scene_check.c src/scene_write.c src/scene_doc.c src/core/particles.c src/nbr.c src/bound.c src/setup.c src/setup_container.c \
             src/backend_cpu.c src/integrate.c src/diag.c src/io.c src/checkpoint.c \
             src/checkpoint_read.c src/checkpoint_keys.c src/outdir.c src/stages.c mpi/comm.c mpi/halo.c mpi/decomp.c
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
@@ -143,7 +143,7 @@ bench: all
 	else echo "(no GPU visible: GPU benchmark skipped)"; fi
 
 format:
-	clang-format -i src/*.c src/*.h src/core/*.h src/physics/*.h mpi/*.c mpi/*.h tests/*.c
+	clang-format -i src/*.c src/*.h src/core/*.c src/core/*.h src/physics/*.h mpi/*.c mpi/*.h tests/*.c
 
 clean:
 	rm -rf $(BUILD)

@@ -71,7 +71,7 @@
 #include <thrust/iterator/counting_iterator.h>
 #include <thrust/iterator/transform_iterator.h>
 extern "C" {
-#include "error.h"
+#include "core/error.h"
 #include "mpi/comm.h"
 #include "sim.h"
 #include "stages.h"

@@ -1,7 +1,7 @@
 /* comm.c — see comm.h. */
 #include "comm.h"
 #include <mpi.h>
-#include "../src/error.h"
+#include "../src/core/error.h"
 
 int comm_rank(void)
 {

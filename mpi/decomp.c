@@ -2,7 +2,7 @@
 #include "decomp.h"
 #include <mpi.h>
 #include <stdlib.h>
-#include "../src/error.h"
+#include "../src/core/error.h"
 
 /* One log line: the cut, the particles per rank, the ghosts, the periods. */
 static void decomp_report(const halo_t *h, const particles_t *p)

@@ -13,7 +13,7 @@
 #endif
 #include <stdlib.h>
 #include <string.h>
-#include "../src/error.h"
+#include "../src/core/error.h"
 #include "../src/physics/grid.h"
 
 #define HALO_MPI_REAL (sizeof(real) == sizeof(double) ? MPI_DOUBLE : MPI_FLOAT)

@@ -32,7 +32,7 @@
 #ifndef SPHSEG_HALO_H
 #define SPHSEG_HALO_H
 #include <stddef.h>
-#include "../src/particles.h"
+#include "../src/core/particles.h"
 #include "halo_geom.h"
 
 enum { HALO_MAX_ARRAYS = 64, HALO_DEPTH = 2 };

@@ -6,7 +6,7 @@
  * slice of the 3D block is a slab whose end slabs hold the walls (16 threads:
  * the busiest slice had 1.32 times the mean material and 2.7 times the mean
  * dummies). Each index's result is its own, so any schedule gives the same bits. */
-#include "error.h"
+#include "core/error.h"
 #include "sim.h"
 #include "stages.h"
 
@@ -61,6 +61,41 @@ static void cpu_renorm(sim_t *s, long lo)
         if (p->kind[i] == KIND_MATERIAL) seg_renorm((size_t)i, p, &s->grid.view, &s->seg);
 }
 
+/* The flow rates of the material (and, when due, its L) and the largest
+ * acceleration. */
+static void cpu_flow_rates(sim_t *s)
+{
+    particles_t *p = &s->p;
+    const long n = (long)p->n;
+    const int renorm = s->renorm_due;
+    double amax = 0;
+#pragma omp parallel for schedule(dynamic, CPU_CHUNK) reduction(max : amax)
+    for (long i = 0; i < n; ++i) {
+        if (p->kind[i] != KIND_MATERIAL) continue;
+        double a = flow_rates_team((size_t)i, p, &s->grid.view, &s->flow, 0, 1, renorm);
+        amax = a > amax ? a : amax;
+    }
+    s->amax = amax;
+    s->renorm_due = 0;
+}
+
+/* A concentration window's time-step bounds, from the material of q (the
+ * store with the window's mean shear rate), into out[STEP_*]. */
+static void cpu_win_bounds(sim_t *s, const particles_t *q, double *out)
+{
+    const long n = (long)q->n;
+    double dmax = 0, wmax = 0;
+#pragma omp parallel for schedule(static) reduction(max : dmax, wmax)
+    for (long i = 0; i < n; ++i) {
+        if (q->kind[i] != KIND_MATERIAL) continue;
+        double b[3];
+        step_bounds_of((size_t)i, q, &s->step_c, b);
+        dmax = b[0] > dmax ? b[0] : dmax;
+        wmax = b[1] > wmax ? b[1] : wmax;
+    }
+    out[STEP_D] = dmax, out[STEP_WAVE] = wmax, out[STEP_SPEED] = 0, out[STEP_ACC] = 0;
+}
+
 /* Run stage id of the table (src/stages.h) for call c; returns 0 when the
  * call leaves it out (prepare without classification, say). The loops:
  * streaming ones schedule(static), neighbour loops dynamic (top). */
@@ -98,19 +133,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         for (long i = 0; i < ng; ++i)
             if (p->kind[i] == KIND_DUMMY) flow_wall((size_t)i, p, &s->grid.view, &s->flow);
         return 1;
-    case ST_FLOW: {
-        const int renorm = s->renorm_due;
-        double amax = 0;
-#pragma omp parallel for schedule(dynamic, CPU_CHUNK) reduction(max : amax)
-        for (long i = 0; i < n; ++i) {
-            if (p->kind[i] != KIND_MATERIAL) continue;
-            double a = flow_rates_team((size_t)i, p, &s->grid.view, &s->flow, 0, 1, renorm);
-            amax = a > amax ? a : amax;
-        }
-        s->amax = amax;
-        s->renorm_due = 0;
-        return 1;
-    }
+    case ST_FLOW: cpu_flow_rates(s); return 1;
     case ST_SEG_COEFFS: cpu_seg_coeffs(s, p); return 1;
     case ST_DCDT: cpu_dcdt(s, p); return 1;
     case ST_SAVE:
@@ -133,19 +156,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         return 1;
     }
     case ST_WIN_RENORM: cpu_renorm(s, 0); return 1;
-    case ST_WIN_BOUNDS: {
-        double dmax = 0, wmax = 0;
-#pragma omp parallel for schedule(static) reduction(max : dmax, wmax)
-        for (long i = 0; i < n; ++i) {
-            if (p->kind[i] != KIND_MATERIAL) continue;
-            double b[3];
-            step_bounds_of((size_t)i, &q, &s->step_c, b);
-            dmax = b[0] > dmax ? b[0] : dmax;
-            wmax = b[1] > wmax ? b[1] : wmax;
-        }
-        c->out[STEP_D] = dmax, c->out[STEP_WAVE] = wmax, c->out[STEP_SPEED] = 0, c->out[STEP_ACC] = 0;
-        return 1;
-    }
+    case ST_WIN_BOUNDS: cpu_win_bounds(s, &q, c->out); return 1;
     case ST_WIN_COEFFS: cpu_seg_coeffs(s, &q); return 1;
     case ST_WIN_DCDT: cpu_dcdt(s, &q); return 1;
     case ST_WIN_ADVANCE: {

@@ -4,7 +4,7 @@
  * stage 2 runs the umbrella test (4.19) only in outer cells and the vicinity
  * test (4.20) only in outer and second cells. Loop bodies: physics/bound_kern.h. */
 #include "bound.h"
-#include "error.h"
+#include "core/error.h"
 #include <stdlib.h>
 
 /* Particles per dynamic chunk of the two sweeps: their cost depends on the

@@ -12,7 +12,7 @@
 #include <time.h>
 #include <unistd.h>
 #include "diag.h"
-#include "error.h"
+#include "core/error.h"
 #include "io.h"
 #include "mpi/comm.h"
 #include "version.h"

@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "checkpoint.h"
-#include "error.h"
+#include "core/error.h"
 
 enum ckpt_key_class { KEY_RUN = 0, KEY_MODEL = 1, KEY_STATE = 2 };
 

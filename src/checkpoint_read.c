@@ -19,7 +19,7 @@
  * (error.h): read the flag before error.h comes in. */
 static unsigned ckpt_acc_rdonly(void) { return H5F_ACC_RDONLY; }
 #include "checkpoint.h"
-#include "error.h"
+#include "core/error.h"
 #include "mpi/comm.h"
 
 #define CKPT_PATH_MAX 4200

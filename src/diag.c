@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include "error.h"
+#include "core/error.h"
 #include "io.h"
 #include "mpi/comm.h"
 

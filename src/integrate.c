@@ -2,7 +2,7 @@
  * and the time-step bounds of the concentration solver. */
 #include <math.h>
 #include <string.h>
-#include "error.h"
+#include "core/error.h"
 #include "mpi/comm.h"
 #include "sim.h"
 

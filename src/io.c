@@ -9,7 +9,7 @@
  * error.h takes over: read the flag here, before error.h comes in (with
  * error.h first, hdf5.h's H5CHECK replaced ours and no call was checked). */
 static unsigned io_acc_trunc(void) { return H5F_ACC_TRUNC; }
-#include "error.h"
+#include "core/error.h"
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>

@@ -29,7 +29,7 @@
  * functions return 0. */
 #ifndef SPHSEG_IO_H
 #define SPHSEG_IO_H
-#include "particles.h"
+#include "core/particles.h"
 
 enum io_type { IO_REAL = 0, IO_UINT8 = 1, IO_INT64 = 2, IO_CREAL = 3 }; /* CREAL: creal (hd.h) */
 

@@ -5,11 +5,11 @@
  * after chunk t-1's, so the order is the serial stable sort's whatever the
  * thread count), and part_permute over particles. */
 #include "nbr.h"
-#include "error.h"
+#include "core/error.h"
 #include <float.h>
 #include <stdlib.h>
 #include <string.h>
-#include "omp_shim.h"
+#include "core/omp_shim.h"
 
 /* Below this many particles a build runs on one thread (the fork costs
  * more than the work); the result is the same. */

@@ -2,7 +2,7 @@
  * host: bin particles into cells of edge >= 2h, sort the store by cell. */
 #ifndef SPHSEG_NBR_H
 #define SPHSEG_NBR_H
-#include "particles.h"
+#include "core/particles.h"
 #include "physics/grid.h"
 
 typedef struct nbr_grid {

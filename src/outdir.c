@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-#include "error.h"
+#include "core/error.h"
 #include "mpi/comm.h"
 
 #define OUTDIR_PATH_MAX 4200

@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-#include "error.h"
+#include "core/error.h"
 #include "mpi/comm.h"
 #include "setup.h"
 

@@ -27,7 +27,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include "error.h"
+#include "core/error.h"
 #include "mpi/comm.h"
 #include "setup.h"
 

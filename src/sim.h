@@ -8,7 +8,7 @@
 #include "bound.h"
 #include "mpi/halo.h"
 #include "nbr.h"
-#include "particles.h"
+#include "core/particles.h"
 #include "physics/flow.h"
 #include "physics/kin.h"
 #include "physics/seg_kern.h"

@@ -13,7 +13,7 @@
 #ifndef SPHSEG_STAGES_H
 #define SPHSEG_STAGES_H
 #include <stdint.h>
-#include "particles.h"
+#include "core/particles.h"
 
 /* Fields of the store, as bits: FLD_<FLD> for each row of PART_FIELDS
  * (src/core/fields.h), in its order (a field may be several arrays: x is 3). */

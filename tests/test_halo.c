@@ -35,7 +35,7 @@
 #include <string.h>
 #include "mpi/halo.h"
 #include "nbr.h"
-#include "particles.h"
+#include "core/particles.h"
 
 static int fails;
 #define CHECK(cond, ...)                                                                                     \

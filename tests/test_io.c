@@ -23,7 +23,7 @@
 #include <unistd.h>
 
 #include "io.h"
-#include "particles.h"
+#include "core/particles.h"
 
 static char g_dir[256];
 static int g_rank, g_size;

@@ -30,7 +30,7 @@
 #include <unistd.h>
 
 #include "io.h"
-#include "particles.h"
+#include "core/particles.h"
 
 enum { N = 1001 };
 static char g_dir[256];

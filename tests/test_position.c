@@ -19,7 +19,7 @@
 #include <stdint.h>
 #include <string.h>
 #include <cmocka.h>
-#include "particles.h"
+#include "core/particles.h"
 #include "physics/step.h"
 
 enum { NP = 2 };

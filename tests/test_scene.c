@@ -1,11 +1,10 @@
-/* test_scene.c — scene loading (scene.c): the default scene, defaults,
+/* test_scene.c — scene loading (src/scene*.c): the default scene, defaults,
  * -P overrides, the used-parameters echo read back bit for bit, and every
  * bad input in tests/scenes_bad/ giving one located message. Expected values
  * are written out here, independently of scene.c's tables; each bad file
  * states its expected message in its first line ("# expect: ...").
  * Run from the repository root (or build with -DSPHSEG_ROOT=\"path\"):
- *   mpicc -std=c11 -Isrc tests/test_scene.c src/scene.c src/error.c \
- *         -lcyaml -lyaml -lcmocka -lm -o build/test_scene && build/test_scene */
+ *   make build/tests/test_scene && build/tests/test_scene */
 #define _POSIX_C_SOURCE 200809L
 #include <setjmp.h>
 #include <stdarg.h>

@@ -8,7 +8,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 #include "nbr.h"
-#include "particles.h"
+#include "core/particles.h"
 
 /* Tolerances for both precisions. RT(x): a check that holds to round-off,
  * with x chosen for double precision; in single precision it becomes

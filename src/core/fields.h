@@ -3,7 +3,7 @@
  *
  *   F(member, FLD, type, n, trim)
  *
- *   member  the particles_t member (src/particles.h); also the field's name
+ *   member  the particles_t member (src/core/particles.h); also the field's name
  *           in messages (stage_fields_str);
  *   FLD     its stage-field bit, FLD_<FLD> (src/stages.h);
  *   type    element type: real, creal, preal (src/physics/hd.h, which the

@@ -6,7 +6,7 @@
 #ifndef SPHSEG_BOUND_KERN_H
 #define SPHSEG_BOUND_KERN_H
 #include <math.h>
-#include "../particles.h"
+#include "../core/particles.h"
 #include "grid.h"
 #include "sph.h"
 

@@ -14,7 +14,7 @@
 #ifndef SPHSEG_FLOW_H
 #define SPHSEG_FLOW_H
 #include <math.h>
-#include "../particles.h"
+#include "../core/particles.h"
 #include "grid.h"
 #include "momentum.h"
 #include "seg.h"

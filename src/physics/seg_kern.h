@@ -4,7 +4,7 @@
 #ifndef SPHSEG_SEG_KERN_H
 #define SPHSEG_SEG_KERN_H
 #include <math.h>
-#include "../particles.h"
+#include "../core/particles.h"
 #include "grid.h"
 #include "linalg.h"
 #include "seg.h"

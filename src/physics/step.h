@@ -8,7 +8,7 @@
 #ifndef SPHSEG_STEP_H
 #define SPHSEG_STEP_H
 #include <math.h>
-#include "../particles.h"
+#include "../core/particles.h"
 #include "flow.h"
 #include "kin.h"
 #include "seg.h"

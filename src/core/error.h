@@ -1,4 +1,4 @@
-/* error.h — rank-aware messages and located errors (DESIGN.md "Errors").
+/* core/error.h — rank-aware messages and located errors (DESIGN.md "Errors").
  * Exit status 1: system failure (out of memory, a failed MPI or HDF5 call).
  * Exit status 2: bad input (before any step, nothing written).
  * Exit status 3: numerical failure (names step, time, particle).

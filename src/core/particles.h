@@ -1,12 +1,12 @@
-/* particles.h — the structure-of-arrays particle store (DESIGN.md).
+/* core/particles.h — the structure-of-arrays particle store (DESIGN.md).
  * Material particles carry C; dummy particles (walls) carry only kinematics
  * and take part in boundary detection and wall source terms. */
 #ifndef SPHSEG_PARTICLES_H
 #define SPHSEG_PARTICLES_H
 #include <stddef.h>
 #include <stdint.h>
-#include "physics/hd.h"
-#include "core/fields.h"
+#include "../physics/hd.h"
+#include "fields.h"
 
 enum part_kind { KIND_MATERIAL = 0, KIND_DUMMY = 1 };
 

@@ -1,4 +1,4 @@
-/* error.c — see error.h. */
+/* core/error.c — see error.h. */
 #include "error.h"
 #include <mpi.h>
 #include <stdarg.h>

@@ -1,4 +1,4 @@
-/* particles.c — the structure-of-arrays particle store (see particles.h).
+/* core/particles.c — the structure-of-arrays particle store (see particles.h).
  * Every per-particle array is one component of a row of PART_FIELDS
  * (src/core/fields.h), and part_arrays[] is made from that table;
  * allocation, release, permutation, packing and the memory estimate all

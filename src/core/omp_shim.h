@@ -1,4 +1,4 @@
-/* omp_shim.h — the OpenMP runtime calls the host code uses, as one-thread
+/* core/omp_shim.h — the OpenMP runtime calls the host code uses, as one-thread
  * stand-ins when the build has no OpenMP (OPENMP=0), so that a threaded loop
  * is written once. */
 #ifndef SPHSEG_OMP_SHIM_H
