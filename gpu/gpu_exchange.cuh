@@ -280,13 +280,7 @@ static void hx_migrate(sim_t *s, gpu_t *g, const halo_geom &v)
     const ftab from = all_tab(&g->d);
     hx_post(s, g, from, 0); /* packs the migrants before the compaction below overwrites the spare set */
     if (nkeep < n) { /* the kept ones in order into the spare set, which becomes the store */
-        perm_tab t;
-        t.n = (int)part_narrays();
-        for (int a = 0; a < t.n; ++a) {
-            t.es[a] = (unsigned char)part_array_esize((size_t)a);
-            t.src[a] = part_array_get(&g->d, (size_t)a);
-            t.dst[a] = part_array_get(&g->alt, (size_t)a);
-        }
+        perm_tab t = perm_all(g);
         dim3 gr((unsigned)((nkeep + 255) / 256), (unsigned)t.n);
         if (nkeep) k_permute<<<gr, 256, 0, g->st>>>(t, x->keep, nkeep);
         CK(cudaGetLastError());

@@ -13,6 +13,128 @@ struct max_uint {
     __device__ unsigned operator()(unsigned a, unsigned b) const { return b > a ? b : a; }
 };
 
+/* Every array of the store, from the current set into the spare one. */
+static perm_tab perm_all(const gpu_t *g)
+{
+    perm_tab t;
+    t.n = (int)part_narrays();
+    for (int a = 0; a < t.n; ++a) {
+        t.es[a] = (unsigned char)part_array_esize((size_t)a);
+        t.src[a] = part_array_get(&g->d, (size_t)a);
+        t.dst[a] = part_array_get(&g->alt, (size_t)a);
+    }
+    return t;
+}
+
+/* The halo lists follow the particles through the sort (perm[k] = old
+ * index now at k, over n): on the device, or through the host. */
+static void gpu_follow(gpu_t *g, halo_t *hl, const unsigned *perm, size_t n)
+{
+    if (hl && g->hx->dev) hx_sorted(g, perm, n); /* the halo lists follow the particles, on the device */
+    else if (hl) { /* through the host */
+        unsigned *hp = (unsigned *)malloc((n ? n : 1) * sizeof(unsigned));
+        size_t *pz = (size_t *)malloc((n ? n : 1) * sizeof(size_t));
+        if (!hp || !pz) error_exit(1, "out of memory (%zu particles)", n);
+        CK(cudaMemcpyAsync(hp, perm, n * sizeof(unsigned), cudaMemcpyDeviceToHost, g->st));
+        CK(cudaStreamSynchronize(g->st));
+        for (size_t k = 0; k < n; ++k) pz[k] = hp[k];
+        halo_sorted(hl, pz, n);
+        free(hp), free(pz);
+    }
+}
+
+/* The store permuted by the sort (the spare set becomes the store) and the
+ * view's cell ranges set. */
+static void gpu_permute_store(gpu_t *g, const unsigned *perm, size_t n)
+{
+    prof_begin(g->st);
+    perm_tab t = perm_all(g);
+    dim3 grid((unsigned)((n + 255) / 256), (unsigned)t.n);
+    if (n) k_permute<<<grid, 256, 0, g->st>>>(t, perm, n);
+    CK(cudaGetLastError());
+    prof_end(g->st, P_PERMUTE);
+    particles_t tmp = g->d;
+    g->d = g->alt;
+    g->alt = tmp;
+    g->view.start = g->start;
+    g->view.end = g->end;
+    g->view.gstart = g->ng ? g->start + g->ncell : NULL;
+    g->view.gend = g->ng ? g->end + g->ncell : NULL;
+}
+
+/* The Verlet list of every particle within sqrt(list2), from the cell scan in
+ * its order; the positions at the build (xb) kept for the Verlet test. */
+static void gpu_list(gpu_t *g, int dim, real list2, size_t n)
+{
+    grid_view vc = g->view;
+    vc.nl = vc.ncnt = NULL;
+    particles_t q = g->d;
+    unsigned *cnt = g->ncnt;
+    prof_begin(g->st);
+    for (;;) { /* a list too short for the densest particle grows, once in a while */
+        unsigned *nl = g->nl, cap = g->nl_cap;
+        each(g, n, [=] __device__(size_t i) { cnt[i] = grid_list_fill(&vc, q.x, i, list2, nl, n, cap); });
+        reduce(g, cnt, (unsigned *)g->dfirst, n, max_uint(), 0u);
+        CK(cudaMemcpyAsync(g->hfirst, g->dfirst, sizeof(long long), cudaMemcpyDeviceToHost, g->st));
+        CK(cudaStreamSynchronize(g->st));
+        unsigned most;
+        memcpy(&most, g->hfirst, sizeof most);
+        if (most <= cap) break;
+        CK(cudaFree(g->nl));
+        g->nl_cap = (most + most / 4 + 7) / 8 * 8;
+        g->nl = (unsigned *)dev_alloc(g->cap * g->nl_cap * sizeof(unsigned));
+    }
+    for (int d = 0; d < dim; ++d)
+        CK(cudaMemcpyAsync(g->xb[d], q.x[d], n * sizeof(real), cudaMemcpyDeviceToDevice, g->st));
+    unsigned *nl = g->nl, cap = g->nl_cap;
+    prof_end(g->st, P_LIST);
+    g->view.nl = nl;
+    g->view.ncnt = cnt;
+    g->view.nl_stride = n;
+    g->view.nl_cap = cap;
+}
+
+/* From the new list: the dummies no material reaches (wact) and the halo
+ * levels (see the top). */
+static void gpu_marks(gpu_t *g, size_t n, size_t nown)
+{
+    particles_t q = g->d;
+    unsigned *cnt = g->ncnt, cap = g->nl_cap;
+    if (g->wact) { /* dummies that no material reaches until the next build (the list's skin) */
+        uint8_t *wa = g->wact;
+        grid_view vw = g->view;
+        each(g, n, [=] __device__(size_t i) {
+            int r = q.kind[i] == KIND_DUMMY && cnt[i] > cap; /* a cell scan at use: keep the loop */
+            if (q.kind[i] == KIND_DUMMY && !r) {
+                NBR_BEGIN(&vw, q.x, i, j)
+                    r |= q.kind[j] == KIND_MATERIAL;
+                NBR_END
+            }
+            wa[i] = (uint8_t)r;
+        });
+    }
+    if (g->lvl) { /* halo levels (see the top) from the new list */
+        uint8_t *lvl = g->lvl;
+        grid_view vl = g->view;
+        each(g, n, [=] __device__(size_t i) { lvl[i] = i >= nown ? 0 : 3; });
+        each(g, nown, [=] __device__(size_t i) {
+            int ghost = 0;
+            NBR_BEGIN(&vl, q.x, i, j)
+                ghost |= j >= nown;
+            NBR_END
+            if (ghost) lvl[i] = 1;
+        });
+        each(g, nown, [=] __device__(size_t i) {
+            if (lvl[i] != 3) return;
+            int near = 0;
+            NBR_BEGIN(&vl, q.x, i, j)
+                near |= lvl[j] == 1;
+            NBR_END
+            if (near) lvl[i] = 2;
+        });
+    }
+}
+
 /* Cells of edge `support` over owned particles and ghosts, each range
  * sorted apart (a ghost bit above the cell index), on the global lattice
  * when origin is given (multi-rank exact builds: HCSR cell types as on one
@@ -76,96 +198,10 @@ static void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, c
         if (k == n - 1 || sk[k + 1] != c) end[c] = k + 1;
     });
     prof_end(g->st, P_SORT);
-    if (hl && g->hx->dev) hx_sorted(g, perm, n); /* the halo lists follow the particles, on the device */
-    else if (hl) { /* through the host */
-        unsigned *hp = (unsigned *)malloc((n ? n : 1) * sizeof(unsigned));
-        size_t *pz = (size_t *)malloc((n ? n : 1) * sizeof(size_t));
-        if (!hp || !pz) error_exit(1, "out of memory (%zu particles)", n);
-        CK(cudaMemcpyAsync(hp, perm, n * sizeof(unsigned), cudaMemcpyDeviceToHost, g->st));
-        CK(cudaStreamSynchronize(g->st));
-        for (size_t k = 0; k < n; ++k) pz[k] = hp[k];
-        halo_sorted(hl, pz, n);
-        free(hp), free(pz);
-    }
-    prof_begin(g->st);
-    perm_tab t;
-    t.n = (int)part_narrays();
-    for (int a = 0; a < t.n; ++a) {
-        t.es[a] = (unsigned char)part_array_esize((size_t)a);
-        t.src[a] = part_array_get(&g->d, (size_t)a);
-        t.dst[a] = part_array_get(&g->alt, (size_t)a);
-    }
-    dim3 grid((unsigned)((n + 255) / 256), (unsigned)t.n);
-    if (n) k_permute<<<grid, 256, 0, g->st>>>(t, perm, n);
-    CK(cudaGetLastError());
-    prof_end(g->st, P_PERMUTE);
-    particles_t tmp = g->d;
-    g->d = g->alt;
-    g->alt = tmp;
-    g->view.start = g->start;
-    g->view.end = g->end;
-    g->view.gstart = g->ng ? g->start + g->ncell : NULL;
-    g->view.gend = g->ng ? g->end + g->ncell : NULL;
-    /* the neighbour list, from the cell scan in its order (grid_list_fill) */
-    grid_view vc = g->view;
-    vc.nl = vc.ncnt = NULL;
-    particles_t q = g->d;
-    unsigned *cnt = g->ncnt;
-    prof_begin(g->st);
-    for (;;) { /* a list too short for the densest particle grows, once in a while */
-        unsigned *nl = g->nl, cap = g->nl_cap;
-        each(g, n, [=] __device__(size_t i) { cnt[i] = grid_list_fill(&vc, q.x, i, list2, nl, n, cap); });
-        reduce(g, cnt, (unsigned *)g->dfirst, n, max_uint(), 0u);
-        CK(cudaMemcpyAsync(g->hfirst, g->dfirst, sizeof(long long), cudaMemcpyDeviceToHost, g->st));
-        CK(cudaStreamSynchronize(g->st));
-        unsigned most;
-        memcpy(&most, g->hfirst, sizeof most);
-        if (most <= cap) break;
-        CK(cudaFree(g->nl));
-        g->nl_cap = (most + most / 4 + 7) / 8 * 8;
-        g->nl = (unsigned *)dev_alloc(g->cap * g->nl_cap * sizeof(unsigned));
-    }
-    for (int d = 0; d < dim; ++d)
-        CK(cudaMemcpyAsync(g->xb[d], q.x[d], n * sizeof(real), cudaMemcpyDeviceToDevice, g->st));
-    unsigned *nl = g->nl, cap = g->nl_cap;
-    prof_end(g->st, P_LIST);
-    g->view.nl = nl;
-    g->view.ncnt = cnt;
-    g->view.nl_stride = n;
-    g->view.nl_cap = cap;
-    if (g->wact) { /* dummies that no material reaches until the next build (the list's skin) */
-        uint8_t *wa = g->wact;
-        grid_view vw = g->view;
-        each(g, n, [=] __device__(size_t i) {
-            int r = q.kind[i] == KIND_DUMMY && cnt[i] > cap; /* a cell scan at use: keep the loop */
-            if (q.kind[i] == KIND_DUMMY && !r) {
-                NBR_BEGIN(&vw, q.x, i, j)
-                    r |= q.kind[j] == KIND_MATERIAL;
-                NBR_END
-            }
-            wa[i] = (uint8_t)r;
-        });
-    }
-    if (g->lvl) { /* halo levels (see the top) from the new list */
-        uint8_t *lvl = g->lvl;
-        grid_view vl = g->view;
-        each(g, n, [=] __device__(size_t i) { lvl[i] = i >= nown ? 0 : 3; });
-        each(g, nown, [=] __device__(size_t i) {
-            int ghost = 0;
-            NBR_BEGIN(&vl, q.x, i, j)
-                ghost |= j >= nown;
-            NBR_END
-            if (ghost) lvl[i] = 1;
-        });
-        each(g, nown, [=] __device__(size_t i) {
-            if (lvl[i] != 3) return;
-            int near = 0;
-            NBR_BEGIN(&vl, q.x, i, j)
-                near |= lvl[j] == 1;
-            NBR_END
-            if (near) lvl[i] = 2;
-        });
-    }
+    gpu_follow(g, hl, perm, n);
+    gpu_permute_store(g, perm, n);
+    gpu_list(g, dim, list2, n);
+    gpu_marks(g, n, nown);
 }
 
 /* HCSR classification (bound.c on the CPU): cell types, then the two sweeps,
