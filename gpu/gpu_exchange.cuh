@@ -253,6 +253,31 @@ static void hx_wrap(sim_t *s, gpu_t *g)
     }
 }
 
+/* The (channel, particle) pairs of MODE (k_targets) for the owned particles,
+ * in ascending particle order in x->pk, x->pv (and, migrating, the kept
+ * ones' indices in x->keep): a counting pass, a scan, a writing pass.
+ * Returns the number of pairs; what names the host's failure. */
+template <int MODE> static size_t hx_choose(sim_t *s, gpu_t *g, const halo_geom &v, const char *what)
+{
+    halo_t *h = s->halo;
+    dhalo *x = g->hx;
+    const size_t n = g->n;
+    hx_space(g, h->nnb, n, 0);
+    CK(cudaMemsetAsync(x->derr, 0xff, sizeof(int), g->st));
+    const unsigned grid = (unsigned)((n + BLOCK - 1) / BLOCK);
+    if (n) k_targets<MODE, 1><<<grid, BLOCK, 0, g->st>>>(v, g->d, n, x->cnt, NULL, NULL, NULL, NULL, x->derr);
+    CK(cudaGetLastError());
+    size_t npair = hx_scan(g, x->cnt, x->off, n);
+    hx_check(g, h, what);
+    hx_space(g, h->nnb, n, npair);
+    if (MODE == HX_MIGRATE) x->keep = grow_dev_t(x->keep, &x->cap_keep, n);
+    if (n)
+        k_targets<MODE, 0><<<grid, BLOCK, 0, g->st>>>(v, g->d, n, NULL, x->off, x->pk, x->pv,
+                                                        MODE == HX_MIGRATE ? x->keep : NULL, x->derr);
+    CK(cudaGetLastError());
+    return npair;
+}
+
 /* halo_migrate on the device: the particles another rank owns go to it,
  * whole; the kept ones keep their order at [0, nkeep), the arrivals follow
  * in channel order. */
@@ -261,17 +286,7 @@ static void hx_migrate(sim_t *s, gpu_t *g, const halo_geom &v)
     halo_t *h = s->halo;
     dhalo *x = g->hx;
     const size_t n = g->n;
-    hx_space(g, h->nnb, n, 0);
-    CK(cudaMemsetAsync(x->derr, 0xff, sizeof(int), g->st));
-    const unsigned grid = (unsigned)((n + BLOCK - 1) / BLOCK);
-    if (n) k_targets<HX_MIGRATE, 1><<<grid, BLOCK, 0, g->st>>>(v, g->d, n, x->cnt, NULL, NULL, NULL, NULL, x->derr);
-    CK(cudaGetLastError());
-    size_t nmig = hx_scan(g, x->cnt, x->off, n);
-    hx_check(g, h, "migration");
-    hx_space(g, h->nnb, n, nmig);
-    x->keep = grow_dev_t(x->keep, &x->cap_keep, n);
-    if (n) k_targets<HX_MIGRATE, 0><<<grid, BLOCK, 0, g->st>>>(v, g->d, n, NULL, x->off, x->pk, x->pv, x->keep, x->derr);
-    CK(cudaGetLastError());
+    size_t nmig = hx_choose<HX_MIGRATE>(s, g, v, "migration");
     size_t nin = hx_lists(s, g, nmig), nkeep = n - nmig;
     h->migrated += (long long)nmig;
     /* posted even when nothing moves here: a neighbour waits for this rank's (empty) segments */
@@ -299,17 +314,7 @@ static void hx_ghosts(sim_t *s, gpu_t *g, const halo_geom &v)
     halo_t *h = s->halo;
     dhalo *x = g->hx;
     const size_t n = g->n;
-    hx_space(g, h->nnb, n, 0);
-    CK(cudaMemsetAsync(x->derr, 0xff, sizeof(int), g->st));
-    const unsigned grid = (unsigned)((n + BLOCK - 1) / BLOCK);
-    if (n) k_targets<HX_GHOSTS, 1><<<grid, BLOCK, 0, g->st>>>(v, g->d, n, x->cnt, NULL, NULL, NULL, NULL, x->derr);
-    CK(cudaGetLastError());
-    size_t npair = hx_scan(g, x->cnt, x->off, n);
-    hx_check(g, h, "ghosts");
-    hx_space(g, h->nnb, n, npair);
-    if (n) k_targets<HX_GHOSTS, 0><<<grid, BLOCK, 0, g->st>>>(v, g->d, n, NULL, x->off, x->pk, x->pv, NULL, x->derr);
-    CK(cudaGetLastError());
-    size_t ng = hx_lists(s, g, npair);
+    size_t ng = hx_lists(s, g, hx_choose<HX_GHOSTS>(s, g, v, "ghosts"));
     gpu_reserve(g, n + ng, n);
     gpu_counts(g, n, ng);
     hx_slots(g, n, ng);
