@@ -302,6 +302,10 @@ int scene_write_used(const struct scene *s, const char *file);
 /* The used parameters as a YAML string (malloc'd), for snapshot headers. */
 char *scene_used_text(const struct scene *s);
 
+/* The default of "Section:key" as the YAML text of its row in the key table
+ * (src/scene_keys.h), or NULL (no default, or no such key). */
+const char *scene_key_default(const char *name);
+
 /* For errors found after loading (DESIGN.md "Errors"): the 1-based line of
  * Section:key in the scene file; for a key not written there (a default, or
  * given only by -P) the line of its section, or 1. */
