@@ -77,6 +77,11 @@ static void ckpt_key_compare(const char *name, void *ctx)
     int in_was = ckpt_key_value(d->stored, name, was, sizeof was);
     int in_now = ckpt_key_value(d->now, name, now, sizeof now);
     if (in_was == in_now && (!in_was || !strcmp(was, now))) return;
+    /* a key newer than the checkpoint, at its default: a new key's default is the
+     * behaviour the code had before it (Material:yield drucker_prager), so the
+     * checkpoint describes that state */
+    const char *def = in_now && !in_was ? scene_key_default(name) : NULL;
+    if (def && !strcmp(def, now)) return;
     enum ckpt_key_class c = ckpt_key_class(name);
     d->count[c]++;
     ckpt_key_note(d->lists[c], sizeof d->lists[c], name, was, now);

@@ -293,6 +293,16 @@ int scene_buf_write(void *data, unsigned char *bytes, size_t size)
 /* ---- defaults, the libcyaml load, ranges ------------------------------------------ */
 
 /* The keys with a default the walk did not meet, edited into the document. */
+const char *scene_key_default(const char *name)
+{
+    for (size_t i = 0; i < ARRAY_LEN(scene_defaults); ++i) {
+        const struct scene_default *d = &scene_defaults[i];
+        size_t ls = strlen(d->section);
+        if (!strncmp(name, d->section, ls) && name[ls] == ':' && !strcmp(name + ls + 1, d->key)) return d->value;
+    }
+    return NULL;
+}
+
 static int add_defaults(struct scene_ctx *c)
 {
     char name[SCENE_NAME], why[160];

@@ -28,6 +28,10 @@ enum init_stress { INIT_STRESS_ZERO = 0, INIT_STRESS_GEOSTATIC = 1 };
  * compressible Newtonian fluid (pressure from the bulk modulus, viscous
  * momentum of Morris et al. 1997). */
 enum mat_model { MAT_GRANULAR = 0, MAT_NEWTONIAN = 1 };
+/* the granular material's yield surface: drucker_prager, the paper's cone
+ * sqrt(J2) = k_mu(mu(I)) p (2.11-2.12); mu_I, the tensorial law |tau| =
+ * sqrt(J2) = mu(I) p of Jop, Forterre & Pouliquen (2006) (physics/stress.h) */
+enum mat_yield { MAT_YIELD_DRUCKER_PRAGER = 0, MAT_YIELD_MU_I = 1 };
 
 struct scene_run {
     double t_end;           /* s, required */
@@ -120,6 +124,8 @@ struct scene_initial {
  * fluid; computed flow only. */
 struct scene_material {
     enum mat_model model; /* granular | newtonian; default granular */
+    enum mat_yield yield; /* granular: drucker_prager (the paper's k_mu cone, 2.12) | mu_I (sqrt(J2) =
+                           * mu(I) p, Jop, Forterre & Pouliquen 2006); default drucker_prager */
     double eta;    /* newtonian: dynamic viscosity, Pa s; default 1e-3 */
     double E;      /* Young's modulus, Pa; default 1e7 (newtonian: with nu, the bulk modulus
                     * K = E / (3 (1 - 2 nu)) and the sound speed sqrt(K / rho)) */
@@ -295,6 +301,10 @@ int scene_write_used(const struct scene *s, const char *file);
 
 /* The used parameters as a YAML string (malloc'd), for snapshot headers. */
 char *scene_used_text(const struct scene *s);
+
+/* The default of "Section:key" as the YAML text of its row in the key table
+ * (src/scene_keys.h), or NULL (no default, or no such key). */
+const char *scene_key_default(const char *name);
 
 /* For errors found after loading (DESIGN.md "Errors"): the 1-based line of
  * Section:key in the scene file; for a key not written there (a default, or

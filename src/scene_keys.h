@@ -38,6 +38,7 @@ static const cyaml_strval_t periodic_axes[] = {
     {"none", PERIODIC_NONE}, {"x", PERIODIC_X}, {"y", PERIODIC_Y}, {"xy", PERIODIC_XY}, {"z", PERIODIC_Z},
     {"xz", PERIODIC_XZ}, {"yz", PERIODIC_YZ}, {"xyz", PERIODIC_XYZ}};
 static const cyaml_strval_t mat_models[] = {{"granular", MAT_GRANULAR}, {"newtonian", MAT_NEWTONIAN}};
+static const cyaml_strval_t mat_yields[] = {{"drucker_prager", MAT_YIELD_DRUCKER_PRAGER}, {"mu_I", MAT_YIELD_MU_I}};
 static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
 
 static const cyaml_strval_t cwall_shapes[] = {
@@ -236,6 +237,8 @@ END_SECTION(physics)
 SECTION("Material", material, scene_material)
     KE("Material", material, scene_material, model, mat_models, "granular",
       "granular | newtonian; default granular")
+    KE("Material", material, scene_material, yield, mat_yields, "drucker_prager",
+      "granular: the yield surface sqrt(J2) = k p, drucker_prager (the paper's k = k_mu(mu(I)) = 3 mu / sqrt(9 + 12 mu^2), eq. 2.12: in simple shear tau / p = k_mu, onset at atan k_mu(mu_s)) | mu_I (k = mu(I): |tau| = mu(I) p, Jop, Forterre & Pouliquen 2006: onset at atan mu_s); default drucker_prager")
     KF("Material", material, scene_material, eta, OPT, "0.001", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "newtonian: dynamic viscosity, Pa s; default 1e-3")
     KF("Material", material, scene_material, E, OPT, "1e7", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,

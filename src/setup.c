@@ -231,10 +231,16 @@ static void setup_drum(sim_t *s)
         warning("Geometry:length %.6g m is not a multiple of dr; the drum is %.6g m long", sc->geometry.length, L);
 }
 
+/* Material:yield as the flow bodies' constant (stress.h). */
+static int flow_yield_of(const struct scene *sc)
+{
+    return sc->material.yield == MAT_YIELD_MU_I ? YIELD_MU_I : YIELD_DRUCKER_PRAGER;
+}
+
 /* Geostatic initial stress of a material at rest under a flat surface at
  * y = surface_y (gravity along -y): sigma_yy = -rho |g| depth, sigma_xx =
  * sigma_zz = K0 sigma_yy with K0 = nu / (1 - nu) (uniaxial strain), returned
- * to the yield cone with mu = mu_s (at rest). It only shortens the elastic
+ * to the yield cone of Material:yield with mu = mu_s (at rest). It only shortens the elastic
  * transient of a start from zero stress. Initial:pressure adds a uniform
  * pressure to the zero or geostatic stress. */
 static void setup_stress(sim_t *s)
@@ -247,7 +253,7 @@ static void setup_stress(sim_t *s)
     const double *gv = sc->physics.gravity;
     int fluid = sc->material.model == MAT_NEWTONIAN; /* hydrostatic: K0 = 1, no shear stress */
     double gn = sqrt(gv[0] * gv[0] + gv[1] * gv[1]), K0 = fluid ? 1.0 : sc->material.nu / (1 - sc->material.nu);
-    real kmu = fluid ? R(0.0) : stress_kmu((real)sc->material.mu_s);
+    real kmu = fluid ? R(0.0) : stress_yield_k(flow_yield_of(sc), (real)sc->material.mu_s);
     for (size_t i = 0; i < p->n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
         real sg[6] = {0, 0, 0, 0, 0, 0};
@@ -531,6 +537,7 @@ static void flow_ctx_of(const struct scene *sc, const sph_ctx *k, const seg_para
     f->m.rho_s = (real)m->rho_s;
     f->m.mu_s = (real)m->mu_s, f->m.mu_d = (real)m->mu_d;
     f->m.I0 = (real)m->I0, f->m.lambda = (real)m->lambda;
+    f->yield = flow_yield_of(sc);
     f->rho = (real)sc->physics.rho;
     f->cs = stress_sound_speed(f->m.G, f->m.K, f->rho);
     f->alpha_av = (real)sc->flow.alpha_av;

@@ -419,6 +419,12 @@ static void test_advance(void **st)
     assert_true(fabs(pr - 1000) < RT(1e-9) * 1000); /* g = sqrt(J2): the pressure stays */
     assert_true(fabs(sqrt(stress_J2(s)) - stress_kmu(mu) * pr) < RT(1e-9) * 1000);
     for (int q = 0; q < 6; ++q) assert_true(p.sig[q][1] == 0);
+    /* Material:yield mu_I (flow_ctx.yield): the same trial onto sqrt(J2) = mu(I) p */
+    c.yield = YIELD_MU_I;
+    assert_int_equal(flow_advance(0, &p, a, &c), 1);
+    for (int q = 0; q < 6; ++q) s[q] = p.sig[q][0];
+    assert_true(fabs(stress_pressure(s) - 1000) < RT(1e-9) * 1000);
+    assert_true(fabs(sqrt(stress_J2(s)) - mu * 1000) < RT(1e-9) * 1000 && mu > stress_kmu(mu) + 0.02);
     part_free(&p);
 }
 

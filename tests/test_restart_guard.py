@@ -7,7 +7,9 @@ line, in bounded time, on 1, 2 and 3 ranks; never exit 0 on a damaged file,
 - foreign scenes: a checkpoint restarted with another dr, or the drum's
   with the shear box scene and the reverse, is refused naming each
   state-defining key that differs; run-control keys may differ and are
-  listed; model keys are a warning;
+  listed; model keys are a warning; a key newer than the checkpoint
+  (Material:yield, issue 30) is the checkpoint's state at its default and
+  refused at another value;
 - damaged files: a few hundred byte-fuzzed mutants of a checkpoint (bytes
   changed, cut short, extended) are refused by the checksum before HDF5
   reads them;
@@ -217,6 +219,26 @@ def took(res, path):
     return rc == 0 and f"restart from {path}: step" in out, warns, f"rc {rc}, {dt:.1f} s\n{err}\n{out[-400:]}"
 
 
+def test_key_newer(sp, work, drum):
+    """A checkpoint written before a key existed (issue 30: Material:yield): its
+    scene text lacks the key; at the key's default (the behaviour the code had)
+    it restarts, at another value it is refused naming the key."""
+    old = os.path.join(work, "before_yield.h5")
+    shutil.copy(drum, old)
+    with h5py.File(old, "r+") as h:
+        text = h["Header"].attrs["Scene"]
+        ok = "  yield: drucker_prager\n" in text
+        set_attr("Header/Scene", text.replace("  yield: drucker_prager\n", ""))(h)
+    reseal(old)
+    more = ["-P", "Geometry:dr=0.004", "-P", "Run:max_steps=3", "-P", "Output:checkpoint_dt=1"]
+    rc, out, err, _ = restart(sp, work, old, DRUM, extra=more)
+    check("a checkpoint from before Material:yield restarts as drucker_prager (its default)",
+          ok and rc == 0 and "Material:yield" not in out + err, f"rc {rc}\n{err}\n{out[-400:]}")
+    ok, why = refused(restart(sp, work, old, DRUM, extra=more + ["-P", "Material:yield=mu_I"]), "mu_I")
+    check("... and is refused as mu_I, naming Material:yield",
+          ok and "Material:yield ((absent) in the checkpoint, mu_I now)" in why, why)
+
+
 def test_seal_flips(sp, work, src, run_ok):
     """Defect 3: a flipped seal step chooses no checkpoint; every reason is said."""
     cur, prev = seal_word(src + "/checkpoint.h5", "step"), seal_word(src + "/checkpoint_prev.h5", "step")
@@ -358,6 +380,7 @@ def main():
     check("run-control keys listed, model keys a warning, the run goes on",
           rc == 0 and "run-control key(s) differ" in out and "Run:t_end (1 in the checkpoint, 1.5 now)" in out
           and "Segregation:D" in err and "model key(s) differ" in err, out[-800:] + err)
+    test_key_newer(sp, work, drum)
 
     # defect 6: crafted, resealed
     for name, fn, words in crafted():

@@ -73,6 +73,112 @@ static void test_return_map(void **st)
     for (int c = 0; c < 6; ++c) assert_true(ten[c] == 0);
 }
 
+/* |tau| = sqrt(tau_ij tau_ij / 2) over the full 3x3 deviator tau = sigma + p I
+ * (Jop, Forterre & Pouliquen 2006's second invariant), written out
+ * independently of stress_J2. */
+static double jfp_tau(const real s[6])
+{
+    double p = -((double)s[0] + s[1] + s[2]) / 3;
+    double T[3][3] = {{s[0] + p, s[3], s[4]}, {s[3], s[1] + p, s[5]}, {s[4], s[5], s[2] + p}}, sum = 0;
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) sum += T[a][b] * T[a][b];
+    return sqrt(sum / 2);
+}
+
+/* Simple shear u_x = gdot y (plane strain) from an initial stress s, in
+ * small elastic trial increments (Jaumann rate C1, spin included), each
+ * returned onto the surface of `yield` at mu_s (the quasi-static limit);
+ * the stress after n increments of shear strain dg each. */
+static void shear_path(real s[6], int yield, int n, double dg)
+{
+    mat_params m = table1();
+    real eps[6] = {0, 0, 0, (real)(dg / 2), 0, 0}, w[3] = {(real)(dg / 2), 0, 0}, r[6];
+    for (int k = 0; k < n; ++k) {
+        stress_rate_elastic(s, eps, w, m.G, m.K, r); /* the rate times dt: eps, w are increments */
+        for (int c = 0; c < 6; ++c) s[c] += r[c];
+        stress_return_yield(s, yield, m.mu_s);
+    }
+}
+
+/* Material:yield in simple shear: the layer's shear stress at yield is
+ * tau_xy / p = mu_s with mu_I (tan 20.9 deg for Table 1's beads, Pouliquen
+ * 1999's onset) and k_mu(mu_s) with drucker_prager (the paper's, tan 19.3
+ * deg): the factor between sqrt(J2) and tau_xy is 1 once the flow rule has
+ * driven the normal stress differences to O(tau^2 / G), whatever the start
+ * (isotropic, or the geostatic K0 = nu / (1 - nu) state of setup.c). */
+static void test_yield_simple_shear(void **st)
+{
+    (void)st;
+    const double p = 1000, mu_s = 0.382, K0 = 0.3 / 0.7;
+    for (int start = 0; start < 2; ++start)
+        for (int yield = 0; yield < 2; ++yield) {
+            /* start 1: sigma_yy = -P, sigma_xx = sigma_zz = K0 sigma_yy, p = 1000 */
+            double P = start ? 3 * p / (1 + 2 * K0) : p;
+            real s[6] = {(real)(-(start ? K0 : 1) * P), (real)-P, (real)(-(start ? K0 : 1) * P), 0, 0, 0};
+            shear_path(s, yield, 4000, 2e-5); /* shear strain 0.08, 800 times the yield strain 1e-4 */
+            double ratio = s[3] / stress_pressure(s), want = yield == YIELD_MU_I ? mu_s : stress_kmu(mu_s);
+            assert_true(fabs(stress_pressure(s) - p) < RT(1e-9) * p); /* isochoric: p kept */
+            assert_true(fabs(ratio - want) < RT(1e-6));
+            /* the normal stresses equal again */
+            assert_true(fabs(s[0] - s[1]) < 1e-3 * p && fabs(s[2] + p) < 1e-3 * p);
+        }
+    /* the onset angles of the two surfaces: atan mu_s = 20.9 deg, atan k_mu(mu_s) = 19.3 deg */
+    assert_true(fabs(atan(stress_yield_k(YIELD_MU_I, mu_s)) * 180 / M_PI - 20.90) < 0.01);
+    assert_true(fabs(atan(stress_yield_k(YIELD_DRUCKER_PRAGER, mu_s)) * 180 / M_PI - 19.27) < 0.01);
+}
+
+/* The mu_I return mapping on 2D plane-strain and 3D states: the code's
+ * sqrt(J2) is JFP's |tau| (an independent sum over the 3x3 deviator); a
+ * state inside |tau| <= mu p is left bit for bit; one outside lands on the
+ * surface with its pressure and deviator direction kept; mapping it again
+ * changes nothing beyond round-off; tension goes to the apex. */
+static void test_return_map_mu_i(void **st)
+{
+    (void)st;
+    const real mu = (real)0.5;
+    const real states[][6] = {
+        {-1000, -1200, -1100, 50, 0, 0},      /* 2D plane strain, inside */
+        {-1000, -1200, -1100, 50, 30, -40},   /* 3D, inside */
+        {-1000, -3000, -500, 900, 0, 0},      /* 2D plane strain, outside */
+        {-1000, -3000, -500, 900, 100, -300}, /* 3D, outside */
+        {-800, -800, -800, 0, 0, 700},        /* pure shear in y-z, outside */
+    };
+    for (size_t k = 0; k < sizeof states / sizeof states[0]; ++k) {
+        real s[6];
+        for (int c = 0; c < 6; ++c) s[c] = states[k][c];
+        double p = stress_pressure(s), tau = jfp_tau(s);
+        assert_true(fabs(tau - sqrt(stress_J2(s))) < RT(1e-12) * tau); /* sqrt(J2) = |tau| */
+        int inside = tau <= mu * p;
+        assert_int_equal(stress_return_yield(s, YIELD_MU_I, mu), inside ? 0 : 1);
+        if (inside) {
+            for (int c = 0; c < 6; ++c) assert_true(s[c] == states[k][c]);
+            continue;
+        }
+        assert_true(fabs(stress_pressure(s) - p) < RT(1e-12) * p);   /* p kept */
+        assert_true(fabs(jfp_tau(s) - mu * p) < RT(1e-12) * mu * p); /* on |tau| = mu p */
+        double r = (s[3] != 0 ? s[3] / states[k][3] : s[5] / states[k][5]);
+        for (int c = 0; c < 6; ++c) /* the deviator scaled by one factor */
+            assert_true(fabs((s[c] + (c < 3 ? p : 0)) - r * (states[k][c] + (c < 3 ? p : 0))) < RT(1e-12) * p);
+        real again[6];
+        for (int c = 0; c < 6; ++c) again[c] = s[c];
+        stress_return_yield(again, YIELD_MU_I, mu); /* idempotent */
+        for (int c = 0; c < 6; ++c) assert_true(fabs(again[c] - s[c]) < RT(1e-14) * p);
+        /* the drucker_prager surface of the same mu is the narrower cone k_mu(mu) < mu */
+        for (int c = 0; c < 6; ++c) again[c] = states[k][c];
+        assert_int_equal(stress_return_yield(again, YIELD_DRUCKER_PRAGER, mu), 1);
+        assert_true(fabs(sqrt(stress_J2(again)) - stress_kmu(mu) * p) < RT(1e-12) * p);
+        assert_true(stress_kmu(mu) < mu);
+    }
+    real in_mu_out_dp[6] = {-1000, -1000, -1000, 450, 0, 0}; /* k_mu(0.5) p = 433 < 450 < 500 = mu p */
+    real t[6];
+    for (int c = 0; c < 6; ++c) t[c] = in_mu_out_dp[c];
+    assert_int_equal(stress_return_yield(t, YIELD_MU_I, mu), 0);
+    assert_int_equal(stress_return_yield(in_mu_out_dp, YIELD_DRUCKER_PRAGER, mu), 1);
+    real ten[6] = {100, -20, 10, 5, 0, 3}; /* mean tension: the apex, as drucker_prager */
+    assert_int_equal(stress_return_yield(ten, YIELD_MU_I, mu), 2);
+    for (int c = 0; c < 6; ++c) assert_true(ten[c] == 0);
+}
+
 static void test_elastic_rate(void **st)
 {
     (void)st;
@@ -134,7 +240,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_moduli),       cmocka_unit_test(test_mu),
-        cmocka_unit_test(test_return_map),   cmocka_unit_test(test_elastic_rate),
+        cmocka_unit_test(test_return_map),   cmocka_unit_test(test_yield_simple_shear),
+        cmocka_unit_test(test_return_map_mu_i), cmocka_unit_test(test_elastic_rate),
         cmocka_unit_test(test_pair_terms),   cmocka_unit_test(test_velgrad_lattice)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -59,6 +59,12 @@ def mu_of_kmu(k):
     return 3 * k / math.sqrt(9 - 12 * k * k) if 12 * k * k < 9 else math.inf
 
 
+# Material:yield -> the reading of the steady state: drucker_prager's yield
+# sqrt(J2) = k_mu(mu) p gives k_mu(mu(I)) = tan(theta), mu_I's sqrt(J2) = mu p
+# gives mu(I) = tan(theta)
+READING = {"drucker_prager": "k_mu", "mu_I": "mu"}
+
+
 def inertial_number(theta_deg, reading="k_mu"):
     """Steady I for the slope, or 0 (arrested) or inf (no steady flow)."""
     t = math.tan(math.radians(theta_deg))
@@ -90,13 +96,19 @@ def gravity(theta_deg):
     return "[%.6f,%.6f,0]" % (G * math.sin(t), -G * math.cos(t))
 
 
-def case(name, theta=25.0, H=0.02, dr=0.0005, alpha=0.1, t_end=3.0, seg=None, E=1e5, dim=2, **extra):
+def case(name, theta=25.0, H=0.02, dr=0.0005, alpha=0.1, t_end=3.0, seg=None, E=1e5, dim=2,
+         yield_="drucker_prager", **extra):
+    """One run of the chute. yield_ is Material:yield; the study's runs before
+    Material:yield existed (docs/validation.md) are drucker_prager, which is
+    why it is the default here and not the scene's mu_I."""
     over = {"Geometry:dr": dr, "Geometry:height": H, "Geometry:width": round(20 * dr, 9),
             "Physics:gravity": gravity(theta), "Flow:alpha_av": alpha, "Run:t_end": t_end,
-            "Output:dt": 0.1, "Output:diag_dt": 0.05, "Run:progress_s": 1e9, "Material:E": E}
+            "Output:dt": 0.1, "Output:diag_dt": 0.05, "Run:progress_s": 1e9, "Material:E": E,
+            "Material:yield": yield_}
     if dim == 3:  # periodic along the slope (x) and across it (z), 20 dr each way
         over.update({"Geometry:dim": 3, "Geometry:depth": round(20 * dr, 9), "Geometry:periodic": "xz"})
-    meta = {"theta": theta, "H": H, "dr": dr, "alpha": alpha, "t_end": t_end, "E": E, "seg": 0, "dim": dim}
+    meta = {"theta": theta, "H": H, "dr": dr, "alpha": alpha, "t_end": t_end, "E": E, "seg": 0, "dim": dim,
+            "yield": yield_}
     if seg:
         V, D, phi0 = seg
         over.update({"Segregation:enabled": "on", "Segregation:flux": "symmetric", "Segregation:model": "constant",
@@ -107,6 +119,40 @@ def case(name, theta=25.0, H=0.02, dr=0.0005, alpha=0.1, t_end=3.0, seg=None, E=
 
 
 SEG = (0.04, 2e-4, 0.5)  # V, D, phi0: Pe = V cos(25) H / D = 3.6 at H = 2 cm
+
+# Pouliquen's (1999) flow rule for glass beads: u / sqrt(g h) = BETA h / h_stop(theta),
+# h_stop = L_STOP d (tan theta2 - tan theta) / (tan theta - tan theta1), with
+# tan theta1 = mu_s and tan theta2 = mu_d of Table 1 (Jop, Forterre & Pouliquen 2005)
+BETA, L_STOP = 0.136, 1.65
+# the flow-rule runs (Material:yield mu_I): (theta, H) with H / h_stop from 1 to 6.6
+# (and 22 degrees at H = h_stop), and the surface speed under a tenth of the sound
+# speed at E = 1e5 Pa
+FLOWRULE = [(22, 0.04), (22, 0.06), (22, 0.08), (24, 0.02), (24, 0.04), (26, 0.02), (26, 0.04), (28, 0.01),
+            (28, 0.02)]
+
+
+def h_stop(theta_deg, d=D_GRAIN):
+    """Pouliquen's h_stop, m (inf at or below theta1 = atan mu_s)."""
+    t = math.tan(math.radians(theta_deg))
+    return L_STOP * d * (MU_D - t) / (t - MU_S) if MU_S < t < MU_D else (math.inf if t <= MU_S else 0.0)
+
+
+def relax_time(theta_deg, H, reading="mu"):
+    """The time a layer starting from rest needs to come within about 2 % of
+    its steady mean (an estimate): the acceleration time ubar / (g (sin - mu_s
+    cos)) plus 4 relaxation times H^2 / (2.5 nu) of the mu(I) viscosity
+    linearised at the base, nu = mu'(I) d sqrt(p rho_s) / rho (k_mu' mu' with
+    drucker_prager's reading)."""
+    th = math.radians(theta_deg)
+    I = inertial_number(theta_deg, reading)
+    p = RHO * G * math.cos(th) * H
+    dmu = (MU_D - MU_S) * I0 / (I + I0) ** 2
+    if reading == "k_mu":
+        mu = mu_of_kmu(math.tan(th))
+        dmu *= 3 * 9 / (9 + 12 * mu * mu) ** 1.5
+    nu = dmu * D_GRAIN * math.sqrt(p * RHO_S) / RHO
+    ubar = 0.6 * float(bagnold(H, theta_deg, H, reading))
+    return ubar / (G * (math.sin(th) - MU_S * math.cos(th))) + 4 * H * H / (2.5 * nu)
 
 
 def cases(which):
@@ -139,6 +185,12 @@ def cases(which):
     if which in ("full", "seg"):
         for dr in (0.002, 0.001, 0.0005):
             c.append(case("seg_dr%g" % (dr * 1e3), dr=dr, seg=SEG))
+    if which in ("full", "flowrule"):
+        # mu_I, 20 rows, alpha_av 0 (the study's means within 2.8 % at 20-26 degrees)
+        for theta, H in FLOWRULE:
+            t_end = max(1.0, math.ceil(2 * relax_time(theta, H)) / 2)
+            c.append(case("fr_t%g_H%g" % (theta, H * 100), theta=theta, H=H, dr=round(H / 20, 9), alpha=0.0,
+                          t_end=t_end, yield_="mu_I"))
     return c
 
 
@@ -184,13 +236,14 @@ def summarise(out, name, row):
     """Surface and depth-mean speed of a run at its last snapshot and 0.5 s
     before, and its error against the analytic profile."""
     theta, H = float(row["theta"]), float(row["H"])
+    reading = READING[row.get("yield") or "drucker_prager"]  # runs.csv before Material:yield: drucker_prager
     prof = load_profiles(os.path.join(out, name))
     times = sorted(prof)
     last = prof[times[-1]]
     before = prof[min(times, key=lambda t: abs(t - (times[-1] - 0.5)))]
-    steady = np.isfinite(inertial_number(theta))
-    ref = bagnold(last["y"], theta, H) if steady else np.full(len(last["y"]), np.nan)
-    uref_top = float(bagnold(H, theta, H)) if steady else math.inf
+    steady = np.isfinite(inertial_number(theta, reading))
+    ref = bagnold(last["y"], theta, H, reading) if steady else np.full(len(last["y"]), np.nan)
+    uref_top = float(bagnold(H, theta, H, reading)) if steady else math.inf
     mean = float(np.average(last["u"], weights=last["n"]))
     mean_before = float(np.average(before["u"], weights=before["n"]))
     res = {"t": times[-1], "u_top": float(last["u"].max()), "u_mean": mean, "u_mean_before": mean_before,
@@ -264,7 +317,8 @@ def cmd_report(a):
         P("| theta (deg) | regime (analytic) | depth-mean u at t_end (m/s) | 0.5 s before | analytic | error |")
         P("|---|---|---|---|---|---|")
         for n in reg + [m for m in S if m.startswith("H")]:
-            th, I = float(runs[n]["theta"]), inertial_number(float(runs[n]["theta"]))
+            th = float(runs[n]["theta"])
+            I = inertial_number(th, READING[runs[n].get("yield") or "drucker_prager"])
             regime = "rest" if I == 0 else ("accelerating" if I == math.inf else "steady, I = %.3f" % I)
             s = S[n]
             err = (s["u_mean"] / s["u_ref_mean"] - 1) if 0 < s["u_ref_mean"] < math.inf else math.nan
@@ -330,6 +384,32 @@ def cmd_report(a):
             ax.set_title("3D chute, 25$^\\circ$, H = 5 mm")
             fig.tight_layout()
             fig.savefig(os.path.join(a.docs, "validation_chute_3d.png"), dpi=110)
+    fr = sorted((n for n in S if n.startswith("fr_")), key=lambda n: (float(runs[n]["theta"]), float(runs[n]["H"])))
+    if fr:
+        P("")
+        P("| theta (deg) | H (cm) | H / h_stop | t (s) | depth-mean u (m/s) | 0.5 s before | u / sqrt(g H) | "
+          "flow rule beta H / h_stop | error | Bagnold, mu(I) = tan theta | error | wall (s) | backend |")
+        P("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+        fig, ax = plt.subplots(figsize=(5.5, 4.2))
+        for n in fr:
+            r, s = runs[n], S[n]
+            th, H = float(r["theta"]), float(r["H"])
+            x = H / h_stop(th)
+            fr_u = s["u_mean"] / math.sqrt(G * H)
+            P("| %g | %g | %.2f | %.1f | %.4f | %.4f | %.4f | %.4f | %+.1f %% | %.4f | %+.1f %% | %s | %s |" % (
+                th, H * 100, x, s["t"], s["u_mean"], s["u_mean_before"], fr_u, BETA * x, 100 * (fr_u / (BETA * x) - 1),
+                s["u_ref_mean"], 100 * (s["u_mean"] / s["u_ref_mean"] - 1), r["wall_s"], r.get("backend", "")))
+            ax.plot(x, fr_u, "o", color="C%d" % ((int(th) - 22) // 2), label="%g$^\\circ$" % th)
+        xs = np.linspace(0, max(float(runs[n]["H"]) / h_stop(float(runs[n]["theta"])) for n in fr) * 1.05, 10)
+        ax.plot(xs, BETA * xs, "k-", label="Pouliquen (1999), $\\beta$ = %g" % BETA)
+        ax.axvline(1, color="grey", lw=0.6)
+        h, l = ax.get_legend_handles_labels()
+        keep = [i for i in range(len(l)) if l[i] not in l[:i]]
+        ax.legend([h[i] for i in keep], [l[i] for i in keep], fontsize=8)
+        ax.set_xlabel("H / h$_{stop}(\\theta)$"), ax.set_ylabel("$\\bar u / \\sqrt{g H}$")
+        ax.set_title("chute, Material:yield mu_I")
+        fig.tight_layout()
+        fig.savefig(os.path.join(a.docs, "validation_chute_flowrule.png"), dpi=110)
     seg = sorted((n for n in S if n.startswith("seg")), key=lambda n: -float(runs[n]["dr"]))
     if seg:
         P("")
@@ -357,7 +437,8 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("resolution", "regimes", "3d", "seg"), cases, reduce_done, cmd_report, jobs=4, argv=argv)
+    batch.study_main(__doc__, ("resolution", "regimes", "3d", "seg", "flowrule"), cases, reduce_done, cmd_report, jobs=4,
+                     argv=argv)
 
 
 if __name__ == "__main__":

@@ -7,7 +7,8 @@
  *                 acceleration (3.9) with artificial viscosity (3.10) and
  *                 gravity, shear rate, Jaumann elastic stress rate (C1);
  *   flow_advance  x, u, sigma = start-of-step value + a * rate, then the
- *                 one-step return mapping (App. C) with mu(I) (2.14);
+ *                 one-step return mapping (App. C) with mu(I) (2.14) onto
+ *                 the yield surface of Material:yield;
  *   flow_shepard  the Shepard filter (3.12) into dsig (scratch).
  * Density is constant (the paper's incompressible bulk, §2.1: 2.3 is not
  * solved), so m_j = rho V_j. Stress is tension positive (stress.h). */
@@ -31,6 +32,8 @@ typedef struct flow_ctx {
     real alpha_av; /* Monaghan coefficient of (3.10); 0 switches it off */
     real g[3];     /* gravity, m/s^2 */
     real damping;  /* zeta of the settling term -zeta u, 1/s (0 when off) */
+    int yield;     /* the yield surface (Material:yield): YIELD_DRUCKER_PRAGER (0, the paper's
+                    * k_mu cone) | YIELD_MU_I (sqrt(J2) = mu(I) p), stress.h */
     seg_params sp; /* d_avg = d^S C + d^L (1 - C) for mu(I) */
     wall_geom w;
     real nu;       /* Newtonian fluid (Material:model newtonian): kinematic viscosity eta / rho,
@@ -173,8 +176,9 @@ HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const fl
 
 /* Material particle i, a in seconds: x = x_n + a u (in double, x + xr in
  * the single build: hd.h), u = u_n + a acc,
- * sigma = return_map(sigma_n + a dsig) with k_mu from mu(I) at the current
- * shear rate, the trial pressure and d_avg(C). The position uses the
+ * sigma = return_map(sigma_n + a dsig) onto the cone of Material:yield
+ * (stress_yield_k: k_mu(mu) or mu) with mu(I) at the current shear rate, the
+ * trial pressure and d_avg(C). The position uses the
  * velocity of the rate evaluation (read before u is overwritten). Returns
  * the return-mapping case (stress_return_map). */
 HD_INLINE int flow_advance(size_t i, particles_t *p, real a, const flow_ctx *c)
@@ -188,9 +192,10 @@ HD_INLINE int flow_advance(size_t i, particles_t *p, real a, const flow_ctx *c)
     }
     real s[6];
     for (int q = 0; q < 6; ++q) s[q] = p->sig_n[q][i] + a * p->dsig[q][i];
-    real kmu = R(0.0); /* the Newtonian fluid: pressure only */
-    if (!(c->nu > 0)) kmu = stress_kmu(stress_mu(&c->m, p->gdot[i], stress_pressure(s), seg_davg(&c->sp, p->C[i])));
-    int r = stress_return_map(s, kmu);
+    real k = R(0.0); /* the Newtonian fluid: pressure only */
+    if (!(c->nu > 0))
+        k = stress_yield_k(c->yield, stress_mu(&c->m, p->gdot[i], stress_pressure(s), seg_davg(&c->sp, p->C[i])));
+    int r = stress_return_map(s, k);
     for (int q = 0; q < 6; ++q) p->sig[q][i] = s[q];
     return r;
 }

@@ -1,7 +1,8 @@
 /* stress.h — the regularized mu(I) elastoplastic model of the paper (§2.3,
- * §2.4, App. C): elastic moduli, mu(I) (2.13–2.14), the Drucker–Prager yield
- * function (2.11–2.12), the Jaumann-rate elastic trial stress and the
- * one-step return mapping with tension cut-off.
+ * §2.4, App. C): elastic moduli, mu(I) (2.13–2.14), the yield surfaces
+ * (Material:yield: the paper's Drucker–Prager cone 2.11–2.12, or the
+ * tensorial mu(I) law of Jop, Forterre & Pouliquen 2006), the Jaumann-rate
+ * elastic trial stress and the one-step return mappings with tension cut-off.
  * Called by the flow bodies (flow.h).
  *
  * Conventions: stress is a symmetric tensor stored as (xx, yy, zz, xy, xz,
@@ -116,6 +117,38 @@ HD_INLINE int stress_return_map(real s[6], real kmu)
     for (int c = 0; c < 3; ++c) s[c] = -p + r * (s[c] + p);
     for (int c = 3; c < 6; ++c) s[c] *= r;
     return 1;
+}
+
+/* The yield surfaces of Material:yield, both cones sqrt(J2) = k p in the
+ * code's J2 = s:s/2 (stress_J2) for a friction mu = mu(I) of (2.14):
+ *   YIELD_DRUCKER_PRAGER  k = k_mu(mu) = 3 mu / sqrt(9 + 12 mu^2), eq. (2.12),
+ *                         the paper's; in simple shear tau_xy / p = k_mu(mu)
+ *                         (0.3495 = tan 19.3 deg at mu_s 0.382);
+ *   YIELD_MU_I            k = mu: the law tau_ij = mu(I) p D_ij / |D| of Jop,
+ *                         Forterre & Pouliquen (2006), |tau| = sqrt(tau_ij tau_ij / 2)
+ *                         = sqrt(J2) <= mu(I) p; in simple shear tau_xy / p = mu
+ *                         (tan 20.9 deg at mu_s), Pouliquen's (1999) onset.
+ * sqrt(J2) is the full 3x3 deviator's, so in 2D plane strain s_zz counts; in
+ * steady isochoric simple shear the flow rule drives s_zz and s_xx - s_yy to
+ * O(tau^2 / G) and sqrt(J2) = |tau_xy| (tests/test_stress.c). */
+enum stress_yield { YIELD_DRUCKER_PRAGER = 0, YIELD_MU_I = 1 };
+
+/* The slope k of the yield cone sqrt(J2) = k p for friction mu (above). */
+HD_INLINE real stress_yield_k(int yield, real mu) { return yield == YIELD_MU_I ? mu : stress_kmu(mu); }
+
+/* The return mapping of Material:yield `yield` at friction mu = mu(I), in
+ * place, with the returns of stress_return_map (0 elastic, 1 returned, 2
+ * apex) and its tension cut-off (a trial p <= 0 goes to the apex sigma = 0).
+ * For YIELD_MU_I a trial outside |tau| = sqrt(J2) <= mu p is returned
+ * radially onto it, the deviator scaled by mu p / sqrt(J2*) at the trial
+ * pressure: radial because the JFP law's flow direction is the deviator
+ * itself (tau parallel to D; with the elastic part, the plastic strain rate
+ * parallel to s, the potential g = sqrt(J2) of 2.15), and isochoric, so p is
+ * kept. Both surfaces are cones about the hydrostatic axis, so the one radial
+ * return serves both, with its own slope. */
+HD_INLINE int stress_return_yield(real s[6], int yield, real mu)
+{
+    return stress_return_map(s, stress_yield_k(yield, mu));
 }
 
 /* Time step of (3.19): chi_CFL min(sqrt(h / a_max), h / c_s), s. */
