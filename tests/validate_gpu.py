@@ -61,6 +61,8 @@ CASES = [
     # periodic axes (mpi/halo.h: images as ghosts of the rank itself): a layer
     # sliding down a 40-degree incline across the period boundary, 2D and 3D
     ("chute", "column_2d.yml", 400, CHUTE),
+    # the tensorial mu(I) yield (Material:yield mu_I, stress.h) on the chute scene that uses it
+    ("chute_mu_I", "chute_2d.yml", 400, []),
     # a gate lifted at t = 0.01 s (Geometry:runout, Walls:gate_open): a column collapse
     ("collapse", "column_2d.yml", 1500, COLLAPSE),
     # an outlet under a silo's opening: the device store shrinks (main.c drain)
@@ -102,13 +104,21 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--sphseg", required=True)
     ap.add_argument("--work", required=True)
+    ap.add_argument("--cases", default=None, help="NAME,NAME: only these cases")
     a = ap.parse_args()
+    cases = CASES
+    if a.cases:
+        names = [n.strip() for n in a.cases.split(",") if n.strip()]
+        unknown = [n for n in names if n not in [c[0] for c in CASES]]
+        if unknown:
+            ap.error("unknown case(s) %s; known: %s" % (", ".join(unknown), ", ".join(c[0] for c in CASES)))
+        cases = [c for c in CASES if c[0] in names]
     probe = run(a.sphseg, "shearbox_2d.yml", os.path.join(a.work, "probe"), "gpu", 1, [])
     if probe.returncode == 2 and "--backend gpu" in probe.stderr:
         print("skipped: " + probe.stderr.strip())
         sys.exit(77)
     ok = True
-    for name, scene, steps, over in CASES:
+    for name, scene, steps, over in cases:
         res = {}
         for tag, backend in (("cpu", "cpu"), ("gpu", "gpu"), ("gpu2", "gpu")):
             out = os.path.join(a.work, name + "_" + tag)

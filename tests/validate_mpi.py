@@ -95,6 +95,8 @@ CASES = [
     ("chute_x", "column_2d.yml", 2000, CHUTE + ["Parallel:axis=x"], "wrap"),
     ("chute_y", "column_2d.yml", 600, CHUTE + ["Parallel:axis=y", "Geometry:height=0.07"], "wrap"),
     ("chute_metis", "column_2d.yml", 1000, CHUTE + ["Parallel:method=metis", "Geometry:height=0.07"], "wrap"),
+    # the tensorial mu(I) yield (Material:yield mu_I, which inputs/chute_2d.yml uses) on the chute above
+    ("chute_mu_I", "column_2d.yml", 1000, CHUTE + ["Material:yield=mu_I", "Parallel:axis=x"], "wrap"),
     # a gate (Geometry:runout, Walls:gate_open): a column collapse, the gate's dummies leave at t = 0.01 s;
     # the slab bounds stay where the first cut put them, so that the front's migrations do not depend on
     # the measured times a load balance would move them by (3 GPU ranks on one device, 49da5d4: 1, 10, 6
