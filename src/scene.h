@@ -12,6 +12,10 @@ enum seg_model { SEG_MODEL_CONSTANT = 0, SEG_MODEL_SHEAR_RATE = 1 };
  * gradients (App. E); direct: eq. (2.5) with the same boundaries (App. A);
  * conservative: pairwise antisymmetric fluxes, no source terms. */
 enum seg_scheme { SEG_SCHEME_PAPER = 0, SEG_SCHEME_DIRECT = 1, SEG_SCHEME_CONSERVATIVE = 2 };
+/* none: the conservative scheme's central pair flux Q_i + Q_j as it is; donor:
+ * capped by the donor's C and the receiver's room (seg_kern.h
+ * seg_flux_donor), which keeps C in [0, 1]. */
+enum seg_limiter { SEG_LIMITER_NONE = 0, SEG_LIMITER_DONOR = 1 };
 enum geom_type { GEOM_SHEARBOX = 0, GEOM_COLUMN = 1, GEOM_DRUM = 2, GEOM_CONTAINER = 3 };
 /* Geometry:periodic, one bit per axis (bit d: axis d). */
 enum periodic_axes {
@@ -102,6 +106,8 @@ struct scene_segregation {
     int renormalize;        /* on | off: conservative scheme's symmetric kernel
                              * renormalisation (restores consistency where the
                              * support is cut); default on */
+    enum seg_limiter limiter; /* none | donor: conservative scheme's bound on the
+                               * pair segregation flux (keeps C in [0, 1]); default donor */
     double drift_tol;       /* relative drift of sum C_i V_i that triggers a warning; default 1e-3 */
     char *every;            /* auto | K >= 1: with computed flow, C advances once every K flow
                              * steps (integrate.c); default auto */

@@ -32,6 +32,7 @@ static const cyaml_strval_t seg_models[] = {{"constant", SEG_MODEL_CONSTANT},
                                             {"shear_rate", SEG_MODEL_SHEAR_RATE}};
 static const cyaml_strval_t seg_schemes[] = {
     {"paper", SEG_SCHEME_PAPER}, {"direct", SEG_SCHEME_DIRECT}, {"conservative", SEG_SCHEME_CONSERVATIVE}};
+static const cyaml_strval_t seg_limiters[] = {{"none", SEG_LIMITER_NONE}, {"donor", SEG_LIMITER_DONOR}};
 static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
 static const cyaml_strval_t part_methods[] = {{"slabs", PART_SLABS}, {"metis", PART_METIS}};
 static const cyaml_strval_t periodic_axes[] = {
@@ -201,6 +202,8 @@ SECTION("Segregation", segregation, scene_segregation)
       "paper | direct | conservative; default conservative")
     KE("Segregation", segregation, scene_segregation, renormalize, on_off, "on",
       "on | off: conservative scheme's symmetric kernel renormalisation (restores consistency where the support is cut); default on")
+    KE("Segregation", segregation, scene_segregation, limiter, seg_limiters, "donor",
+      "none | donor: conservative scheme only (paper and direct ignore it). donor caps each pair's segregation flux Q_i + Q_j at 2 A (V_i + V_j) min(C_u, 1 - C_d), u the particle it takes small grains from and d the one it gives them to, and bounds the time step with a wave speed of at least A V: C stays in [0, 1] (docs/numerics.md, Bounded C); none: the flux uncapped, as before issue 30 (C may leave [0, 1]); default donor")
     KF("Segregation", segregation, scene_segregation, drift_tol, OPT, "1e-3", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "relative drift of sum C_i V_i that triggers a warning; default 1e-3")
     KS("Segregation", segregation, scene_segregation, every, 0, CYAML_UNLIMITED, "auto",

@@ -555,6 +555,7 @@ void setup_contexts(sim_t *s)
     s->seg.sp = seg_params_of(sc);
     s->seg.scheme = (int)g->scheme;
     s->seg.renorm = g->renormalize;
+    s->seg.limiter = (int)g->limiter;
     s->hcsr = g->enabled && g->scheme != SEG_SCHEME_CONSERVATIVE;
     s->kin = kin_params_of(sc);
     s->seg_on = g->enabled;
@@ -573,6 +574,7 @@ void setup_contexts(sim_t *s)
     st->kin = s->kin;
     st->sp = s->seg.sp;
     st->w = *w;
+    st->seg_cap = g->scheme == SEG_SCHEME_CONSERVATIVE && g->limiter == SEG_LIMITER_DONOR;
     st->outlet = sc->outlet.enabled;
     st->outlet_below = sc->outlet.below;
 }

@@ -10,7 +10,12 @@
  *  - magnitudes (issue 20): the Laplacian against a hand lattice sum with
  *    and without eta, the segregation term at boundary particles exact for
  *    a linear field (C1 gradients), variable V and D conserving, the CSR
- *    sources of a uniform field integrating to the flux Q W. */
+ *    sources of a uniform field integrating to the flux Q W;
+ *  - the donor limiter (issue 30): its pair flux against the central one
+ *    over a grid of (C_u, C_d), and on the lattice an explicit step at the
+ *    default time-step bounds from a field with steep fronts at 0 and 1:
+ *    C leaves [0, 1] by more than 1e-3 without the limiter and stays in it
+ *    with it, sum V_i dC_i/dt still zero to round-off. */
 #include <stdlib.h>
 #include "bound.h"
 #include "physics/seg_kern.h"
@@ -248,12 +253,122 @@ static void test_wall_flux_total(void **st)
     bound_free(&f.w), nbr_free(&f.g), part_free(&f.p);
 }
 
+/* seg_flux_donor against the central pair flux Q_u + Q_d on a grid of
+ * (C_u, C_d) in [0, 1] and just outside, symmetric (2.8) and asymmetric
+ * (2.9) F, V from (2.7) with the particle's own C: never negative, never
+ * above the central flux, equal to it (exactly) for equal C, zero from a
+ * donor without small grains and into a receiver full of them. */
+static void test_donor_flux(void **st)
+{
+    (void)st;
+    seg_params sps[2] = {{1, 0, 1, 0, 0, (real)0.11, (real)0.0307, (real)0.004, (real)0.008, {0, -1, 0}},
+                         {(real)1.6, (real)0.89, 1, 0, 0, (real)0.11, (real)0.0307, (real)0.004, (real)0.008,
+                          {0, -1, 0}}};
+    int capped = 0;
+    for (int s = 0; s < 2; ++s)
+        for (int a = -1; a <= 21; ++a)
+            for (int b = -1; b <= 21; ++b) {
+                const seg_params *sp = &sps[s];
+                real Cu = (real)(a / 20.0), Cd = (real)(b / 20.0), gd = (real)7.0;
+                real Vu = seg_V(sp, Cu, gd), Vd = seg_V(sp, Cd, gd);
+                real Qsum = Vu * seg_F(sp, Cu) + Vd * seg_F(sp, Cd);
+                real q = seg_flux_donor(Qsum, Vu + Vd, Cu, Cd, sp->A);
+                assert_true(q >= 0);
+                assert_true(q <= Qsum || Qsum < 0);
+                if (a == b && a >= 0 && a <= 20) assert_true(q == Qsum);
+                if (a <= 0 || b >= 20) assert_true(q == 0);
+                capped += q < Qsum;
+            }
+    assert_true(capped > 40); /* it does act, off the diagonal */
+}
+
+/* A lattice field with steep fronts at both bounds (V h / D = 6): rows of
+ * C = 0 above rows in (0.3, 0.7), rows of C = 1 below, a few 0 and 1 among
+ * them. One explicit step of the default time-step bounds (dt = min(0.2 h
+ * / max|dQ/dC|, 0.1 h^2 / D), here at C = 0: A V) with renormalisation on.
+ * Without the limiter C leaves [0, 1] by more than 1e-3 (the undershoot of
+ * the R35 drum, in one step); with it C stays within [0, 1] to round-off,
+ * and sum V_i dC_i/dt is zero to round-off. Symmetric and asymmetric F. */
+static void check_donor_step(double A, double kappa)
+{
+    double V = 1e-3, h = 1.5 * DR, D = V * h / 6;
+    fixture f;
+    setup_fixture(&f, 2, V, D);
+    f.c.sp.A = (real)A, f.c.sp.kappa = (real)kappa, f.c.renorm = 1;
+    srand(11);
+    for (size_t i = 0; i < f.p.n; ++i) {
+        int row = (int)floor(f.p.x[1][i] / DR);
+        double u = rand() / (double)RAND_MAX;
+        f.p.C[i] = (real)(row >= 16 ? 0.0 : row < 6 ? 1.0 : u < 0.1 ? 0.0 : u > 0.9 ? 1.0 : 0.3 + 0.4 * u);
+    }
+    coeffs(&f);
+    for (size_t i = 0; i < f.p.n; ++i)
+        if (f.p.kind[i] == KIND_MATERIAL) seg_renorm(i, &f.p, &f.g.view, &f.c);
+    double dt = fmin(0.2 * h / (A * V), 0.1 * h * h / D), lo[2], hi[2], sum = 0, mag = 0;
+    for (int lim = 0; lim < 2; ++lim) {
+        f.c.limiter = lim;
+        lo[lim] = INFINITY, hi[lim] = -INFINITY;
+        for (size_t i = 0; i < f.p.n; ++i) {
+            if (f.p.kind[i] != KIND_MATERIAL) continue;
+            double r = rate(&f, i), C = f.p.C[i] + dt * r;
+            lo[lim] = fmin(lo[lim], C), hi[lim] = fmax(hi[lim], C);
+            if (lim) sum += r * f.p.vol[i], mag += fabs(r * f.p.vol[i]);
+        }
+    }
+    print_message("    A %.2f kappa %.2f: one step, C in [%.5f, %.5f] without the limiter, [%.3g, 1 + %.3g] with it\n",
+                  A, kappa, lo[0], hi[0], lo[1], hi[1] - 1);
+    assert_true(lo[0] < -1e-3 && hi[0] > 1 + 1e-3);
+    assert_true(lo[1] > -RT(1e-12) && hi[1] < 1 + RT(1e-12));
+    assert_true(mag > 0 && fabs(sum) < RT(1e-12) * mag);
+    bound_free(&f.w), nbr_free(&f.g), part_free(&f.p);
+}
+
+static void test_donor_step_sym(void **st) { (void)st; check_donor_step(1.0, 0.0); }
+static void test_donor_step_asym(void **st) { (void)st; check_donor_step(1.6, 0.89); }
+
+/* Variable V and D (2.7, random shear rates) and renormalisation with the
+ * limiter on a field with fronts: the capped pair flux is still evaluated
+ * alike from both sides, so sum V_i dC_i/dt = 0 to round-off; and the cap
+ * acts (the rates differ from the unlimited ones). */
+static void test_donor_sum_variable(void **st)
+{
+    (void)st;
+    fixture f;
+    setup_fixture(&f, 2, 0, 0);
+    f.c.sp.shear_model = 1, f.c.sp.chi_V = (real)0.3, f.c.sp.chi_D = (real)0.05, f.c.renorm = 1;
+    srand(7);
+    for (size_t i = 0; i < f.p.n; ++i) {
+        double u = rand() / (double)RAND_MAX;
+        f.p.C[i] = (real)(u < 0.3 ? 0.0 : u > 0.7 ? 1.0 : u);
+        f.p.gdot[i] = (real)(20.0 * rand() / (double)RAND_MAX);
+    }
+    coeffs(&f);
+    for (size_t i = 0; i < f.p.n; ++i)
+        if (f.p.kind[i] == KIND_MATERIAL) seg_renorm(i, &f.p, &f.g.view, &f.c);
+    double sum = 0, mag = 0;
+    int differ = 0;
+    for (size_t i = 0; i < f.p.n; ++i) {
+        if (f.p.kind[i] != KIND_MATERIAL) continue;
+        f.c.limiter = 0;
+        double r0 = rate(&f, i);
+        f.c.limiter = 1;
+        double r = rate(&f, i) * f.p.vol[i];
+        sum += r, mag += fabs(r);
+        differ += fabs(r / f.p.vol[i] - r0) > 1e-6 * fabs(r0);
+    }
+    assert_true(differ > 10 && mag > 0);
+    assert_true(fabs(sum) < RT(1e-12) * mag);
+    bound_free(&f.w), nbr_free(&f.g), part_free(&f.p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_interior_paper), cmocka_unit_test(test_interior_conservative),
         cmocka_unit_test(test_boundary_c1),
         cmocka_unit_test(test_conservative_sum), cmocka_unit_test(test_conservative_sum_variable),
-        cmocka_unit_test(test_uniform_sources), cmocka_unit_test(test_wall_flux_total)};
+        cmocka_unit_test(test_uniform_sources), cmocka_unit_test(test_wall_flux_total),
+        cmocka_unit_test(test_donor_flux), cmocka_unit_test(test_donor_step_sym),
+        cmocka_unit_test(test_donor_step_asym), cmocka_unit_test(test_donor_sum_variable)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

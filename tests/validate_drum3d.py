@@ -9,7 +9,8 @@ the same bed with the drum at rest for 0.03 s. Checked:
                  snapshot (no particle lost, none created);
   containment:   every material particle stays inside the cylinder (r < R)
                  and between the end walls (0 < z < L);
-  bounds:        C stays in [-0.01, 1.01] (diagnostics.csv C_min, C_max);
+  bounds:        C stays in [-1e-3, 1 + 1e-3] (diagnostics.csv C_min, C_max;
+                 Segregation:limiter donor, the default);
   conservation:  the relative drift of sum C_i V_i stays below 1e-10 (the
                  conservative scheme conserves it to round-off, in 3D too);
   rotation:      the material turns with the drum: its mean angular

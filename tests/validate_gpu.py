@@ -44,6 +44,15 @@ from containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, 
 CASES = [
     ("shearbox", "shearbox_2d.yml", 40, []),
     ("shearbox_paper", "shearbox_2d.yml", 40, ["Segregation:scheme=paper"]),
+    # the donor limiter where it caps: small grains sinking through large at Pe = 200
+    # (tests/validate_bounds.py), and the same without it
+    ("column_bounds", "shearbox_2d.yml", 60, ["Kinematics:velocity=rest", "Segregation:V=0.0023",
+                                              "Segregation:D=1e-6", "Initial:C_below=0", "Initial:C_above=1",
+                                              "Geometry:dr=0.00348", "Geometry:width=0.02175"]),
+    ("column_bounds_none", "shearbox_2d.yml", 60, ["Kinematics:velocity=rest", "Segregation:V=0.0023",
+                                                   "Segregation:D=1e-6", "Initial:C_below=0",
+                                                   "Initial:C_above=1", "Geometry:dr=0.00348",
+                                                   "Geometry:width=0.02175", "Segregation:limiter=none"]),
     ("column", "column_2d.yml", 60, []),
     ("column_3d", "column_2d.yml", 30, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.05",
                                         "Geometry:depth=0.05", "Geometry:height=0.1",

@@ -9,7 +9,9 @@ converged to its steady state to < 1e-6. Tolerance: MAE <= MAE_TOL at
 dr/H = 0.04 (the error of the SPH profile against eq. 28; the reference
 shows the remaining time-dependence is negligible): 0.012, twice the largest
 measured error of the conservative scheme (0.0061, 0.0031, 0.0034 for the
-three cases, issue 20).
+three cases, issue 20; 0.0061, 0.0037, 0.0053 with Segregation:limiter donor,
+the default since issue 30, whose cap adds a donor-cell flux's diffusion in the
+steep tails at Pe = 20 and 40: docs/shearbox.md, "Bounded C").
 """
 import argparse
 import os

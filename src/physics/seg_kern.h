@@ -15,6 +15,7 @@ typedef struct seg_ctx {
     seg_params sp;
     int scheme; /* enum seg_scheme (scene.h): 0 paper, 1 direct, 2 conservative */
     int renorm; /* conservative scheme: symmetric renormalisation on/off */
+    int limiter; /* conservative scheme: enum seg_limiter (scene.h): 0 none, 1 donor */
 } seg_ctx;
 
 /* The three contributions to dC/dt, 1/s: segregation, diffusion, CSR source. */
@@ -213,11 +214,36 @@ HD_INLINE void seg_Lbar(const real Li[6], const real Lj[6], const real v[3], rea
     out[2] = l[4] * v[0] + l[5] * v[1] + l[2] * v[2];
 }
 
-/* What seg_rate_conservative reads of neighbour j besides its position. */
-HD_INLINE void seg_load_j(const particles_t *p, size_t j, real Lj[6], real cqdv[4])
+/* What seg_rate_conservative reads of neighbour j besides its position
+ * (cqdv[4], V of j, only with the donor limiter). */
+HD_INLINE void seg_load_j(const particles_t *p, size_t j, int limiter, real Lj[6], real cqdv[5])
 {
     for (int m = 0; m < 6; ++m) Lj[m] = p->L[m][j];
     cqdv[0] = p->C[j], cqdv[1] = p->segQ[j], cqdv[2] = p->segD[j], cqdv[3] = p->vol[j];
+    cqdv[4] = limiter ? p->segV[j] : R(0.0);
+}
+
+/* The donor limiter of the conservative scheme's pair segregation flux: the
+ * central flux Qsum = Q_u + Q_d capped at 2 A Vsum min(C_u, 1 - C_d), Vsum =
+ * V_u + V_d, with u the particle the pair's flux takes small grains from
+ * (the upper one along Lbar: ghat.Lbar x_ud < 0) and d the one it gives
+ * them to; both C clamped to [0, 1], the result to >= 0. A particle without
+ * small grains gives none and one full of them takes none. F(C) <= A min(C,
+ * 1 - C) on [0, 1] for 0 <= kappa < 1 (2.8-2.9), so the cap leaves a pair of
+ * equal C alone with a factor 2 to spare: it acts only across steep fronts
+ * next to a bound. Each pair's outflow from u is at most 2 A Vsum C_u, so an
+ * explicit step within the time-step bounds (step.h: wave speed >= A V)
+ * keeps C in [0, 1] (docs/numerics.md, "Bounded C": the argument, its margin
+ * and the measured factor 2). Symmetric in (i, j) once u and d are named, so
+ * the pair flux stays antisymmetric. m/s. */
+HD_INLINE real seg_flux_donor(real Qsum, real Vsum, real Cu, real Cd, real A)
+{
+    real a = Cu > 0 ? (Cu < 1 ? Cu : R(1.0)) : R(0.0);
+    real b = Cd > 0 ? (Cd < 1 ? Cd : R(1.0)) : R(0.0);
+    real room = a < R(1.0) - b ? a : R(1.0) - b;
+    real cap = R(2.0) * A * Vsum * room;
+    real q = Qsum < cap ? Qsum : cap;
+    return q > 0 ? q : R(0.0);
 }
 
 /* dC_i/dt in conservative form: the divergence of J = Q ghat - D grad C by
@@ -231,13 +257,16 @@ HD_INLINE void seg_load_j(const particles_t *p, size_t j, real Lj[6], real cqdv[
  * source terms; L restores first-order consistency where the support is cut
  * (side walls). Distinct particles never coincide, so the clipping eta of
  * (3.8), which lowers the Laplacian by ~1.5 % at h = 1.5 dr whatever dr, is
- * not needed. With renorm = 0, Lbar = I. */
+ * not needed. With renorm = 0, Lbar = I. With the donor limiter (limiter =
+ * 1) Q_i + Q_j is the pair's seg_flux_donor, which keeps C in [0, 1]; the
+ * diffusion term is bounded as it stands (its pair weights are >= 0: Lbar
+ * is positive definite). */
 HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c,
                                          int lane, int nlanes)
 {
     const sph_ctx *k = &c->k;
     const seg_params *sp = &c->sp;
-    real Ci = p->C[i], Qi = p->segQ[i], Di = p->segD[i];
+    real Ci = p->C[i], Qi = p->segQ[i], Di = p->segD[i], Vi = c->limiter ? p->segV[i] : R(0.0);
     creal seg = 0, diff = 0; /* summed in double in both precisions (hd.h, creal) */
     /* i's own values read once; j's before or after the distance test by
      * SPH_EARLY_LOADS (hd.h) */
@@ -246,12 +275,12 @@ HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const g
     for (int m = 0; m < 6; ++m) Li[m] = p->L[m][i];
     NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
         if (j == i || p->kind[j] != KIND_MATERIAL) continue;
-        real Lj[6], cqdv[4]; /* C, Q, D, V of j */
-        if (SPH_EARLY_LOADS) seg_load_j(p, j, Lj, cqdv);
+        real Lj[6], cqdv[5]; /* C, Q, D, volume, V of j */
+        if (SPH_EARLY_LOADS) seg_load_j(p, j, c->limiter, Lj, cqdv);
         real xij[3];
         real r2 = grid_pair_xi(k->dim, xi, p->x, j, xij);
         if (r2 >= k->support2) continue;
-        if (!SPH_EARLY_LOADS) seg_load_j(p, j, Lj, cqdv);
+        if (!SPH_EARLY_LOADS) seg_load_j(p, j, c->limiter, Lj, cqdv);
         real Cj = cqdv[0], Qj = cqdv[1], Dj = cqdv[2], volj = cqdv[3];
         real r = (real)sqrt((double)r2);
         real w = kernel_f(r, k->h, k->alpha) * volj;
@@ -259,7 +288,10 @@ HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const g
         if (c->renorm) seg_Lbar(Li, Lj, xij, lx);
         real gx = sp->ghat[0] * lx[0] + sp->ghat[1] * lx[1] + sp->ghat[2] * lx[2];
         real xlx = (xij[0] * lx[0] + xij[1] * lx[1] + xij[2] * lx[2]) / r2;
-        seg -= w * (Qi + Qj) * gx;
+        real q = Qi + Qj, vs = Vi + cqdv[4];
+        if (c->limiter) /* gx < 0: the pair's flux takes small grains from i to j */
+            q = gx < 0 ? seg_flux_donor(q, vs, Ci, Cj, sp->A) : seg_flux_donor(q, vs, Cj, Ci, sp->A);
+        seg -= w * q * gx;
         diff += w * (Di + Dj) * (Ci - Cj) * xlx;
     NBR_END
     team_sum_c(&seg, 1, nlanes);

@@ -21,6 +21,7 @@ typedef struct step_ctx {
     kin_params kin;
     seg_params sp;
     wall_geom w;
+    int seg_cap;         /* the donor limiter (seg_flux_donor) is on: the wave speed is at least A V */
     int outlet;          /* Outlet:enabled: material below outlet_below leaves the run */
     double outlet_below; /* Outlet:below, m */
 } step_ctx;
@@ -29,7 +30,11 @@ typedef struct step_ctx {
 enum { STEP_D = 0, STEP_WAVE = 1, STEP_SPEED = 2, STEP_ACC = 3, STEP_NBOUNDS = 4 };
 
 /* Material particle i: D, |dQ/dC| and |u| (the first three STEP_ slots;
- * |acc| comes from the rate evaluation). */
+ * |acc| comes from the rate evaluation). With the donor limiter the wave
+ * speed is at least A V, the slope of its cap at the bounds (seg_kern.h
+ * seg_flux_donor): |dQ/dC| alone vanishes where F' does (C = 1/2 of the
+ * symmetric flux), and a uniform C = 1/2 would take its first step from
+ * the diffusion bound alone. */
 HD_INLINE void step_bounds_of(size_t i, const particles_t *p, const step_ctx *c, double out[3])
 {
     double u, gmax = c->gkin;
@@ -47,6 +52,7 @@ HD_INLINE void step_bounds_of(size_t i, const particles_t *p, const step_ctx *c,
     real C = p->C[i];
     out[0] = seg_D(&c->sp, C, (real)gmax);
     out[1] = seg_wave_speed(&c->sp, C, (real)gmax);
+    if (c->seg_cap) out[1] = fmax(out[1], (double)(c->sp.A * seg_V(&c->sp, C, (real)gmax)));
 }
 
 /* Blow-up conditions, in the order they are tested (DESIGN.md "Errors"). */
