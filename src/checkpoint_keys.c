@@ -70,6 +70,17 @@ struct ckpt_key_diff {
     int count[3];
 };
 
+/* The value a key newer than a checkpoint had in effect before it existed:
+ * its default, but where a key's default changed the behaviour when it came,
+ * the old behaviour's value. */
+static const char *ckpt_key_before(const char *name)
+{
+    static const char *const before[][2] = {{"Segregation:limiter", "none"}};
+    for (size_t k = 0; k < sizeof before / sizeof before[0]; ++k)
+        if (!strcmp(name, before[k][0])) return before[k][1];
+    return scene_key_default(name);
+}
+
 static void ckpt_key_compare(const char *name, void *ctx)
 {
     struct ckpt_key_diff *d = ctx;
@@ -77,10 +88,11 @@ static void ckpt_key_compare(const char *name, void *ctx)
     int in_was = ckpt_key_value(d->stored, name, was, sizeof was);
     int in_now = ckpt_key_value(d->now, name, now, sizeof now);
     if (in_was == in_now && (!in_was || !strcmp(was, now))) return;
-    /* a key newer than the checkpoint, at its default: a new key's default is the
-     * behaviour the code had before it (Material:yield drucker_prager), so the
-     * checkpoint describes that state */
-    const char *def = in_now && !in_was ? scene_key_default(name) : NULL;
+    /* a key newer than the checkpoint: the checkpoint ran the behaviour the code
+     * had before the key, which is the key's default (Material:yield
+     * drucker_prager) unless ckpt_key_before names another (Segregation:limiter,
+     * whose default donor came with it: the code before capped nothing) */
+    const char *def = in_now && !in_was ? ckpt_key_before(name) : NULL;
     if (def && !strcmp(def, now)) return;
     enum ckpt_key_class c = ckpt_key_class(name);
     d->count[c]++;

@@ -237,6 +237,21 @@ def test_key_newer(sp, work, drum):
     ok, why = refused(restart(sp, work, old, DRUM, extra=more + ["-P", "Material:yield=mu_I"]), "mu_I")
     check("... and is refused as mu_I, naming Material:yield",
           ok and "Material:yield ((absent) in the checkpoint, mu_I now)" in why, why)
+    # Segregation:limiter came with a default (donor) that is not what the code did before it (none)
+    old = os.path.join(work, "before_limiter.h5")
+    shutil.copy(drum, old)
+    with h5py.File(old, "r+") as h:
+        text = h["Header"].attrs["Scene"]
+        ok = "  limiter: donor\n" in text
+        set_attr("Header/Scene", text.replace("  limiter: donor\n", ""))(h)
+    reseal(old)
+    rc, out, err, _ = restart(sp, work, old, DRUM, extra=more)
+    check("a checkpoint from before Segregation:limiter restarted at its default (donor) says the key changed "
+          "(the code before capped nothing)",
+          ok and "Segregation:limiter ((absent) in the checkpoint, donor now)" in out + err, f"rc {rc}\n{err}\n{out[-400:]}")
+    rc, out, err, _ = restart(sp, work, old, DRUM, extra=more + ["-P", "Segregation:limiter=none"])
+    check("... and restarted with limiter none (the old behaviour) says nothing of it",
+          rc == 0 and "Segregation:limiter" not in out + err, f"rc {rc}\n{err}\n{out[-400:]}")
 
 
 def test_seal_flips(sp, work, src, run_ok):
