@@ -14,7 +14,10 @@
  * unpacks it. Safety without further messages: a sender reuses a buffer two
  * exchanges later, after it has received that neighbour's next descriptor,
  * which the neighbour sends only after its own stream (and so its copy out
- * of this buffer) has drained.
+ * of this buffer) has drained. A buffer that grows is replaced, never freed
+ * while the run lasts (CUDA leaves freeing memory a peer maps undefined):
+ * the peers close their mapping when the new generation arrives, and the
+ * old buffers go at the end, after every rank has closed its mappings.
  *
  * Which channels: decided whenever the channels are set (halo_t.gen), from
  * two rounds of small messages among neighbours: host name, PCI bus id and
@@ -92,7 +95,11 @@ static char *ipc_send_buffer(gpu_t *g, size_t bytes)
     dhalo *x = g->hx;
     int p = x->ipc_par;
     if (bytes > x->ipc_cap[p] || !x->ipc_buf[p]) {
-        if (x->ipc_buf[p]) CK(cudaFree(x->ipc_buf[p])); /* the peers' last copy out of it has drained (above) */
+        if (x->ipc_buf[p]) { /* kept until the end: freeing memory a peer still maps is undefined (CUDA) */
+            x->ipc_old = (char **)realloc(x->ipc_old, (size_t)(x->nold + 1) * sizeof(char *));
+            if (!x->ipc_old) error_exit(1, "out of memory");
+            x->ipc_old[x->nold++] = x->ipc_buf[p];
+        }
         x->ipc_cap[p] = bytes + bytes / 2 + 4096;
         x->ipc_buf[p] = (char *)dev_alloc(x->ipc_cap[p]);
         CK(cudaIpcGetMemHandle(&x->ipc_handle[p], x->ipc_buf[p]));
@@ -152,18 +159,24 @@ static void ipc_land(sim_t *s, gpu_t *g)
     x->dripc = (char *)grow_dev(x->dripc, &x->cap_dripc, x->irb[m]);
     for (int k = 0; k < m; ++k) {
         size_t bytes = x->irb[k + 1] - x->irb[k];
-        if (!x->ipc[k] || !bytes) continue;
-        const char *src = ipc_peer(g, h->nb[k], &x->ipc_in[k]) + x->ipc_in[k].off;
-        CK(cudaMemcpyAsync(x->dripc + x->irb[k], src, bytes, cudaMemcpyDeviceToDevice, g->st));
+        if (!x->ipc[k]) continue;
+        const char *src = ipc_peer(g, h->nb[k], &x->ipc_in[k]) + x->ipc_in[k].off; /* mapped even when empty:
+                                                                                   * a new generation closes the old */
+        if (bytes) CK(cudaMemcpyAsync(x->dripc + x->irb[k], src, bytes, cudaMemcpyDeviceToDevice, g->st));
     }
 }
 
+/* At the end of the run (every rank): the peers' buffers unmapped, then,
+ * once every rank has unmapped (a collective), this rank's own freed. */
 static void ipc_free(dhalo *x)
 {
     for (int e = 0; e < x->nmap; ++e)
         if (x->map[e].ptr) CK(cudaIpcCloseMemHandle(x->map[e].ptr));
+    (void)comm_max(0.0);
     for (int p = 0; p < 2; ++p)
         if (x->ipc_buf[p]) CK(cudaFree(x->ipc_buf[p]));
+    for (int e = 0; e < x->nold; ++e) CK(cudaFree(x->ipc_old[e]));
+    free(x->ipc_old);
     if (x->dripc) CK(cudaFree(x->dripc));
     free(x->map), free(x->ipc), free(x->ipc_in), free(x->ib), free(x->irb);
 }

@@ -86,7 +86,8 @@ struct dhalo {
      * the per-channel byte offsets of the IPC segments (host, nnb + 1) */
     int *ipc, nipc, ipc_par, ipc_said;
     long ipc_gen;
-    char *ipc_buf[2];
+    char *ipc_buf[2], **ipc_old; /* the send buffers, and those replaced when they grew */
+    int nold;
     size_t ipc_cap[2];
     cudaIpcMemHandle_t ipc_handle[2];
     long long ipc_bgen[2], ipc_count;
