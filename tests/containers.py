@@ -102,3 +102,16 @@ def run_column(sphseg, out, over, extra=(), backend=None):
         print(r.stdout[-2000:], r.stderr[-2000:])
         sys.exit("FAIL: sphseg exited with %d" % r.returncode)
     return r.stdout
+
+
+def pick_cases(ap, cases, names):
+    """The entries of cases (tuples, name first) named in names ("a,b", as
+    --cases takes them), in the list's order; all when names is empty; an
+    unknown name is the parser's error."""
+    if not names:
+        return cases
+    want = [n.strip() for n in names.split(",") if n.strip()]
+    unknown = [n for n in want if n not in [c[0] for c in cases]]
+    if unknown:
+        ap.error("unknown case(s) %s; known: %s" % (", ".join(unknown), ", ".join(c[0] for c in cases)))
+    return [c for c in cases if c[0] in want]

@@ -219,17 +219,23 @@ def took(res, path):
     return rc == 0 and f"restart from {path}: step" in out, warns, f"rc {rc}, {dt:.1f} s\n{err}\n{out[-400:]}"
 
 
+def without_line(work, drum, name, line):
+    """A copy of checkpoint drum, resealed, whose stored scene lacks line (a
+    checkpoint written before that key existed); whether the line was there."""
+    old = os.path.join(work, name)
+    shutil.copy(drum, old)
+    with h5py.File(old, "r+") as h:
+        text = h["Header"].attrs["Scene"]
+        set_attr("Header/Scene", text.replace(line, ""))(h)
+    reseal(old)
+    return old, line in text
+
+
 def test_key_newer(sp, work, drum):
     """A checkpoint written before a key existed (issue 30: Material:yield): its
     scene text lacks the key; at the key's default (the behaviour the code had)
     it restarts, at another value it is refused naming the key."""
-    old = os.path.join(work, "before_yield.h5")
-    shutil.copy(drum, old)
-    with h5py.File(old, "r+") as h:
-        text = h["Header"].attrs["Scene"]
-        ok = "  yield: drucker_prager\n" in text
-        set_attr("Header/Scene", text.replace("  yield: drucker_prager\n", ""))(h)
-    reseal(old)
+    old, ok = without_line(work, drum, "before_yield.h5", "  yield: drucker_prager\n")
     more = ["-P", "Geometry:dr=0.004", "-P", "Run:max_steps=3", "-P", "Output:checkpoint_dt=1"]
     rc, out, err, _ = restart(sp, work, old, DRUM, extra=more)
     check("a checkpoint from before Material:yield restarts as drucker_prager (its default)",
@@ -238,13 +244,7 @@ def test_key_newer(sp, work, drum):
     check("... and is refused as mu_I, naming Material:yield",
           ok and "Material:yield ((absent) in the checkpoint, mu_I now)" in why, why)
     # Segregation:limiter came with a default (donor) that is not what the code did before it (none)
-    old = os.path.join(work, "before_limiter.h5")
-    shutil.copy(drum, old)
-    with h5py.File(old, "r+") as h:
-        text = h["Header"].attrs["Scene"]
-        ok = "  limiter: donor\n" in text
-        set_attr("Header/Scene", text.replace("  limiter: donor\n", ""))(h)
-    reseal(old)
+    old, ok = without_line(work, drum, "before_limiter.h5", "  limiter: donor\n")
     rc, out, err, _ = restart(sp, work, old, DRUM, extra=more)
     check("a checkpoint from before Segregation:limiter restarted at its default (donor) says the key changed "
           "(the code before capped nothing)",

@@ -39,7 +39,7 @@ TOL_C1 = 1e-4
 # name, scene, steps, overrides
 sys.path.insert(0, HERE)
 from containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
-                        SILO)
+                        SILO, pick_cases)
 
 CASES = [
     ("shearbox", "shearbox_2d.yml", 40, []),
@@ -115,13 +115,7 @@ def main():
     ap.add_argument("--work", required=True)
     ap.add_argument("--cases", default=None, help="NAME,NAME: only these cases")
     a = ap.parse_args()
-    cases = CASES
-    if a.cases:
-        names = [n.strip() for n in a.cases.split(",") if n.strip()]
-        unknown = [n for n in names if n not in [c[0] for c in CASES]]
-        if unknown:
-            ap.error("unknown case(s) %s; known: %s" % (", ".join(unknown), ", ".join(c[0] for c in CASES)))
-        cases = [c for c in CASES if c[0] in names]
+    cases = pick_cases(ap, CASES, a.cases)
     probe = run(a.sphseg, "shearbox_2d.yml", os.path.join(a.work, "probe"), "gpu", 1, [])
     if probe.returncode == 2 and "--backend gpu" in probe.stderr:
         print("skipped: " + probe.stderr.strip())

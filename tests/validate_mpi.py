@@ -72,7 +72,7 @@ TOL_GPU = 1e-8  # GPU runs, and the GPU against the CPU
 TOL_C1 = 1e-4   # GPU runs of the paper scheme
 DRUM = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:shepard_every=20"]
 from containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
-                        SILO)
+                        SILO, pick_cases)
 
 # name, scene, steps, overrides, what must happen on several ranks
 CASES = [
@@ -185,13 +185,7 @@ def main():
     gpu = a.backend == "gpu"
     if not a.steps_scale > 0:
         ap.error("--steps-scale must be positive")
-    cases = CASES
-    if a.cases:
-        names = [n.strip() for n in a.cases.split(",") if n.strip()]
-        unknown = [n for n in names if n not in [c[0] for c in CASES]]
-        if unknown:
-            ap.error("unknown case(s) %s; known: %s" % (", ".join(unknown), ", ".join(c[0] for c in CASES)))
-        cases = [c for c in CASES if c[0] in names]
+    cases = pick_cases(ap, CASES, a.cases)
     if gpu and not gpu_visible():
         print("SKIP: no GPU visible")
         sys.exit(77)
