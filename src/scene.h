@@ -36,6 +36,11 @@ enum mat_model { MAT_GRANULAR = 0, MAT_NEWTONIAN = 1 };
  * sqrt(J2) = k_mu(mu(I)) p (2.11-2.12); mu_I, the tensorial law |tau| =
  * sqrt(J2) = mu(I) p of Jop, Forterre & Pouliquen (2006) (physics/stress.h) */
 enum mat_yield { MAT_YIELD_DRUCKER_PRAGER = 0, MAT_YIELD_MU_I = 1 };
+/* Flow:stabilization: monaghan, the paper's artificial viscosity (3.10);
+ * riemann, the low-dissipation Riemann solver of Zhang, Hu & Adams (2017);
+ * delta, delta-SPH pressure diffusion alone (physics/momentum.h). The values
+ * are the flow bodies' STAB_* (physics/flow.h). */
+enum flow_stab { FLOW_STAB_MONAGHAN = 0, FLOW_STAB_RIEMANN = 1, FLOW_STAB_DELTA = 2 };
 
 struct scene_run {
     double t_end;           /* s, required */
@@ -145,7 +150,10 @@ struct scene_material {
 
 /* Momentum and stress solver options; computed flow only. */
 struct scene_flow {
-    double alpha_av;        /* artificial viscosity coefficient (3.10); default 0.1; 0 = off */
+    enum flow_stab stabilization; /* monaghan (default, the paper's) | riemann | delta */
+    double alpha_av;        /* artificial viscosity coefficient (3.10), monaghan; default 0.1; 0 = off */
+    double riemann_eta;     /* riemann: the limiter's eta; default 3 (Zhang, Hu & Adams 2017) */
+    double delta;           /* delta: the diffusion coefficient; default 0.1 (Antuono et al. 2010) */
     unsigned shepard_every; /* Shepard filter (3.12) every N steps; default 30; 0 = off */
     double damping;         /* velocity damping -zeta u added to (3.9), 1/s, for settling
                              * (dynamic relaxation); default 0 */

@@ -39,6 +39,8 @@ static const cyaml_strval_t periodic_axes[] = {
     {"none", PERIODIC_NONE}, {"x", PERIODIC_X}, {"y", PERIODIC_Y}, {"xy", PERIODIC_XY}, {"z", PERIODIC_Z},
     {"xz", PERIODIC_XZ}, {"yz", PERIODIC_YZ}, {"xyz", PERIODIC_XYZ}};
 static const cyaml_strval_t mat_models[] = {{"granular", MAT_GRANULAR}, {"newtonian", MAT_NEWTONIAN}};
+static const cyaml_strval_t flow_stabs[] = {
+    {"monaghan", FLOW_STAB_MONAGHAN}, {"riemann", FLOW_STAB_RIEMANN}, {"delta", FLOW_STAB_DELTA}};
 static const cyaml_strval_t mat_yields[] = {{"drucker_prager", MAT_YIELD_DRUCKER_PRAGER}, {"mu_I", MAT_YIELD_MU_I}};
 static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
 
@@ -260,8 +262,14 @@ SECTION("Material", material, scene_material)
       "regularization of (2.14), 1/s; default 0.001")
 END_SECTION(material)
 SECTION("Flow", flow, scene_flow)
+    KE("Flow", flow, scene_flow, stabilization, flow_stabs, "monaghan",
+      "what damps the acoustic noise of the momentum and stress equations: monaghan (the paper's artificial viscosity 3.10, Flow:alpha_av; it also acts as a shear viscosity alpha c_s h / 8 that follows E and h) | riemann (the low-dissipation Riemann solver of Zhang, Hu & Adams 2017: a pair pressure rho beta dU / 2 on the closing speed dU along the pair, beta = min(Flow:riemann_eta dU, c_s), and the Riemann pressure diffusion K / (rho c_s)) | delta (delta-SPH pressure diffusion 2 Flow:delta h c_s, Antuono et al. 2010, with no momentum dissipation); riemann and delta diffuse the pressure less its hydrostatic part (Fourtakas et al. 2019); default monaghan (docs/granular.md \"Stabilisation\")")
     KF("Flow", flow, scene_flow, alpha_av, OPT, "0.1", 0, INFINITY, HI_OPEN, ALWAYS,
-      "artificial viscosity coefficient (3.10); default 0.1; 0 = off")
+      "artificial viscosity coefficient (3.10), Flow:stabilization monaghan; default 0.1; 0 = off")
+    KF("Flow", flow, scene_flow, riemann_eta, OPT, "3", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "Flow:stabilization riemann: the limiter's eta in beta = min(eta dU, c_s); default 3 (Zhang, Hu & Adams 2017)")
+    KF("Flow", flow, scene_flow, delta, OPT, "0.1", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "Flow:stabilization delta: the diffusion coefficient delta of delta-SPH; default 0.1 (Antuono et al. 2010; Marrone et al. 2011)")
     KU("Flow", flow, scene_flow, shepard_every, "30",
       "Shepard filter (3.12) every N steps; default 30; 0 = off")
     KF("Flow", flow, scene_flow, damping, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,

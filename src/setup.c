@@ -231,6 +231,16 @@ static void setup_drum(sim_t *s)
         warning("Geometry:length %.6g m is not a multiple of dr; the drum is %.6g m long", sc->geometry.length, L);
 }
 
+/* Flow:stabilization as the flow bodies' constant (flow.h). */
+static int flow_stab_of(const struct scene *sc)
+{
+    switch (sc->flow.stabilization) {
+    case FLOW_STAB_RIEMANN: return STAB_RIEMANN;
+    case FLOW_STAB_DELTA: return STAB_DELTA;
+    default: return STAB_MONAGHAN;
+    }
+}
+
 /* Material:yield as the flow bodies' constant (stress.h). */
 static int flow_yield_of(const struct scene *sc)
 {
@@ -541,6 +551,14 @@ static void flow_ctx_of(const struct scene *sc, const sph_ctx *k, const seg_para
     f->rho = (real)sc->physics.rho;
     f->cs = stress_sound_speed(f->m.G, f->m.K, f->rho);
     f->alpha_av = (real)sc->flow.alpha_av;
+    f->stab = flow_stab_of(sc);
+    f->eta_r = (real)sc->flow.riemann_eta;
+    /* the pressure diffusion (momentum.h mom_pdiff): riemann K / (rho c_s), the
+     * continuity dissipation of the acoustic Riemann solver (dp = (K / rho) drho);
+     * delta 2 delta h c_s */
+    f->pdiff = f->stab == STAB_RIEMANN ? f->m.K / (f->rho * f->cs)
+             : f->stab == STAB_DELTA   ? R(2.0) * (real)sc->flow.delta * k->h * f->cs
+                                       : R(0.0);
     for (int d = 0; d < 3; ++d) f->g[d] = (real)sc->physics.gravity[d];
     f->sp = *sp;
 }

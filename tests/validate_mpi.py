@@ -89,6 +89,8 @@ CASES = [
     ("drum_3d", "drum_3d.yml", 60, ["Geometry:dr=0.0025", "Geometry:length=0.025", "Material:E=1e5",
                                     "Segregation:every=9"], None),
     ("drum_EV_metis", "drum_2d_EV.yml", 800, DRUM + ["Parallel:method=metis"], "migrate"),
+    # Flow:stabilization riemann (physics/momentum.h): its pair terms read the ghosts' stress and kind
+    ("drum_EV_riemann", "drum_2d_EV.yml", 800, DRUM + ["Flow:stabilization=riemann"], "migrate"),
     # periodic axes (Geometry:periodic, mpi/halo.h): a layer sliding down a
     # 40-degree incline, periodic along x; slabs cut across the period (x) and
     # along it (y), and a 3D layer periodic along x and z

@@ -97,18 +97,18 @@ def gravity(theta_deg):
 
 
 def case(name, theta=25.0, H=0.02, dr=0.0005, alpha=0.1, t_end=3.0, seg=None, E=1e5, dim=2,
-         yield_="drucker_prager", **extra):
+         yield_="drucker_prager", stab="monaghan", **extra):
     """One run of the chute. yield_ is Material:yield; the study's runs before
     Material:yield existed (docs/validation.md) are drucker_prager, which is
     why it is the default here and not the scene's mu_I."""
     over = {"Geometry:dr": dr, "Geometry:height": H, "Geometry:width": round(20 * dr, 9),
             "Physics:gravity": gravity(theta), "Flow:alpha_av": alpha, "Run:t_end": t_end,
             "Output:dt": 0.1, "Output:diag_dt": 0.05, "Run:progress_s": 1e9, "Material:E": E,
-            "Material:yield": yield_}
+            "Material:yield": yield_, "Flow:stabilization": stab}
     if dim == 3:  # periodic along the slope (x) and across it (z), 20 dr each way
         over.update({"Geometry:dim": 3, "Geometry:depth": round(20 * dr, 9), "Geometry:periodic": "xz"})
     meta = {"theta": theta, "H": H, "dr": dr, "alpha": alpha, "t_end": t_end, "E": E, "seg": 0, "dim": dim,
-            "yield": yield_}
+            "yield": yield_, "stab": stab}
     if seg:
         V, D, phi0 = seg
         over.update({"Segregation:enabled": "on", "Segregation:flux": "symmetric", "Segregation:model": "constant",
@@ -168,6 +168,11 @@ def cases(which):
                 c.append(case("res_dr%g_a%g" % (dr * 1e3, alpha), H=0.01, dr=dr, alpha=alpha, t_end=4.0))
         for alpha in (0.1, 0.0):  # steady by 2.5 s (within 0.5 % at dr 0.25 mm)
             c.append(case("res_dr0.125_a%g" % alpha, H=0.01, dr=0.000125, alpha=alpha, t_end=2.5))
+    if which in ("full", "stabilization"):
+        # Flow:stabilization riemann and delta on the resolution runs' layer (alpha_av unused)
+        for dr in (0.001, 0.0005, 0.00025):
+            for stab in ("riemann", "delta"):
+                c.append(case("stab_%s_dr%g" % (stab, dr * 1e3), H=0.01, dr=dr, alpha=0.0, t_end=4.0, stab=stab))
     if which in ("full", "regimes"):
         for theta in (15, 18, 20, 22, 24, 25, 26, 28, 30):
             c.append(case("theta%g" % theta, theta=theta, H=0.01, dr=0.0005, t_end=4.0, alpha=0.0))
@@ -437,7 +442,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("resolution", "regimes", "3d", "seg", "flowrule"), cases, reduce_done, cmd_report, jobs=4,
+    batch.study_main(__doc__, ("resolution", "stabilization", "regimes", "3d", "seg", "flowrule"), cases, reduce_done, cmd_report, jobs=4,
                      argv=argv)
 
 

@@ -4,8 +4,11 @@
  *   flow_wall     dummy velocity (4.1/4.2) and stress (4.3) from the
  *                 material in its support;
  *   flow_rates    velocity gradient, strain rate and spin (3.14–3.15),
- *                 acceleration (3.9) with artificial viscosity (3.10) and
- *                 gravity, shear rate, Jaumann elastic stress rate (C1);
+ *                 acceleration (3.9) with the stabilisation of
+ *                 Flow:stabilization (Monaghan's artificial viscosity 3.10,
+ *                 the low-dissipation Riemann solver, or delta-SPH pressure
+ *                 diffusion: momentum.h) and gravity, shear rate, Jaumann
+ *                 elastic stress rate (C1);
  *   flow_advance  x, u, sigma = start-of-step value + a * rate, then the
  *                 one-step return mapping (App. C) with mu(I) (2.14) onto
  *                 the yield surface of Material:yield;
@@ -24,12 +27,19 @@
 #include "stress.h"
 #include "wall.h"
 
+/* Flow:stabilization (src/scene_keys.h): what damps the acoustic noise. */
+enum { STAB_MONAGHAN = 0, STAB_RIEMANN = 1, STAB_DELTA = 2 };
+
 typedef struct flow_ctx {
     sph_ctx k;
     mat_params m;
     real rho;      /* bulk density, kg/m^3 */
     real cs;       /* elastic sound speed, m/s (3.10, 3.19) */
-    real alpha_av; /* Monaghan coefficient of (3.10); 0 switches it off */
+    int stab;      /* Flow:stabilization: STAB_MONAGHAN (the paper's 3.10) | STAB_RIEMANN | STAB_DELTA */
+    real alpha_av; /* Monaghan coefficient of (3.10), monaghan only; 0 switches it off */
+    real eta_r;    /* riemann: the limiter's eta (Zhang, Hu & Adams 2017: 3) */
+    real pdiff;    /* the pressure diffusion's coefficient (mom_pdiff): riemann K / (rho c_s);
+                    * delta 2 delta h c_s; 0 = none (monaghan) */
     real g[3];     /* gravity, m/s^2 */
     real damping;  /* zeta of the settling term -zeta u, 1/s (0 when off) */
     int yield;     /* the yield surface (Material:yield): YIELD_DRUCKER_PRAGER (0, the paper's
@@ -137,6 +147,8 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
      * loop through the particles_t pointers); j's before or after the
      * distance test by SPH_EARLY_LOADS (hd.h) */
     const real xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]}, ui[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
+    const real pi = stress_pressure(si);
+    real pd = R(0.0); /* the pressure diffusion, Pa/s (riemann, delta) */
     NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
         if (j == i) continue;
         real uj[3], sj[6], volj = 0;
@@ -150,18 +162,35 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
         real gradW[3] = {f * xij[0], f * xij[1], f * xij[2]};
         real uij[3] = {ui[0] - uj[0], ui[1] - uj[1], ui[2] - uj[2]};
         mom_velgrad_add(L, volj, uij, gradW);
-        real Pi = c->alpha_av > 0 ? mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij) : R(0.0);
+        real Pi = R(0.0);
+        if (c->stab == STAB_MONAGHAN) {
+            if (c->alpha_av > 0) Pi = mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij);
+        } else {
+            /* against a wall (a dummy j) the acoustic Riemann problem unlimited (beta = c_s):
+             * the limiter is for the shear of the bulk, not for a particle closing on a wall */
+            if (c->stab == STAB_RIEMANN)
+                Pi = mom_riemann(p->kind[j] == KIND_MATERIAL ? c->eta_r : R(1e30), c->cs, c->rho, uij, xij, r2);
+            /* the pressure difference less its hydrostatic part rho g.x_ji (Fourtakas et al.
+             * 2019): a free surface, where the support is cut, is not driven */
+            const real dpH = c->rho * (c->g[0] * xij[0] + c->g[1] * xij[1] + c->g[2] * xij[2]);
+            pd += mom_pdiff(stress_pressure(sj) - pi + dpH, volj, f, r2, k->eta2, c->stab == STAB_RIEMANN);
+        }
         mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
         if (c->nu > 0) mom_visc_add(a, volj, c->nu, f, r2, k->eta2, uij);
     NBR_END
     team_sum(L, 9, nlanes);
     team_sum(a, 3, nlanes);
+    if (c->stab != STAB_MONAGHAN) team_sum(&pd, 1, nlanes);
     if (renorm) team_sum(m, 6, nlanes);
     if (lane != 0) return R(0.0);
     if (renorm) seg_renorm_store(i, p, k->dim, m);
     real eps[6], w[3], ds[6];
     mom_strain_spin(L, eps, w);
     stress_rate_elastic(si, eps, w, c->m.G, c->m.K, ds);
+    if (c->stab != STAB_MONAGHAN) {
+        const real dp = c->pdiff * pd; /* dp_i/dt += dp: sigma_kk -= dp */
+        ds[0] -= dp, ds[1] -= dp, ds[2] -= dp;
+    }
     for (int q = 0; q < 6; ++q) p->dsig[q][i] = ds[q];
     for (int d = 0; d < 3; ++d) p->acc[d][i] = a[d] + c->g[d] - c->damping * p->v[d][i];
     p->gdot[i] = stress_shear_rate(eps);

@@ -42,6 +42,42 @@ HD_INLINE real mom_av(real alpha, real cs, real h, real rho_i, real rho_j, const
     return alpha * cs * h / (R(0.5) * (rho_i + rho_j)) * ux / (r2 + R(0.01) * h * h);
 }
 
+/* The pair dissipation of the low-dissipation Riemann solver of Zhang, Hu &
+ * Adams (2017, J. Comput. Phys. 335, 605), in the units of mom_av: the
+ * acoustic Riemann problem along e_ij = x_ji / r between the left state i
+ * and the right state j gives P* = (p_i + p_j)/2 + rho beta dU / 2 with
+ * dU = (u_i - u_j).e_ij = -(u_ij.x_ij) / r, and their limiter
+ * beta = min(eta max(dU, 0), c). So Pi_ij = -beta dU / rho for approaching
+ * pairs, else 0: quadratic in the closing speed below c / eta, where
+ * Monaghan's (3.10) is linear in it with the factor alpha c h / r, so that a
+ * smooth shear flow (dU ~ gdot r) feels it as a viscosity eta gdot r^2, not
+ * alpha c h. No c in it below the cap: it does not follow the stiffness E. */
+HD_INLINE real mom_riemann(real eta, real cs, real rho, const real uij[3], const real xij[3], real r2)
+{
+    real ux = uij[0] * xij[0] + uij[1] * xij[1] + uij[2] * xij[2];
+    if (ux >= 0 || r2 <= 0) return 0;
+    real dU = -ux / (real)sqrt((double)r2);
+    real beta = eta * dU < cs ? eta * dU : cs;
+    return -beta * dU / rho;
+}
+
+/* The pressure diffusion of particle i from the pair j, Pa/s: the rate
+ * coef w (p_j - p_i) V_j (-f) r^2 / (r^2 + eta2) r^q (q = 1 for riemann, 0
+ * for delta: see flow_ctx.pdiff), added to dp_i/dt (so to -dsigma_kk/dt).
+ * It is the Riemann solver's dissipation in the continuity equation
+ * (u* = u_bar + (p_i - p_j) / (2 rho c) e_ij, Zhang, Hu & Adams 2017) or
+ * delta-SPH's density diffusion (Molteni & Colagrossi 2009; Antuono et al.
+ * 2010: delta h c sum psi_ij . grad W V_j, psi_ij = 2 (rho_j - rho_i)
+ * x_ji / r^2) written for the pressure, dp = c^2 drho: both flow from high
+ * to low pressure and conserve sum p_i V_i pairwise (equal V). Only the
+ * isotropic part of the stress is diffused; the deviator is the rheology's.
+ * dp is p_j - p_i less its hydrostatic part (flow_rates_team). */
+HD_INLINE real mom_pdiff(real dp, real V_j, real f, real r2, real eta2, int riemann)
+{
+    real w = -f * V_j * dp;
+    return riemann ? w * (real)sqrt((double)r2) : w * r2 / (r2 + eta2);
+}
+
 /* Adds the pair j to the acceleration of i, eq. (3.9):
  * a_i += m_j (sigma_i/rho_i^2 + sigma_j/rho_j^2 + Pi_ij I) . grad_i W_ij.
  * Symmetric in (i, j) but for grad W, so m_i a_ij = -m_j a_ji. */

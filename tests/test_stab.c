@@ -1,0 +1,133 @@
+/* test_stab.c — Flow:stabilization riemann and delta (src/physics/momentum.h
+ * mom_riemann, mom_pdiff; flow.h flow_rates_team), against exact answers:
+ *  - the Riemann pair term (Zhang, Hu & Adams 2017 with their limiter):
+ *    none for separating pairs, -eta dU^2 / rho below the cap (so quadratic
+ *    in the closing speed dU), -c dU / rho above it, to round-off;
+ *  - the pressure diffusion leaves a hydrostatic column at rest untouched,
+ *    free surface included, where the support is cut: the pair differences
+ *    less rho g.x_ji vanish pair by pair (a wrong sign of the hydrostatic part
+ *    doubles them: the top row's pressure would grow at ~rho g c_s);
+ *  - it conserves sum V_i p_i (equal volumes, no walls, no gravity) to
+ *    round-off, and moves a pressure bump down: the bump's rate is negative,
+ *    its neighbours' positive;
+ *  - it is isotropic: the deviatoric stress rate is the elastic one (zero
+ *    at rest). */
+#include "physics/flow.h"
+#include <string.h>
+#include "testutil.h"
+
+#define DR 1e-3
+
+static flow_ctx ctx(int stab)
+{
+    flow_ctx c;
+    memset(&c, 0, sizeof c);
+    c.k = sph_make(2, (real)(1.5 * DR), (real)DR);
+    stress_moduli((real)1e5, (real)0.3, &c.m.G, &c.m.K);
+    c.m.rho_s = 2500, c.m.mu_s = (real)0.382, c.m.mu_d = (real)0.682, c.m.I0 = (real)0.279;
+    c.m.lambda = (real)0.001;
+    c.rho = 1500;
+    c.cs = stress_sound_speed(c.m.G, c.m.K, c.rho);
+    c.stab = stab;
+    c.eta_r = 3;
+    c.pdiff = stab == STAB_RIEMANN ? c.m.K / (c.rho * c.cs) : R(2.0) * R(0.1) * c.k.h * c.cs;
+    c.g[1] = (real)-9.81;
+    c.sp.d_small = (real)0.25e-3, c.sp.d_large = (real)0.5e-3;
+    return c;
+}
+
+static void test_riemann_pair(void **st)
+{
+    (void)st;
+    const real rho = 1500, c = 3, eta = 3;
+    real x[3] = {(real)DR, 0, 0}, r2 = (real)(DR * DR);
+    real sep[3] = {R(0.01), 0, 0}; /* u_ij . x_ij > 0: separating */
+    assert_true(mom_riemann(eta, c, rho, sep, x, r2) == 0);
+    real slow[3] = {R(-0.02), R(0.05), 0}; /* closing at dU = 0.02 m/s, a shear part that does not count */
+    double want = -3.0 * 0.02 * 0.02 / 1500;
+    assert_true(fabs(mom_riemann(eta, c, rho, slow, x, r2) - want) <= RT(1e-12) * fabs(want));
+    real fast[3] = {R(-2.0), 0, 0}; /* eta dU = 6 > c: the cap */
+    want = -3.0 * 2.0 / 1500;
+    assert_true(fabs(mom_riemann(eta, c, rho, fast, x, r2) - want) <= RT(1e-12) * fabs(want));
+}
+
+/* Hydrostatic stress -p I, p = rho |g| (H - y), on a block with dummy rows
+ * below and at the sides; velocities zero. */
+static void hydrostatic(particles_t *p, const flow_ctx *c, int nx, int ny)
+{
+    tu_block2d(p, nx, ny, DR, 3, 3);
+    double H = ny * DR;
+    for (size_t i = 0; i < p->n; ++i) {
+        double pr = c->rho * 9.81 * (H - p->x[1][i]);
+        for (int q = 0; q < 3; ++q) p->sig[q][i] = (real)-pr;
+    }
+}
+
+static void test_hydrostatic_at_rest(void **st)
+{
+    (void)st;
+    for (int stab = STAB_RIEMANN; stab <= STAB_DELTA; ++stab) {
+        particles_t p;
+        nbr_grid g = {0};
+        flow_ctx c = ctx(stab);
+        hydrostatic(&p, &c, 10, 8);
+        nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+        /* the rate of a pressure change the size of one row's weight per acoustic time h / c_s */
+        double scale = c.rho * 9.81 * DR * c.cs / c.k.h;
+        for (size_t i = 0; i < p.n; ++i) {
+            if (p.kind[i] != KIND_MATERIAL) continue;
+            flow_rates(i, &p, &g.view, &c);
+            for (int q = 0; q < 6; ++q) assert_true(fabs((double)p.dsig[q][i]) <= RT(1e-9) * scale);
+        }
+        nbr_free(&g);
+        part_free(&p);
+    }
+}
+
+static void test_conservation_and_sign(void **st)
+{
+    (void)st;
+    for (int stab = STAB_RIEMANN; stab <= STAB_DELTA; ++stab) {
+        particles_t p;
+        nbr_grid g = {0};
+        flow_ctx c = ctx(stab);
+        c.g[1] = 0;
+        int n = 9;
+        tu_block2d(&p, n, n, DR, 0, 0);
+        unsigned s = 12345u;
+        for (size_t i = 0; i < p.n; ++i) { /* a rough pressure field, and a bump in the middle */
+            s = s * 1103515245u + 12345u;
+            double pr = 1000 + 300 * ((s >> 8) & 1023) / 1023.0;
+            for (int q = 0; q < 3; ++q) p.sig[q][i] = (real)-pr;
+        }
+        size_t b = tu_find(&p, (int64_t)((n / 2) * n + n / 2));
+        for (int q = 0; q < 3; ++q) p.sig[q][b] -= 5000;
+        nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+        double sum = 0, mag = 0;
+        for (size_t i = 0; i < p.n; ++i) {
+            flow_rates(i, &p, &g.view, &c);
+            double dp = -(double)p.dsig[0][i]; /* dp/dt; the normal rates all equal, the shear ones zero */
+            assert_true(fabs((double)p.dsig[1][i] - p.dsig[0][i]) <= RT(1e-12) * (fabs(dp) + 1));
+            assert_true(fabs((double)p.dsig[3][i]) <= RT(1e-12) * (fabs(dp) + 1));
+            sum += (double)p.vol[i] * dp, mag += (double)p.vol[i] * fabs(dp);
+        }
+        assert_true(fabs(sum) <= RT(1e-12) * mag);
+        flow_rates(b, &p, &g.view, &c);
+        assert_true(p.dsig[0][b] > 0); /* dp/dt < 0 at the bump */
+        size_t nb = tu_find(&p, (int64_t)((n / 2) * n + n / 2 + 1));
+        flow_rates(nb, &p, &g.view, &c);
+        assert_true(p.dsig[0][nb] < 0); /* and > 0 beside it */
+        nbr_free(&g);
+        part_free(&p);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_riemann_pair),
+        cmocka_unit_test(test_hydrostatic_at_rest),
+        cmocka_unit_test(test_conservation_and_sign),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
