@@ -118,35 +118,8 @@ static flow_ctx make_ctx(void)
     return c;
 }
 
-/* The fixture of the tests on a particle set: the store, its cell list and
- * the flow context (make_ctx), made before each test (cmocka setup) and
- * freed after it, whether it passed or not (teardown). */
-typedef struct flow_fx {
-    particles_t p;
-    nbr_grid g;
-    flow_ctx c;
-} flow_fx;
-
-static int fx_setup(void **st)
-{
-    flow_fx *f = calloc(1, sizeof *f);
-    if (!f) return -1;
-    f->c = make_ctx();
-    *st = f;
-    return 0;
-}
-
-static int fx_teardown(void **st)
-{
-    flow_fx *f = *st;
-    nbr_free(&f->g);
-    part_free(&f->p);
-    free(f);
-    return 0;
-}
-
 /* The cell list of the fixture's particles (cells of 2h). */
-static void fx_list(flow_fx *f) { nbr_build(&f->g, &f->p, R(2.0) * f->c.k.h, NULL); }
+static void fx_list(tu_fx *f, const flow_ctx *c) { tu_fx_list(f, c->k.h); }
 
 /* Interior particle of an n x n block: the one nearest the centre. */
 static size_t centre(const particles_t *p, int n)
@@ -156,42 +129,44 @@ static size_t centre(const particles_t *p, int n)
 
 /* The cell list, then the flow rates of the centre particle of the n x n
  * block; returns its index. */
-static size_t fx_rates_centre(flow_fx *f, int n)
+static size_t fx_rates_centre(tu_fx *f, const flow_ctx *c, int n)
 {
-    fx_list(f);
+    fx_list(f, c);
     size_t i = centre(&f->p, n);
-    flow_rates(i, &f->p, &f->g.view, &f->c);
+    flow_rates(i, &f->p, &f->g.view, c);
     return i;
 }
 
 static void test_uniform_stress(void **st)
 {
-    flow_fx *f = *st;
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
     int n = 12;
     tu_block2d(&f->p, n, n, DR, 0, 0);
     real s0[6] = {-3000, -5000, -2400, 700, 0, 0};
     for (size_t i = 0; i < f->p.n; ++i)
         for (int q = 0; q < 6; ++q) f->p.sig[q][i] = s0[q];
-    size_t i = fx_rates_centre(f, n);
-    double scale = 5000 / (f->c.rho * DR); /* one term's size */
+    size_t i = fx_rates_centre(f, &c, n);
+    double scale = 5000 / (c.rho * DR); /* one term's size */
     assert_true(fabs(f->p.acc[0][i]) < RT(1e-10) * scale);
-    assert_true(fabs(f->p.acc[1][i] - f->c.g[1]) < RT(1e-10) * scale);
+    assert_true(fabs(f->p.acc[1][i] - c.g[1]) < RT(1e-10) * scale);
     assert_true(f->p.gdot[i] == 0);
 }
 
 static void test_linear_velocity(void **st)
 {
-    flow_fx *f = *st;
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
     int n = 12;
     tu_block2d(&f->p, n, n, DR, 0, 0);
     const double A[2][2] = {{0.3, 2.0}, {-0.5, -0.1}}; /* du_a/dx_b, 1/s */
     for (size_t k = 0; k < f->p.n; ++k)
         for (int a = 0; a < 2; ++a) f->p.v[a][k] = (real)(A[a][0] * f->p.x[0][k] + A[a][1] * f->p.x[1][k]);
-    size_t i = fx_rates_centre(f, n);
+    size_t i = fx_rates_centre(f, &c, n);
     real eps[6] = {(real)A[0][0], (real)A[1][1], 0, (real)(0.5 * (A[0][1] + A[1][0])), 0, 0};
     real w[3] = {(real)(0.5 * (A[0][1] - A[1][0])), 0, 0};
     real s0[6] = {0, 0, 0, 0, 0, 0}, ds[6];
-    stress_rate_elastic(s0, eps, w, f->c.m.G, f->c.m.K, ds);
+    stress_rate_elastic(s0, eps, w, c.m.G, c.m.K, ds);
     double gd = stress_shear_rate(eps);
     assert_true(fabs(f->p.gdot[i] - gd) < 0.01 * gd);
     double dmax = 0;
@@ -201,7 +176,8 @@ static void test_linear_velocity(void **st)
 
 static void test_rigid_rotation(void **st)
 {
-    flow_fx *f = *st;
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
     int n = 12;
     tu_block2d(&f->p, n, n, DR, 0, 0);
     const double Om = 3.0, s1 = -4000, s2 = -1000; /* rad/s, Pa */
@@ -209,7 +185,7 @@ static void test_rigid_rotation(void **st)
         f->p.v[0][k] = (real)(-Om * f->p.x[1][k]), f->p.v[1][k] = (real)(Om * f->p.x[0][k]);
         f->p.sig[0][k] = (real)s1, f->p.sig[1][k] = (real)s2, f->p.sig[2][k] = (real)s2;
     }
-    size_t i = fx_rates_centre(f, n);
+    size_t i = fx_rates_centre(f, &c, n);
     double rate = Om * (s1 - s2);
     assert_true(fabs(f->p.gdot[i]) < RT(1e-9) * Om);
     assert_true(fabs(f->p.dsig[3][i] - rate) < 0.01 * fabs(rate));
@@ -240,17 +216,18 @@ static void scramble(particles_t *p, unsigned seed)
 
 static void test_momentum_conservation(void **st)
 {
-    flow_fx *f = *st;
-    f->c.g[1] = 0;
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
+    c.g[1] = 0;
     int n = 10;
     tu_block2d(&f->p, n, n, DR, 0, 0);
     scramble(&f->p, 7);
-    fx_list(f);
+    fx_list(f, &c);
     double sum[2] = {0, 0}, mag = 0;
     for (size_t k = 0; k < f->p.n; ++k) {
-        flow_rates(k, &f->p, &f->g.view, &f->c);
-        for (int a = 0; a < 2; ++a) sum[a] += f->c.rho * f->p.vol[k] * f->p.acc[a][k];
-        mag += f->c.rho * f->p.vol[k] * fabs(f->p.acc[0][k]);
+        flow_rates(k, &f->p, &f->g.view, &c);
+        for (int a = 0; a < 2; ++a) sum[a] += c.rho * f->p.vol[k] * f->p.acc[a][k];
+        mag += c.rho * f->p.vol[k] * fabs(f->p.acc[0][k]);
     }
     assert_true(mag > 0);
     assert_true(fabs(sum[0]) < RT(1e-12) * mag && fabs(sum[1]) < RT(1e-12) * mag);
@@ -258,16 +235,17 @@ static void test_momentum_conservation(void **st)
 
 static void test_shepard_uniform(void **st)
 {
-    flow_fx *f = *st;
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
     tu_block2d(&f->p, 8, 8, DR, 3, 3);
     for (size_t k = 0; k < f->p.n; ++k) {
         real s0[6] = {-100, -200, -90, 15, 0, 0};
         for (int q = 0; q < 6; ++q) f->p.sig[q][k] = f->p.kind[k] == KIND_MATERIAL ? s0[q] : 12345;
     }
-    fx_list(f);
+    fx_list(f, &c);
     for (size_t k = 0; k < f->p.n; ++k) {
         if (f->p.kind[k] != KIND_MATERIAL) continue;
-        flow_shepard(k, &f->p, &f->g.view, &f->c); /* dummies (12345) must not enter */
+        flow_shepard(k, &f->p, &f->g.view, &c); /* dummies (12345) must not enter */
         for (int q = 0; q < 6; ++q) assert_true(fabs(f->p.dsig[q][k] - f->p.sig[q][k]) < RT(1e-12) * 200);
     }
 }
@@ -276,8 +254,9 @@ static void test_shepard_uniform(void **st)
  * (s1 + s3, s3 + s2), Pa/m. */
 static void test_linear_stress(void **st)
 {
-    flow_fx *f = *st;
-    f->c.g[1] = 0;
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
+    c.g[1] = 0;
     int n = 12;
     tu_block2d(&f->p, n, n, DR, 0, 0);
     const double s1 = 3e5, s2 = -8e5, s3 = 5e5;
@@ -286,8 +265,8 @@ static void test_linear_stress(void **st)
         f->p.sig[0][k] = (real)(-2000 + s1 * x), f->p.sig[1][k] = (real)(-3000 + s2 * y);
         f->p.sig[3][k] = (real)(s3 * (x + y)), f->p.sig[2][k] = -2500;
     }
-    size_t i = fx_rates_centre(f, n);
-    double ax = (s1 + s3) / f->c.rho, ay = (s3 + s2) / f->c.rho, mag = hypot(ax, ay);
+    size_t i = fx_rates_centre(f, &c, n);
+    double ax = (s1 + s3) / c.rho, ay = (s3 + s2) / c.rho, mag = hypot(ax, ay);
     assert_true(fabs(f->p.acc[0][i] - ax) < 0.005 * mag && fabs(f->p.acc[1][i] - ay) < 0.005 * mag);
 }
 
@@ -297,20 +276,21 @@ static void test_linear_stress(void **st)
  * F = (1/r) dW/dr; a decelerates i (negative here). Receding: a_i = 0. */
 static void test_viscosity_closed_form(void **st)
 {
-    flow_fx *f = *st;
-    f->c.g[1] = 0;
-    double r = 1.2 * DR, V = DR * DR, h = f->c.k.h;
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
+    c.g[1] = 0;
+    double r = 1.2 * DR, V = DR * DR, h = c.k.h;
     part_alloc(&f->p, 2, 2);
     tu_put(&f->p, 0, 0, 0, KIND_MATERIAL, V);
     tu_put(&f->p, r, 0, 0, KIND_MATERIAL, V);
     for (int dir = 1; dir >= -1; dir -= 2) {
         f->p.v[0][0] = (real)(0.3 * dir), f->p.v[0][1] = 0;
-        fx_list(f);
+        fx_list(f, &c);
         size_t i = tu_find(&f->p, 0);
-        flow_rates(i, &f->p, &f->g.view, &f->c);
+        flow_rates(i, &f->p, &f->g.view, &c);
         double ux = 0.3 * dir * -r; /* u_ij.x_ij */
-        double Pi = ux < 0 ? f->c.alpha_av * f->c.cs * h * ux / (f->c.rho * (r * r + 0.01 * h * h)) : 0;
-        double ax = f->c.rho * V * Pi * kernel_f((real)r, f->c.k.h, f->c.k.alpha) * -r;
+        double Pi = ux < 0 ? c.alpha_av * c.cs * h * ux / (c.rho * (r * r + 0.01 * h * h)) : 0;
+        double ax = c.rho * V * Pi * kernel_f((real)r, c.k.h, c.k.alpha) * -r;
         if (dir > 0) assert_true(ax < 0 && fabs(f->p.acc[0][i] - ax) < RT(1e-12) * fabs(ax));
         else assert_true(f->p.acc[0][i] == 0);
         assert_true(f->p.acc[1][i] == 0);
@@ -320,24 +300,25 @@ static void test_viscosity_closed_form(void **st)
 /* sigma_yy = -1e4 (H - y) (hydrostatic, Pa) on an 8 x 8 block with walls. */
 static void test_shepard_linear(void **st)
 {
-    flow_fx *f = *st;
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
     int n = 8;
-    double H = n * DR, gam = 1e4, h = f->c.k.h;
+    double H = n * DR, gam = 1e4, h = c.k.h;
     tu_block2d(&f->p, n, n, DR, 3, 3);
     for (size_t k = 0; k < f->p.n; ++k)
         for (int q = 0; q < 6; ++q)
             f->p.sig[q][k] = (real)(f->p.kind[k] == KIND_MATERIAL ? (q == 1 ? -gam * (H - f->p.x[1][k]) : 0) : 12345);
-    fx_list(f);
+    fx_list(f, &c);
     size_t in = tu_find(&f->p, 4 * n + 4), low = tu_find(&f->p, 4); /* row 4, and row 0 (on the base) */
-    flow_shepard(in, &f->p, &f->g.view, &f->c);
+    flow_shepard(in, &f->p, &f->g.view, &c);
     assert_true(fabs(f->p.dsig[1][in] - f->p.sig[1][in]) < RT(1e-12) * gam * H);
-    flow_shepard(low, &f->p, &f->g.view, &f->c);
+    flow_shepard(low, &f->p, &f->g.view, &c);
     double num = 0, den = 0; /* rows b >= 0 above particle (4, 0): the material */
     for (int a = -3; a <= 3; ++a)
         for (int b = 0; b <= 3; ++b) {
             double rr = hypot(a * DR, b * DR);
             if (rr >= 2 * h) continue;
-            double W = kernel_w((real)rr, f->c.k.h, f->c.k.alpha);
+            double W = kernel_w((real)rr, c.k.h, c.k.alpha);
             num += W * -gam * (H - (b + 0.5) * DR), den += W;
         }
     assert_true(fabs(f->p.dsig[1][low] - num / den) < RT(1e-12) * gam * H);
@@ -346,25 +327,26 @@ static void test_shepard_linear(void **st)
 
 static void test_renorm_fused(void **st)
 {
-    flow_fx *f = *st;
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
     seg_ctx sc;
     memset(&sc, 0, sizeof sc);
-    sc.k = f->c.k;
+    sc.k = c.k;
     tu_block2d(&f->p, 9, 9, DR, 3, 3);
     scramble(&f->p, 11);
-    fx_list(f);
+    fx_list(f, &c);
     int nmat = 0, nbent = 0;
     for (size_t k = 0; k < f->p.n; ++k) {
         if (f->p.kind[k] != KIND_MATERIAL) continue;
         seg_renorm(k, &f->p, &f->g.view, &sc);
         real L0[6], acc0[3], ds0[6], gd0;
         for (int q = 0; q < 6; ++q) L0[q] = f->p.L[q][k], f->p.L[q][k] = -7;
-        flow_rates(k, &f->p, &f->g.view, &f->c);
+        flow_rates(k, &f->p, &f->g.view, &c);
         for (int q = 0; q < 6; ++q) assert_true(f->p.L[q][k] == -7); /* renorm off: L untouched */
         for (int a = 0; a < 3; ++a) acc0[a] = f->p.acc[a][k];
         for (int q = 0; q < 6; ++q) ds0[q] = f->p.dsig[q][k];
         gd0 = f->p.gdot[k];
-        flow_rates_team(k, &f->p, &f->g.view, &f->c, 0, 1, 1);
+        flow_rates_team(k, &f->p, &f->g.view, &c, 0, 1, 1);
         for (int q = 0; q < 6; ++q) assert_true(f->p.L[q][k] == L0[q]);
         for (int a = 0; a < 3; ++a) assert_true(f->p.acc[a][k] == acc0[a]);
         for (int q = 0; q < 6; ++q) assert_true(f->p.dsig[q][k] == ds0[q]);
@@ -377,7 +359,8 @@ static void test_renorm_fused(void **st)
 
 static void test_advance(void **st)
 {
-    flow_fx *f = *st;
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
     part_alloc(&f->p, 2, 2);
     f->p.n = 2;
     for (size_t i = 0; i < 2; ++i) {
@@ -394,20 +377,20 @@ static void test_advance(void **st)
     real s1[6] = {500, 200, 100, 10, 0, 0};
     for (int q = 0; q < 6; ++q) f->p.sig_n[q][0] = s0[q], f->p.sig_n[q][1] = s1[q], f->p.dsig[q][0] = f->p.dsig[q][1] = 0;
     real a = (real)0.01;
-    assert_int_equal(flow_advance(0, &f->p, a, &f->c), 1);
-    assert_int_equal(flow_advance(1, &f->p, a, &f->c), 2);
+    assert_int_equal(flow_advance(0, &f->p, a, &c), 1);
+    assert_int_equal(flow_advance(1, &f->p, a, &c), 2);
     assert_true(fabs(f->p.x[0][0] - (1 + 0.01 * 0.25)) < RT(1e-14) && fabs(f->p.x[1][0] - (2 - 0.01)) < RT(1e-14));
     assert_true(fabs(f->p.v[0][0] - 0.5) < RT(1e-14) && fabs(f->p.v[1][0] + 0.1) < RT(1e-14));
     real s[6];
     for (int q = 0; q < 6; ++q) s[q] = f->p.sig[q][0];
     real pr = stress_pressure(s);
-    real mu = stress_mu(&f->c.m, 2, pr, seg_davg(&f->c.sp, (real)0.5));
+    real mu = stress_mu(&c.m, 2, pr, seg_davg(&c.sp, (real)0.5));
     assert_true(fabs(pr - 1000) < RT(1e-9) * 1000); /* g = sqrt(J2): the pressure stays */
     assert_true(fabs(sqrt(stress_J2(s)) - stress_kmu(mu) * pr) < RT(1e-9) * 1000);
     for (int q = 0; q < 6; ++q) assert_true(f->p.sig[q][1] == 0);
     /* Material:yield mu_I (flow_ctx.yield): the same trial onto sqrt(J2) = mu(I) p */
-    f->c.yield = YIELD_MU_I;
-    assert_int_equal(flow_advance(0, &f->p, a, &f->c), 1);
+    c.yield = YIELD_MU_I;
+    assert_int_equal(flow_advance(0, &f->p, a, &c), 1);
     for (int q = 0; q < 6; ++q) s[q] = f->p.sig[q][0];
     assert_true(fabs(stress_pressure(s) - 1000) < RT(1e-9) * 1000);
     assert_true(fabs(sqrt(stress_J2(s)) - mu * 1000) < RT(1e-9) * 1000 && mu > stress_kmu(mu) + 0.02);
@@ -415,12 +398,13 @@ static void test_advance(void **st)
 
 static void test_drum_dummy_stress(void **st)
 {
-    flow_fx *f = *st;
-    f->c.w = drum_walls(0.03, 0, 60); /* a_w = 108 m/s^2 at r = R */
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
+    c.w = drum_walls(0.03, 0, 60); /* a_w = 108 m/s^2 at r = R */
     double xd = 0.0305, yd = 0.0005, P0 = 5000, V = DR * DR;
     real aw[3], xdv[3] = {(real)xd, (real)yd, 0};
-    wall_accel(&f->c.w, 1, xdv, aw);
-    double geff[2] = {f->c.g[0] - aw[0], f->c.g[1] - aw[1]};
+    wall_accel(&c.w, 1, xdv, aw);
+    double geff[2] = {c.g[0] - aw[0], c.g[1] - aw[1]};
     assert_true(fabs(aw[0] + 60.0 * 60.0 * xd) < RT(1e-9) * 100); /* centripetal, towards the axis */
     part_alloc(&f->p, 2, 64);
     tu_put(&f->p, xd, yd, 0, KIND_DUMMY, V);
@@ -429,33 +413,34 @@ static void test_drum_dummy_stress(void **st)
             double x = xd - (i + 1) * DR, y = yd + j * DR;
             tu_put(&f->p, x, y, 0, KIND_MATERIAL, V);
             size_t k = f->p.n - 1;
-            f->p.sig[0][k] = (real)(-P0 - f->c.rho * geff[0] * (x - xd));
-            f->p.sig[1][k] = (real)(-P0 - f->c.rho * geff[1] * (y - yd));
+            f->p.sig[0][k] = (real)(-P0 - c.rho * geff[0] * (x - xd));
+            f->p.sig[1][k] = (real)(-P0 - c.rho * geff[1] * (y - yd));
             f->p.sig[2][k] = (real)-P0;
         }
-    assign_walls(&f->p, &f->c.w);
-    fx_list(f);
+    assign_walls(&f->p, &c.w);
+    fx_list(f, &c);
     size_t d = tu_find(&f->p, 0);
-    flow_wall(d, &f->p, &f->g.view, &f->c);
+    flow_wall(d, &f->p, &f->g.view, &c);
     for (int a = 0; a < 3; ++a) assert_true(fabs(f->p.sig[a][d] + P0) < RT(1e-10) * P0);
 }
 
 static void test_dummy_above_surface(void **st)
 {
-    flow_fx *f = *st; /* g = -9.81 y */
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx(); /* g = -9.81 y */
     int n = 8;
-    double H = n * DR, rg = f->c.rho * 9.81;
+    double H = n * DR, rg = c.rho * 9.81;
     tu_block2d(&f->p, n, n, DR, 3, 3); /* side walls reach 3 rows above the material */
-    f->c.w = box_walls(n * DR);
-    assign_walls(&f->p, &f->c.w);
+    c.w = box_walls(n * DR);
+    assign_walls(&f->p, &c.w);
     for (size_t k = 0; k < f->p.n; ++k)
         f->p.sig[1][k] = (real)(f->p.kind[k] == KIND_MATERIAL ? -rg * (H - f->p.x[1][k]) : 0);
-    fx_list(f);
+    fx_list(f, &c);
     int mid = 0, above = 0;
     for (size_t d = 0; d < f->p.n; ++d) {
         double x = f->p.x[0][d], y = f->p.x[1][d];
         if (f->p.kind[d] != KIND_DUMMY || x > 0 || x < -DR) continue; /* the left wall's first layer */
-        flow_wall(d, &f->p, &f->g.view, &f->c);
+        flow_wall(d, &f->p, &f->g.view, &c);
         if (fabs(y - 4.5 * DR) < 0.1 * DR) /* mid-height: the column's stress */
             mid++, assert_true(fabs(f->p.sig[1][d] + rg * (H - y)) < 1e-9 * rg * H);
         if (y > H + DR) { /* 1.5 dr above the surface, material in reach */
@@ -544,13 +529,13 @@ static void test_drum3d_walls(void **st)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test_setup_teardown(test_uniform_stress, fx_setup, fx_teardown),        cmocka_unit_test_setup_teardown(test_linear_velocity, fx_setup, fx_teardown),
-        cmocka_unit_test_setup_teardown(test_rigid_rotation, fx_setup, fx_teardown),
-        cmocka_unit_test_setup_teardown(test_momentum_conservation, fx_setup, fx_teardown), cmocka_unit_test_setup_teardown(test_shepard_uniform, fx_setup, fx_teardown),
-        cmocka_unit_test_setup_teardown(test_renorm_fused, fx_setup, fx_teardown),          cmocka_unit_test_setup_teardown(test_linear_stress, fx_setup, fx_teardown),
-        cmocka_unit_test_setup_teardown(test_viscosity_closed_form, fx_setup, fx_teardown), cmocka_unit_test_setup_teardown(test_shepard_linear, fx_setup, fx_teardown),
-        cmocka_unit_test_setup_teardown(test_advance, fx_setup, fx_teardown),               cmocka_unit_test_setup_teardown(test_drum_dummy_stress, fx_setup, fx_teardown),
-        cmocka_unit_test_setup_teardown(test_dummy_above_surface, fx_setup, fx_teardown),   cmocka_unit_test(test_drum_wall_motion),
+        TU_FX_TEST(test_uniform_stress),        TU_FX_TEST(test_linear_velocity),
+        TU_FX_TEST(test_rigid_rotation),
+        TU_FX_TEST(test_momentum_conservation), TU_FX_TEST(test_shepard_uniform),
+        TU_FX_TEST(test_renorm_fused),          TU_FX_TEST(test_linear_stress),
+        TU_FX_TEST(test_viscosity_closed_form), TU_FX_TEST(test_shepard_linear),
+        TU_FX_TEST(test_advance),               TU_FX_TEST(test_drum_dummy_stress),
+        TU_FX_TEST(test_dummy_above_surface),   cmocka_unit_test(test_drum_wall_motion),
         cmocka_unit_test(test_box_translation),       cmocka_unit_test(test_drum3d_walls),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
