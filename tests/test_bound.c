@@ -17,12 +17,18 @@ static void classify(tu_fx *f)
     bound_classify(&f->w, &f->p, &f->g, &k);
 }
 
+/* An N x N block with nl dummy layers at the base and the sides, classified. */
+static void classify_block(tu_fx *f, int N, int nl)
+{
+    tu_block2d(&f->p, N, N, DR, nl, nl);
+    classify(f);
+}
+
 static void test_square(void **st)
 {
     tu_fx *f = *st;
     int N = 20;
-    tu_block2d(&f->p, N, N, DR, 0, 0);
-    classify(f);
+    classify_block(f, N, 0);
     for (size_t i = 0; i < f->p.n; ++i) {
         int ci = (int)floor(f->p.x[0][i] / DR), cj = (int)floor(f->p.x[1][i] / DR);
         int edge = ci == 0 || cj == 0 || ci == N - 1 || cj == N - 1;
@@ -71,8 +77,7 @@ static void test_walls(void **st)
 {
     tu_fx *f = *st;
     int N = 16;
-    tu_block2d(&f->p, N, N, DR, 3, 3);
-    classify(f);
+    classify_block(f, N, 3);
     for (size_t i = 0; i < f->p.n; ++i) {
         if (f->p.kind[i] == KIND_DUMMY) {
             assert_int_equal(f->p.bclass[i], BC_DUMMY);

@@ -118,6 +118,14 @@ static flow_ctx make_ctx(void)
     return c;
 }
 
+/* The fixture's particles: an n x n block with nl dummy layers at the base
+ * and the sides; returns the flow context (make_ctx). */
+static flow_ctx fx_block(tu_fx *f, int n, int nl)
+{
+    tu_block2d(&f->p, n, n, DR, nl, nl);
+    return make_ctx();
+}
+
 /* The cell list of the fixture's particles (cells of 2h). */
 static void fx_list(tu_fx *f, const flow_ctx *c) { tu_fx_list(f, c->k.h); }
 
@@ -140,9 +148,8 @@ static size_t fx_rates_centre(tu_fx *f, const flow_ctx *c, int n)
 static void test_uniform_stress(void **st)
 {
     tu_fx *f = *st;
-    flow_ctx c = make_ctx();
     int n = 12;
-    tu_block2d(&f->p, n, n, DR, 0, 0);
+    flow_ctx c = fx_block(f, n, 0);
     real s0[6] = {-3000, -5000, -2400, 700, 0, 0};
     for (size_t i = 0; i < f->p.n; ++i)
         for (int q = 0; q < 6; ++q) f->p.sig[q][i] = s0[q];
@@ -156,9 +163,8 @@ static void test_uniform_stress(void **st)
 static void test_linear_velocity(void **st)
 {
     tu_fx *f = *st;
-    flow_ctx c = make_ctx();
     int n = 12;
-    tu_block2d(&f->p, n, n, DR, 0, 0);
+    flow_ctx c = fx_block(f, n, 0);
     const double A[2][2] = {{0.3, 2.0}, {-0.5, -0.1}}; /* du_a/dx_b, 1/s */
     for (size_t k = 0; k < f->p.n; ++k)
         for (int a = 0; a < 2; ++a) f->p.v[a][k] = (real)(A[a][0] * f->p.x[0][k] + A[a][1] * f->p.x[1][k]);
@@ -177,9 +183,8 @@ static void test_linear_velocity(void **st)
 static void test_rigid_rotation(void **st)
 {
     tu_fx *f = *st;
-    flow_ctx c = make_ctx();
     int n = 12;
-    tu_block2d(&f->p, n, n, DR, 0, 0);
+    flow_ctx c = fx_block(f, n, 0);
     const double Om = 3.0, s1 = -4000, s2 = -1000; /* rad/s, Pa */
     for (size_t k = 0; k < f->p.n; ++k) {
         f->p.v[0][k] = (real)(-Om * f->p.x[1][k]), f->p.v[1][k] = (real)(Om * f->p.x[0][k]);
@@ -217,10 +222,9 @@ static void scramble(particles_t *p, unsigned seed)
 static void test_momentum_conservation(void **st)
 {
     tu_fx *f = *st;
-    flow_ctx c = make_ctx();
-    c.g[1] = 0;
     int n = 10;
-    tu_block2d(&f->p, n, n, DR, 0, 0);
+    flow_ctx c = fx_block(f, n, 0);
+    c.g[1] = 0;
     scramble(&f->p, 7);
     fx_list(f, &c);
     double sum[2] = {0, 0}, mag = 0;
@@ -255,10 +259,9 @@ static void test_shepard_uniform(void **st)
 static void test_linear_stress(void **st)
 {
     tu_fx *f = *st;
-    flow_ctx c = make_ctx();
-    c.g[1] = 0;
     int n = 12;
-    tu_block2d(&f->p, n, n, DR, 0, 0);
+    flow_ctx c = fx_block(f, n, 0);
+    c.g[1] = 0;
     const double s1 = 3e5, s2 = -8e5, s3 = 5e5;
     for (size_t k = 0; k < f->p.n; ++k) {
         double x = f->p.x[0][k], y = f->p.x[1][k];
