@@ -72,6 +72,7 @@
 #include <thrust/iterator/transform_iterator.h>
 extern "C" {
 #include "core/error.h"
+#include "core/tuning.h"
 #include "mpi/comm.h"
 #include "sim.h"
 #include "stages.h"

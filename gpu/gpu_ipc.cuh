@@ -44,8 +44,7 @@ struct ipc_map {
 
 static int ipc_wanted(const dhalo *x)
 {
-    const char *e = getenv("SPHSEG_GPU_IPC");
-    return !x->cuda_aware && !(e && *e && !strcmp(e, "0"));
+    return !x->cuda_aware && tuning_get()->gpu_ipc;
 }
 
 /* Decide, per channel, whether it goes by IPC (x->ipc[k]). Collective among

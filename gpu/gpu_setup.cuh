@@ -102,21 +102,17 @@ static void gpu_counts(gpu_t *g, size_t n, size_t ng)
 }
 
 /* Threads per particle in the neighbour loops: SPHSEG_GPU_TEAM (1, 2, 4, 8
- * or 16), else GPU_TEAM_MAX of the dimension (by the length of the list:
+ * or 16; core/tuning.h), else GPU_TEAM_MAX of the dimension (by the length of the list:
  * 4 in 2D, about 30 neighbours; 8 in 3D, about 140), halved while n T
  * exceeds GPU_TEAM_THREADS: a small store runs more threads per particle
  * (latency), a large one fills the device with one (the rule is measured in
  * docs/gpu.md, "Teams"). */
 static int gpu_team_size(int dim, size_t n)
 {
-    const char *e = getenv("SPHSEG_GPU_TEAM");
-    if (e && *e) {
-        char *end;
-        long t = strtol(e, &end, 10);
-        if (*end || (t != 1 && t != 2 && t != 4 && t != 8 && t != 16))
-            error_exit(2, "SPHSEG_GPU_TEAM=%s: expected 1, 2, 4, 8 or 16 threads per particle", e);
-        return (int)t;
-    }
+    const tuning *tu = tuning_get();
+    if (tu->gpu_team < 0)
+        error_exit(2, "SPHSEG_GPU_TEAM=%s: expected 1, 2, 4, 8 or 16 threads per particle", tu->gpu_team_text);
+    if (tu->gpu_team > 0) return tu->gpu_team;
     int t = dim == 3 ? GPU_TEAM_MAX_3D : GPU_TEAM_MAX_2D;
     while (t > 1 && (double)n * t > GPU_TEAM_THREADS) t /= 2;
     return t;
@@ -131,10 +127,8 @@ static gpu_t *gpu_get(sim_t *s)
     g->dev = g_local_rank % (ndev > 0 ? ndev : 1);
     CK(cudaSetDevice(g->dev));
     CK(cudaStreamCreateWithFlags(&g->st, cudaStreamNonBlocking));
-    const char *pe = getenv("SPHSEG_GPU_PROFILE");
-    prof.on = pe && *pe && strcmp(pe, "0") != 0;
-    const char *ws = getenv("SPHSEG_GPU_WALLSKIP");
-    g->wskip = !(ws && strcmp(ws, "0") == 0);
+    prof.on = tuning_get()->gpu_profile;
+    g->wskip = tuning_get()->gpu_wallskip;
     if (prof.on) {
         CK(cudaEventCreate(&prof.a));
         CK(cudaEventCreate(&prof.b));
@@ -150,10 +144,8 @@ static gpu_t *gpu_get(sim_t *s)
         g->hx = (dhalo *)calloc(1, sizeof *g->hx);
         if (!g->hx) error_exit(1, "out of memory");
         g->hx->cuda_aware = halo_cuda_aware();
-        const char *ov = getenv("SPHSEG_GPU_OVERLAP");
-        g->hx->overlap = !(ov && !strcmp(ov, "0"));
-        const char *hx = getenv("SPHSEG_GPU_HOSTX");
-        g->hx->dev = !(hx && *hx && strcmp(hx, "0"));
+        g->hx->overlap = tuning_get()->gpu_overlap;
+        g->hx->dev = !tuning_get()->gpu_hostx;
         s->halo->exposed_measured = 1;
         for (int k = 0; k < HX_EV; ++k) CK(cudaEventCreate(&g->hx->ev[k]));
     }

@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "../src/core/error.h"
+#include "../src/core/tuning.h"
 #include "../src/physics/grid.h"
 
 #define HALO_MPI_REAL (sizeof(real) == sizeof(double) ? MPI_DOUBLE : MPI_FLOAT)
@@ -839,8 +840,7 @@ void halo_swap_small(halo_t *h, const void *send, void *recv, size_t bytes, cons
 
 int halo_cuda_aware(void)
 {
-    const char *e = getenv("SPHSEG_CUDA_AWARE");
-    if (e && !strcmp(e, "0")) return 0;
+    if (!tuning_get()->cuda_aware) return 0;
 #if defined(MPIX_CUDA_AWARE_SUPPORT) && MPIX_CUDA_AWARE_SUPPORT
     return MPIX_Query_cuda_support() ? 1 : 0;
 #else

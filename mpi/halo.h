@@ -170,7 +170,8 @@ void halo_wait_bytes(halo_t *h);
  * CUDA IPC channels), blocking. */
 void halo_swap_small(halo_t *h, const void *send, void *recv, size_t bytes, const int *on);
 /* 1 if the MPI library reports CUDA-aware point-to-point transfers
- * (Open MPI's MPIX_Query_cuda_support) and SPHSEG_CUDA_AWARE is not 0. */
+ * (Open MPI's MPIX_Query_cuda_support) and SPHSEG_CUDA_AWARE is not 0
+ * (core/tuning.h). */
 int halo_cuda_aware(void);
 /* The decisions' view of h (halo_geom.h), pointing at h's arrays; a device
  * copy points its arrays at device memory instead. */

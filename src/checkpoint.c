@@ -54,22 +54,6 @@ static void ckpt_attr_int64(hid_t loc, const char *name, long long v)
     io_attr_scalar(loc, name, H5T_STD_I64LE, H5T_NATIVE_INT64, &w);
 }
 
-/* Rows [start, start + count) of fspace (none when count is 0, mspace too:
- * the rank still takes part); returns a collective transfer list. */
-static hid_t ckpt_select_rows(hid_t fspace, hid_t mspace, hsize_t start, hsize_t count)
-{
-    hid_t dxpl;
-    H5CHECK(dxpl = H5Pcreate(H5P_DATASET_XFER));
-    H5CHECK(H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE));
-    if (count > 0) {
-        H5CHECK(H5Sselect_hyperslab(fspace, H5S_SELECT_SET, &start, NULL, &count, NULL));
-    } else {
-        H5CHECK(H5Sselect_none(fspace));
-        H5CHECK(H5Sselect_none(mspace));
-    }
-    return dxpl;
-}
-
 /* ---- writing ---------------------------------------------------------------- */
 
 /* A 1D dataset of ntot rows of mtype (file type ftype); this rank writes its n
@@ -82,7 +66,7 @@ static hid_t ckpt_write_rows(hid_t loc, const char *name, hid_t ftype, hid_t mty
     H5CHECK(fspace = H5Screate_simple(1, &dims, NULL));
     H5CHECK(mspace = H5Screate_simple(1, &mdims, NULL));
     H5CHECK(dset = H5Dcreate2(loc, name, ftype, fspace, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
-    dxpl = ckpt_select_rows(fspace, mspace, start, count);
+    dxpl = io_select_rows(fspace, mspace, start, count);
     char what[80];
     snprintf(what, sizeof what, "the dataset %s", name);
     if (ntot > 0) io_write_rows(dset, mtype, mspace, fspace, dxpl, buf, what);

@@ -20,6 +20,7 @@
 static unsigned ckpt_acc_rdonly(void) { return H5F_ACC_RDONLY; }
 #include "checkpoint.h"
 #include "core/error.h"
+#include "io.h"
 #include "mpi/comm.h"
 
 #define CKPT_PATH_MAX 4200
@@ -160,17 +161,10 @@ static hid_t ckpt_dataset(hid_t loc, const char *name, H5T_class_t cls, size_t e
 static void ckpt_read_rows(hid_t d, hid_t mtype, void *buf, long long n, long long offset)
 {
     hid_t fspace, mspace, dxpl;
-    hsize_t mdims = n > 0 ? (hsize_t)n : 1, start = (hsize_t)offset, count = (hsize_t)n;
+    hsize_t mdims = n > 0 ? (hsize_t)n : 1;
     H5CHECK(fspace = H5Dget_space(d));
     H5CHECK(mspace = H5Screate_simple(1, &mdims, NULL));
-    H5CHECK(dxpl = H5Pcreate(H5P_DATASET_XFER));
-    H5CHECK(H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE));
-    if (count > 0) {
-        H5CHECK(H5Sselect_hyperslab(fspace, H5S_SELECT_SET, &start, NULL, &count, NULL));
-    } else {
-        H5CHECK(H5Sselect_none(fspace));
-        H5CHECK(H5Sselect_none(mspace));
-    }
+    dxpl = io_select_rows(fspace, mspace, (uint64_t)offset, (uint64_t)n);
     H5CHECK(H5Dread(d, mtype, mspace, fspace, dxpl, buf));
     H5CHECK(H5Pclose(dxpl));
     H5CHECK(H5Sclose(mspace));

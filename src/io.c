@@ -615,6 +615,21 @@ void io_write_rows(hid_t dset, hid_t mtype, hid_t mspace, hid_t fspace, hid_t dx
 
 void io_forget_tmp(void) { io_open.tmp[0] = 0; }
 
+hid_t io_select_rows(hid_t fspace, hid_t mspace, uint64_t start, uint64_t count)
+{
+    hid_t dxpl;
+    hsize_t s0 = (hsize_t)start, c0 = (hsize_t)count;
+    H5CHECK(dxpl = H5Pcreate(H5P_DATASET_XFER));
+    H5CHECK(H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE));
+    if (c0 > 0) {
+        H5CHECK(H5Sselect_hyperslab(fspace, H5S_SELECT_SET, &s0, NULL, &c0, NULL));
+    } else {
+        H5CHECK(H5Sselect_none(fspace));
+        H5CHECK(H5Sselect_none(mspace));
+    }
+    return dxpl;
+}
+
 int io_write_snapshot(const char *outdir, int index, const particles_t *p, double time, long step,
                       const char *scene_text, const char *walls, const char *code_version)
 {

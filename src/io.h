@@ -92,6 +92,10 @@ void io_write_rows(int64_t dset, int64_t mtype, int64_t mspace, int64_t fspace, 
                    const char *name);
 void io_write_agree(int failed, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void io_forget_tmp(void);
+/* Rows [start, start + count) of the 1D file space fspace (none when count
+ * is 0, of the memory space mspace too: the rank still takes part in the
+ * collective call); returns a collective transfer list (H5Pclose it). */
+int64_t io_select_rows(int64_t fspace, int64_t mspace, uint64_t start, uint64_t count);
 void io_write_failed(const char *fmt, ...) __attribute__((format(printf, 1, 2), noreturn));
 
 #endif

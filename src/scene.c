@@ -68,43 +68,14 @@ static const cyaml_schema_value_t gravity_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_
 #define EKS(sec, st, k, mn, mx, doc) CYAML_FIELD_STRING_PTR(#k, OPT, struct st, k, mn, mx),
 #define EKV(sec, st, k, n, doc) CYAML_FIELD_SEQUENCE_FIXED(#k, OPT, struct st, k, &gravity_entry, n),
 #include "scene_keys.h"
-#undef ENTRY
-#undef END_ENTRY
-#undef SECTION
-#undef END_SECTION
-#define ENTRY(name, st, title)
-#define END_ENTRY(name, st)
-#define END_SECTION(m)
-#undef KF
-#undef KE
-#undef KU
-#undef KS
-#undef KV
-#undef KL
-#undef EKF
-#undef EKE
-#undef EKU
-#undef EKS
-#undef EKV
-#define EKF(sec, st, k, doc)
-#define EKE(sec, st, k, strs, doc)
-#define EKU(sec, st, k, doc)
-#define EKS(sec, st, k, mn, mx, doc)
-#define EKV(sec, st, k, n, doc)
 
 const cyaml_schema_field_t scene_fields[] = {
-#define SECTION(sec, m, st) SEC(sec, m, m##_fields),
-#define KF(sec, m, st, k, req, def, lo, hi, open, when, doc)
-#define KE(sec, m, st, k, strs, def, doc)
-#define KU(sec, m, st, k, def, doc)
-#define KS(sec, m, st, k, mn, mx, def, doc)
-#define KV(sec, m, st, k, n, def, doc)
-#define KL(sec, m, st, k, entry, max, doc)
-#include "scene_keys.h"
+#include "scene_keys_none.h"
 #undef SECTION
+#define SECTION(sec, m, st) SEC(sec, m, m##_fields),
+#include "scene_keys.h"
     CYAML_FIELD_END,
 };
-#define SECTION(sec, m, st)
 
 static const cyaml_schema_value_t scene_schema = {
     CYAML_VALUE_MAPPING(CYAML_FLAG_POINTER, struct scene, scene_fields)};
@@ -117,15 +88,16 @@ struct scene_default {
 
 /* The keys with a default (value NULL: none; add_defaults skips them). */
 static const struct scene_default scene_defaults[] = {
+#include "scene_keys_none.h"
 #undef KF
-#undef KE
-#undef KU
-#undef KS
-#undef KV
 #define KF(sec, m, st, k, req, def, lo, hi, open, when, doc) {sec, #k, def},
+#undef KE
 #define KE(sec, m, st, k, strs, def, doc) {sec, #k, def},
+#undef KU
 #define KU(sec, m, st, k, def, doc) {sec, #k, def},
+#undef KS
 #define KS(sec, m, st, k, mn, mx, def, doc) {sec, #k, def},
+#undef KV
 #define KV(sec, m, st, k, n, def, doc) {sec, #k, def},
 #include "scene_keys.h"
 };
@@ -141,16 +113,9 @@ struct scene_range {
 
 /* The numbers with a range (when NO_RANGE: none; check_ranges skips them). */
 static const struct scene_range scene_ranges[] = {
+#include "scene_keys_none.h"
 #undef KF
-#undef KE
-#undef KU
-#undef KS
-#undef KV
 #define KF(sec, m, st, k, req, def, lo, hi, open, when, doc) {sec ":" #k, offsetof(struct scene, m.k), lo, hi, open, when},
-#define KE(sec, m, st, k, strs, def, doc)
-#define KU(sec, m, st, k, def, doc)
-#define KS(sec, m, st, k, mn, mx, def, doc)
-#define KV(sec, m, st, k, n, def, doc)
 #include "scene_keys.h"
 };
 

@@ -196,7 +196,7 @@ struct scene_parallel {
 };
 
 /* An outlet: material particles that fall below a horizontal plane leave the
- * run (main.c outlet_drain); their count and sum C_i V_i go to
+ * run (run_guard.c run_drain); their count and sum C_i V_i go to
  * diagnostics.csv, and the conservation check counts them. */
 struct scene_outlet {
     int enabled;  /* on | off; default off */

@@ -13,21 +13,7 @@
 
 
 /* the names of the enumerated keys (the guarded head of scene_keys.h), rows ignored */
-#define ENTRY(name, st, title)
-#define END_ENTRY(name, st)
-#define SECTION(sec, m, st)
-#define END_SECTION(m)
-#define KF(sec, m, st, k, req, def, lo, hi, open, when, doc)
-#define KE(sec, m, st, k, strs, def, doc)
-#define KU(sec, m, st, k, def, doc)
-#define KS(sec, m, st, k, mn, mx, def, doc)
-#define KV(sec, m, st, k, n, def, doc)
-#define KL(sec, m, st, k, entry, max, doc)
-#define EKF(sec, st, k, doc)
-#define EKE(sec, st, k, strs, doc)
-#define EKU(sec, st, k, doc)
-#define EKS(sec, st, k, mn, mx, doc)
-#define EKV(sec, st, k, n, doc)
+#include "scene_keys_none.h"
 #include "scene_keys.h"
 
 enum { DOC_NUM, DOC_NAME, DOC_UINT, DOC_STRING, DOC_VEC, DOC_LIST };
@@ -43,32 +29,29 @@ struct scene_doc {
     const char *doc;
 };
 static const struct scene_doc scene_docs[] = {
-#undef ENTRY
-#undef SECTION
+#include "scene_keys_none.h"
 #undef KF
-#undef KE
-#undef KU
-#undef KS
-#undef KV
-#undef KL
-#undef EKF
-#undef EKE
-#undef EKU
-#undef EKS
-#undef EKV
-#define ENTRY(name, st, title)
-#define SECTION(sec, m, st)
 #define KF(sec, m, st, k, req, def, lo, hi, open, when, doc) \
     {sec, #k, DOC_NUM, NULL, 0, (req) == REQ, def, lo, hi, open, when, doc},
+#undef KE
 #define KE(sec, m, st, k, strs, def, doc) {sec, #k, DOC_NAME, strs, CYAML_ARRAY_LEN(strs), 0, def, 0, 0, 0, NO_RANGE, doc},
+#undef KU
 #define KU(sec, m, st, k, def, doc) {sec, #k, DOC_UINT, NULL, 0, 0, def, 0, 0, 0, NO_RANGE, doc},
+#undef KS
 #define KS(sec, m, st, k, mn, mx, def, doc) {sec, #k, DOC_STRING, NULL, 0, 0, def, 0, 0, 0, NO_RANGE, doc},
+#undef KV
 #define KV(sec, m, st, k, n, def, doc) {sec, #k, DOC_VEC, NULL, n, 0, def, 0, 0, 0, NO_RANGE, doc},
+#undef KL
 #define KL(sec, m, st, k, entry, max, doc) {sec, #k, DOC_LIST, NULL, max, 0, NULL, 0, 0, 0, NO_RANGE, doc},
+#undef EKF
 #define EKF(sec, st, k, doc) {sec ":K", #k, DOC_NUM, NULL, 0, 0, NULL, 0, 0, 0, NO_RANGE, doc},
+#undef EKE
 #define EKE(sec, st, k, strs, doc) {sec ":K", #k, DOC_NAME, strs, CYAML_ARRAY_LEN(strs), 0, NULL, 0, 0, 0, NO_RANGE, doc},
+#undef EKU
 #define EKU(sec, st, k, doc) {sec ":K", #k, DOC_UINT, NULL, 0, 0, NULL, 0, 0, 0, NO_RANGE, doc},
+#undef EKS
 #define EKS(sec, st, k, mn, mx, doc) {sec ":K", #k, DOC_STRING, NULL, 0, 0, NULL, 0, 0, 0, NO_RANGE, doc},
+#undef EKV
 #define EKV(sec, st, k, n, doc) {sec ":K", #k, DOC_VEC, NULL, n, 0, NULL, 0, 0, 0, NO_RANGE, doc},
 #include "scene_keys.h"
 };

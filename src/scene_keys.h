@@ -1,5 +1,6 @@
 /* scene_keys.h — every key of the scene file, declared once (no include
- * guard: src/scene.c includes it once per use, defining the row macros):
+ * guard: src/scene.c and src/scene_doc.c include it once per use, after
+ * src/scene_keys_none.h, defining the row macros they read):
  * the libcyaml schema, the defaults, the ranges of the numbers, the
  * documentation (sphseg --keys, docs/keys.md) and so the echo
  * (used_params.yml) all come from these rows.
@@ -12,7 +13,7 @@
  *   KS(..., key, min, max, default, doc)  a string           KV(..., key, n, default, doc)  n numbers
  *   KL(..., key, entry, max, doc)  a list of mappings, each entry's keys in ENTRY(entry, struct,
  *      Name) ... END_ENTRY(entry, struct), rows EKF, EKE, EKU, EKS, EKV (no default: zero, and no
- *      range: the checks of scene.c check_container)
+ *      range: the checks of scene_check.c check_wall and check_region)
  * A default is YAML text, NULL for a required key or one without a default.
  * A new key is one row here and its member in struct scene (scene.h). */
 #ifndef SPHSEG_SCENE_KEYS_NAMES /* once per translation unit: the names of the enumerated keys */

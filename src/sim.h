@@ -1,6 +1,6 @@
 /* sim.h — the state of one run and the backend seam. A backend owns where
  * the particle arrays live and runs the per-step stages; the driver
- * (src/main.c) and time integration (src/integrate.c) call it only through
+ * (src/main.c, src/run.c) and time integration (src/integrate.c) call it only through
  * struct backend. The CPU backend (src/backend_cpu.c) runs OpenMP loops over
  * the shared bodies of src/physics/; the CUDA backend (gpu/) plugs in here. */
 #ifndef SPHSEG_SIM_H

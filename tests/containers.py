@@ -88,20 +88,37 @@ def row_profile(s, dr):
             max(np.ptp(u[row == k]) for k in rows))
 
 
+def sphseg_work_args():
+    """The command line every validation takes: --sphseg BIN (the binary
+    under test) and --work DIR (where its runs write)."""
+    import argparse
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sphseg", required=True)
+    ap.add_argument("--work", required=True)
+    return ap.parse_args()
+
+
+def run_scene(sphseg, scene, out, over, extra=()):
+    """sphseg SCENE -o out with the -P overrides over (and extra arguments);
+    exits the script with FAIL and the run's last output when sphseg fails.
+    Returns its stdout."""
+    import subprocess
+    import sys
+    cmd = [sphseg, scene, "-o", out] + sum([["-P", o] for o in over], []) + list(extra)
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        print(r.stdout[-2000:], r.stderr[-2000:])
+        sys.exit("FAIL: sphseg exited with %d" % r.returncode)
+    return r.stdout
+
+
 def run_column(sphseg, out, over, extra=(), backend=None):
     """sphseg inputs/column_2d.yml -o out with the overrides over (and
     extra arguments, --backend when given); exits the script with FAIL and
     the run's last output when sphseg fails. Returns its stdout."""
     import os
-    import subprocess
-    import sys
     scene = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "inputs", "column_2d.yml")
-    cmd = [sphseg, scene, "-o", out] + (["--backend", backend] if backend else [])
-    r = subprocess.run(cmd + sum([["-P", o] for o in over], []) + list(extra), capture_output=True, text=True)
-    if r.returncode != 0:
-        print(r.stdout[-2000:], r.stderr[-2000:])
-        sys.exit("FAIL: sphseg exited with %d" % r.returncode)
-    return r.stdout
+    return run_scene(sphseg, scene, out, over, (["--backend", backend] if backend else []) + list(extra))
 
 
 def pick_cases(ap, cases, names):

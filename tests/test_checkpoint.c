@@ -136,41 +136,67 @@ static void load_scene(struct scene *sc)
     assert_int_equal(scene_parse(sc, path, 0, NULL, err, sizeof err), 0);
 }
 
+/* The fixture of each test (cmocka setup and teardown): the scene, its
+ * text as a checkpoint stores it, and two runs of it, a to write and b to
+ * read back, freed after the test whether it passed or not. */
+typedef struct ckpt_fx {
+    struct scene sc;
+    char *text;
+    sim_t a, b;
+} ckpt_fx;
+
+static int fx_setup(void **state)
+{
+    ckpt_fx *f = calloc(1, sizeof *f);
+    *state = f;
+    if (!f) return -1;
+    load_scene(&f->sc);
+    f->a.sc = f->b.sc = &f->sc;
+    f->a.flow.w.n = f->b.flow.w.n = NWALLS;
+    f->text = scene_used_text(&f->sc);
+    return 0;
+}
+
+static int fx_teardown(void **state)
+{
+    ckpt_fx *f = *state;
+    part_free(&f->a.p);
+    part_free(&f->b.p);
+    free(f->text);
+    scene_free(&f->sc);
+    free(f);
+    return 0;
+}
+
 static void test_round_trip(void **state)
 {
-    (void)state;
-    struct scene sc;
-    load_scene(&sc);
-    sim_t a = {0}, b = {0};
-    a.sc = b.sc = &sc;
-    a.flow.w.n = b.flow.w.n = NWALLS;
+    ckpt_fx *f = *state;
     size_t n = 50 + 13 * (size_t)g_rank; /* unequal blocks */
-    fill_store(&a.p, n);
-    a.t = 1.2345678901234567, a.step = 4242, a.dt = 3.3e-5, a.amax = 98.765;
+    fill_store(&f->a.p, n);
+    f->a.t = 1.2345678901234567, f->a.step = 4242, f->a.dt = 3.3e-5, f->a.amax = 98.765;
     double times[3] = {0, 0.5, 1.0};
     long long npart[3] = {100, 101, 102};
     ckpt_run ra = {.small0 = 1.5e-3, .max_drift = 2.5e-15, .warned = 1, .nsnap = 3, .times = times, .npart = npart};
     ckpt_run rb = {0};
-    char *text = scene_used_text(&sc);
-    ckpt_write(g_dir, &a, &ra, text);
-    a.step = 4243;
-    ckpt_write(g_dir, &a, &ra, text); /* the first becomes checkpoint_prev.h5 */
+    ckpt_write(g_dir, &f->a, &ra, f->text);
+    f->a.step = 4243;
+    ckpt_write(g_dir, &f->a, &ra, f->text); /* the first becomes checkpoint_prev.h5 */
     char prev[128], cur[128];
     snprintf(prev, sizeof prev, "%s/checkpoint_prev.h5", g_dir);
     snprintf(cur, sizeof cur, "%s/checkpoint.h5", g_dir);
     assert_int_equal(access(prev, R_OK), 0);
 
     char chosen[256];
-    ckpt_read(cur, &b, &rb, chosen, sizeof chosen);
-    assert_int_equal(b.p.n, n);
+    ckpt_read(cur, &f->b, &rb, chosen, sizeof chosen);
+    assert_int_equal(f->b.p.n, n);
     for (size_t k = 0; k < part_narrays(); ++k)
-        assert_memory_equal(part_array_get(&b.p, k), part_array_get(&a.p, k), n * part_array_esize(k));
-    assert_memory_equal(&b.t, &a.t, sizeof a.t);
-    assert_memory_equal(&b.dt, &a.dt, sizeof a.dt);
-    assert_memory_equal(&b.amax, &a.amax, sizeof a.amax);
-    assert_int_equal(b.step, 4243);
+        assert_memory_equal(part_array_get(&f->b.p, k), part_array_get(&f->a.p, k), n * part_array_esize(k));
+    assert_memory_equal(&f->b.t, &f->a.t, sizeof f->a.t);
+    assert_memory_equal(&f->b.dt, &f->a.dt, sizeof f->a.dt);
+    assert_memory_equal(&f->b.amax, &f->a.amax, sizeof f->a.amax);
+    assert_int_equal(f->b.step, 4243);
     /* kind 1 (dummy) at i % 3 == 0; n_material counts all ranks */
-    assert_int_equal(b.n_material, comm_sum_ll((long long)(n - (n + 2) / 3)));
+    assert_int_equal(f->b.n_material, comm_sum_ll((long long)(n - (n + 2) / 3)));
     assert_memory_equal(&rb.small0, &ra.small0, sizeof ra.small0);
     assert_memory_equal(&rb.max_drift, &ra.max_drift, sizeof ra.max_drift);
     assert_int_equal(rb.warned, 1);
@@ -180,13 +206,13 @@ static void test_round_trip(void **state)
 
     sim_t c = {0};
     ckpt_run rc = {0};
-    c.sc = &sc;
+    c.sc = &f->sc;
     c.flow.w.n = NWALLS;
     ckpt_read(prev, &c, &rc, chosen, sizeof chosen);
     assert_int_equal(c.step, 4242);
     sim_t e = {0}; /* the directory: its newest valid checkpoint */
     ckpt_run re = {0};
-    e.sc = &sc;
+    e.sc = &f->sc;
     e.flow.w.n = NWALLS;
     ckpt_read(g_dir, &e, &re, chosen, sizeof chosen);
     assert_int_equal(e.step, 4243);
@@ -195,11 +221,7 @@ static void test_round_trip(void **state)
     part_free(&e.p);
     ckpt_run_free(&rb);
     ckpt_run_free(&rc);
-    part_free(&a.p);
-    part_free(&b.p);
     part_free(&c.p);
-    free(text);
-    scene_free(&sc);
 }
 
 /* Rank 0 xors byte k of path with x (then all ranks meet). */
@@ -224,17 +246,12 @@ static void xor_byte(const char *path, long k, unsigned char x)
  * waits for a writer. */
 static void test_seal_bits(void **state)
 {
-    (void)state;
-    struct scene sc;
-    load_scene(&sc);
-    sim_t a = {0};
-    a.sc = &sc;
-    a.flow.w.n = NWALLS;
-    fill_store(&a.p, 5 + (size_t)g_rank);
-    a.t = 0.75, a.step = 10;
+    ckpt_fx *f = *state;
+    fill_store(&f->a.p, 5 + (size_t)g_rank);
+    f->a.t = 0.75, f->a.step = 10;
     ckpt_run ra = {0};
-    char *text = scene_used_text(&sc), path[128], why[600], fifo[128];
-    ckpt_write(g_dir, &a, &ra, text);
+    char path[128], why[600], fifo[128];
+    ckpt_write(g_dir, &f->a, &ra, f->text);
     snprintf(path, sizeof path, "%s/checkpoint.h5", g_dir);
     ckpt_seal seal;
     assert_int_equal(ckpt_verify(path, &seal, why, sizeof why), 0);
@@ -263,9 +280,6 @@ static void test_seal_bits(void **state)
     assert_int_equal(ckpt_verify(fifo, &seal, why, sizeof why), 1);
     assert_string_equal(why, "not a regular file");
     if (g_rank == 0) unlink(fifo);
-    part_free(&a.p);
-    free(text);
-    scene_free(&sc);
 }
 
 /* Rank 0 sets the Header attribute NumRanks of path to nranks, gives
@@ -304,41 +318,32 @@ static void set_nranks(const char *path, long long nranks)
 
 static void test_other_rank_count(void **state)
 {
-    (void)state;
-    struct scene sc;
-    load_scene(&sc);
-    sim_t a = {0}, b = {0};
-    a.sc = b.sc = &sc;
-    a.flow.w.n = b.flow.w.n = NWALLS;
-    fill_store(&a.p, 20 + 7 * (size_t)g_rank);
+    ckpt_fx *f = *state;
+    fill_store(&f->a.p, 20 + 7 * (size_t)g_rank);
     ckpt_run ra = {0}, rb = {0};
-    char *text = scene_used_text(&sc), path[128];
-    ckpt_write(g_dir, &a, &ra, text);
+    char path[128];
+    ckpt_write(g_dir, &f->a, &ra, f->text);
     snprintf(path, sizeof path, "%s/checkpoint.h5", g_dir);
     set_nranks(path, g_size + 1);
     char chosen[256];
-    ckpt_read(path, &b, &rb, chosen, sizeof chosen);
+    ckpt_read(path, &f->b, &rb, chosen, sizeof chosen);
     long long ntot = 0, share = 0;
     for (int r = 0; r < g_size; ++r) ntot += 20 + 7 * r;
     long long q = ntot / g_size, rem = ntot % g_size, first = g_rank * q + (g_rank < rem ? g_rank : rem);
     share = q + (g_rank < rem);
-    assert_int_equal(b.p.n, share);
+    assert_int_equal(f->b.p.n, share);
     for (long long j = 0; j < share; ++j) { /* global row first + j: which rank wrote it, where */
         long long row = first + j;
         int r = 0;
         while (row >= 20 + 7 * r) row -= 20 + 7 * r++;
         for (size_t k = 0; k < part_narrays(); ++k) {
             size_t es = part_array_esize(k);
-            const uint8_t *got = (const uint8_t *)part_array_get(&b.p, k) + (size_t)j * es;
-            if (is_checked(&b.p, k)) continue; /* set apart by fill_store */
+            const uint8_t *got = (const uint8_t *)part_array_get(&f->b.p, k) + (size_t)j * es;
+            if (is_checked(&f->b.p, k)) continue; /* set apart by fill_store */
             for (size_t by = 0; by < es; ++by) assert_int_equal(got[by], ref_byte(k, r, (size_t)row, by));
         }
     }
     ckpt_run_free(&rb);
-    part_free(&a.p);
-    part_free(&b.p);
-    free(text);
-    scene_free(&sc);
 }
 
 int main(int argc, char **argv)
@@ -351,9 +356,9 @@ int main(int argc, char **argv)
         if (!mkdtemp(g_dir)) MPI_Abort(MPI_COMM_WORLD, 1);
     }
     MPI_Bcast(g_dir, sizeof g_dir, MPI_CHAR, 0, MPI_COMM_WORLD);
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_round_trip),
-                                       cmocka_unit_test(test_other_rank_count),
-                                       cmocka_unit_test(test_seal_bits)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test_setup_teardown(test_round_trip, fx_setup, fx_teardown),
+                                       cmocka_unit_test_setup_teardown(test_other_rank_count, fx_setup, fx_teardown),
+                                       cmocka_unit_test_setup_teardown(test_seal_bits, fx_setup, fx_teardown)};
     int failed = cmocka_run_group_tests(tests, NULL, NULL), any = 0;
     MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     if (!any && g_rank == 0) {

@@ -11,9 +11,7 @@
 #    that are there.
 set -u
 bin=${1:?usage: test_extremes.sh build/sphseg}
-tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-fail=0
-check() { if eval "$2"; then echo "PASS $1"; else echo "FAIL $1"; fail=1; return 1; fi; }
+. "$(dirname "$0")/testlib.sh" # $tmp (removed at exit), $fail, check NAME CONDITION
 export OMP_NUM_THREADS=1
 one_line_2() { # name, expected words, command...: exit 2, one line, under 10 s
     local name=$1 words=$2; shift 2

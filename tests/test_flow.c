@@ -44,6 +44,7 @@
  *    or either end wall, and no other. */
 #include "physics/flow.h"
 #include "physics/step.h"
+#include <stdlib.h>
 #include <string.h>
 #include "testutil.h"
 
@@ -117,83 +118,83 @@ static flow_ctx make_ctx(void)
     return c;
 }
 
+/* The fixture's particles: an n x n block with nl dummy layers at the base
+ * and the sides; returns the flow context (make_ctx). */
+static flow_ctx fx_block(tu_fx *f, int n, int nl)
+{
+    tu_block2d(&f->p, n, n, DR, nl, nl);
+    return make_ctx();
+}
+
+/* The cell list of the fixture's particles (cells of 2h). */
+static void fx_list(tu_fx *f, const flow_ctx *c) { tu_fx_list(f, c->k.h); }
+
 /* Interior particle of an n x n block: the one nearest the centre. */
 static size_t centre(const particles_t *p, int n)
 {
     return tu_find(p, (int64_t)((n / 2) * n + n / 2));
 }
 
+/* The cell list, then the flow rates of the centre particle of the n x n
+ * block; returns its index. */
+static size_t fx_rates_centre(tu_fx *f, const flow_ctx *c, int n)
+{
+    fx_list(f, c);
+    size_t i = centre(&f->p, n);
+    flow_rates(i, &f->p, &f->g.view, c);
+    return i;
+}
+
 static void test_uniform_stress(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
-    flow_ctx c = make_ctx();
+    tu_fx *f = *st;
     int n = 12;
-    tu_block2d(&p, n, n, DR, 0, 0);
+    flow_ctx c = fx_block(f, n, 0);
     real s0[6] = {-3000, -5000, -2400, 700, 0, 0};
-    for (size_t i = 0; i < p.n; ++i)
-        for (int q = 0; q < 6; ++q) p.sig[q][i] = s0[q];
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-    size_t i = centre(&p, n);
-    flow_rates(i, &p, &g.view, &c);
+    for (size_t i = 0; i < f->p.n; ++i)
+        for (int q = 0; q < 6; ++q) f->p.sig[q][i] = s0[q];
+    size_t i = fx_rates_centre(f, &c, n);
     double scale = 5000 / (c.rho * DR); /* one term's size */
-    assert_true(fabs(p.acc[0][i]) < RT(1e-10) * scale);
-    assert_true(fabs(p.acc[1][i] - c.g[1]) < RT(1e-10) * scale);
-    assert_true(p.gdot[i] == 0);
-    nbr_free(&g);
-    part_free(&p);
+    assert_true(fabs(f->p.acc[0][i]) < RT(1e-10) * scale);
+    assert_true(fabs(f->p.acc[1][i] - c.g[1]) < RT(1e-10) * scale);
+    assert_true(f->p.gdot[i] == 0);
 }
 
 static void test_linear_velocity(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
-    flow_ctx c = make_ctx();
+    tu_fx *f = *st;
     int n = 12;
-    tu_block2d(&p, n, n, DR, 0, 0);
+    flow_ctx c = fx_block(f, n, 0);
     const double A[2][2] = {{0.3, 2.0}, {-0.5, -0.1}}; /* du_a/dx_b, 1/s */
-    for (size_t k = 0; k < p.n; ++k)
-        for (int a = 0; a < 2; ++a) p.v[a][k] = (real)(A[a][0] * p.x[0][k] + A[a][1] * p.x[1][k]);
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-    size_t i = centre(&p, n);
-    flow_rates(i, &p, &g.view, &c);
+    for (size_t k = 0; k < f->p.n; ++k)
+        for (int a = 0; a < 2; ++a) f->p.v[a][k] = (real)(A[a][0] * f->p.x[0][k] + A[a][1] * f->p.x[1][k]);
+    size_t i = fx_rates_centre(f, &c, n);
     real eps[6] = {(real)A[0][0], (real)A[1][1], 0, (real)(0.5 * (A[0][1] + A[1][0])), 0, 0};
     real w[3] = {(real)(0.5 * (A[0][1] - A[1][0])), 0, 0};
     real s0[6] = {0, 0, 0, 0, 0, 0}, ds[6];
     stress_rate_elastic(s0, eps, w, c.m.G, c.m.K, ds);
     double gd = stress_shear_rate(eps);
-    assert_true(fabs(p.gdot[i] - gd) < 0.01 * gd);
+    assert_true(fabs(f->p.gdot[i] - gd) < 0.01 * gd);
     double dmax = 0;
     for (int q = 0; q < 6; ++q) dmax = fmax(dmax, fabs(ds[q]));
-    for (int q = 0; q < 6; ++q) assert_true(fabs(p.dsig[q][i] - ds[q]) < 0.01 * dmax);
-    nbr_free(&g);
-    part_free(&p);
+    for (int q = 0; q < 6; ++q) assert_true(fabs(f->p.dsig[q][i] - ds[q]) < 0.01 * dmax);
 }
 
 static void test_rigid_rotation(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
-    flow_ctx c = make_ctx();
+    tu_fx *f = *st;
     int n = 12;
-    tu_block2d(&p, n, n, DR, 0, 0);
+    flow_ctx c = fx_block(f, n, 0);
     const double Om = 3.0, s1 = -4000, s2 = -1000; /* rad/s, Pa */
-    for (size_t k = 0; k < p.n; ++k) {
-        p.v[0][k] = (real)(-Om * p.x[1][k]), p.v[1][k] = (real)(Om * p.x[0][k]);
-        p.sig[0][k] = (real)s1, p.sig[1][k] = (real)s2, p.sig[2][k] = (real)s2;
+    for (size_t k = 0; k < f->p.n; ++k) {
+        f->p.v[0][k] = (real)(-Om * f->p.x[1][k]), f->p.v[1][k] = (real)(Om * f->p.x[0][k]);
+        f->p.sig[0][k] = (real)s1, f->p.sig[1][k] = (real)s2, f->p.sig[2][k] = (real)s2;
     }
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-    size_t i = centre(&p, n);
-    flow_rates(i, &p, &g.view, &c);
+    size_t i = fx_rates_centre(f, &c, n);
     double rate = Om * (s1 - s2);
-    assert_true(fabs(p.gdot[i]) < RT(1e-9) * Om);
-    assert_true(fabs(p.dsig[3][i] - rate) < 0.01 * fabs(rate));
-    assert_true(fabs(p.dsig[0][i]) < RT(1e-9) * fabs(rate) && fabs(p.dsig[1][i]) < RT(1e-9) * fabs(rate));
-    nbr_free(&g);
-    part_free(&p);
+    assert_true(fabs(f->p.gdot[i]) < RT(1e-9) * Om);
+    assert_true(fabs(f->p.dsig[3][i] - rate) < 0.01 * fabs(rate));
+    assert_true(fabs(f->p.dsig[0][i]) < RT(1e-9) * fabs(rate) && fabs(f->p.dsig[1][i]) < RT(1e-9) * fabs(rate));
 }
 
 /* Deterministic pseudo-random numbers in [-1, 1). */
@@ -220,72 +221,56 @@ static void scramble(particles_t *p, unsigned seed)
 
 static void test_momentum_conservation(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
-    flow_ctx c = make_ctx();
-    c.g[1] = 0;
+    tu_fx *f = *st;
     int n = 10;
-    tu_block2d(&p, n, n, DR, 0, 0);
-    scramble(&p, 7);
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    flow_ctx c = fx_block(f, n, 0);
+    c.g[1] = 0;
+    scramble(&f->p, 7);
+    fx_list(f, &c);
     double sum[2] = {0, 0}, mag = 0;
-    for (size_t k = 0; k < p.n; ++k) {
-        flow_rates(k, &p, &g.view, &c);
-        for (int a = 0; a < 2; ++a) sum[a] += c.rho * p.vol[k] * p.acc[a][k];
-        mag += c.rho * p.vol[k] * fabs(p.acc[0][k]);
+    for (size_t k = 0; k < f->p.n; ++k) {
+        flow_rates(k, &f->p, &f->g.view, &c);
+        for (int a = 0; a < 2; ++a) sum[a] += c.rho * f->p.vol[k] * f->p.acc[a][k];
+        mag += c.rho * f->p.vol[k] * fabs(f->p.acc[0][k]);
     }
     assert_true(mag > 0);
     assert_true(fabs(sum[0]) < RT(1e-12) * mag && fabs(sum[1]) < RT(1e-12) * mag);
-    nbr_free(&g);
-    part_free(&p);
 }
 
 static void test_shepard_uniform(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
+    tu_fx *f = *st;
     flow_ctx c = make_ctx();
-    tu_block2d(&p, 8, 8, DR, 3, 3);
-    for (size_t k = 0; k < p.n; ++k) {
+    tu_block2d(&f->p, 8, 8, DR, 3, 3);
+    for (size_t k = 0; k < f->p.n; ++k) {
         real s0[6] = {-100, -200, -90, 15, 0, 0};
-        for (int q = 0; q < 6; ++q) p.sig[q][k] = p.kind[k] == KIND_MATERIAL ? s0[q] : 12345;
+        for (int q = 0; q < 6; ++q) f->p.sig[q][k] = f->p.kind[k] == KIND_MATERIAL ? s0[q] : 12345;
     }
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-    for (size_t k = 0; k < p.n; ++k) {
-        if (p.kind[k] != KIND_MATERIAL) continue;
-        flow_shepard(k, &p, &g.view, &c); /* dummies (12345) must not enter */
-        for (int q = 0; q < 6; ++q) assert_true(fabs(p.dsig[q][k] - p.sig[q][k]) < RT(1e-12) * 200);
+    fx_list(f, &c);
+    for (size_t k = 0; k < f->p.n; ++k) {
+        if (f->p.kind[k] != KIND_MATERIAL) continue;
+        flow_shepard(k, &f->p, &f->g.view, &c); /* dummies (12345) must not enter */
+        for (int q = 0; q < 6; ++q) assert_true(fabs(f->p.dsig[q][k] - f->p.sig[q][k]) < RT(1e-12) * 200);
     }
-    nbr_free(&g);
-    part_free(&p);
 }
 
 /* sigma_xx = s1 x, sigma_yy = s2 y, sigma_xy = s3 (x + y): div sigma =
  * (s1 + s3, s3 + s2), Pa/m. */
 static void test_linear_stress(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
-    flow_ctx c = make_ctx();
-    c.g[1] = 0;
+    tu_fx *f = *st;
     int n = 12;
-    tu_block2d(&p, n, n, DR, 0, 0);
+    flow_ctx c = fx_block(f, n, 0);
+    c.g[1] = 0;
     const double s1 = 3e5, s2 = -8e5, s3 = 5e5;
-    for (size_t k = 0; k < p.n; ++k) {
-        double x = p.x[0][k], y = p.x[1][k];
-        p.sig[0][k] = (real)(-2000 + s1 * x), p.sig[1][k] = (real)(-3000 + s2 * y);
-        p.sig[3][k] = (real)(s3 * (x + y)), p.sig[2][k] = -2500;
+    for (size_t k = 0; k < f->p.n; ++k) {
+        double x = f->p.x[0][k], y = f->p.x[1][k];
+        f->p.sig[0][k] = (real)(-2000 + s1 * x), f->p.sig[1][k] = (real)(-3000 + s2 * y);
+        f->p.sig[3][k] = (real)(s3 * (x + y)), f->p.sig[2][k] = -2500;
     }
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-    size_t i = centre(&p, n);
-    flow_rates(i, &p, &g.view, &c);
+    size_t i = fx_rates_centre(f, &c, n);
     double ax = (s1 + s3) / c.rho, ay = (s3 + s2) / c.rho, mag = hypot(ax, ay);
-    assert_true(fabs(p.acc[0][i] - ax) < 0.005 * mag && fabs(p.acc[1][i] - ay) < 0.005 * mag);
-    nbr_free(&g);
-    part_free(&p);
+    assert_true(fabs(f->p.acc[0][i] - ax) < 0.005 * mag && fabs(f->p.acc[1][i] - ay) < 0.005 * mag);
 }
 
 /* Two material particles r = 1.2 dr apart on x, no stress, no gravity: i
@@ -294,49 +279,43 @@ static void test_linear_stress(void **st)
  * F = (1/r) dW/dr; a decelerates i (negative here). Receding: a_i = 0. */
 static void test_viscosity_closed_form(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
+    tu_fx *f = *st;
     flow_ctx c = make_ctx();
     c.g[1] = 0;
     double r = 1.2 * DR, V = DR * DR, h = c.k.h;
-    part_alloc(&p, 2, 2);
-    tu_put(&p, 0, 0, 0, KIND_MATERIAL, V);
-    tu_put(&p, r, 0, 0, KIND_MATERIAL, V);
+    part_alloc(&f->p, 2, 2);
+    tu_put(&f->p, 0, 0, 0, KIND_MATERIAL, V);
+    tu_put(&f->p, r, 0, 0, KIND_MATERIAL, V);
     for (int dir = 1; dir >= -1; dir -= 2) {
-        p.v[0][0] = (real)(0.3 * dir), p.v[0][1] = 0;
-        nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-        size_t i = tu_find(&p, 0);
-        flow_rates(i, &p, &g.view, &c);
+        f->p.v[0][0] = (real)(0.3 * dir), f->p.v[0][1] = 0;
+        fx_list(f, &c);
+        size_t i = tu_find(&f->p, 0);
+        flow_rates(i, &f->p, &f->g.view, &c);
         double ux = 0.3 * dir * -r; /* u_ij.x_ij */
         double Pi = ux < 0 ? c.alpha_av * c.cs * h * ux / (c.rho * (r * r + 0.01 * h * h)) : 0;
         double ax = c.rho * V * Pi * kernel_f((real)r, c.k.h, c.k.alpha) * -r;
-        if (dir > 0) assert_true(ax < 0 && fabs(p.acc[0][i] - ax) < RT(1e-12) * fabs(ax));
-        else assert_true(p.acc[0][i] == 0);
-        assert_true(p.acc[1][i] == 0);
+        if (dir > 0) assert_true(ax < 0 && fabs(f->p.acc[0][i] - ax) < RT(1e-12) * fabs(ax));
+        else assert_true(f->p.acc[0][i] == 0);
+        assert_true(f->p.acc[1][i] == 0);
     }
-    nbr_free(&g);
-    part_free(&p);
 }
 
 /* sigma_yy = -1e4 (H - y) (hydrostatic, Pa) on an 8 x 8 block with walls. */
 static void test_shepard_linear(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
+    tu_fx *f = *st;
     flow_ctx c = make_ctx();
     int n = 8;
     double H = n * DR, gam = 1e4, h = c.k.h;
-    tu_block2d(&p, n, n, DR, 3, 3);
-    for (size_t k = 0; k < p.n; ++k)
+    tu_block2d(&f->p, n, n, DR, 3, 3);
+    for (size_t k = 0; k < f->p.n; ++k)
         for (int q = 0; q < 6; ++q)
-            p.sig[q][k] = (real)(p.kind[k] == KIND_MATERIAL ? (q == 1 ? -gam * (H - p.x[1][k]) : 0) : 12345);
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-    size_t in = tu_find(&p, 4 * n + 4), low = tu_find(&p, 4); /* row 4, and row 0 (on the base) */
-    flow_shepard(in, &p, &g.view, &c);
-    assert_true(fabs(p.dsig[1][in] - p.sig[1][in]) < RT(1e-12) * gam * H);
-    flow_shepard(low, &p, &g.view, &c);
+            f->p.sig[q][k] = (real)(f->p.kind[k] == KIND_MATERIAL ? (q == 1 ? -gam * (H - f->p.x[1][k]) : 0) : 12345);
+    fx_list(f, &c);
+    size_t in = tu_find(&f->p, 4 * n + 4), low = tu_find(&f->p, 4); /* row 4, and row 0 (on the base) */
+    flow_shepard(in, &f->p, &f->g.view, &c);
+    assert_true(fabs(f->p.dsig[1][in] - f->p.sig[1][in]) < RT(1e-12) * gam * H);
+    flow_shepard(low, &f->p, &f->g.view, &c);
     double num = 0, den = 0; /* rows b >= 0 above particle (4, 0): the material */
     for (int a = -3; a <= 3; ++a)
         for (int b = 0; b <= 3; ++b) {
@@ -345,94 +324,84 @@ static void test_shepard_linear(void **st)
             double W = kernel_w((real)rr, c.k.h, c.k.alpha);
             num += W * -gam * (H - (b + 0.5) * DR), den += W;
         }
-    assert_true(fabs(p.dsig[1][low] - num / den) < RT(1e-12) * gam * H);
-    assert_true(fabs(p.dsig[1][low] - p.sig[1][low]) > 0.1 * gam * DR); /* the cut support biases it */
-    nbr_free(&g);
-    part_free(&p);
+    assert_true(fabs(f->p.dsig[1][low] - num / den) < RT(1e-12) * gam * H);
+    assert_true(fabs(f->p.dsig[1][low] - f->p.sig[1][low]) > 0.1 * gam * DR); /* the cut support biases it */
 }
 
 static void test_renorm_fused(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
+    tu_fx *f = *st;
     flow_ctx c = make_ctx();
     seg_ctx sc;
     memset(&sc, 0, sizeof sc);
     sc.k = c.k;
-    tu_block2d(&p, 9, 9, DR, 3, 3);
-    scramble(&p, 11);
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    tu_block2d(&f->p, 9, 9, DR, 3, 3);
+    scramble(&f->p, 11);
+    fx_list(f, &c);
     int nmat = 0, nbent = 0;
-    for (size_t k = 0; k < p.n; ++k) {
-        if (p.kind[k] != KIND_MATERIAL) continue;
-        seg_renorm(k, &p, &g.view, &sc);
+    for (size_t k = 0; k < f->p.n; ++k) {
+        if (f->p.kind[k] != KIND_MATERIAL) continue;
+        seg_renorm(k, &f->p, &f->g.view, &sc);
         real L0[6], acc0[3], ds0[6], gd0;
-        for (int q = 0; q < 6; ++q) L0[q] = p.L[q][k], p.L[q][k] = -7;
-        flow_rates(k, &p, &g.view, &c);
-        for (int q = 0; q < 6; ++q) assert_true(p.L[q][k] == -7); /* renorm off: L untouched */
-        for (int a = 0; a < 3; ++a) acc0[a] = p.acc[a][k];
-        for (int q = 0; q < 6; ++q) ds0[q] = p.dsig[q][k];
-        gd0 = p.gdot[k];
-        flow_rates_team(k, &p, &g.view, &c, 0, 1, 1);
-        for (int q = 0; q < 6; ++q) assert_true(p.L[q][k] == L0[q]);
-        for (int a = 0; a < 3; ++a) assert_true(p.acc[a][k] == acc0[a]);
-        for (int q = 0; q < 6; ++q) assert_true(p.dsig[q][k] == ds0[q]);
-        assert_true(p.gdot[k] == gd0);
+        for (int q = 0; q < 6; ++q) L0[q] = f->p.L[q][k], f->p.L[q][k] = -7;
+        flow_rates(k, &f->p, &f->g.view, &c);
+        for (int q = 0; q < 6; ++q) assert_true(f->p.L[q][k] == -7); /* renorm off: L untouched */
+        for (int a = 0; a < 3; ++a) acc0[a] = f->p.acc[a][k];
+        for (int q = 0; q < 6; ++q) ds0[q] = f->p.dsig[q][k];
+        gd0 = f->p.gdot[k];
+        flow_rates_team(k, &f->p, &f->g.view, &c, 0, 1, 1);
+        for (int q = 0; q < 6; ++q) assert_true(f->p.L[q][k] == L0[q]);
+        for (int a = 0; a < 3; ++a) assert_true(f->p.acc[a][k] == acc0[a]);
+        for (int q = 0; q < 6; ++q) assert_true(f->p.dsig[q][k] == ds0[q]);
+        assert_true(f->p.gdot[k] == gd0);
         nmat++;
         nbent += fabs(L0[0] - 1) > 1e-3; /* the walls cut the support: L is not I */
     }
     assert_true(nmat == 81 && nbent > 0);
-    nbr_free(&g);
-    part_free(&p);
 }
 
 static void test_advance(void **st)
 {
-    (void)st;
-    particles_t p;
+    tu_fx *f = *st;
     flow_ctx c = make_ctx();
-    part_alloc(&p, 2, 2);
-    p.n = 2;
+    part_alloc(&f->p, 2, 2);
+    f->p.n = 2;
     for (size_t i = 0; i < 2; ++i) {
-        p.x_n[0][i] = 1, p.x_n[1][i] = 2;
-        p.v_n[0][i] = 0.5, p.v_n[1][i] = 0;
-        p.v[0][i] = 0.25, p.v[1][i] = -1; /* rate-state velocity */
-        p.acc[0][i] = 0, p.acc[1][i] = -10;
-        p.C[i] = (real)0.5;
-        p.gdot[i] = 2;
+        f->p.x_n[0][i] = 1, f->p.x_n[1][i] = 2;
+        f->p.v_n[0][i] = 0.5, f->p.v_n[1][i] = 0;
+        f->p.v[0][i] = 0.25, f->p.v[1][i] = -1; /* rate-state velocity */
+        f->p.acc[0][i] = 0, f->p.acc[1][i] = -10;
+        f->p.C[i] = (real)0.5;
+        f->p.gdot[i] = 2;
     }
     /* particle 0: compressive trial with a large shear -> on the cone */
     real s0[6] = {-1000, -1000, -1000, 900, 0, 0};
     /* particle 1: tensile trial -> apex */
     real s1[6] = {500, 200, 100, 10, 0, 0};
-    for (int q = 0; q < 6; ++q) p.sig_n[q][0] = s0[q], p.sig_n[q][1] = s1[q], p.dsig[q][0] = p.dsig[q][1] = 0;
+    for (int q = 0; q < 6; ++q) f->p.sig_n[q][0] = s0[q], f->p.sig_n[q][1] = s1[q], f->p.dsig[q][0] = f->p.dsig[q][1] = 0;
     real a = (real)0.01;
-    assert_int_equal(flow_advance(0, &p, a, &c), 1);
-    assert_int_equal(flow_advance(1, &p, a, &c), 2);
-    assert_true(fabs(p.x[0][0] - (1 + 0.01 * 0.25)) < RT(1e-14) && fabs(p.x[1][0] - (2 - 0.01)) < RT(1e-14));
-    assert_true(fabs(p.v[0][0] - 0.5) < RT(1e-14) && fabs(p.v[1][0] + 0.1) < RT(1e-14));
+    assert_int_equal(flow_advance(0, &f->p, a, &c), 1);
+    assert_int_equal(flow_advance(1, &f->p, a, &c), 2);
+    assert_true(fabs(f->p.x[0][0] - (1 + 0.01 * 0.25)) < RT(1e-14) && fabs(f->p.x[1][0] - (2 - 0.01)) < RT(1e-14));
+    assert_true(fabs(f->p.v[0][0] - 0.5) < RT(1e-14) && fabs(f->p.v[1][0] + 0.1) < RT(1e-14));
     real s[6];
-    for (int q = 0; q < 6; ++q) s[q] = p.sig[q][0];
+    for (int q = 0; q < 6; ++q) s[q] = f->p.sig[q][0];
     real pr = stress_pressure(s);
     real mu = stress_mu(&c.m, 2, pr, seg_davg(&c.sp, (real)0.5));
     assert_true(fabs(pr - 1000) < RT(1e-9) * 1000); /* g = sqrt(J2): the pressure stays */
     assert_true(fabs(sqrt(stress_J2(s)) - stress_kmu(mu) * pr) < RT(1e-9) * 1000);
-    for (int q = 0; q < 6; ++q) assert_true(p.sig[q][1] == 0);
+    for (int q = 0; q < 6; ++q) assert_true(f->p.sig[q][1] == 0);
     /* Material:yield mu_I (flow_ctx.yield): the same trial onto sqrt(J2) = mu(I) p */
     c.yield = YIELD_MU_I;
-    assert_int_equal(flow_advance(0, &p, a, &c), 1);
-    for (int q = 0; q < 6; ++q) s[q] = p.sig[q][0];
+    assert_int_equal(flow_advance(0, &f->p, a, &c), 1);
+    for (int q = 0; q < 6; ++q) s[q] = f->p.sig[q][0];
     assert_true(fabs(stress_pressure(s) - 1000) < RT(1e-9) * 1000);
     assert_true(fabs(sqrt(stress_J2(s)) - mu * 1000) < RT(1e-9) * 1000 && mu > stress_kmu(mu) + 0.02);
-    part_free(&p);
 }
 
 static void test_drum_dummy_stress(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
+    tu_fx *f = *st;
     flow_ctx c = make_ctx();
     c.w = drum_walls(0.03, 0, 60); /* a_w = 108 m/s^2 at r = R */
     double xd = 0.0305, yd = 0.0005, P0 = 5000, V = DR * DR;
@@ -440,55 +409,49 @@ static void test_drum_dummy_stress(void **st)
     wall_accel(&c.w, 1, xdv, aw);
     double geff[2] = {c.g[0] - aw[0], c.g[1] - aw[1]};
     assert_true(fabs(aw[0] + 60.0 * 60.0 * xd) < RT(1e-9) * 100); /* centripetal, towards the axis */
-    part_alloc(&p, 2, 64);
-    tu_put(&p, xd, yd, 0, KIND_DUMMY, V);
+    part_alloc(&f->p, 2, 64);
+    tu_put(&f->p, xd, yd, 0, KIND_DUMMY, V);
     for (int i = 0; i < 4; ++i) /* the material on the drum's side of the dummy */
         for (int j = -3; j <= 3; ++j) {
             double x = xd - (i + 1) * DR, y = yd + j * DR;
-            tu_put(&p, x, y, 0, KIND_MATERIAL, V);
-            size_t k = p.n - 1;
-            p.sig[0][k] = (real)(-P0 - c.rho * geff[0] * (x - xd));
-            p.sig[1][k] = (real)(-P0 - c.rho * geff[1] * (y - yd));
-            p.sig[2][k] = (real)-P0;
+            tu_put(&f->p, x, y, 0, KIND_MATERIAL, V);
+            size_t k = f->p.n - 1;
+            f->p.sig[0][k] = (real)(-P0 - c.rho * geff[0] * (x - xd));
+            f->p.sig[1][k] = (real)(-P0 - c.rho * geff[1] * (y - yd));
+            f->p.sig[2][k] = (real)-P0;
         }
-    assign_walls(&p, &c.w);
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-    size_t d = tu_find(&p, 0);
-    flow_wall(d, &p, &g.view, &c);
-    for (int a = 0; a < 3; ++a) assert_true(fabs(p.sig[a][d] + P0) < RT(1e-10) * P0);
-    nbr_free(&g);
-    part_free(&p);
+    assign_walls(&f->p, &c.w);
+    fx_list(f, &c);
+    size_t d = tu_find(&f->p, 0);
+    flow_wall(d, &f->p, &f->g.view, &c);
+    for (int a = 0; a < 3; ++a) assert_true(fabs(f->p.sig[a][d] + P0) < RT(1e-10) * P0);
 }
 
 static void test_dummy_above_surface(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
+    tu_fx *f = *st;
     flow_ctx c = make_ctx(); /* g = -9.81 y */
     int n = 8;
     double H = n * DR, rg = c.rho * 9.81;
-    tu_block2d(&p, n, n, DR, 3, 3); /* side walls reach 3 rows above the material */
+    tu_block2d(&f->p, n, n, DR, 3, 3); /* side walls reach 3 rows above the material */
     c.w = box_walls(n * DR);
-    assign_walls(&p, &c.w);
-    for (size_t k = 0; k < p.n; ++k)
-        p.sig[1][k] = (real)(p.kind[k] == KIND_MATERIAL ? -rg * (H - p.x[1][k]) : 0);
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    assign_walls(&f->p, &c.w);
+    for (size_t k = 0; k < f->p.n; ++k)
+        f->p.sig[1][k] = (real)(f->p.kind[k] == KIND_MATERIAL ? -rg * (H - f->p.x[1][k]) : 0);
+    fx_list(f, &c);
     int mid = 0, above = 0;
-    for (size_t d = 0; d < p.n; ++d) {
-        double x = p.x[0][d], y = p.x[1][d];
-        if (p.kind[d] != KIND_DUMMY || x > 0 || x < -DR) continue; /* the left wall's first layer */
-        flow_wall(d, &p, &g.view, &c);
+    for (size_t d = 0; d < f->p.n; ++d) {
+        double x = f->p.x[0][d], y = f->p.x[1][d];
+        if (f->p.kind[d] != KIND_DUMMY || x > 0 || x < -DR) continue; /* the left wall's first layer */
+        flow_wall(d, &f->p, &f->g.view, &c);
         if (fabs(y - 4.5 * DR) < 0.1 * DR) /* mid-height: the column's stress */
-            mid++, assert_true(fabs(p.sig[1][d] + rg * (H - y)) < 1e-9 * rg * H);
+            mid++, assert_true(fabs(f->p.sig[1][d] + rg * (H - y)) < 1e-9 * rg * H);
         if (y > H + DR) { /* 1.5 dr above the surface, material in reach */
             above++;
-            for (int q = 0; q < 6; ++q) assert_true(p.sig[q][d] == 0);
+            for (int q = 0; q < 6; ++q) assert_true(f->p.sig[q][d] == 0);
         }
     }
     assert_true(mid == 1 && above == 2);
-    nbr_free(&g);
-    part_free(&p);
 }
 
 static void test_drum_wall_motion(void **st)
@@ -569,13 +532,13 @@ static void test_drum3d_walls(void **st)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_uniform_stress),        cmocka_unit_test(test_linear_velocity),
-        cmocka_unit_test(test_rigid_rotation),
-        cmocka_unit_test(test_momentum_conservation), cmocka_unit_test(test_shepard_uniform),
-        cmocka_unit_test(test_renorm_fused),          cmocka_unit_test(test_linear_stress),
-        cmocka_unit_test(test_viscosity_closed_form), cmocka_unit_test(test_shepard_linear),
-        cmocka_unit_test(test_advance),               cmocka_unit_test(test_drum_dummy_stress),
-        cmocka_unit_test(test_dummy_above_surface),   cmocka_unit_test(test_drum_wall_motion),
+        TU_FX_TEST(test_uniform_stress),        TU_FX_TEST(test_linear_velocity),
+        TU_FX_TEST(test_rigid_rotation),
+        TU_FX_TEST(test_momentum_conservation), TU_FX_TEST(test_shepard_uniform),
+        TU_FX_TEST(test_renorm_fused),          TU_FX_TEST(test_linear_stress),
+        TU_FX_TEST(test_viscosity_closed_form), TU_FX_TEST(test_shepard_linear),
+        TU_FX_TEST(test_advance),               TU_FX_TEST(test_drum_dummy_stress),
+        TU_FX_TEST(test_dummy_above_surface),   cmocka_unit_test(test_drum_wall_motion),
         cmocka_unit_test(test_box_translation),       cmocka_unit_test(test_drum3d_walls),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -6,9 +6,7 @@
 set -u
 bin=${1:?usage: $0 BINARY}
 here=$(cd "$(dirname "$0")" && pwd)
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail=0
+. "$(dirname "$0")/testlib.sh" # $tmp (removed at exit), $fail, check NAME CONDITION
 for scene in "$here"/../inputs/*.yml; do
     name=$(basename "$scene" .yml)
     # the 3D drum at its default resolution holds 1.7e5 particles: coarser here

@@ -16,9 +16,7 @@
 set -u
 bin=${1:?usage: test_jobs.sh build/sphseg}
 PY=${PYTHON:-/usr/bin/python3}
-tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-fail=0
-check() { if eval "$2"; then echo "PASS $1"; else echo "FAIL $1"; fail=1; return 1; fi; }
+. "$(dirname "$0")/testlib.sh" # $tmp (removed at exit), $fail, check NAME CONDITION
 unset "${!SLURM_@}" # the no-SLURM mode, even inside a job
 
 for s in jobs/*.sbatch jobs/*.sh; do check "bash -n $s" "bash -n '$s'"; done

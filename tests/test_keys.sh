@@ -6,9 +6,7 @@
 set -u
 bin=${1:?usage: $0 BINARY}
 root=$(cd "$(dirname "$0")/.." && pwd)
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail=0
+. "$(dirname "$0")/testlib.sh" # $tmp (removed at exit), $fail, check NAME CONDITION
 "$bin" --keys > "$tmp/keys.md" || { echo "FAIL --keys exited with $?"; exit 1; }
 if diff -q "$tmp/keys.md" "$root/docs/keys.md" > /dev/null; then
     echo "PASS docs/keys.md is what sphseg --keys writes"

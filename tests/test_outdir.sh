@@ -16,9 +16,7 @@
 #    when checkpoint.h5 is damaged; both damaged: exit 2 naming both.
 set -u
 bin=${1:?usage: test_outdir.sh build/sphseg}
-tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-fail=0
-check() { if eval "$2"; then echo "PASS $1"; else echo "FAIL $1"; fail=1; return 1; fi; }
+. "$(dirname "$0")/testlib.sh" # $tmp (removed at exit), $fail, check NAME CONDITION
 export OMP_NUM_THREADS=1
 scene=inputs/shearbox_2d.yml
 short=(-P Run:t_end=3 -P Output:dt=1 -P Output:checkpoint_dt=1)

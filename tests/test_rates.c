@@ -49,6 +49,23 @@ static void coeffs(fixture *f)
     for (size_t i = 0; i < f->p.n; ++i) seg_coeffs(i, &f->p, &f->c);
 }
 
+/* The conservative scheme with variable coefficients (2.7: V and D from
+ * each particle's own shear rate, random in [0, 20) 1/s) and
+ * renormalisation on; C random in [0, 1], or with fronts: 0 where the
+ * random draw is below 0.3, 1 above 0.7. The coefficients computed. */
+static void setup_variable(fixture *f, unsigned seed, int fronts)
+{
+    setup_fixture(f, 2, 0, 0);
+    f->c.sp.shear_model = 1, f->c.sp.chi_V = (real)0.3, f->c.sp.chi_D = (real)0.05, f->c.renorm = 1;
+    srand(seed);
+    for (size_t i = 0; i < f->p.n; ++i) {
+        double u = rand() / (double)RAND_MAX;
+        f->p.C[i] = (real)(fronts && u < 0.3 ? 0.0 : fronts && u > 0.7 ? 1.0 : u);
+        f->p.gdot[i] = (real)(20.0 * rand() / (double)RAND_MAX);
+    }
+    coeffs(f);
+}
+
 static double rate(const fixture *f, size_t i)
 {
     seg_rate r = f->c.scheme == 2 ? seg_rate_conservative(i, &f->p, &f->g.view, &f->c, 0, 1)
@@ -166,14 +183,7 @@ static void test_conservative_sum_variable(void **st)
 {
     (void)st;
     fixture f;
-    setup_fixture(&f, 2, 0, 0);
-    f.c.sp.shear_model = 1, f.c.sp.chi_V = (real)0.3, f.c.sp.chi_D = (real)0.05, f.c.renorm = 1;
-    srand(5);
-    for (size_t i = 0; i < f.p.n; ++i) {
-        f.p.C[i] = (real)(rand() / (double)RAND_MAX);
-        f.p.gdot[i] = (real)(20.0 * rand() / (double)RAND_MAX);
-    }
-    coeffs(&f);
+    setup_variable(&f, 5, 0);
     int bent = 0;
     for (size_t i = 0; i < f.p.n; ++i)
         if (f.p.kind[i] == KIND_MATERIAL) {
@@ -334,15 +344,7 @@ static void test_donor_sum_variable(void **st)
 {
     (void)st;
     fixture f;
-    setup_fixture(&f, 2, 0, 0);
-    f.c.sp.shear_model = 1, f.c.sp.chi_V = (real)0.3, f.c.sp.chi_D = (real)0.05, f.c.renorm = 1;
-    srand(7);
-    for (size_t i = 0; i < f.p.n; ++i) {
-        double u = rand() / (double)RAND_MAX;
-        f.p.C[i] = (real)(u < 0.3 ? 0.0 : u > 0.7 ? 1.0 : u);
-        f.p.gdot[i] = (real)(20.0 * rand() / (double)RAND_MAX);
-    }
-    coeffs(&f);
+    setup_variable(&f, 7, 1);
     for (size_t i = 0; i < f.p.n; ++i)
         if (f.p.kind[i] == KIND_MATERIAL) seg_renorm(i, &f.p, &f.g.view, &f.c);
     double sum = 0, mag = 0;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The warnings for flow settings outside the measured range (src/main.c,
-# flow_warn_settings; docs/gpu.md "Stiffness, artificial viscosity and CFL"):
+# The warnings for flow settings outside the measured range (src/settings_check.c,
+# settings_warn_drum; docs/gpu.md "Stiffness, artificial viscosity and CFL"):
 # alpha_av sqrt(E) more than 2x off Table 1's (0.1 at 10 MPa), and
 # Run:cfl_flow > 0.2, and E below the softest measured accurate (10 kPa). Each probe is a 1-step CPU drum; the warning must be
 # there when the setting is off and absent when it is in range.

@@ -6,7 +6,9 @@
 #include <stddef.h>
 #include <setjmp.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <cmocka.h>
+#include "bound.h"
 #include "nbr.h"
 #include "core/particles.h"
 
@@ -59,5 +61,38 @@ static inline size_t tu_find(const particles_t *p, int64_t id)
     fail_msg("no particle with id %lld", (long long)id);
     return 0;
 }
+
+/* The fixture of a test on a particle set (cmocka_unit_test_setup_teardown
+ * with tu_fx_setup, tu_fx_teardown; the test reads it as *state): the
+ * store, its cell list and the boundary classification's work arrays, all
+ * empty before the test and freed after it, whether it passed or not. */
+typedef struct tu_fx {
+    particles_t p;
+    nbr_grid g;
+    bound_work w;
+} tu_fx;
+
+static inline int tu_fx_setup(void **state)
+{
+    tu_fx *f = calloc(1, sizeof *f);
+    *state = f;
+    return f ? 0 : -1;
+}
+
+static inline int tu_fx_teardown(void **state)
+{
+    tu_fx *f = *state;
+    bound_free(&f->w);
+    nbr_free(&f->g);
+    part_free(&f->p);
+    free(f);
+    return 0;
+}
+
+/* The fixture's cell list: cells of edge 2h. */
+static inline void tu_fx_list(tu_fx *f, real h) { nbr_build(&f->g, &f->p, R(2.0) * h, NULL); }
+
+/* A cmocka test entry with the fixture. */
+#define TU_FX_TEST(t) cmocka_unit_test_setup_teardown(t, tu_fx_setup, tu_fx_teardown)
 
 #endif

@@ -29,7 +29,6 @@ sum C_i V_i recomputed from the snapshots (snap.conservation) <= 1e-12 in
 the double build, 1e-5 in the single one (docs/shearbox.md: 2e-15 and
 < 1e-6 measured), the diagnostics' column equal to the snapshots' sums.
 """
-import argparse
 import os
 import subprocess
 import sys
@@ -41,6 +40,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import snap  # noqa: E402
 import study  # noqa: E402
 from drum_invariants import Checks, diagnostics_columns  # noqa: E402
+from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 LO, HI = -1e-3, 1 + 1e-3
 DRIFT = {"double": 1e-12, "single": 1e-5}
@@ -132,10 +132,7 @@ def shearbox(check, sphseg, work):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     os.makedirs(a.work, exist_ok=True)
     check = Checks()
     columns(check, a.sphseg, a.work)

@@ -24,7 +24,6 @@ uniform along x); and the lid's 3 layers of dummies carry the lid's wall id
 
   python3 tests/validate_channel.py --sphseg build-dev/sphseg --work /tmp/vc
 """
-import argparse
 import os
 import subprocess
 import sys
@@ -35,7 +34,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import snap  # noqa: E402
 sys.path.insert(0, HERE)
-from containers import row_profile  # noqa: E402  (tests/containers.py)
+from containers import row_profile, sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 SCENE = os.path.join(HERE, "..", "inputs", "poiseuille_2d.yml")
 
@@ -61,10 +60,7 @@ def run_scene(sphseg, out, over):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     out = os.path.join(a.work, "channel")
     run_scene(a.sphseg, out, ["Run:t_end=0.1", "Output:dt=0.01", "Run:progress_s=1e9"])
     ok, umax = True, F * H * H / (8 * NU)

@@ -26,7 +26,6 @@ viscosity, docs/validation.md):
            to 3 s: measured MAE 0.0096 against eq. 28 (0.0055 at dr 1 mm,
            0.0030 at 0.5 mm on the H100); tolerance 0.02.
 """
-import argparse
 import math
 import os
 import sys
@@ -37,15 +36,13 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import batch  # noqa: E402
 import chute_study as cs  # noqa: E402
+from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 TOL_MEAN, TOL_ROWS, TOL_REST, MIN_GROWTH, TOL_SEG = 0.06, 0.09, 0.02, 0.10, 0.02
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     layer = dict(H=0.005, dr=0.00025, alpha=0.0, E=2.5e4)
     cases = [cs.case("steady", theta=25, t_end=1.2, **layer), cs.case("rest", theta=18, t_end=0.4, **layer),
              cs.case("running", theta=30, t_end=0.4, **layer), cs.case("seg", dr=0.002, seg=cs.SEG)]

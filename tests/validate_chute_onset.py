@@ -37,7 +37,6 @@ Without the yield key at work: with Material:yield read but drucker_prager
 always used, the mu_I 20-degree layer flows (0.103 m/s); with mu_I always
 used, the drucker_prager 20-degree layer rests (0.0060 m/s); both fail here.
 """
-import argparse
 import math
 import os
 import sys
@@ -48,6 +47,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import batch  # noqa: E402
 import chute_study as cs  # noqa: E402
+from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 H, DR, T_END = 0.06, 0.003, 1.2
 TOL_REST, TOL_CREEP_GROWTH, MIN_FLOW, MIN_CONTRAST = 0.10, 0.10, 0.5, 5.0
@@ -65,10 +65,7 @@ def depth_mean_series(outdir):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     layer = dict(H=H, dr=DR, alpha=0.1, E=2.5e4, t_end=T_END)
     settle = {"Flow:damping": 100, "Flow:damping_until": 0.15}
     cases = [cs.case("mui_20", theta=20, yield_="mu_I", **layer, **settle),

@@ -17,7 +17,6 @@ L0 = 2 cm at dr = 1 mm (L0/dr = 20, as the study's aspect sweep).
 Both: the front has stopped (it moves < 5 mm/s at the end) and no material
 is lost.
 """
-import argparse
 import os
 import sys
 
@@ -25,6 +24,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import batch  # noqa: E402
 import collapse_study as cs  # noqa: E402
+from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 # a: (runout / Lube, height / Lube) expected, tolerance (relative)
 EXPECT = {0.5: ((1.0, 1.0), 0.15), 2.0: ((1.66, 0.76), 0.12)}
@@ -32,10 +32,7 @@ CREEP = 0.005  # m/s
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     cases = [cs.case("a%g" % av, av) for av in EXPECT]
     batch.run_cases_or_exit(cases, a.sphseg, a.work, limit_s=600)
     ok = True

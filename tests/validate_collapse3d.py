@@ -14,7 +14,6 @@ a = 2 at R0/dr = 8 (800 material particles), to 5 sqrt(H0 / g) = 0.23 s:
     (x < 2 dr) agree within 2 dr, and both within 3 dr of the front over all
     directions (the lattice's columns are not round, so not closer).
 """
-import argparse
 import math
 import os
 import sys
@@ -26,15 +25,13 @@ sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import batch  # noqa: E402
 import collapse3d_study as cs  # noqa: E402
 import snap  # noqa: E402
+from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 TOL_RUNOUT = 0.20
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     c = cs.case("a2_rows8", 2, rows=8)
     c.over["Run:t_end"] = round(5 * math.sqrt(c.meta["H0"] / cs.G), 4)
     c.over["Output:dt"] = 0.01

@@ -12,33 +12,23 @@ unweighted filter creeps by 1.5e-2 dr (median; the mutation test of issue 20):
   displacement from t = 0.1 to 0.2 s: median <= 7e-3 dr, max <= 4e-2 dr
   (a column that creeps or slumps moves by whole spacings).
 """
-import argparse
 import os
-import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import column_check  # noqa: E402
+from containers import run_scene, sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 SCENE = os.path.join(HERE, "..", "inputs", "column_2d.yml")
 
 
 def run(sphseg, out, extra):
-    cmd = [sphseg, SCENE, "-o", out, "-P", "Run:progress_s=1e9", "-P", "Geometry:dr=0.0025"]
-    for e in extra:
-        cmd += ["-P", e]
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        print(r.stderr)
-        sys.exit("FAIL: sphseg exited with %d" % r.returncode)
+    run_scene(sphseg, SCENE, out, ["Run:progress_s=1e9", "Geometry:dr=0.0025"] + list(extra))
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     ok = True
 
     out = os.path.join(a.work, "settled")

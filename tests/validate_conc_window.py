@@ -41,18 +41,13 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import drum_compare  # noqa: E402
 import snap  # noqa: E402
+from drum_invariants import Checks  # noqa: E402  (tests/drum_invariants.py)
 
 DRUM = os.path.join(HERE, "..", "inputs", "drum_2d_EV.yml")
 T_END = 0.6
 OVER = ["Geometry:dr=0.0025", "Material:E=1e5", "Run:t_end=%g" % T_END, "Output:dt=0.3", "Run:progress_s=1e9"]
 TOL_PER_K = 1.3e-4
-OK = True
-
-
-def check(name, good, detail):
-    global OK
-    OK &= bool(good)
-    print("%-4s %-40s %s" % ("ok" if good else "FAIL", name, detail))
+check = Checks()  # check(name, good, detail): one ok/FAIL line; check.ok
 
 
 def run(sphseg, out, every):
@@ -104,8 +99,8 @@ def main():
               "%.3f vs %.3f deg" % (row["angle"], row["angle_ref"]))
     ratio = err["40"] / max(err["10"], 1e-300)
     check("first order in the window length", 2 <= ratio <= 8, "e(40)/e(10) = %.2f (1st order: 4)" % ratio)
-    print("all checks passed" if OK else "SOME CHECKS FAILED")
-    sys.exit(0 if OK else 1)
+    print("all checks passed" if check.ok else "SOME CHECKS FAILED")
+    sys.exit(0 if check.ok else 1)
 
 
 if __name__ == "__main__":

@@ -33,7 +33,6 @@ Container:regions, src/setup_container.c):
 
   python3 tests/validate_container.py --sphseg build/sphseg --work /tmp/v
 """
-import argparse
 import csv
 import os
 import subprocess
@@ -45,19 +44,14 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 sys.path.insert(0, HERE)
 import snap  # noqa: E402
-from containers import (CHUTE, CHUTE_AS_CONTAINER, COLUMN_AS_CONTAINER, DRUM3D_AS_CONTAINER,  # noqa: E402
+from drum_invariants import Checks  # noqa: E402  (tests/drum_invariants.py)
+from containers import (sphseg_work_args, CHUTE, CHUTE_AS_CONTAINER, COLUMN_AS_CONTAINER, DRUM3D_AS_CONTAINER,  # noqa: E402
                         DRUM_AS_CONTAINER, HOPPER, HOPPER_3D, SHEARBOX_AS_CONTAINER)
 
 INPUTS = os.path.join(HERE, "..", "inputs")
 TOL = 1e-10
 
-ok = True
-
-
-def check(name, good, detail):
-    global ok
-    ok &= bool(good)
-    print("%s %s: %s" % ("ok  " if good else "FAIL", name, detail))
+check = Checks()  # check(name, good, detail): one ok/FAIL line; check.ok
 
 
 def run(sphseg, scene, out, over):
@@ -115,10 +109,7 @@ def matched(sphseg, w, name, scene, base, inst):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     w = a.work
 
     # 1. the drum as a container: bit for bit
@@ -218,7 +209,7 @@ def main():
     per_wall = {n: int(np.sum(dw == k)) for n, k in ids.items()}
     check("3D hopper", "end_lo" in ids and "end_hi" in ids and all(v > 0 for v in per_wall.values()) and len(S) == 2,
           "dummies per wall %s; %d snapshots" % (per_wall, len(S)))
-    sys.exit(0 if ok else 1)
+    sys.exit(0 if check.ok else 1)
 
 
 if __name__ == "__main__":

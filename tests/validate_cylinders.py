@@ -15,7 +15,6 @@ square array at solid fraction phi = 0.126, U = f L^2 K(phi) / (4 pi nu) =
   - no fluid particle enters the post (r > a at every snapshot), the post's
     dummies lie inside it, and the fluid stays inside the period [0, L)^2.
 """
-import argparse
 import os
 import sys
 
@@ -26,15 +25,13 @@ sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import batch  # noqa: E402
 import cylinders_study as cs  # noqa: E402
 import snap  # noqa: E402
+from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 TOL_U, TOL_VY = 0.10, 0.01
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     c = cs.case("res20", rows=20)
     c.over["Output:dt"] = 0.1
     batch.run_cases_or_exit([c], a.sphseg, a.work, limit_s=600)

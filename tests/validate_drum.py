@@ -35,7 +35,6 @@ physical invariants of paper §6 with tolerances.
   diagnostics:   the kinetic energy, largest speed, C range and material count of
                  diagnostics.csv equal those of the snapshots.
 """
-import argparse
 import os
 import subprocess
 import sys
@@ -48,16 +47,14 @@ import drum_analysis  # noqa: E402
 import snap  # noqa: E402
 from drum_invariants import (Checks, diagnostics_columns, drum_omega, kmu, mass_bounds_conservation,  # noqa: E402
                              omega_of, stress_ratio)
+from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 SCENE = os.path.join(HERE, "..", "inputs", "drum_2d_EV.yml")
 FRICTION_FRAC = 0.1
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     out = os.path.join(a.work, "drum")
     over = ["Geometry:dr=0.0025", "Material:E=1e5", "Run:t_end=2", "Output:dt=0.5", "Output:diag_dt=0.05",
             "Run:progress_s=1e9"]

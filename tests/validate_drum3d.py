@@ -42,9 +42,7 @@ The dynamic angle of repose is not checked here: the bed needs about 1/6 of
 a turn to avalanche (tests/validate_drum.py, 2 s at 5 rpm), about
 2.5e4 steps of this 3D drum, half an hour on 2 cores.
 """
-import argparse
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -54,6 +52,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import drum_analysis  # noqa: E402
 import snap  # noqa: E402
 from drum_invariants import Checks, diagnostics_columns, mass_bounds_conservation, omega_of  # noqa: E402
+from containers import run_scene, sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 SCENE = os.path.join(HERE, "..", "inputs", "drum_3d.yml")
 BASE = ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025", "Material:E=1e5",
@@ -61,18 +60,11 @@ BASE = ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025", "
 
 
 def run(sphseg, out, over):
-    cmd = [sphseg, SCENE, "-o", out] + sum([["-P", o] for o in BASE + over], [])
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        print(r.stderr)
-        sys.exit("FAIL: sphseg exited with %d" % r.returncode)
+    run_scene(sphseg, SCENE, out, BASE + over)
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     out, rest = os.path.join(a.work, "drum3d"), os.path.join(a.work, "drum3d_rest")
     run(a.sphseg, out, ["Walls:rpm=15", "Run:t_end=0.05", "Output:dt=0.025", "Output:diag_dt=0.005"])
     run(a.sphseg, rest, ["Walls:rpm=0", "Run:t_end=0.03", "Output:dt=0.03", "Output:diag_dt=0.005"])

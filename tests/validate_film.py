@@ -27,7 +27,6 @@ development machine), and the surface row 0.9 % faster than the series at
 time, and every particle of a row within 1e-9 of the row's speed (the
 periodic images: a film is uniform along the slope).
 """
-import argparse
 import os
 import sys
 
@@ -39,7 +38,7 @@ import snap  # noqa: E402
 
 H, DR, NU, G = 0.01, 0.0005, 1e-3, 4.905
 sys.path.insert(0, HERE)
-from containers import FILM as FILM_CASE, row_profile, run_column  # noqa: E402  (tests/containers.py)
+from containers import FILM as FILM_CASE, row_profile, run_column, sphseg_work_args  # noqa: E402  (tests/containers.py)
 FILM = FILM_CASE + ["Run:t_end=0.3", "Output:dt=0.05", "Run:progress_s=1e9"]
 TIMES, TOL, TOL_ROW = (0.05, 0.1, 0.3), 0.025, 1e-9
 
@@ -56,10 +55,7 @@ def series(y, t, n=400):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     out = os.path.join(a.work, "film")
     run_column(a.sphseg, out, FILM)
     ok, umax = True, G * H * H / (2 * NU)

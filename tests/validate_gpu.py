@@ -79,7 +79,7 @@ CASES = [
     ("chute_mu_I", "chute_2d.yml", 400, []),
     # a gate lifted at t = 0.01 s (Geometry:runout, Walls:gate_open): a column collapse
     ("collapse", "column_2d.yml", 1500, COLLAPSE),
-    # an outlet under a silo's opening: the device store shrinks (main.c drain)
+    # an outlet under a silo's opening: the device store shrinks (run_guard.c run_drain)
     ("silo", "column_2d.yml", 5000, SILO),
     # the Newtonian fluid (Material:model newtonian): a film down the incline, tests/validate_film.py
     ("film", "column_2d.yml", 400, FILM),

@@ -18,7 +18,6 @@ segregation on, so that C varies along what drains) and the material soft (E = 0
   - the snapshots' own sum C_i V_i plus the outflow of the same row equals
     the t = 0 sum to round-off (the diagnostics are not trusted alone).
 """
-import argparse
 import csv
 import os
 import sys
@@ -30,16 +29,13 @@ sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import snap  # noqa: E402
 
 sys.path.insert(0, HERE)
-from containers import SILO as SILO_CASE, run_column  # noqa: E402  (tests/containers.py)
+from containers import SILO as SILO_CASE, run_column, sphseg_work_args  # noqa: E402  (tests/containers.py)
 SILO = SILO_CASE + ["Run:t_end=0.15", "Output:dt=0.05", "Output:diag_dt=0.005", "Run:progress_s=1e9"]
 TOL = 1e-12
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     out = os.path.join(a.work, "silo")
     run_column(a.sphseg, out, SILO)
     with open(os.path.join(out, "diagnostics.csv")) as f:

@@ -17,7 +17,6 @@ profile C(z) (row means) is compared at t/T = 20, 40, 80 by MAE and RMSE
     must stop with exit status 3 naming step, time and particle, and leave
     its last snapshot readable.
 """
-import argparse
 import os
 import subprocess
 import sys
@@ -25,6 +24,7 @@ import sys
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools"))
 import snap  # noqa: E402
 import study  # noqa: E402
+from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 MAE_CONS, MAE_DIRECT = 0.03, 0.06
 ORDER_MIN = 2.0
@@ -90,10 +90,7 @@ def paper_blowup(sphseg, work):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     ok = conservative_cases(a.sphseg, a.work)
     ok &= direct_case(a.sphseg, a.work)
     ok &= paper_blowup(a.sphseg, a.work)

@@ -14,7 +14,6 @@ and 15 cm. Here: fill 5 cm, W = 8 and 16 mm at dr 1 mm to 0.4 s.
     agree within 10 % (measured 4.2 % at W = 8 mm, whose narrow opening
     flows less evenly, and 1.0 % at 16 mm).
 """
-import argparse
 import math
 import os
 import sys
@@ -25,6 +24,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import batch  # noqa: E402
 import silo_study as ss  # noqa: E402
+from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 C_FIT, KD_FIT = 1.313, 0.00353
 TOL_RATE, TOL_RATIO, TOL_STEADY = 0.08, 0.06, 0.10
@@ -35,10 +35,7 @@ def beverloo(W):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     cases = [ss.case("W%g" % (W * 1e3), W, H=0.05, t_end=0.4) for W in (0.008, 0.016)]
     for c in cases:
         c.over["Output:dt"] = 0.4

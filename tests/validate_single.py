@@ -30,17 +30,12 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "tools"))
 import drum_compare  # noqa: E402
+from drum_invariants import Checks  # noqa: E402  (tests/drum_invariants.py)
 
 DRUM = os.path.join(HERE, "..", "inputs", "drum_2d_EV.yml")
 OVER = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:alpha_av=1", "Run:t_end=0.6", "Output:dt=0.3",
         "Run:progress_s=1e9"]
-OK = True
-
-
-def check(name, good, detail):
-    global OK
-    OK &= bool(good)
-    print("%-4s %-44s %s" % ("ok" if good else "FAIL", name, detail))
+check = Checks()  # check(name, good, detail): one ok/FAIL line; check.ok
 
 
 def run(binary, out, every):
@@ -73,8 +68,8 @@ def main():
     check("single vs double: mid-chord speed", r["speed_err"] < 1e-5, "%.2e of the surface speed" % r["speed_err"])
     r = drum_compare.compare(d1, sa, [0.6])[0]
     check("single with windows vs double: C", r["C_rms"] < 1.6e-6, "rms %.2e (tol 1.6e-6)" % r["C_rms"])
-    print("all checks passed" if OK else "SOME CHECKS FAILED")
-    sys.exit(0 if OK else 1)
+    print("all checks passed" if check.ok else "SOME CHECKS FAILED")
+    sys.exit(0 if check.ok else 1)
 
 
 if __name__ == "__main__":

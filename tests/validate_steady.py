@@ -13,7 +13,6 @@ three cases, issue 20; 0.0061, 0.0037, 0.0053 with Segregation:limiter donor,
 the default since issue 30, whose cap adds a donor-cell flux's diffusion in the
 steep tails at Pe = 20 and 40: docs/shearbox.md, "Bounded C").
 """
-import argparse
 import os
 import subprocess
 import sys
@@ -24,6 +23,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import seg1d  # noqa: E402
 import snap  # noqa: E402
 import study  # noqa: E402
+from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 MAE_TOL = 0.012
 CASES = [(0.5, 5.0), (0.3, 20.0), (0.7, 40.0)]
@@ -57,10 +57,7 @@ def run(sphseg, out, phi0, Pe, scheme, dr_over_H=0.04, D=1e-6):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg", required=True)
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
+    a = sphseg_work_args()
     ok = True
     for scheme in ("paper", "conservative"):
         for phi0, Pe in CASES:

@@ -180,6 +180,14 @@ def read_runs(root):
         return {r["name"]: r for r in csv.DictReader(f)}
 
 
+def write_csv(path, header, rows):
+    """path (a CSV file) with the header row and then rows."""
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(header)
+        w.writerows(rows)
+
+
 def observed_order(h, e):
     """Least-squares slope of log e against log h (the observed order)."""
     import numpy as np

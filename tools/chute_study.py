@@ -33,7 +33,6 @@ along the slope is uniform and drops out).
 `run` reduces each run's snapshots to row profiles (profiles.csv: t, y, u, C
 of each lattice row) and deletes the snapshots unless --keep.
 """
-import csv
 import math
 import os
 import shutil
@@ -215,10 +214,7 @@ def reduce_run(outdir, dr, keep=False):
             rows.append((float(s["Time"]), y[m].mean(), u[m].mean(), C[m].mean(), int(m.sum())))
         if not keep:
             os.remove(p)
-    with open(os.path.join(outdir, "profiles.csv"), "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["t", "y", "u", "C", "n"])
-        w.writerows(rows)
+    batch.write_csv(os.path.join(outdir, "profiles.csv"), ["t", "y", "u", "C", "n"], rows)
     return len(rows)
 
 

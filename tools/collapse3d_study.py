@@ -17,7 +17,6 @@ axis. Runs go to 7 sqrt(H0 / g) (the flow stops within about 3).
   python3 tools/collapse3d_study.py run --sphseg build/sphseg --out out/collapse3d [--backend gpu] [--set ...]
   python3 tools/collapse3d_study.py report --out out/collapse3d --docs docs
 """
-import csv
 import math
 import os
 import sys
@@ -87,18 +86,12 @@ def reduce_run(outdir, dr, keep=False):
         last = (r, x[:, 1])
         if not keep:
             os.remove(p)
-    with open(os.path.join(outdir, "front.csv"), "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["t", "front", "height_at_axis", "max_speed"])
-        w.writerows(rows)
+    batch.write_csv(os.path.join(outdir, "front.csv"), ["t", "front", "height_at_axis", "max_speed"], rows)
     if last is not None:
         r, y = last
         b = np.floor(r / (2 * dr)).astype(int)
-        with open(os.path.join(outdir, "deposit.csv"), "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(["r", "top"])
-            for k in np.unique(b):
-                w.writerow([(k + 0.5) * 2 * dr, y[b == k].max() + 0.5 * dr])
+        batch.write_csv(os.path.join(outdir, "deposit.csv"), ["r", "top"],
+                        [[(k + 0.5) * 2 * dr, y[b == k].max() + 0.5 * dr] for k in np.unique(b)])
     return len(rows)
 
 

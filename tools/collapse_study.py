@@ -21,7 +21,6 @@ material at the wall (x < 2 dr). The flow stops within a few sqrt(H0 / g)
   python3 tools/collapse_study.py run --sphseg build/sphseg --out out/collapse_study [--backend gpu]
   python3 tools/collapse_study.py report --out out/collapse_study --docs docs
 """
-import csv
 import math
 import os
 import re
@@ -88,17 +87,11 @@ def reduce_run(outdir, dr, keep=False):
         last = xy
         if not keep:
             os.remove(p)
-    with open(os.path.join(outdir, "front.csv"), "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["t", "front", "height_at_wall", "max_speed", "n"])
-        w.writerows(rows)
+    batch.write_csv(os.path.join(outdir, "front.csv"), ["t", "front", "height_at_wall", "max_speed", "n"], rows)
     if last is not None:  # the final deposit's surface: highest material per bin of 2 dr
         b = np.floor(last[:, 0] / (2 * dr)).astype(int)
-        with open(os.path.join(outdir, "deposit.csv"), "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(["x", "top"])
-            for k in np.unique(b):
-                w.writerow([(k + 0.5) * 2 * dr, last[b == k, 1].max() + 0.5 * dr])
+        batch.write_csv(os.path.join(outdir, "deposit.csv"), ["x", "top"],
+                        [[(k + 0.5) * 2 * dr, last[b == k, 1].max() + 0.5 * dr] for k in np.unique(b)])
     return len(rows)
 
 

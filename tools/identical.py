@@ -56,7 +56,7 @@ COMPARED_GROUPS = ("Particles", "Topology")  # byte for byte
 SKIP_HEADER = {"Version"}
 SKIP_DIAG = {"wall_s"}
 CHECKPOINTS = ("checkpoint_prev.h5", "checkpoint.h5")  # full state, the store's arrays by index
-MAX_OUTPUTS = 1e5  # Output:dt may ask for at most this many snapshots up to Run:t_end (src/main.c)
+MAX_OUTPUTS = 1e5  # Output:dt may ask for at most this many snapshots up to Run:t_end (src/settings_check.c)
 
 
 class RunFailed(Exception):

@@ -170,11 +170,7 @@ def cmd_steady(a):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
-    r = sub.add_parser("run")
-    r.add_argument("--out", required=True)
-    r.add_argument("--res", type=float, nargs="+", default=[0.04, 0.02, 0.01])
-    r.add_argument("--cases", nargs="+", default=list(shearbox_study.CASES))
-    r.add_argument("--jobs", type=int, default=os.cpu_count())
+    r = shearbox_study.add_run_parser(sub)
     r.add_argument("--sphseg", default=os.path.join(HERE, "..", "build", "sphseg"))
     z = sub.add_parser("report")
     z.add_argument("--out", help="study folder (DIR/none, DIR/donor); without it, --csv is read")

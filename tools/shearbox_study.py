@@ -255,15 +255,22 @@ def cmd_analyze(a):
     print(table)
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = ap.add_subparsers(dest="cmd", required=True)
+def add_run_parser(sub):
+    """The `run` command of a shear-box study (this one, limiter_study.py):
+    --out, --res, --cases, --jobs; the caller adds its own."""
     r = sub.add_parser("run")
     r.add_argument("--out", required=True)
     r.add_argument("--res", type=float, nargs="+", default=[0.04, 0.02, 0.01])
-    r.add_argument("--schemes", nargs="+", default=["paper", "direct", "conservative"])
     r.add_argument("--cases", nargs="+", default=list(CASES))
     r.add_argument("--jobs", type=int, default=os.cpu_count())
+    return r
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    r = add_run_parser(sub)
+    r.add_argument("--schemes", nargs="+", default=["paper", "direct", "conservative"])
     r.add_argument("--threads", type=int, default=1, help="OMP_NUM_THREADS of each run")
     r.add_argument("--set", nargs="*", default=[], help="extra Section:key=value overrides")
     r.add_argument("--sphseg", default=os.path.join(HERE, "..", "build", "sphseg"))

@@ -11,21 +11,26 @@ static int (*error_cleanup)(void);
 
 void error_on_exit(int (*fn)(void)) { error_cleanup = fn; }
 
-static int error_rank(void)
+/* MPI is running: initialised and not yet finalised. */
+static int error_mpi_live(void)
 {
-    int init = 0, fin = 0, rank = 0;
+    int init = 0, fin = 0;
     MPI_Initialized(&init);
     MPI_Finalized(&fin);
-    if (init && !fin) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    return init && !fin;
+}
+
+static int error_rank(void)
+{
+    int rank = 0;
+    if (error_mpi_live()) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     return rank;
 }
 
 static int error_size(void)
 {
-    int init = 0, fin = 0, size = 1;
-    MPI_Initialized(&init);
-    MPI_Finalized(&fin);
-    if (init && !fin) MPI_Comm_size(MPI_COMM_WORLD, &size);
+    int size = 1;
+    if (error_mpi_live()) MPI_Comm_size(MPI_COMM_WORLD, &size);
     return size;
 }
 

@@ -84,36 +84,33 @@ void part_free(particles_t *p)
     memset(p, 0, sizeof *p);
 }
 
+/* part_gather's loop for elements of type T */
+#define PART_GATHER_AS(T)                                                                                     \
+    do {                                                                                                       \
+        T *d = dst;                                                                                            \
+        const T *s = src;                                                                                      \
+        for (size_t k = k0; k < k1; k++) d[k] = s[perm[k]];                                                    \
+    } while (0)
+
 /* dst[k] = src[perm[k]], k in [k0, k1), for elements of esize bytes. */
 static void part_gather(void *dst, const void *src, const size_t *perm, size_t k0, size_t k1, size_t esize)
 {
     switch (esize) {
-    case 8: {
-        uint64_t *d = dst;
-        const uint64_t *s = src;
-        for (size_t k = k0; k < k1; k++)
-            d[k] = s[perm[k]];
+    case 8:
+        PART_GATHER_AS(uint64_t);
         break;
-    }
-    case 4: {
-        uint32_t *d = dst;
-        const uint32_t *s = src;
-        for (size_t k = k0; k < k1; k++)
-            d[k] = s[perm[k]];
+    case 4:
+        PART_GATHER_AS(uint32_t);
         break;
-    }
-    case 1: {
-        uint8_t *d = dst;
-        const uint8_t *s = src;
-        for (size_t k = k0; k < k1; k++)
-            d[k] = s[perm[k]];
+    case 1:
+        PART_GATHER_AS(uint8_t);
         break;
-    }
     default:
         for (size_t k = k0; k < k1; k++)
             memcpy((char *)dst + k * esize, (const char *)src + perm[k] * esize, esize);
     }
 }
+#undef PART_GATHER_AS
 
 /* Gather every array through perm into its first m entries. Parallel over
  * particles: thread t gathers and stores back the same static slice of every

@@ -2,7 +2,7 @@
  * by the CPU and GPU backends so that both decide the same way:
  *   step_bounds_of  what the time-step bounds need (integrate_dt): the
  *                   diffusivity, the segregation wave speed and the speed;
- *   step_guard      the blow-up conditions of the driver (src/main.c);
+ *   step_guard      the blow-up conditions of the driver (src/run_guard.c);
  * and the per-particle bodies of the backend hooks that are not neighbour
  * loops (step_place, step_save, step_advance). */
 #ifndef SPHSEG_STEP_H
@@ -62,7 +62,7 @@ enum step_bad {
     STEP_BAD_STATE = 2,    /* non-finite position, velocity or stress */
     STEP_BAD_OUTSIDE = 3,  /* beyond a wall by more than h */
     STEP_BAD_CFL = 4,      /* moved more than h in one step */
-    STEP_OUTLET = 5        /* not a failure: below the outlet, to leave the run (main.c outlet_drain) */
+    STEP_OUTLET = 5        /* not a failure: below the outlet, to leave the run (run_guard.c run_drain) */
 };
 
 /* Is material particle i outside its container (beyond a bounding wall by

@@ -24,7 +24,7 @@
  * counter-clockwise positive seen with y up) about the z axis through c,
  * for a plane only with a normal along z (the end walls of a drum), which
  * the rotation keeps. A gate is a primitive whose dummies leave the run at
- * open_at (main.c). */
+ * open_at (src/run.c). */
 enum wall_shape { WALL_PLANE = 0, WALL_CYLINDER = 1 };
 enum wall_move { WALL_FIXED = 0, WALL_TRANSLATE = 1, WALL_ROTATE = 2 };
 /* The most primitives a container has (the 3D column with a runout, a gate

@@ -1,0 +1,57 @@
+/* core/tuning.c — the tuning and diagnostics settings read from the
+ * environment, once (core/tuning.h). */
+#include "tuning.h"
+#include <stdlib.h>
+#include <string.h>
+#include "error.h"
+
+/* The settings' names, and their values as read (NULL: not set). */
+enum { T_PROFILE, T_TEAM, T_WALLSKIP, T_OVERLAP, T_HOSTX, T_IPC, T_CUDA_AWARE, T_N };
+static const char *const tuning_names[T_N] = {"SPHSEG_GPU_PROFILE", "SPHSEG_GPU_TEAM",  "SPHSEG_GPU_WALLSKIP",
+                                              "SPHSEG_GPU_OVERLAP", "SPHSEG_GPU_HOSTX", "SPHSEG_GPU_IPC",
+                                              "SPHSEG_CUDA_AWARE"};
+static const char *tuning_raw[T_N];
+
+/* Set and not empty. */
+static int is_set(const char *e) { return e && *e; }
+/* Set to exactly "0" (an empty value keeps the default). */
+static int is_zero(const char *e) { return e && !strcmp(e, "0"); }
+
+static int team_of(const char *e)
+{
+    if (!is_set(e)) return 0;
+    char *end;
+    long t = strtol(e, &end, 10);
+    return *end || (t != 1 && t != 2 && t != 4 && t != 8 && t != 16) ? -1 : (int)t;
+}
+
+const tuning *tuning_get(void)
+{
+    static tuning t;
+    static int read;
+    if (read) return &t;
+    for (int k = 0; k < T_N; ++k) tuning_raw[k] = getenv(tuning_names[k]);
+    const char *const *r = tuning_raw;
+    t = (tuning){.gpu_profile = is_set(r[T_PROFILE]) && !is_zero(r[T_PROFILE]),
+                 .gpu_team = team_of(r[T_TEAM]),
+                 .gpu_wallskip = !is_zero(r[T_WALLSKIP]),
+                 .gpu_overlap = !is_zero(r[T_OVERLAP]),
+                 .gpu_hostx = is_set(r[T_HOSTX]) && !is_zero(r[T_HOSTX]),
+                 .gpu_ipc = !is_zero(r[T_IPC]),
+                 .cuda_aware = !is_zero(r[T_CUDA_AWARE]),
+                 .gpu_team_text = is_set(r[T_TEAM]) ? r[T_TEAM] : NULL};
+    read = 1;
+    return &t;
+}
+
+void tuning_log(void)
+{
+    tuning_get();
+    char line[1024] = "";
+    size_t used = 0;
+    for (int k = 0; k < T_N; ++k)
+        if (tuning_raw[k] && used + 100 < sizeof line)
+            used += (size_t)snprintf(line + used, sizeof line - used, "%s%s=%.64s", used ? ", " : "",
+                                     tuning_names[k], tuning_raw[k]);
+    if (used) message("tuning: %s (README, \"Tuning and diagnostics settings\")", line);
+}

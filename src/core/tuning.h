@@ -1,0 +1,27 @@
+/* core/tuning.h — the tuning and diagnostics settings: the only environment
+ * variables sphseg reads (README, "Tuning and diagnostics settings"). None
+ * changes the answer beyond round-off; each exists to measure a saving or
+ * to diagnose. They are read here, once, at the first tuning_get (nowhere
+ * else: `grep -rn getenv src mpi gpu` finds this file only), and
+ * tuning_log names those that are set. */
+#ifndef SPHSEG_TUNING_H
+#define SPHSEG_TUNING_H
+
+typedef struct tuning {
+    int gpu_profile;  /* SPHSEG_GPU_PROFILE set and not 0: time each GPU stage (default 0) */
+    int gpu_team;     /* SPHSEG_GPU_TEAM: threads per particle 1, 2, 4, 8 or 16; 0: the rule (default);
+                       * -1: set to something else (gpu_team_text; the GPU backend refuses it) */
+    int gpu_wallskip; /* SPHSEG_GPU_WALLSKIP not 0: dummies out of reach skip their wall loop (default 1) */
+    int gpu_overlap;  /* SPHSEG_GPU_OVERLAP not 0: ghost refreshes overlap interior work (default 1) */
+    int gpu_hostx;    /* SPHSEG_GPU_HOSTX set and not 0: list-build exchanges through the host (default 0) */
+    int gpu_ipc;      /* SPHSEG_GPU_IPC not 0: CUDA IPC between the GPUs of one node (default 1) */
+    int cuda_aware;   /* SPHSEG_CUDA_AWARE not 0: device buffers to MPI where it reports CUDA support (default 1) */
+    const char *gpu_team_text; /* SPHSEG_GPU_TEAM as set, or NULL */
+} tuning;
+
+/* The settings, read from the environment at the first call. */
+const tuning *tuning_get(void);
+/* One log line (rank 0) naming the settings that are set, if any. */
+void tuning_log(void);
+
+#endif

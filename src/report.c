@@ -1,0 +1,111 @@
+/* report.c — what a run says in its log: the start-up lines, the done: line
+ * with the halo's totals, and the command that continues a run stopped
+ * early (src/run.h). */
+#include <signal.h>
+#include <string.h>
+#include "core/error.h"
+#include "core/tuning.h"
+#include "mpi/comm.h"
+#include "run.h"
+#include "settings_check.h"
+#include "version.h"
+
+/* arg, single-quoted for a POSIX shell when it holds anything but plain
+ * characters, appended to b. */
+static void shell_word(char *b, size_t n, const char *arg)
+{
+    size_t used = strlen(b);
+    if (arg[0] && strspn(arg, "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_./:=+-,@%") ==
+                      strlen(arg)) {
+        snprintf(b + used, n - used, " %s", arg);
+        return;
+    }
+    snprintf(b + used, n - used, " '");
+    for (const char *q = arg; *q && (used = strlen(b)) + 8 < n; ++q)
+        snprintf(b + used, n - used, *q == '\'' ? "'\\''" : "%c", *q);
+    used = strlen(b);
+    snprintf(b + used, n - used, "'");
+}
+
+/* Stopped early by a signal, Run:max_wall_time or OUTDIR/STOP, the
+ * checkpoint written: the command that continues, with this run's -P
+ * options (a different Run:t_end is allowed). */
+void report_stopped(const outputs *o, const sim_t *s, const ckpt_clock *ck, enum ckpt_stop why)
+{
+    if (why == CKPT_STOPFILE) ckpt_clear_stop(ck);
+    char cmd[8192] = "sphseg", cause[64];
+    shell_word(cmd, sizeof cmd, o->scene);
+    shell_word(cmd, sizeof cmd, "-o"), shell_word(cmd, sizeof cmd, o->dir);
+    shell_word(cmd, sizeof cmd, "--restart"), shell_word(cmd, sizeof cmd, o->dir);
+    for (int k = 0; k < o->c->n_over; ++k) shell_word(cmd, sizeof cmd, "-P"), shell_word(cmd, sizeof cmd, o->c->over[k]);
+    if (o->c->backend) shell_word(cmd, sizeof cmd, "--backend"), shell_word(cmd, sizeof cmd, o->c->backend);
+    int sig = ck->signal;
+    snprintf(cause, sizeof cause, "received %s", sig == SIGTERM ? "SIGTERM" : sig == SIGUSR1 ? "SIGUSR1"
+                                                 : sig == SIGINT ? "SIGINT" : sig == SIGHUP ? "SIGHUP" : "a signal");
+    message("stopping at step %ld, t = %.9g s: %s; wrote %s/checkpoint.h5. Continue with\n  %s", s->step, s->t,
+            why == CKPT_WALL ? "the next step would pass Run:max_wall_time"
+            : why == CKPT_SIGNAL ? cause : "found the STOP file", o->dir, cmd);
+}
+
+/* The end of a run: the last progress line, the halo's and the run's totals
+ * (the done: line; io is the wall time in output), the windows of C. */
+void report_end(sim_t *s, diag *d, double io)
+{
+    diag_progress(d, s, 1);
+    double wall = diag_wall() - d->wall0, stepping = wall - io, ntot = (double)comm_sum_ll((long long)s->p.n);
+    /* the halo time of the done: line is the time the computation stood
+     * still for it: all of it on the CPU; on the GPU, which overlaps the
+     * refreshes with interior work, what the device timeline shows */
+    double comm = s->halo ? comm_max(s->halo->wall_comm) : 0, halo = comm;
+    if (s->halo && s->halo->exposed_measured) {
+        halo = comm_max(s->halo->wall_exposed);
+        message("domains: the device stood still %.3f s for the halo on the slowest rank (exchanges at list "
+                "builds, packing, copies and waits not hidden behind interior work)", halo);
+    }
+    if (s->halo)
+        message("domains: %lld particle migrations between ranks, %.3f s of host time in halo calls on the slowest "
+                "rank (%.3f s of it in MPI waits%s), %.4g MB and %.4g messages sent per rank per step (mean)",
+                comm_sum_ll(s->halo->migrated), comm, comm_max(s->halo->wall_wait),
+                s->halo->exposed_measured ? "; with the GPU, also waits for the device before a pack" : "",
+                s->step > d->step0 ? 1e-6 * (double)comm_sum_ll(s->halo->bytes) / comm_size() / (double)(s->step - d->step0) : 0.0,
+                s->step > d->step0 ? (double)comm_sum_ll(s->halo->messages) / comm_size() / (double)(s->step - d->step0) : 0.0);
+    message("done: %ld steps, %.3f s wall, %.4e particle-steps/s, max |drift of sum C V| %.3e, %.3f s of the "
+            "wall in output and diagnostics (not in the rate), %.3f s in halo exchange", s->step, wall,
+            stepping > 0 ? (double)(s->step - d->step0) * ntot / stepping : 0.0, d->max_drift, io, halo);
+    if (s->win.on && s->win.windows > 0)
+        message("concentration: %ld windows of %.1f flow steps on average, %ld midpoint steps of C", s->win.windows,
+                (double)(s->step - d->step0 - s->win.k) / (double)s->win.windows, s->win.substeps);
+}
+
+/* The start-up lines: the run (particles, h, what is solved, ranks, backend,
+ * OUTDIR), the tuning settings that are set, the walls, the flow's sound
+ * speed and filter (and a drum's settings outside the measured range), the
+ * concentration's windows; a checkpoint's open window that
+ * Segregation:every 1 cannot take is refused (exit 2). */
+void report_start(sim_t *s, const outputs *o, const run_cli *c)
+{
+    const struct scene *sc = s->sc;
+    const char *scheme = !s->seg_on ? "off"
+                         : sc->segregation.scheme == SEG_SCHEME_CONSERVATIVE ? "conservative"
+                         : sc->segregation.scheme == SEG_SCHEME_DIRECT       ? "direct" : "paper";
+    message("sphseg %s: %s, %zu material + %zu dummy particles, h = %.4g m, flow %s, segregation %s, "
+            "%d rank(s), backend %s, output %s", SPHSEG_VERSION, sc->path, s->n_material,
+            (size_t)comm_sum_ll((long long)s->p.n) - s->n_material,
+            (double)s->seg.k.h, s->flow_on ? "computed" : "prescribed", scheme, comm_size(), s->be->name, o->dir);
+    tuning_log();
+    char wl[1024];
+    message("container: walls %s", wall_list(s, 1, wl, sizeof wl));
+    if (s->flow_on)
+        message("flow: c_s = %.4g m/s, h/c_s = %.3g s, Shepard filter every %u steps, alpha_av = %g",
+                (double)s->flow.cs, (double)(s->seg.k.h / s->flow.cs), sc->flow.shepard_every, sc->flow.alpha_av);
+    if (s->flow_on && sc->geometry.type == GEOM_DRUM) settings_warn_drum(sc); /* measured on drums */
+    if (s->win.on && sc->segregation.every_k)
+        message("concentration: one midpoint step every %u flow steps (Segregation:every), at the window's mean "
+                "shear rate", sc->segregation.every_k);
+    else if (s->win.on)
+        message("concentration: one midpoint step every K flow steps, K from its own time-step bounds, at most %d "
+                "(Segregation:every auto), at the window's mean shear rate", integrate_conc_auto_max());
+    else if (s->win.k > 0)
+        input_error("%s: the checkpoint has an open concentration window (%ld flow steps): restart it with "
+                    "Segregation:every other than 1", c->restart, s->win.k);
+}
