@@ -82,6 +82,19 @@ void report_end(sim_t *s, diag *d, double io)
  * speed and filter (and a drum's settings outside the measured range), the
  * concentration's windows; a checkpoint's open window that
  * Segregation:every 1 cannot take is refused (exit 2). */
+/* Flow:stabilization and its coefficient, for the start-up line. */
+static const char *stab_text(const struct scene *sc, char *b, size_t n)
+{
+    const struct scene_flow *f = &sc->flow;
+    if (f->stabilization == FLOW_STAB_RIEMANN)
+        snprintf(b, n, "stabilization riemann (eta %g)", f->riemann_eta);
+    else if (f->stabilization == FLOW_STAB_DELTA)
+        snprintf(b, n, "stabilization delta (delta %g)", f->delta);
+    else
+        snprintf(b, n, "alpha_av = %g", f->alpha_av);
+    return b;
+}
+
 void report_start(sim_t *s, const outputs *o, const run_cli *c)
 {
     const struct scene *sc = s->sc;
@@ -93,11 +106,11 @@ void report_start(sim_t *s, const outputs *o, const run_cli *c)
             (size_t)comm_sum_ll((long long)s->p.n) - s->n_material,
             (double)s->seg.k.h, s->flow_on ? "computed" : "prescribed", scheme, comm_size(), s->be->name, o->dir);
     tuning_log();
-    char wl[1024];
+    char wl[1024], st[128];
     message("container: walls %s", wall_list(s, 1, wl, sizeof wl));
     if (s->flow_on)
-        message("flow: c_s = %.4g m/s, h/c_s = %.3g s, Shepard filter every %u steps, alpha_av = %g",
-                (double)s->flow.cs, (double)(s->seg.k.h / s->flow.cs), sc->flow.shepard_every, sc->flow.alpha_av);
+        message("flow: c_s = %.4g m/s, h/c_s = %.3g s, Shepard filter every %u steps, %s", (double)s->flow.cs,
+                (double)(s->seg.k.h / s->flow.cs), sc->flow.shepard_every, stab_text(sc, st, sizeof st));
     if (s->flow_on && sc->geometry.type == GEOM_DRUM) settings_warn_drum(sc); /* measured on drums */
     if (s->win.on && sc->segregation.every_k)
         message("concentration: one midpoint step every %u flow steps (Segregation:every), at the window's mean "

@@ -65,6 +65,7 @@ int settings_check(const struct scene *sc, const char *backend)
 
 void settings_warn_alpha_sqrt_e(const struct scene *sc)
 {
+    if (sc->flow.stabilization != FLOW_STAB_MONAGHAN) return; /* alpha_av is monaghan's alone */
     double r = sc->flow.alpha_av * sqrt(sc->material.E) / (FLOW_ALPHA_REF * sqrt(FLOW_E_REF));
     if (r < 0.5 || r > 2)
         warning("Flow:alpha_av * sqrt(Material:E) is %.3g times Table 1's (alpha 0.1 at E = 10 MPa): the artificial "
