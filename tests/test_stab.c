@@ -15,24 +15,16 @@
 #include "physics/flow.h"
 #include <string.h>
 #include "testutil.h"
+#include "flowctx.h"
 
 #define DR 1e-3
 
 static flow_ctx ctx(int stab)
 {
-    flow_ctx c;
-    memset(&c, 0, sizeof c);
-    c.k = sph_make(2, (real)(1.5 * DR), (real)DR);
-    stress_moduli((real)1e5, (real)0.3, &c.m.G, &c.m.K);
-    c.m.rho_s = 2500, c.m.mu_s = (real)0.382, c.m.mu_d = (real)0.682, c.m.I0 = (real)0.279;
-    c.m.lambda = (real)0.001;
-    c.rho = 1500;
-    c.cs = stress_sound_speed(c.m.G, c.m.K, c.rho);
+    flow_ctx c = tu_flow_ctx(1e5, DR);
     c.stab = stab;
     c.eta_r = 3;
     c.pdiff = stab == STAB_RIEMANN ? c.m.K / (c.rho * c.cs) : R(2.0) * R(0.1) * c.k.h * c.cs;
-    c.g[1] = (real)-9.81;
-    c.sp.d_small = (real)0.25e-3, c.sp.d_large = (real)0.5e-3;
     return c;
 }
 
