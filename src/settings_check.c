@@ -75,6 +75,15 @@ void settings_warn_alpha_sqrt_e(const struct scene *sc)
                 "(docs/gpu.md)", r, FLOW_ALPHA_REF * sqrt(FLOW_E_REF / sc->material.E));
 }
 
+void settings_warn_stabilization(const struct scene *sc)
+{
+    if (sc->flow.stabilization == FLOW_STAB_MONAGHAN) return;
+    warning("Flow:stabilization %s is not validated: its pressure diffusion compacts a free surface slowly "
+            "(a 1 cm chute layer at 25 degrees sinks 0.23 mm/s with riemann, 0.075 mm/s with delta), and in the "
+            "2D drum at 10 kPa particles left through the wall within 3-8 s (docs/granular.md \"Stabilisation\")",
+            sc->flow.stabilization == FLOW_STAB_RIEMANN ? "riemann" : "delta");
+}
+
 void settings_warn_drum(const struct scene *sc)
 {
     settings_warn_alpha_sqrt_e(sc);
