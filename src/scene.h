@@ -153,6 +153,7 @@ struct scene_flow {
     enum flow_stab stabilization; /* monaghan (default, the paper's) | riemann | delta */
     double alpha_av;        /* artificial viscosity coefficient (3.10), monaghan; default 0.1; 0 = off */
     double riemann_eta;     /* riemann: the limiter's eta; default 3 (Zhang, Hu & Adams 2017) */
+    unsigned riemann_diffusion; /* riemann: on | off (default): the Riemann pressure diffusion K / (rho c_s) */
     double delta;           /* delta: the diffusion coefficient; default 0.1 (Antuono et al. 2010) */
     unsigned shepard_every; /* Shepard filter (3.12) every N steps; default 30; 0 = off */
     double damping;         /* velocity damping -zeta u added to (3.9), 1/s, for settling

@@ -264,11 +264,13 @@ SECTION("Material", material, scene_material)
 END_SECTION(material)
 SECTION("Flow", flow, scene_flow)
     KE("Flow", flow, scene_flow, stabilization, flow_stabs, "monaghan",
-      "what damps the acoustic noise of the momentum and stress equations: monaghan (the paper's artificial viscosity 3.10, Flow:alpha_av; it also acts as a shear viscosity alpha c_s h / 8 that follows E and h) | riemann (the low-dissipation Riemann solver of Zhang, Hu & Adams 2017: a pair pressure rho beta dU / 2 on the closing speed dU along the pair, beta = min(Flow:riemann_eta dU, c_s), and the Riemann pressure diffusion K / (rho c_s)) | delta (delta-SPH pressure diffusion 2 Flow:delta h c_s, Antuono et al. 2010, with no momentum dissipation); riemann and delta diffuse the pressure less its hydrostatic part (Fourtakas et al. 2019); default monaghan (docs/granular.md \"Stabilisation\")")
+      "what damps the acoustic noise of the momentum and stress equations: monaghan (the paper's artificial viscosity 3.10, Flow:alpha_av; it also acts as a shear viscosity alpha c_s h / 8 that follows E and h) | riemann (the low-dissipation Riemann solver of Zhang, Hu & Adams 2017: a pair pressure rho beta dU / 2 on the closing speed dU along the pair, beta = min(Flow:riemann_eta dU, c_s), beta = c_s against a wall; with Flow:riemann_diffusion on also its pressure diffusion) | delta (delta-SPH pressure diffusion 2 Flow:delta h c_s, Antuono et al. 2010, with no momentum dissipation); the pressure diffusions act on the pressure less its hydrostatic part (Fourtakas et al. 2019); default monaghan (docs/granular.md \"Stabilisation\")")
     KF("Flow", flow, scene_flow, alpha_av, OPT, "0.1", 0, INFINITY, HI_OPEN, ALWAYS,
       "artificial viscosity coefficient (3.10), Flow:stabilization monaghan; default 0.1; 0 = off")
     KF("Flow", flow, scene_flow, riemann_eta, OPT, "3", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "Flow:stabilization riemann: the limiter's eta in beta = min(eta dU, c_s); default 3 (Zhang, Hu & Adams 2017)")
+    KE("Flow", flow, scene_flow, riemann_diffusion, on_off, "off",
+      "Flow:stabilization riemann: on | off: also diffuse the pressure at the Riemann solver's rate K / (rho c_s) (its continuity dissipation, less the hydrostatic part); default off: measured to compact a free surface at a constant rate (docs/granular.md \"Stabilisation\")")
     KF("Flow", flow, scene_flow, delta, OPT, "0.1", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "Flow:stabilization delta: the diffusion coefficient delta of delta-SPH; default 0.1 (Antuono et al. 2010; Marrone et al. 2011)")
     KU("Flow", flow, scene_flow, shepard_every, "30",

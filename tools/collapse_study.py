@@ -63,6 +63,10 @@ def cases(which):
     if which in ("full", "aspect"):
         for a in (0.5, 1, 2, 3, 5, 7, 10):
             c.append(case("a%g" % a, a))
+    if which in ("full", "yield"):
+        # Material:yield mu_I (onset at atan mu_s = 20.9 degrees) against the scene's drucker_prager (19.3)
+        for a in (1, 2, 5):
+            c.append(case("a%g_muI" % a, a, **{"Material:yield": "mu_I"}))
     if which in ("full", "resolution"):
         for dr in (0.002, 0.0005, 0.00025):  # dr 1 mm is a2 above
             c.append(case("a2_dr%g" % (dr * 1e3), 2, dr=dr))
@@ -178,7 +182,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("aspect", "resolution"), cases, reduce_done, cmd_report, argv=argv)
+    batch.study_main(__doc__, ("aspect", "yield", "resolution"), cases, reduce_done, cmd_report, argv=argv)
 
 
 if __name__ == "__main__":

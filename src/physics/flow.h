@@ -38,8 +38,8 @@ typedef struct flow_ctx {
     int stab;      /* Flow:stabilization: STAB_MONAGHAN (the paper's 3.10) | STAB_RIEMANN | STAB_DELTA */
     real alpha_av; /* Monaghan coefficient of (3.10), monaghan only; 0 switches it off */
     real eta_r;    /* riemann: the limiter's eta (Zhang, Hu & Adams 2017: 3) */
-    real pdiff;    /* the pressure diffusion's coefficient (mom_pdiff): riemann K / (rho c_s);
-                    * delta 2 delta h c_s; 0 = none (monaghan) */
+    real pdiff;    /* the pressure diffusion's coefficient (mom_pdiff): riemann with
+                    * Flow:riemann_diffusion on K / (rho c_s); delta 2 delta h c_s; 0 = none */
     real g[3];     /* gravity, m/s^2 */
     real damping;  /* zeta of the settling term -zeta u, 1/s (0 when off) */
     int yield;     /* the yield surface (Material:yield): YIELD_DRUCKER_PRAGER (0, the paper's
@@ -171,23 +171,25 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
             if (c->stab == STAB_RIEMANN)
                 Pi = mom_riemann(p->kind[j] == KIND_MATERIAL ? c->eta_r : R(1e30), c->cs, c->rho, uij, xij, r2);
             /* the pressure difference less its hydrostatic part rho g.x_ji (Fourtakas et al.
-             * 2019): a free surface, where the support is cut, is not driven */
-            const real dpH = c->rho * (c->g[0] * xij[0] + c->g[1] * xij[1] + c->g[2] * xij[2]);
-            pd += mom_pdiff(stress_pressure(sj) - pi + dpH, volj, f, r2, k->eta2, c->stab == STAB_RIEMANN);
+             * 2019): a free surface, where the support is cut, is not driven by rho g */
+            if (c->pdiff > 0) {
+                const real dpH = c->rho * (c->g[0] * xij[0] + c->g[1] * xij[1] + c->g[2] * xij[2]);
+                pd += mom_pdiff(stress_pressure(sj) - pi + dpH, volj, f, r2, k->eta2, c->stab == STAB_RIEMANN);
+            }
         }
         mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
         if (c->nu > 0) mom_visc_add(a, volj, c->nu, f, r2, k->eta2, uij);
     NBR_END
     team_sum(L, 9, nlanes);
     team_sum(a, 3, nlanes);
-    if (c->stab != STAB_MONAGHAN) team_sum(&pd, 1, nlanes);
+    if (c->pdiff > 0) team_sum(&pd, 1, nlanes);
     if (renorm) team_sum(m, 6, nlanes);
     if (lane != 0) return R(0.0);
     if (renorm) seg_renorm_store(i, p, k->dim, m);
     real eps[6], w[3], ds[6];
     mom_strain_spin(L, eps, w);
     stress_rate_elastic(si, eps, w, c->m.G, c->m.K, ds);
-    if (c->stab != STAB_MONAGHAN) {
+    if (c->pdiff > 0) {
         const real dp = c->pdiff * pd; /* dp_i/dt += dp: sigma_kk -= dp */
         ds[0] -= dp, ds[1] -= dp, ds[2] -= dp;
     }
