@@ -152,7 +152,7 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
         mom_velgrad_add(L, volj, uij, gradW);
         real Pi = c->alpha_av > 0 ? mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij) : R(0.0);
         mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
-        if (c->nu > 0) mom_visc_add(a, volj, c->nu, f, r2, k->eta2, uij);
+        if (c->nu > 0) mom_visc_add(a, volj, c->nu, f, uij);
     NBR_END
     team_sum(L, 9, nlanes);
     team_sum(a, 3, nlanes);
