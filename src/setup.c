@@ -534,6 +534,7 @@ static void flow_ctx_of(const struct scene *sc, const sph_ctx *k, const seg_para
     stress_moduli((real)m->E, (real)m->nu, &f->m.G, &f->m.K);
     f->nu = m->model == MAT_NEWTONIAN ? (real)(m->eta / sc->physics.rho) : R(0.0);
     if (m->model == MAT_NEWTONIAN) f->m.G = 0; /* a fluid: pressure alone, the viscous force apart */
+    f->visc_norm = R(1.0) / mom_visc_lattice(k->dim, k->h, k->dr);
     f->m.rho_s = (real)m->rho_s;
     f->m.mu_s = (real)m->mu_s, f->m.mu_d = (real)m->mu_d;
     f->m.I0 = (real)m->I0, f->m.lambda = (real)m->lambda;

@@ -41,6 +41,7 @@ typedef struct flow_ctx {
                     * alone (m.G = 0: no shear stress, the return mapping with k_mu = 0 keeps it
                     * isotropic and cuts tension), and the viscous force is Morris et al.'s
                     * (1997) pair term (mom_visc_add) */
+    real visc_norm; /* 1 / mom_visc_lattice(dim, h, dr): the viscous term's lattice moment (momentum.h) */
 } flow_ctx;
 
 /* Dummy d's velocity and stress from the sums over the material in its
@@ -152,7 +153,7 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
         mom_velgrad_add(L, volj, uij, gradW);
         real Pi = c->alpha_av > 0 ? mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij) : R(0.0);
         mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
-        if (c->nu > 0) mom_visc_add(a, volj, c->nu, f, uij);
+        if (c->nu > 0) mom_visc_add(a, volj, c->nu * c->visc_norm, f, uij);
     NBR_END
     team_sum(L, 9, nlanes);
     team_sum(a, 3, nlanes);
