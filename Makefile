@@ -93,7 +93,7 @@ CORE_SRC := src/core/error.c src/scene.c src/scene_yaml.c src/scene_walk.c src/s
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
 HEADERS  := $(wildcard src/*.h src/core/*.h src/physics/*.h mpi/*.h)
 
-UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint test_stages test_position
+UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_halo test_checkpoint test_stages test_position test_shift
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
 
 .PHONY: all deps deps-test run test test-slurm unit bench clean format test-mutants
