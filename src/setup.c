@@ -535,6 +535,9 @@ static void flow_ctx_of(const struct scene *sc, const sph_ctx *k, const seg_para
     f->nu = m->model == MAT_NEWTONIAN ? (real)(m->eta / sc->physics.rho) : R(0.0);
     if (m->model == MAT_NEWTONIAN) f->m.G = 0; /* a fluid: pressure alone, the viscous force apart */
     f->visc_norm = R(1.0) / mom_visc_lattice(k->dim, k->h, k->dr);
+    f->p_back = m->model == MAT_NEWTONIAN && sc->flow.background_pressure == FLOW_BACKGROUND_EXCLUDED
+                    ? (real)(2 * sc->initial.pressure / (sc->physics.rho * sc->physics.rho))
+                    : R(0.0);
     f->m.rho_s = (real)m->rho_s;
     f->m.mu_s = (real)m->mu_s, f->m.mu_d = (real)m->mu_d;
     f->m.I0 = (real)m->I0, f->m.lambda = (real)m->lambda;

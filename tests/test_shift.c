@@ -20,6 +20,10 @@
  *  - at a free surface (the top row of a block with nothing above) a
  *    particle displaced along the surface is not shifted; three rows down
  *    the same displacement is shifted back;
+ *  - Flow:background_pressure excluded: a uniform background pressure p0
+ *    on a perturbed block exerts no force (flow_ctx.p_back = 2 p0 / rho^2
+ *    cancels it in the pair term to round-off), where the pair term alone
+ *    pushes a displaced particle by (2 p0 / rho) |grad C|;
  *  - off: the stage is not in the plan (src/stages.c): tests/test_stages.c
  *    holds the plans of the scenes without it. */
 #include "physics/flow.h"
@@ -195,12 +199,41 @@ static void test_shift_surface(void **st)
     }
 }
 
+static void test_background_excluded(void **st)
+{
+    (void)st;
+    particles_t p;
+    nbr_grid g = {0};
+    flow_ctx c;
+    memset(&c, 0, sizeof c);
+    c.k = sph_make(2, (real)(1.5 * DR), (real)DR);
+    c.rho = 1500, c.nu = (real)1e-3, c.visc_norm = 1;
+    const double p0 = 300;
+    int n = 12;
+    tu_block2d(&p, n, n, DR, 0, 0);
+    size_t i0 = (size_t)((n / 2) * n + n / 2);
+    p.x[0][i0] += (real)(0.2 * DR), p.x[1][i0] -= (real)(0.1 * DR);
+    for (size_t i = 0; i < p.n; ++i)
+        for (int q = 0; q < 3; ++q) p.sig[q][i] = (real)-p0;
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    size_t i = tu_find(&p, (int64_t)i0);
+    flow_rates(i, &p, &g.view, &c);
+    const double push = hypot(p.acc[0][i], p.acc[1][i]), scale = 2 * p0 / (c.rho * DR);
+    assert_true(push > 0.01 * scale); /* in the pair term: a force */
+    c.p_back = (real)(2 * p0 / (c.rho * c.rho));
+    flow_rates(i, &p, &g.view, &c);
+    assert_true(hypot(p.acc[0][i], p.acc[1][i]) < RT(1e-12) * scale); /* left out: none */
+    nbr_free(&g);
+    part_free(&p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lattice_moment), cmocka_unit_test(test_visc_quadratic),
         cmocka_unit_test(test_shift_lattice),  cmocka_unit_test(test_shift_back),
         cmocka_unit_test(test_shift_taylor),   cmocka_unit_test(test_shift_surface),
+        cmocka_unit_test(test_background_excluded),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -23,6 +23,11 @@ start-up decays within about (L/2 pi)^2/nu = 2.5 ms, so what changes after
 0.05 s is the particles' arrangement: they start on the square lattice and
 lose its order around the post within about 1 s.
 
+Set "background" (issue 30): shifting with Flow:background_pressure excluded
+(the background pressure left out of the momentum pair term, Adami, Hu &
+Adams 2013) at 30 and 300 Pa and L/dr = 16, 20, 24, without shifting at
+300 Pa, and phi = 0.05-0.3 at L/dr = 20.
+
 Set "shifting" (issue 30): the same cell with Flow:shifting fickian (Lind et
 al. 2012) at L/dr = 20, 30, 40 (30 Pa), and at L/dr = 20 and 30 the
 background pressures 0 and 300 Pa with and without it: does the
@@ -67,7 +72,7 @@ def u_ref(phi):
     return F * L * L / (NU * drag_sa(phi))
 
 
-def case(name, rows=40, phi=math.pi * 0.04, p0=30.0, t_end=2.0, shifting="off", **meta):
+def case(name, rows=40, phi=math.pi * 0.04, p0=30.0, t_end=2.0, shifting="off", background="momentum", **meta):
     a = L * math.sqrt(phi / math.pi)
     dr = round(L / rows, 12)
     over = {"Geometry:dr": dr, "Run:t_end": t_end, "Output:dt": 0.01, "Output:diag_dt": 0.01,
@@ -76,8 +81,10 @@ def case(name, rows=40, phi=math.pi * 0.04, p0=30.0, t_end=2.0, shifting="off", 
                                "material: outside}]" % a}
     if shifting != "off":
         over["Flow:shifting"] = shifting
+    if background != "momentum":
+        over["Flow:background_pressure"] = background
     return batch.Case(name, SCENE, over, rows=rows, phi=phi, a=a, p0=p0, t_end=t_end, dr=dr, shifting=shifting,
-                      **meta)
+                      background=background, **meta)
 
 
 def cases(which):
@@ -95,6 +102,14 @@ def cases(which):
             for p0 in (0.0, 300.0) if rows < 40 else ():
                 c.append(case("sh_p%g_r%d" % (p0, rows), rows=rows, p0=p0, shifting="fickian"))
                 c.append(case("ns_p%g_r%d" % (p0, rows), rows=rows, p0=p0))
+    if which == "background":  # not in full: CPU-sized, issue 30; shifting with p0 left out of (3.9)
+        for p0 in (30.0, 300.0):
+            c.append(case("shx_p%g_r20" % p0, rows=20, p0=p0, shifting="fickian", background="excluded"))
+        c.append(case("nsx_p300_r20", rows=20, p0=300.0, background="excluded"))
+        for rows in (16, 24):
+            c.append(case("shx_res%d" % rows, rows=rows, shifting="fickian", background="excluded"))
+        for phi in (0.05, 0.1, 0.2, 0.3):
+            c.append(case("shx_phi%g_r20" % phi, rows=20, phi=phi, shifting="fickian", background="excluded"))
     if which in ("full", "fraction"):
         for phi in (0.05, 0.1, 0.2, 0.3):
             c.append(case("phi%g" % phi, phi=phi))
@@ -174,18 +189,21 @@ def summarise(d, row):
 
 def shift_table(runs, S, P):
     """The shifting set's table (issue 30), if it ran."""
-    sh = [n for n in S if n.startswith(("sh_", "ns_"))]
+    sh = [n for n in S if n.startswith(("sh_", "ns_", "shx_", "nsx_"))]
     if not sh:
         return
-    key = lambda n: (int(runs[n]["rows"]), runs[n].get("shifting", "off"), float(runs[n]["p0"]))
-    P("| L/dr | Flow:shifting | background pressure (Pa) | lowest pressure (Pa) | U / U_SA - 1 at 0.05 s | "
-      "mean over [%.1f s, t_end] | its standard deviation | disorder over the window | wall (s) | steps |" % T1)
-    P("|---|---|---|---|---|---|---|---|---|---|")
+    key = lambda n: (float(runs[n]["phi"]), int(runs[n]["rows"]), runs[n].get("shifting", "off"),
+                     runs[n].get("background", "momentum"), float(runs[n]["p0"]))
+    P("| phi | L/dr | Flow:shifting | Flow:background_pressure | background pressure (Pa) | lowest pressure (Pa) | "
+      "U / U_SA - 1 at 0.05 s | mean over [%.1f s, t_end] | its standard deviation | disorder over the window | "
+      "wall (s) | steps |" % T1)
+    P("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for n in sorted(sh, key=key):
         r, s = runs[n], S[n]
-        P("| %s | %s | %g | %.1f | %+.1f %% | %+.1f %% | %.1f %% | %.2f %% | %s | %s |" % (
-            r["rows"], r.get("shifting", "off"), float(r["p0"]), s["p_min"], 100 * s["early"], 100 * s["mean"],
-            100 * s["sd"], 100 * s["disorder"], r["wall_s"], r["steps"]))
+        P("| %.3g | %s | %s | %s | %g | %.1f | %+.1f %% | %+.1f %% | %.1f %% | %.2f %% | %s | %s |" % (
+            float(r["phi"]), r["rows"], r.get("shifting", "off"), r.get("background", "momentum"), float(r["p0"]),
+            s["p_min"], 100 * s["early"], 100 * s["mean"], 100 * s["sd"], 100 * s["disorder"], r["wall_s"],
+            r["steps"]))
     P("")
 
 
@@ -263,7 +281,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("resolution", "pressure", "fraction", "shifting"), cases, reduce_done, cmd_report, jobs=4,
+    batch.study_main(__doc__, ("resolution", "pressure", "fraction", "shifting", "background"), cases, reduce_done, cmd_report, jobs=4,
                      argv=argv)
 
 

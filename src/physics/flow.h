@@ -42,6 +42,8 @@ typedef struct flow_ctx {
                     * isotropic and cuts tension), and the viscous force is Morris et al.'s
                     * (1997) pair term (mom_visc_add) */
     real visc_norm; /* 1 / mom_visc_lattice(dim, h, dr): the viscous term's lattice moment (momentum.h) */
+    real p_back;    /* Flow:background_pressure excluded (Newtonian fluid): 2 p0 / rho^2, added to the pair's
+                     * Pi of (3.9), which then sees sigma + p0 I: a uniform p0 exerts no force; else 0 */
 } flow_ctx;
 
 /* Dummy d's velocity and stress from the sums over the material in its
@@ -152,6 +154,7 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
         real uij[3] = {ui[0] - uj[0], ui[1] - uj[1], ui[2] - uj[2]};
         mom_velgrad_add(L, volj, uij, gradW);
         real Pi = c->alpha_av > 0 ? mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij) : R(0.0);
+        if (c->p_back != 0) Pi += c->p_back;
         mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
         if (c->nu > 0) mom_visc_add(a, volj, c->nu * c->visc_norm, f, uij);
     NBR_END
