@@ -25,7 +25,7 @@ lose its order around the post within about 1 s.
 
 Set "background" (issue 30): shifting with Flow:background_pressure excluded
 (the background pressure left out of the momentum pair term, Adami, Hu &
-Adams 2013) at 30 and 300 Pa and L/dr = 20, 24, 28, without shifting at
+Adams 2013) at 30 and 300 Pa and L/dr = 20, 24, 28, 32, without shifting at
 300 Pa, and phi = 0.05-0.3 at L/dr = 20.
 
 Set "shifting" (issue 30): the same cell with Flow:shifting fickian (Lind et
@@ -109,7 +109,8 @@ def cases(which):
         c.append(case("shx_res24", rows=24, shifting="fickian", background="excluded"))  # 20: shx_p30_r20
         for phi in (0.05, 0.1, 0.2, 0.3):
             c.append(case("shx_phi%g_r20" % phi, rows=20, phi=phi, shifting="fickian", background="excluded"))
-        c.append(case("shx_res28", rows=28, shifting="fickian", background="excluded"))  # (16 is below the period's 6 supports)
+        for rows in (28, 32):  # (16 is below the period's 6 supports)
+            c.append(case("shx_res%d" % rows, rows=rows, shifting="fickian", background="excluded"))
     if which in ("full", "fraction"):
         for phi in (0.05, 0.1, 0.2, 0.3):
             c.append(case("phi%g" % phi, phi=phi))
