@@ -71,7 +71,7 @@ def main():
     good = d_on["dis"] <= TOL_START * d_on["start"] and d_on["dis"] <= TOL_OFF * d_off["dis"]
     ok &= good
     print("%s disorder over [%.1f, %.1f] s: %.2f %% with shifting, %.2f %% without, %.2f %% at the start "
-          "(tolerances: %.1f of the start, %.1f of the run without)"
+          "(tolerances: %.2f of the start, %.2f of the run without)"
           % ("ok  " if good else "FAIL", WINDOW[0], WINDOW[1], 100 * d_on["dis"], 100 * d_off["dis"],
              100 * d_on["start"], TOL_START, TOL_OFF))
     for n in ("shift", "noshift"):
