@@ -274,7 +274,7 @@ SECTION("Flow", flow, scene_flow)
     KE("Flow", flow, scene_flow, shifting, flow_shiftings, "off",
       "particle shifting: off (the paper's) | fickian: each step a material particle moves by -A h |u| dt sum_j V_j (1 + 0.2 (W_ij/W(dr))^4) grad W_ij (Lind et al. 2012), along a free surface only there, its velocity and stress carried by a first-order Taylor step, its C and volume unchanged; default off")
     KF("Flow", flow, scene_flow, shift_coeff, OPT, "2", 0, INFINITY, HI_OPEN, ALWAYS,
-      "A of Flow:shifting fickian (D = A h |u| dt), -; Lind et al. (2012) use 2 (1 to 6 alike); default 2")
+      "A of Flow:shifting fickian (D = A h |u| dt), -; Lind et al. (2012) take 2; default 2")
     KE("Flow", flow, scene_flow, background_pressure, flow_backgrounds, "momentum",
       "Newtonian fluid: its background pressure Initial:pressure acts in the momentum pair term (3.9) like any pressure (momentum) | is left out of it, keeping the pressure above the tension cut-off only (excluded; Adami, Hu & Adams 2013, where it drives only the particles' regularisation); the granular material ignores it; default momentum")
 END_SECTION(flow)

@@ -1,12 +1,12 @@
 /* shift.h — particle shifting (Flow:shifting fickian), the regularisation of
- * Lind, Xu, Stansby & Rogers (2012, J. Comput. Phys. 231, 1499), eqs. for
- * dr_s = -D grad C with D = A h |u_i| dt and the anti-clumping term of
- * Monaghan (2000):
+ * Lind, Xu, Stansby & Rogers (2012, J. Comput. Phys. 231, 1499): a Fickian
+ * shift dr_s = -D grad C down the gradient of the particle concentration,
+ * with D = A h |u_i| dt and the anti-clumping term of Monaghan (2000):
  *
  *   dr_i = -A h |u_i| dt sum_j V_j (1 + R (W_ij / W(dr))^n) grad_i W_ij,
  *
  * R = 0.2, n = 4 (their values, Monaghan's), A = Flow:shift_coeff (Lind et
- * al. use 2 and find A in [1, 6] works alike). The sum runs over material
+ * al. take 2, the default). The sum runs over material
  * and dummies, so a particle crowding a wall is pushed off it; dummies are
  * never shifted. At a free surface the particle concentration has a jump
  * the shift would follow outwards: a particle whose divergence of position
@@ -18,7 +18,7 @@
  * the surface, so it is left out: the surface layer is not regularised.)
  *
  * The shifted particle carries its velocity and stress to its new place by
- * the first-order Taylor step phi' = phi + dr . grad phi (Lind et al. §3.3,
+ * the first-order Taylor step phi' = phi + dr . grad phi (as Lind et al. do,
  * with grad phi_i = sum_j V_j (phi_j - phi_i) grad_i W_ij over material and
  * dummies); C is not corrected: shifting moves a particle with its C and V
  * unchanged, so sum C_i V_i stays conserved to round-off (a Taylor step of
