@@ -220,10 +220,31 @@ static void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t)
     prof_end(g->st, P_MOTION);
 }
 
+/* ST_SAVE is held back (above); ST_SHIFT runs the held-back save first,
+ * since it adds the shift to the saved copies. */
 static void gpu_save_start(sim_t *s)
 {
     gpu_t *g = gpu_hook(s, 1);
-    g->pend_save = 1;
+    const stage_sched *m = gpu_sched(s);
+    for (int k = 0; k < m->n[HOOK_SAVE]; ++k) switch (m->ids[HOOK_SAVE][k]) {
+        case ST_SAVE: g->pend_save = 1; break;
+        case ST_SHIFT: {
+            gpu_settle(s, g);
+            gpu_step_kernel(s, g, 0, 0.0);
+            particles_t p = g->d;
+            grid_view v = g->view;
+            shift_ctx c = s->shift;
+            const real dt = (real)s->dt;
+            prof_begin(g->st);
+            team(g, g->n, [=] __device__(size_t i, int lane, int T) {
+                particles_t q = p;
+                if (q.kind[i] == KIND_MATERIAL) shift_team(i, &q, &v, &c, dt, lane, T);
+            });
+            prof_end(g->st, P_MOTION);
+            break;
+        }
+        default: error_exit(1, "backend_gpu: stage %d has no body in save_start", m->ids[HOOK_SAVE][k]);
+        }
 }
 
 static void gpu_advance(sim_t *s, double a, double w)

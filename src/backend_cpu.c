@@ -140,6 +140,11 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
 #pragma omp parallel for schedule(static)
         for (long i = 0; i < n; ++i) step_save((size_t)i, p, s->flow_on);
         return 1;
+    case ST_SHIFT:
+#pragma omp parallel for schedule(dynamic, CPU_CHUNK)
+        for (long i = 0; i < n; ++i)
+            if (p->kind[i] == KIND_MATERIAL) shift_team((size_t)i, p, &s->grid.view, &s->shift, (real)s->dt, 0, 1);
+        return 1;
     case ST_ADVANCE: { /* step_advance does x, u, sigma, C and gsum in one pass: ST_ADVANCE_C, _GSUM */
         const int seg = s->seg_on && !s->win.on;
 #pragma omp parallel for schedule(static)

@@ -21,6 +21,7 @@ void integrate_step(sim_t *s, double dt)
     const struct backend *be = s->be; /* the state is prepared at t (run start, last step) */
     const int win = s->win.on;        /* C in windows: the flow alone here (integrate_conc) */
     s->flow.damping = (real)(s->t < s->sc->flow.damping_until ? s->sc->flow.damping : 0.0);
+    s->dt = dt; /* this step's, for the shift in save_start (physics/shift.h) */
     be->rates(s);
     be->save_start(s);
     be->advance(s, 0.5 * dt, 0.0);
@@ -30,7 +31,6 @@ void integrate_step(sim_t *s, double dt)
     be->prepare(s, s->t + dt, !win); /* windows classify and renormalise at their close */
     s->t += dt;
     s->step++;
-    s->dt = dt;
     if (win) s->win.k++, s->win.T += dt;
     unsigned every = s->sc->flow.shepard_every;
     if (s->flow_on && every > 0 && s->step % (long)every == 0) be->filter(s);

@@ -16,6 +16,8 @@ enum seg_scheme { SEG_SCHEME_PAPER = 0, SEG_SCHEME_DIRECT = 1, SEG_SCHEME_CONSER
  * capped by the donor's C and the receiver's room (seg_kern.h
  * seg_flux_donor), which keeps C in [0, 1]. */
 enum seg_limiter { SEG_LIMITER_NONE = 0, SEG_LIMITER_DONOR = 1 };
+enum flow_shifting { FLOW_SHIFT_OFF = 0, FLOW_SHIFT_FICKIAN = 1 }; /* = enum shift_kind, physics/shift.h */
+enum flow_background { FLOW_BACKGROUND_MOMENTUM = 0, FLOW_BACKGROUND_EXCLUDED = 1 };
 enum geom_type { GEOM_SHEARBOX = 0, GEOM_COLUMN = 1, GEOM_DRUM = 2, GEOM_CONTAINER = 3 };
 /* Geometry:periodic, one bit per axis (bit d: axis d). */
 enum periodic_axes {
@@ -159,6 +161,9 @@ struct scene_flow {
     double damping;         /* velocity damping -zeta u added to (3.9), 1/s, for settling
                              * (dynamic relaxation); default 0 */
     double damping_until;   /* damping acts while t < damping_until, s; default 0 */
+    enum flow_shifting shifting; /* particle shifting: off (the paper's) | fickian (Lind et al. 2012) */
+    double shift_coeff;     /* A of the shift D = A h |u| dt, -; default 2 */
+    enum flow_background background_pressure; /* Newtonian fluid: Initial:pressure in (3.9) or left out of it */
 };
 
 /* Rigid walls by dummy particles (paper §4.1). */

@@ -34,6 +34,9 @@ static const cyaml_strval_t seg_models[] = {{"constant", SEG_MODEL_CONSTANT},
 static const cyaml_strval_t seg_schemes[] = {
     {"paper", SEG_SCHEME_PAPER}, {"direct", SEG_SCHEME_DIRECT}, {"conservative", SEG_SCHEME_CONSERVATIVE}};
 static const cyaml_strval_t seg_limiters[] = {{"none", SEG_LIMITER_NONE}, {"donor", SEG_LIMITER_DONOR}};
+static const cyaml_strval_t flow_shiftings[] = {{"off", FLOW_SHIFT_OFF}, {"fickian", FLOW_SHIFT_FICKIAN}};
+static const cyaml_strval_t flow_backgrounds[] = {{"momentum", FLOW_BACKGROUND_MOMENTUM},
+                                                   {"excluded", FLOW_BACKGROUND_EXCLUDED}};
 static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
 static const cyaml_strval_t part_methods[] = {{"slabs", PART_SLABS}, {"metis", PART_METIS}};
 static const cyaml_strval_t periodic_axes[] = {
@@ -279,6 +282,12 @@ SECTION("Flow", flow, scene_flow)
       "velocity damping -zeta u added to (3.9), 1/s, for settling (dynamic relaxation); default 0")
     KF("Flow", flow, scene_flow, damping_until, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "damping acts while t < damping_until, s; default 0")
+    KE("Flow", flow, scene_flow, shifting, flow_shiftings, "off",
+      "particle shifting: off (the paper's) | fickian: each step a material particle moves by -A h |u| dt sum_j V_j (1 + 0.2 (W_ij/W(dr))^4) grad W_ij (Lind et al. 2012), along a free surface only there, its velocity and stress carried by a first-order Taylor step, its C and volume unchanged; default off")
+    KF("Flow", flow, scene_flow, shift_coeff, OPT, "2", 0, INFINITY, HI_OPEN, ALWAYS,
+      "A of Flow:shifting fickian (D = A h |u| dt), -; Lind et al. (2012) take 2; default 2")
+    KE("Flow", flow, scene_flow, background_pressure, flow_backgrounds, "momentum",
+      "Newtonian fluid: its background pressure Initial:pressure acts in the momentum pair term (3.9) like any pressure (momentum) | is left out of it, keeping the pressure above the tension cut-off only (excluded; Adami, Hu & Adams 2013, where it drives only the particles' regularisation); the granular material ignores it; default momentum")
 END_SECTION(flow)
 SECTION("Walls", walls, scene_walls)
     KE("Walls", walls, scene_walls, slip, slips, "no_slip",

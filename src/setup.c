@@ -544,6 +544,10 @@ static void flow_ctx_of(const struct scene *sc, const sph_ctx *k, const seg_para
     stress_moduli((real)m->E, (real)m->nu, &f->m.G, &f->m.K);
     f->nu = m->model == MAT_NEWTONIAN ? (real)(m->eta / sc->physics.rho) : R(0.0);
     if (m->model == MAT_NEWTONIAN) f->m.G = 0; /* a fluid: pressure alone, the viscous force apart */
+    f->visc_norm = R(1.0) / mom_visc_lattice(k->dim, k->h, k->dr);
+    f->p_back = m->model == MAT_NEWTONIAN && sc->flow.background_pressure == FLOW_BACKGROUND_EXCLUDED
+                    ? (real)(2 * sc->initial.pressure / (sc->physics.rho * sc->physics.rho))
+                    : R(0.0);
     f->m.rho_s = (real)m->rho_s;
     f->m.mu_s = (real)m->mu_s, f->m.mu_d = (real)m->mu_d;
     f->m.I0 = (real)m->I0, f->m.lambda = (real)m->lambda;
@@ -580,6 +584,7 @@ void setup_contexts(sim_t *s)
     s->flow_on = sc->kinematics.velocity == KIN_COMPUTED;
 
     flow_ctx_of(sc, &s->seg.k, &s->seg.sp, &s->flow);
+    s->shift = shift_make(&s->seg.k, (int)sc->flow.shifting, (real)sc->flow.shift_coeff);
     wall_geom *w = &s->flow.w;
     memset(w, 0, sizeof *w);
     w->periodic = (int)sc->geometry.periodic;

@@ -12,6 +12,7 @@
 #include "physics/flow.h"
 #include "physics/kin.h"
 #include "physics/seg_kern.h"
+#include "physics/shift.h"
 #include "physics/step.h"
 #include "scene.h"
 
@@ -101,6 +102,7 @@ typedef struct sim {
     seg_ctx seg;
     kin_params kin;
     flow_ctx flow;
+    shift_ctx shift;   /* particle shifting (Flow:shifting; physics/shift.h) */
     const char *wall_name[WALL_PRIM_MAX]; /* the name of each wall primitive of flow.w (setup.c builders) */
     step_ctx step_c;   /* time-step bounds and blow-up guard */
     int flow_on;       /* Kinematics:velocity computed: momentum and stress solved */

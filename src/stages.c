@@ -33,6 +33,8 @@ const stage stage_table[] = {
     {ST_DCDT, H(HOOK_RATES), "seg_dCdt", SF_SEG, SF_WIN, RANGE_OWNED, NB_CONC, FLD_DCDT, 0},
     {ST_DCDT, H(HOOK_RATES), "seg_dCdt", SF_SEG | SF_RENORM, SF_WIN, RANGE_OWNED, FLD_L, 0, 0},
     {ST_SAVE, H(HOOK_SAVE), "step_save", 0, 0, RANGE_OWNED, 0, FLD_XN | FLD_VN | FLD_SIGN | FLD_CN, 0},
+    /* after the save: it writes only the start-of-step copies, which no neighbour reads */
+    {ST_SHIFT, H(HOOK_SAVE), "shift_team", SF_FLOW | SF_SHIFT, 0, RANGE_OWNED, NB_FLOW, FLD_XN | FLD_VN | FLD_SIGN, 0},
     {ST_ADVANCE, H(HOOK_ADVANCE), "step_advance", SF_FLOW, 0, RANGE_OWNED, 0, FLD_X | FLD_V | FLD_SIG, 0},
     {ST_ADVANCE_C, H(HOOK_ADVANCE), "step_advance", SF_SEG, SF_WIN, RANGE_OWNED, 0, FLD_C, 0},
     {ST_ADVANCE_GSUM, H(HOOK_ADVANCE), "step_advance", SF_WIN, 0, RANGE_OWNED, 0, FLD_GSUM, 0},
@@ -66,6 +68,7 @@ unsigned stage_flags(const struct sim *s)
     if (s->win.on) f |= SF_WIN;
     if (s->seg_on && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) f |= SF_RENORM;
     if (s->hcsr) f |= SF_HCSR;
+    if (s->shift.kind != SHIFT_OFF) f |= SF_SHIFT;
     return f;
 }
 
@@ -176,7 +179,7 @@ uint32_t stage_moving_fields(unsigned flags)
 
 const stage_sched *stage_schedule(unsigned flags)
 {
-    enum { NF = 32 }; /* five flags */
+    enum { NF = 64 }; /* six flags */
     static stage_sched memo[NF];
     static int done[NF];
     flags &= NF - 1;

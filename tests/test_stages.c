@@ -63,6 +63,16 @@ static void test_plans(void **st)
     expect_plan(HOOK_CONC_BEGIN, DRUM, cb, 0);
     int cs[] = {ST_WIN_COEFFS, ST_WIN_DCDT, ST_WIN_ADVANCE};
     expect_plan(HOOK_CONC_STEP, DRUM | SF_WIN, cs, 3);
+    /* Flow:shifting: after the save, with computed flow only; it reads what the flow rates read of
+     * ghosts and writes the start-of-step copies, which no ghost carries: no refresh, no new ghost field */
+    int save[] = {ST_SAVE, ST_SHIFT};
+    expect_plan(HOOK_SAVE, DRUM, save, 1);
+    expect_plan(HOOK_SAVE, DRUM | SF_SHIFT, save, 2);
+    expect_plan(HOOK_SAVE, SHEARBOX | SF_SHIFT, save, 1);
+    assert_int_equal(stage_ghost_fields(DRUM | SF_SHIFT), stage_ghost_fields(DRUM));
+    assert_int_equal(stage_refresh_after(ST_SHIFT, DRUM | SF_SHIFT, 0), 0);
+    assert_int_equal(stage_refresh_after(ST_SHIFT, DRUM | SF_SHIFT, 1), 0);
+    assert_int_equal(stage_moving_fields(DRUM | SF_SHIFT | SF_WIN), stage_moving_fields(DRUM | SF_WIN));
 }
 
 static void test_ghost_fields(void **st)

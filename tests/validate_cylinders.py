@@ -7,10 +7,12 @@ Reference: the superficial velocity U of Sangani & Acrivos (1982) for a
 square array at solid fraction phi = 0.126, U = f L^2 K(phi) / (4 pi nu) =
 6.60 mm/s. L/dr = 20 (340 fluid particles, the post 4 dr in radius), 2 s.
   - U averaged over [1, 2] s, where it is statistically steady, within 10 %
-    of the reference (measured +5.4 % on the development machine; the
-    study's mean over the same window, sampled twice as often, +4.6 % with a
-    standard deviation of 1.3 %, and -1.8 % at L/dr = 40; the background pressure moves it
-    by as much, docs/validation.md);
+    of the reference (measured +3.3 % on the development machine with the
+    viscous operator of issue 30, +5.4 % with Morris's eta^2 before it; the
+    study's mean over the same window then, sampled twice as often, +4.6 %
+    with a standard deviation of 1.3 %, and -1.8 % at L/dr = 40; the
+    background pressure moves it by as much unless Flow:background_pressure
+    excluded, docs/validation.md);
   - the flow has the symmetry of the cell: the mean v_y under 1 % of U;
   - no fluid particle enters the post (r > a at every snapshot), the post's
     dummies lie inside it, and the fluid stays inside the period [0, L)^2.

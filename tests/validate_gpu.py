@@ -91,6 +91,12 @@ CASES = [
     ("chute_container", "column_2d.yml", 400, CHUTE + CHUTE_AS_CONTAINER),
     # a post in a cell periodic along x and y: Stokes flow through a lattice of cylinders
     ("cylinders", "cylinders_2d.yml", 400, ["Geometry:dr=0.0005"]),
+    # particle shifting (Flow:shifting, ST_SHIFT in save_start) with the background pressure left out
+    # of the momentum, and shifting on a granular drum with a free surface
+    ("cylinders_shift", "cylinders_2d.yml", 400, ["Geometry:dr=0.0005", "Flow:shifting=fickian",
+                                                  "Flow:background_pressure=excluded"]),
+    ("drum_EV_shift", "drum_2d_EV.yml", 60, ["Flow:shepard_every=20", "Segregation:every=1",
+                                             "Flow:shifting=fickian"]),
     # a larger Verlet skin (Run:list_skin; the CPU ignores it): fewer list builds, longer
     # lists, and on a periodic axis images kept longer; the same answer to round-off
     ("drum_3d_skin", "drum_3d.yml", 40, ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025",

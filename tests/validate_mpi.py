@@ -118,6 +118,9 @@ CASES = [
     ("chute_container", "column_2d.yml", 2000, CHUTE + CHUTE_AS_CONTAINER + ["Parallel:axis=x"], "wrap"),
     # a post in a cell periodic along x and y (Stokes flow through a lattice of cylinders), slabs along y
     ("cylinders", "cylinders_2d.yml", 600, ["Geometry:dr=0.0005", "Parallel:axis=y"], None),
+    # the same with particle shifting (ST_SHIFT reads the ghosts' x, v, sig) and p0 out of the momentum
+    ("cylinders_shift", "cylinders_2d.yml", 300, ["Geometry:dr=0.0005", "Parallel:axis=y", "Flow:shifting=fickian",
+                                                  "Flow:background_pressure=excluded"], None),
     ("column_3d_metis", "column_2d.yml", 30, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.05",
                                               "Geometry:depth=0.05", "Geometry:height=0.1",
                                               "Parallel:method=metis"], None),

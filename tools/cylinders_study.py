@@ -23,6 +23,20 @@ start-up decays within about (L/2 pi)^2/nu = 2.5 ms, so what changes after
 0.05 s is the particles' arrangement: they start on the square lattice and
 lose its order around the post within about 1 s.
 
+Set "background" (issue 30): shifting with Flow:background_pressure excluded
+(the background pressure left out of the momentum pair term, Adami, Hu &
+Adams 2013) at 30 and 300 Pa and L/dr = 20, 24, 28, 32, without shifting at
+300 Pa, and phi = 0.05-0.3 at L/dr = 20.
+
+Set "shifting" (issue 30): the same cell with Flow:shifting fickian (Lind et
+al. 2012) at L/dr = 20, 30, 40 (30 Pa), and at L/dr = 20 and 30 the
+background pressures 0 and 300 Pa with and without it: does the
+regularisation make the settled drag independent of the background
+pressure? Each snapshot also gives the disorder, the relative standard
+deviation over the fluid particles of the kernel sum sum_j V_j W_ij (fluid
+and the post's dummies, periodic): 3.7 % at t = 0 at L/dr = 20, where the
+square lattice is cut by the post, whose dummies do not lie on it.
+
   python3 tools/cylinders_study.py run --sphseg build/sphseg --out out/cylinders [--backend gpu] [--set ...]
   python3 tools/cylinders_study.py report --out out/cylinders --docs docs
 """
@@ -58,14 +72,19 @@ def u_ref(phi):
     return F * L * L / (NU * drag_sa(phi))
 
 
-def case(name, rows=40, phi=math.pi * 0.04, p0=30.0, t_end=2.0, **meta):
+def case(name, rows=40, phi=math.pi * 0.04, p0=30.0, t_end=2.0, shifting="off", background="momentum", **meta):
     a = L * math.sqrt(phi / math.pi)
     dr = round(L / rows, 12)
     over = {"Geometry:dr": dr, "Run:t_end": t_end, "Output:dt": 0.01, "Output:diag_dt": 0.01,
             "Run:progress_s": 1e9, "Initial:pressure": p0,
             "Container:walls": "[{name: post, shape: cylinder, centre: [0.005, 0.005], radius: %.9g, "
                                "material: outside}]" % a}
-    return batch.Case(name, SCENE, over, rows=rows, phi=phi, a=a, p0=p0, t_end=t_end, dr=dr, **meta)
+    if shifting != "off":
+        over["Flow:shifting"] = shifting
+    if background != "momentum":
+        over["Flow:background_pressure"] = background
+    return batch.Case(name, SCENE, over, rows=rows, phi=phi, a=a, p0=p0, t_end=t_end, dr=dr, shifting=shifting,
+                      background=background, **meta)
 
 
 def cases(which):
@@ -77,10 +96,44 @@ def cases(which):
     if which in ("full", "pressure"):
         for p0 in (0.0, 100.0, 300.0):  # 30 is res40
             c.append(case("p%g" % p0, p0=p0))
+    if which == "shifting":  # not in full: CPU-sized, issue 30
+        for rows in (20, 30, 40):  # cheapest first
+            c.append(case("sh_res%d" % rows, rows=rows, shifting="fickian"))
+            for p0 in (0.0, 300.0) if rows < 40 else ():
+                c.append(case("sh_p%g_r%d" % (p0, rows), rows=rows, p0=p0, shifting="fickian"))
+                c.append(case("ns_p%g_r%d" % (p0, rows), rows=rows, p0=p0))
+    if which == "background":  # not in full: CPU-sized, issue 30; shifting with p0 left out of (3.9)
+        for p0 in (30.0, 300.0):
+            c.append(case("shx_p%g_r20" % p0, rows=20, p0=p0, shifting="fickian", background="excluded"))
+        c.append(case("nsx_p300_r20", rows=20, p0=300.0, background="excluded"))
+        c.append(case("shx_res24", rows=24, shifting="fickian", background="excluded"))  # 20: shx_p30_r20
+        for phi in (0.05, 0.1, 0.2, 0.3):
+            c.append(case("shx_phi%g_r20" % phi, rows=20, phi=phi, shifting="fickian", background="excluded"))
+        for rows in (28, 32):  # (16 is below the period's 6 supports)
+            c.append(case("shx_res%d" % rows, rows=rows, shifting="fickian", background="excluded"))
     if which in ("full", "fraction"):
         for phi in (0.05, 0.1, 0.2, 0.3):
             c.append(case("phi%g" % phi, phi=phi))
     return c
+
+
+def disorder(x, V, m, h):
+    """The relative standard deviation over the particles m of the kernel sum
+    sum_j V_j W(|x_i - x_j|, h) (Wendland C2, 2D; all particles j, the cell
+    periodic along x and y)."""
+    from scipy.spatial import cKDTree
+    xy = np.mod(x[:, :2], L)
+    xy[xy >= L] = 0.0  # a coordinate that rounds up to L
+    t = cKDTree(xy, boxsize=L)
+    pairs = t.query_pairs(2 * h, output_type="ndarray")
+    d = xy[pairs[:, 0]] - xy[pairs[:, 1]]
+    d -= L * np.round(d / L)
+    q = np.hypot(d[:, 0], d[:, 1]) / h
+    w = 7 / (4 * math.pi * h * h) * (1 - q / 2) ** 4 * (1 + 2 * q)
+    k = np.full(len(xy), 7 / (4 * math.pi * h * h)) * V  # self
+    np.add.at(k, pairs[:, 0], w * V[pairs[:, 1]])
+    np.add.at(k, pairs[:, 1], w * V[pairs[:, 0]])
+    return float(k[m].std() / k[m].mean())
 
 
 def reduce_run(d, keep=False):
@@ -93,8 +146,11 @@ def reduce_run(d, keep=False):
         u, V = np.asarray(s["Velocities"]), np.asarray(s["Volume"])
         sig = np.asarray(s["Stress"])
         p = -(sig[m, 0] + sig[m, 1] + sig[m, 2]) / 3
+        x = np.asarray(s["Coordinates"])
+        h = 1.5 * math.sqrt(float(np.median(V[m])))  # the scene's h_factor 1.5
         rows.append({"t": float(s["Time"]), "U": float((u[m, 0] * V[m]).sum() / L ** 2),
-                     "V": float((u[m, 1] * V[m]).sum() / L ** 2), "p_min": float(p.min()), "p_max": float(p.max())})
+                     "V": float((u[m, 1] * V[m]).sum() / L ** 2), "p_min": float(p.min()), "p_max": float(p.max()),
+                     "disorder": disorder(x, V, m, h)})
     with open(os.path.join(d, "series.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
@@ -126,9 +182,30 @@ def summarise(d, row):
     w = s["t"] >= T1 - 1e-9
     i05 = int(np.argmin(np.abs(s["t"] - 0.05)))
     Uw = s["U"][w] if w.any() else np.array([math.nan])
-    return {"ref": ref, "mean": Uw.mean() / ref - 1, "sd": Uw.std() / ref, "lo": Uw.min() / ref - 1,
+    dis = s["disorder"][w].mean() if "disorder" in s and w.any() else math.nan
+    return {"disorder": dis, "ref": ref, "mean": Uw.mean() / ref - 1, "sd": Uw.std() / ref, "lo": Uw.min() / ref - 1,
             "hi": Uw.max() / ref - 1, "early": s["U"][i05] / ref - 1, "t": s["t"], "U": s["U"] / ref,
             "vy": np.abs(s["V"]).max() / ref, "p_min": s["p_min"].min(), "drag": F * L * L / (NU * Uw.mean())}
+
+
+def shift_table(runs, S, P):
+    """The shifting set's table (issue 30), if it ran."""
+    sh = [n for n in S if n.startswith(("sh_", "ns_", "shx_", "nsx_"))]
+    if not sh:
+        return
+    key = lambda n: (float(runs[n]["phi"]), int(runs[n]["rows"]), runs[n].get("shifting", "off"),
+                     runs[n].get("background", "momentum"), float(runs[n]["p0"]))
+    P("| phi | L/dr | Flow:shifting | Flow:background_pressure | background pressure (Pa) | lowest pressure (Pa) | "
+      "U / U_SA - 1 at 0.05 s | mean over [%.1f s, t_end] | its standard deviation | disorder over the window | "
+      "wall (s) | steps |" % T1)
+    P("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for n in sorted(sh, key=key):
+        r, s = runs[n], S[n]
+        P("| %.3g | %s | %s | %s | %g | %.1f | %+.1f %% | %+.1f %% | %.1f %% | %.2f %% | %s | %s |" % (
+            float(r["phi"]), r["rows"], r.get("shifting", "off"), r.get("background", "momentum"), float(r["p0"]),
+            s["p_min"], 100 * s["early"], 100 * s["mean"], 100 * s["sd"], 100 * s["disorder"], r["wall_s"],
+            r["steps"]))
+    P("")
 
 
 def cmd_report(a):
@@ -140,6 +217,7 @@ def cmd_report(a):
     lines = []
     P = lines.append
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.4))
+    shift_table(runs, S, P)
     res = sorted((n for n in S if n.startswith("res")), key=lambda n: int(runs[n]["rows"]))
     if res:
         P("| L/dr | a/dr | particles | U / U_SA - 1 at 0.05 s | mean over [%.1f s, t_end] | its standard deviation | "
@@ -204,7 +282,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("resolution", "pressure", "fraction"), cases, reduce_done, cmd_report, jobs=4,
+    batch.study_main(__doc__, ("resolution", "pressure", "fraction", "shifting", "background"), cases, reduce_done, cmd_report, jobs=4,
                      argv=argv)
 
 

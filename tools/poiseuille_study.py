@@ -36,10 +36,13 @@ the steady row means separates the curvature (the effective viscosity nu_eff)
 from the walls' effective positions y0 (base) and y1 (lid), in units of dr;
 and e at t_end is also given against the steady parabola of an effective
 channel H + f dr centred on the real one (f = 1/2, 1), to see whether the
-error is the walls' position. (It is not: the walls lie within 0.05 dr of y = 0
-and H and converge at about second order, while nu_eff stays about 1.5 % low,
-the lattice sum of the viscous operator with its eta^2 = (0.1 h)^2 at
-h = 1.5 dr, printed with the table: a floor at fixed h/dr.)
+error is the walls' position. (With Morris's operator as it was, eta^2 =
+(0.1 h)^2 in it, it was not: the walls lay within 0.05 dr of y = 0 and H and
+converged at about second order, while nu_eff stayed about 1.5 % low, the
+lattice sum of the operator at h = 1.5 dr, printed with the table: a floor
+at fixed h/dr. The operator now has no eta^2 and is divided by its lattice
+moment, mom_visc_lattice in src/physics/momentum.h, so nu_eff is nu on the
+lattice and what is left is the walls', converging at second order.)
 
   python3 tools/poiseuille_study.py --sphseg build-dev/sphseg --out /tmp/pois_study [--table file] [--docs docs]
 
@@ -251,9 +254,10 @@ def table(res, runs, t_end):
             100 * r["fit_resid"], " | ".join("%.2f %%" % (100 * r["shifted"][f]) for f in SHIFTS),
             100 * r["at"].get(t_end, float("nan")), r["spread"], r.get("drift", float("nan"))))
     lat, lat0 = lattice_laplacian()
-    L += ["", "The viscous operator on the lattice (h = 1.5 dr, eta^2 = (0.1 h)^2, far from walls) gives %.4f of the "
-          "Laplacian (%.4f without eta^2): nu_eff / nu - 1 = %+.2f %% at every dr, a steady excess of %+.2f %% "
-          "that does not converge at fixed h/dr." % (lat, lat0, 100 * (lat - 1), 100 * (1 / lat - 1))]
+    L += ["", "Morris's viscous operator on the lattice (h = 1.5 dr, far from walls) gives %.4f of the Laplacian with "
+          "eta^2 = (0.1 h)^2 (the code before issue 30: nu_eff / nu - 1 = %+.2f %% at every dr) and %.4f without it "
+          "(%+.2f %%); the code divides it by that lattice moment (mom_visc_lattice), which leaves nu_eff = nu on "
+          "the lattice." % (lat, 100 * (lat - 1), lat0, 100 * (lat0 - 1))]
     return "\n".join(L) + "\n"
 
 
@@ -293,7 +297,7 @@ def figure(res, t_end, path):
              label="steady fit: walls' offset (y1 - y0) / H - 1 (order %.2f)" % batch.observed_order(h, wall))
     lat = lattice_laplacian()[0]
     b.axhline(100 * (1 - lat), color="0.5", lw=0.8, ls=":",
-              label="1 - lattice sum of the viscous operator (h = 1.5 dr): %.2f %%" % (100 * (1 - lat)))
+              label="the floor of Morris's operator with eta^2 (h = 1.5 dr): %.2f %%" % (100 * (1 - lat)))
     e0 = 100 * res[ns[0]]["at"].get(t_end, np.nan)
     for p, ls in ((1, ":"), (2, "-.")):
         b.loglog(h * 1e3, e0 * (h / h[0]) ** p, "k" + ls, lw=0.8, label="slope %d" % p)

@@ -51,6 +51,9 @@ typedef struct flow_ctx {
                     * alone (m.G = 0: no shear stress, the return mapping with k_mu = 0 keeps it
                     * isotropic and cuts tension), and the viscous force is Morris et al.'s
                     * (1997) pair term (mom_visc_add) */
+    real visc_norm; /* 1 / mom_visc_lattice(dim, h, dr): the viscous term's lattice moment (momentum.h) */
+    real p_back;    /* Flow:background_pressure excluded (Newtonian fluid): 2 p0 / rho^2, added to the pair's
+                     * Pi of (3.9), which then sees sigma + p0 I: a uniform p0 exerts no force; else 0 */
 } flow_ctx;
 
 /* Dummy d's velocity and stress from the sums over the material in its
@@ -177,8 +180,9 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
                 pd += mom_pdiff(stress_pressure(sj) - pi + dpH, volj, f, r2, k->eta2, c->stab == STAB_RIEMANN);
             }
         }
+        if (c->p_back != 0) Pi += c->p_back;
         mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
-        if (c->nu > 0) mom_visc_add(a, volj, c->nu, f, r2, k->eta2, uij);
+        if (c->nu > 0) mom_visc_add(a, volj, c->nu * c->visc_norm, f, uij);
     NBR_END
     team_sum(L, 9, nlanes);
     team_sum(a, 3, nlanes);

@@ -1,0 +1,103 @@
+/* shift.h — particle shifting (Flow:shifting fickian), the regularisation of
+ * Lind, Xu, Stansby & Rogers (2012, J. Comput. Phys. 231, 1499): a Fickian
+ * shift dr_s = -D grad C down the gradient of the particle concentration,
+ * with D = A h |u_i| dt and the anti-clumping term of Monaghan (2000):
+ *
+ *   dr_i = -A h |u_i| dt sum_j V_j (1 + R (W_ij / W(dr))^n) grad_i W_ij,
+ *
+ * R = 0.2, n = 4 (their values, Monaghan's), A = Flow:shift_coeff (Lind et
+ * al. take 2, the default). The sum runs over material
+ * and dummies, so a particle crowding a wall is pushed off it; dummies are
+ * never shifted. At a free surface the particle concentration has a jump
+ * the shift would follow outwards: a particle whose divergence of position
+ * div r_i = -sum_j V_j x_ij . grad_i W_ij is below d - 1/2 (1.5 in 2D,
+ * Lind et al.'s threshold; d in a full support) is not shifted. (Lind et
+ * al. keep the tangential part there, with the normal from grad C; with
+ * the normal from the same sum as the shift that part is the difference of
+ * two tilted estimates, of no reliable sign for a particle displaced along
+ * the surface, so it is left out: the surface layer is not regularised.)
+ *
+ * The shifted particle carries its velocity and stress to its new place by
+ * the first-order Taylor step phi' = phi + dr . grad phi (as Lind et al. do,
+ * with grad phi_i = sum_j V_j (phi_j - phi_i) grad_i W_ij over material and
+ * dummies); C is not corrected: shifting moves a particle with its C and V
+ * unchanged, so sum C_i V_i stays conserved to round-off (a Taylor step of
+ * C would not conserve it). Gather style, one material particle per call;
+ * it runs in the save hook (ST_SHIFT, src/stages.c), after step_save, and
+ * writes only i's start-of-step copies x_n, v_n, sig_n, which no neighbour
+ * reads: the predictor and corrector then start from the shifted state. */
+#ifndef SPHSEG_SHIFT_H
+#define SPHSEG_SHIFT_H
+#include <math.h>
+#include "../core/particles.h"
+#include "grid.h"
+#include "kernel.h"
+#include "sph.h"
+
+enum shift_kind { SHIFT_OFF = 0, SHIFT_FICKIAN = 1 };
+
+typedef struct shift_ctx {
+    sph_ctx k;
+    int kind;   /* enum shift_kind (Flow:shifting) */
+    real A;     /* Flow:shift_coeff, - */
+    real R;     /* anti-clumping weight, 0.2 (Monaghan 2000; Lind et al. 2012) */
+    real w_dr;  /* W(dr), the kernel at the initial spacing */
+    real div_free; /* div r below which a particle is at a free surface: d - 1/2 */
+} shift_ctx;
+
+HD_INLINE shift_ctx shift_make(const sph_ctx *k, int kind, real A)
+{
+    shift_ctx c;
+    c.k = *k;
+    c.kind = kind;
+    c.A = A;
+    c.R = R(0.2);
+    c.w_dr = kernel_w(k->dr, k->h, k->alpha);
+    c.div_free = (real)k->dim - R(0.5);
+    return c;
+}
+
+/* Material particle i at the start of a step of length dt: the shift
+ * dr_i into x_n and the Taylor steps into v_n and sig_n (after step_save).
+ * Lane `lane` of a team of nlanes (hd.h); lane 0 writes. */
+HD_INLINE void shift_team(size_t i, particles_t *p, const grid_view *g, const shift_ctx *c, real dt, int lane,
+                          int nlanes)
+{
+    const sph_ctx *k = &c->k;
+    real gc[3] = {0, 0, 0}, div = 0, gu[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, gs[18];
+    for (int q = 0; q < 18; ++q) gs[q] = 0;
+    const real xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]}, ui[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
+    real si[6];
+    for (int q = 0; q < 6; ++q) si[q] = p->sig[q][i];
+    NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
+        if (j == i) continue;
+        real xij[3];
+        real r2 = grid_pair_xi(k->dim, xi, p->x, j, xij);
+        if (r2 >= k->support2) continue;
+        const real r = (real)sqrt((double)r2), f = kernel_f(r, k->h, k->alpha), V = p->vol[j];
+        const real t = kernel_w(r, k->h, k->alpha) / c->w_dr, t2 = t * t;
+        const real cw = V * (R(1.0) + c->R * t2 * t2) * f, vf = V * f;
+        div -= vf * r2;
+        for (int b = 0; b < 3; ++b) {
+            gc[b] += cw * xij[b];
+            for (int a = 0; a < 3; ++a) gu[3 * a + b] += vf * (p->v[a][j] - ui[a]) * xij[b];
+            for (int q = 0; q < 6; ++q) gs[3 * q + b] += vf * (p->sig[q][j] - si[q]) * xij[b];
+        }
+    NBR_END
+    team_sum(gc, 3, nlanes);
+    team_sum(&div, 1, nlanes);
+    team_sum(gu, 9, nlanes);
+    team_sum(gs, 18, nlanes);
+    if (lane != 0) return;
+    const real speed = (real)sqrt((double)(ui[0] * ui[0] + ui[1] * ui[1] + ui[2] * ui[2]));
+    const real D = c->A * k->h * speed * dt;
+    const real dr[3] = {-D * gc[0], -D * gc[1], -D * gc[2]};
+    if (div < c->div_free) return; /* at a free surface: not shifted */
+    for (int a = 0; a < k->dim; ++a) p->x_n[a][i] += (preal)dr[a];
+    for (int a = 0; a < 3; ++a)
+        p->v_n[a][i] += gu[3 * a] * dr[0] + gu[3 * a + 1] * dr[1] + gu[3 * a + 2] * dr[2];
+    for (int q = 0; q < 6; ++q)
+        p->sig_n[q][i] += gs[3 * q] * dr[0] + gs[3 * q + 1] * dr[1] + gs[3 * q + 2] * dr[2];
+}
+
+#endif
