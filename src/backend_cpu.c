@@ -96,6 +96,26 @@ static void cpu_win_bounds(sim_t *s, const particles_t *q, double *out)
     out[STEP_D] = dmax, out[STEP_WAVE] = wmax, out[STEP_SPEED] = 0, out[STEP_ACC] = 0;
 }
 
+/* Particle shifting (physics/shift.h) of the owned material particles. */
+static void cpu_shift(sim_t *s)
+{
+    particles_t *p = &s->p;
+    const long n = (long)p->n;
+#pragma omp parallel for schedule(dynamic, CPU_CHUNK)
+    for (long i = 0; i < n; ++i)
+        if (p->kind[i] == KIND_MATERIAL) shift_team((size_t)i, p, &s->grid.view, &s->shift, (real)s->dt, 0, 1);
+}
+
+/* The Shepard filter (3.12) of the owned material particles, into dsig. */
+static void cpu_shepard(sim_t *s)
+{
+    particles_t *p = &s->p;
+    const long n = (long)p->n;
+#pragma omp parallel for schedule(dynamic, CPU_CHUNK)
+    for (long i = 0; i < n; ++i)
+        if (p->kind[i] == KIND_MATERIAL) flow_shepard((size_t)i, p, &s->grid.view, &s->flow);
+}
+
 /* Run stage id of the table (src/stages.h) for call c; returns 0 when the
  * call leaves it out (prepare without classification, say). The loops:
  * streaming ones schedule(static), neighbour loops dynamic (top). */
@@ -140,11 +160,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
 #pragma omp parallel for schedule(static)
         for (long i = 0; i < n; ++i) step_save((size_t)i, p, s->flow_on);
         return 1;
-    case ST_SHIFT:
-#pragma omp parallel for schedule(dynamic, CPU_CHUNK)
-        for (long i = 0; i < n; ++i)
-            if (p->kind[i] == KIND_MATERIAL) shift_team((size_t)i, p, &s->grid.view, &s->shift, (real)s->dt, 0, 1);
-        return 1;
+    case ST_SHIFT: cpu_shift(s); return 1;
     case ST_ADVANCE: { /* step_advance does x, u, sigma, C and gsum in one pass: ST_ADVANCE_C, _GSUM */
         const int seg = s->seg_on && !s->win.on;
 #pragma omp parallel for schedule(static)
@@ -170,11 +186,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         for (long i = 0; i < n; ++i) step_conc_advance((size_t)i, p, as, c->half);
         return 1;
     }
-    case ST_SHEPARD:
-#pragma omp parallel for schedule(dynamic, CPU_CHUNK)
-        for (long i = 0; i < n; ++i)
-            if (p->kind[i] == KIND_MATERIAL) flow_shepard((size_t)i, p, &s->grid.view, &s->flow);
-        return 1;
+    case ST_SHEPARD: cpu_shepard(s); return 1;
     case ST_SHEPARD_STORE:
 #pragma omp parallel for schedule(static)
         for (long i = 0; i < n; ++i) flow_shepard_store((size_t)i, p);

@@ -48,6 +48,13 @@ static void save_all(particles_t *p)
     }
 }
 
+/* Fickian shifting at its default coefficient on the 2D kernel at h = 1.5 dr. */
+static shift_ctx fickian(void)
+{
+    sph_ctx k = sph_make(2, (real)(1.5 * DR), (real)DR);
+    return shift_make(&k, SHIFT_FICKIAN, 2);
+}
+
 static void test_lattice_moment(void **st)
 {
     (void)st;
@@ -59,24 +66,20 @@ static void test_lattice_moment(void **st)
 
 static void test_visc_quadratic(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
+    tu_fx *f = *st;
     flow_ctx c;
     memset(&c, 0, sizeof c);
     c.k = sph_make(2, (real)(1.5 * DR), (real)DR);
     c.rho = 1000, c.nu = (real)1e-3;
     c.visc_norm = R(1.0) / mom_visc_lattice(2, c.k.h, c.k.dr);
     int n = 12;
-    tu_block2d(&p, n, n, DR, 0, 0);
-    for (size_t i = 0; i < p.n; ++i) p.v[0][i] = p.x[1][i] * p.x[1][i];
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-    size_t i = centre(&p, n);
-    flow_rates(i, &p, &g.view, &c);
-    assert_true(fabs(p.acc[0][i] - 2 * c.nu) < RT(1e-9) * 2 * c.nu);
-    assert_true(fabs(p.acc[1][i]) < RT(1e-9) * 2 * c.nu);
-    nbr_free(&g);
-    part_free(&p);
+    tu_block2d(&f->p, n, n, DR, 0, 0);
+    for (size_t i = 0; i < f->p.n; ++i) f->p.v[0][i] = f->p.x[1][i] * f->p.x[1][i];
+    nbr_build(&f->g, &f->p, R(2.0) * c.k.h, NULL);
+    size_t i = centre(&f->p, n);
+    flow_rates(i, &f->p, &f->g.view, &c);
+    assert_true(fabs(f->p.acc[0][i] - 2 * c.nu) < RT(1e-9) * 2 * c.nu);
+    assert_true(fabs(f->p.acc[1][i]) < RT(1e-9) * 2 * c.nu);
 }
 
 /* A 14 x 14 block moving at u0 along x, particle `moved` displaced by d
@@ -97,27 +100,19 @@ static size_t shifted_block(particles_t *p, nbr_grid *g, const shift_ctx *c, dou
 
 static void test_shift_lattice(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
-    sph_ctx k = sph_make(2, (real)(1.5 * DR), (real)DR);
-    shift_ctx c = shift_make(&k, SHIFT_FICKIAN, 2);
-    size_t i = shifted_block(&p, &g, &c, 0, 0, 1e-4);
-    for (int a = 0; a < 2; ++a) assert_true(fabs((double)(p.x_n[a][i] - (preal)p.x[a][i])) < RT(1e-12) * DR);
-    nbr_free(&g);
-    part_free(&p);
+    tu_fx *f = *st;
+    shift_ctx c = fickian();
+    size_t i = shifted_block(&f->p, &f->g, &c, 0, 0, 1e-4);
+    for (int a = 0; a < 2; ++a) assert_true(fabs((double)(f->p.x_n[a][i] - (preal)f->p.x[a][i])) < RT(1e-12) * DR);
 }
 
 static void test_shift_back(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
-    sph_ctx k = sph_make(2, (real)(1.5 * DR), (real)DR);
-    shift_ctx c = shift_make(&k, SHIFT_FICKIAN, 2);
+    tu_fx *f = *st;
+    shift_ctx c = fickian();
     const double dt = 1e-4, dx = 0.2, dy = 0.1;
-    size_t i = shifted_block(&p, &g, &c, dx, dy, dt);
-    double s[2] = {(double)(p.x_n[0][i] - (preal)p.x[0][i]), (double)(p.x_n[1][i] - (preal)p.x[1][i])};
+    size_t i = shifted_block(&f->p, &f->g, &c, dx, dy, dt);
+    double s[2] = {(double)(f->p.x_n[0][i] - (preal)f->p.x[0][i]), (double)(f->p.x_n[1][i] - (preal)f->p.x[1][i])};
     /* back towards the site: against the displacement, not along it */
     double along = (s[0] * dx + s[1] * dy) / hypot(dx, dy), len = hypot(s[0], s[1]);
     assert_true(along < -0.9 * len);
@@ -126,48 +121,41 @@ static void test_shift_back(void **st)
     assert_true(len > 0.1 * D * hypot(dx, dy) * DR / (1.5 * DR * 1.5 * DR));
     assert_true(len < 10 * D * hypot(dx, dy) * DR / (1.5 * DR * 1.5 * DR));
     /* nothing else changed: the others' copies, every C and volume */
-    for (size_t j = 0; j < p.n; ++j) {
-        assert_true(p.C_n[j] == p.C[j]);
-        assert_true(p.vol[j] == (real)(DR * DR));
+    for (size_t j = 0; j < f->p.n; ++j) {
+        assert_true(f->p.C_n[j] == f->p.C[j]);
+        assert_true(f->p.vol[j] == (real)(DR * DR));
         if (j == i) continue;
-        for (int a = 0; a < 3; ++a) assert_true(p.x_n[a][j] == (preal)p.x[a][j]);
+        for (int a = 0; a < 3; ++a) assert_true(f->p.x_n[a][j] == (preal)f->p.x[a][j]);
     }
     /* uniform velocity: the Taylor step adds nothing */
-    assert_true(fabs(p.v_n[0][i] - (real)0.1) < RT(1e-12));
-    nbr_free(&g);
-    part_free(&p);
+    assert_true(fabs(f->p.v_n[0][i] - (real)0.1) < RT(1e-12));
 }
 
 static void test_shift_taylor(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
-    sph_ctx k = sph_make(2, (real)(1.5 * DR), (real)DR);
-    shift_ctx c = shift_make(&k, SHIFT_FICKIAN, 2);
+    tu_fx *f = *st;
+    shift_ctx c = fickian();
     int n = 14;
-    tu_block2d(&p, n, n, DR, 0, 0);
+    tu_block2d(&f->p, n, n, DR, 0, 0);
     const double G[2][2] = {{3, 1}, {-2, 0.5}}, S = 1e5; /* 1/s; Pa/m */
     size_t i0 = (size_t)((n / 2) * n + n / 2);
-    p.x[0][i0] += (real)(0.2 * DR), p.x[1][i0] += (real)(0.1 * DR);
-    for (size_t i = 0; i < p.n; ++i) {
-        for (int a = 0; a < 2; ++a) p.v[a][i] = (real)(0.1 * (a == 0) + G[a][0] * p.x[0][i] + G[a][1] * p.x[1][i]);
-        p.sig[3][i] = (real)(S * p.x[0][i]);
+    f->p.x[0][i0] += (real)(0.2 * DR), f->p.x[1][i0] += (real)(0.1 * DR);
+    for (size_t i = 0; i < f->p.n; ++i) {
+        for (int a = 0; a < 2; ++a) f->p.v[a][i] = (real)(0.1 * (a == 0) + G[a][0] * f->p.x[0][i] + G[a][1] * f->p.x[1][i]);
+        f->p.sig[3][i] = (real)(S * f->p.x[0][i]);
     }
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-    save_all(&p);
-    size_t i = centre(&p, n);
-    shift_team(i, &p, &g.view, &c, (real)1e-3, 0, 1);
-    double s[2] = {(double)(p.x_n[0][i] - (preal)p.x[0][i]), (double)(p.x_n[1][i] - (preal)p.x[1][i])};
+    nbr_build(&f->g, &f->p, R(2.0) * c.k.h, NULL);
+    save_all(&f->p);
+    size_t i = centre(&f->p, n);
+    shift_team(i, &f->p, &f->g.view, &c, (real)1e-3, 0, 1);
+    double s[2] = {(double)(f->p.x_n[0][i] - (preal)f->p.x[0][i]), (double)(f->p.x_n[1][i] - (preal)f->p.x[1][i])};
     assert_true(hypot(s[0], s[1]) > 0);
     for (int a = 0; a < 2; ++a) {
-        double want = G[a][0] * s[0] + G[a][1] * s[1], got = p.v_n[a][i] - p.v[a][i];
+        double want = G[a][0] * s[0] + G[a][1] * s[1], got = f->p.v_n[a][i] - f->p.v[a][i];
         assert_true(fabs(got - want) < 0.03 * (fabs(G[a][0] * s[0]) + fabs(G[a][1] * s[1])));
     }
-    assert_true(fabs((p.sig_n[3][i] - p.sig[3][i]) - S * s[0]) < 0.03 * fabs(S * s[0]));
-    assert_true(p.sig_n[0][i] == p.sig[0][i]);
-    nbr_free(&g);
-    part_free(&p);
+    assert_true(fabs((f->p.sig_n[3][i] - f->p.sig[3][i]) - S * s[0]) < 0.03 * fabs(S * s[0]));
+    assert_true(f->p.sig_n[0][i] == f->p.sig[0][i]);
 }
 
 static void test_shift_surface(void **st)
@@ -201,39 +189,35 @@ static void test_shift_surface(void **st)
 
 static void test_background_excluded(void **st)
 {
-    (void)st;
-    particles_t p;
-    nbr_grid g = {0};
+    tu_fx *f = *st;
     flow_ctx c;
     memset(&c, 0, sizeof c);
     c.k = sph_make(2, (real)(1.5 * DR), (real)DR);
     c.rho = 1500, c.nu = (real)1e-3, c.visc_norm = 1;
     const double p0 = 300;
     int n = 12;
-    tu_block2d(&p, n, n, DR, 0, 0);
+    tu_block2d(&f->p, n, n, DR, 0, 0);
     size_t i0 = (size_t)((n / 2) * n + n / 2);
-    p.x[0][i0] += (real)(0.2 * DR), p.x[1][i0] -= (real)(0.1 * DR);
-    for (size_t i = 0; i < p.n; ++i)
-        for (int q = 0; q < 3; ++q) p.sig[q][i] = (real)-p0;
-    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-    size_t i = tu_find(&p, (int64_t)i0);
-    flow_rates(i, &p, &g.view, &c);
-    const double push = hypot(p.acc[0][i], p.acc[1][i]), scale = 2 * p0 / (c.rho * DR);
+    f->p.x[0][i0] += (real)(0.2 * DR), f->p.x[1][i0] -= (real)(0.1 * DR);
+    for (size_t i = 0; i < f->p.n; ++i)
+        for (int q = 0; q < 3; ++q) f->p.sig[q][i] = (real)-p0;
+    nbr_build(&f->g, &f->p, R(2.0) * c.k.h, NULL);
+    size_t i = tu_find(&f->p, (int64_t)i0);
+    flow_rates(i, &f->p, &f->g.view, &c);
+    const double push = hypot(f->p.acc[0][i], f->p.acc[1][i]), scale = 2 * p0 / (c.rho * DR);
     assert_true(push > 0.01 * scale); /* in the pair term: a force */
     c.p_back = (real)(2 * p0 / (c.rho * c.rho));
-    flow_rates(i, &p, &g.view, &c);
-    assert_true(hypot(p.acc[0][i], p.acc[1][i]) < RT(1e-12) * scale); /* left out: none */
-    nbr_free(&g);
-    part_free(&p);
+    flow_rates(i, &f->p, &f->g.view, &c);
+    assert_true(hypot(f->p.acc[0][i], f->p.acc[1][i]) < RT(1e-12) * scale); /* left out: none */
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_lattice_moment), cmocka_unit_test(test_visc_quadratic),
-        cmocka_unit_test(test_shift_lattice),  cmocka_unit_test(test_shift_back),
-        cmocka_unit_test(test_shift_taylor),   cmocka_unit_test(test_shift_surface),
-        cmocka_unit_test(test_background_excluded),
+        cmocka_unit_test(test_lattice_moment), TU_FX_TEST(test_visc_quadratic),
+        TU_FX_TEST(test_shift_lattice),  TU_FX_TEST(test_shift_back),
+        TU_FX_TEST(test_shift_taylor),   cmocka_unit_test(test_shift_surface),
+        TU_FX_TEST(test_background_excluded),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

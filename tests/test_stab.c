@@ -55,71 +55,69 @@ static void hydrostatic(particles_t *p, const flow_ctx *c, int nx, int ny)
     }
 }
 
-static void test_hydrostatic_at_rest(void **st)
+/* A hydrostatic column at rest under stabilisation stab: no stress rate anywhere. */
+static void hydrostatic_at_rest(tu_fx *f, int stab)
 {
-    (void)st;
-    for (int stab = STAB_RIEMANN; stab <= STAB_DELTA; ++stab) {
-        particles_t p;
-        nbr_grid g = {0};
-        flow_ctx c = ctx(stab);
-        hydrostatic(&p, &c, 10, 8);
-        nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-        /* the rate of a pressure change the size of one row's weight per acoustic time h / c_s */
-        double scale = c.rho * 9.81 * DR * c.cs / c.k.h;
-        for (size_t i = 0; i < p.n; ++i) {
-            if (p.kind[i] != KIND_MATERIAL) continue;
-            flow_rates(i, &p, &g.view, &c);
-            for (int q = 0; q < 6; ++q) assert_true(fabs((double)p.dsig[q][i]) <= RT(1e-9) * scale);
-        }
-        nbr_free(&g);
-        part_free(&p);
+    flow_ctx c = ctx(stab);
+    hydrostatic(&f->p, &c, 10, 8);
+    tu_fx_list(f, c.k.h);
+    /* the rate of a pressure change the size of one row's weight per acoustic time h / c_s */
+    double scale = c.rho * 9.81 * DR * c.cs / c.k.h;
+    for (size_t i = 0; i < f->p.n; ++i) {
+        if (f->p.kind[i] != KIND_MATERIAL) continue;
+        flow_rates(i, &f->p, &f->g.view, &c);
+        for (int q = 0; q < 6; ++q) assert_true(fabs((double)f->p.dsig[q][i]) <= RT(1e-9) * scale);
     }
 }
 
-static void test_conservation_and_sign(void **st)
+static void test_hydrostatic_riemann(void **st) { hydrostatic_at_rest(*st, STAB_RIEMANN); }
+static void test_hydrostatic_delta(void **st) { hydrostatic_at_rest(*st, STAB_DELTA); }
+
+/* A rough pressure field with a bump, no walls, no gravity: sum V dp/dt = 0, the bump's
+ * rate negative and its neighbour's positive, the rate isotropic. */
+static void conservation_and_sign(tu_fx *f, int stab)
 {
-    (void)st;
-    for (int stab = STAB_RIEMANN; stab <= STAB_DELTA; ++stab) {
-        particles_t p;
-        nbr_grid g = {0};
-        flow_ctx c = ctx(stab);
-        c.g[1] = 0;
-        int n = 9;
-        tu_block2d(&p, n, n, DR, 0, 0);
-        unsigned s = 12345u;
-        for (size_t i = 0; i < p.n; ++i) { /* a rough pressure field, and a bump in the middle */
-            s = s * 1103515245u + 12345u;
-            double pr = 1000 + 300 * ((s >> 8) & 1023) / 1023.0;
-            for (int q = 0; q < 3; ++q) p.sig[q][i] = (real)-pr;
-        }
-        size_t b = tu_find(&p, (int64_t)((n / 2) * n + n / 2));
-        for (int q = 0; q < 3; ++q) p.sig[q][b] -= 5000;
-        nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-        double sum = 0, mag = 0;
-        for (size_t i = 0; i < p.n; ++i) {
-            flow_rates(i, &p, &g.view, &c);
-            double dp = -(double)p.dsig[0][i]; /* dp/dt; the normal rates all equal, the shear ones zero */
-            assert_true(fabs((double)p.dsig[1][i] - p.dsig[0][i]) <= RT(1e-12) * (fabs(dp) + 1));
-            assert_true(fabs((double)p.dsig[3][i]) <= RT(1e-12) * (fabs(dp) + 1));
-            sum += (double)p.vol[i] * dp, mag += (double)p.vol[i] * fabs(dp);
-        }
-        assert_true(fabs(sum) <= RT(1e-12) * mag);
-        flow_rates(b, &p, &g.view, &c);
-        assert_true(p.dsig[0][b] > 0); /* dp/dt < 0 at the bump */
-        size_t nb = tu_find(&p, (int64_t)((n / 2) * n + n / 2 + 1));
-        flow_rates(nb, &p, &g.view, &c);
-        assert_true(p.dsig[0][nb] < 0); /* and > 0 beside it */
-        nbr_free(&g);
-        part_free(&p);
+    particles_t *p = &f->p;
+    flow_ctx c = ctx(stab);
+    c.g[1] = 0;
+    int n = 9;
+    tu_block2d(p, n, n, DR, 0, 0);
+    unsigned s = 12345u;
+    for (size_t i = 0; i < p->n; ++i) {
+        s = s * 1103515245u + 12345u;
+        double pr = 1000 + 300 * ((s >> 8) & 1023) / 1023.0;
+        for (int q = 0; q < 3; ++q) p->sig[q][i] = (real)-pr;
     }
+    size_t b = tu_find(p, (int64_t)((n / 2) * n + n / 2));
+    for (int q = 0; q < 3; ++q) p->sig[q][b] -= 5000;
+    tu_fx_list(f, c.k.h);
+    double sum = 0, mag = 0;
+    for (size_t i = 0; i < p->n; ++i) {
+        flow_rates(i, p, &f->g.view, &c);
+        double dp = -(double)p->dsig[0][i]; /* dp/dt; the normal rates all equal, the shear ones zero */
+        assert_true(fabs((double)p->dsig[1][i] - p->dsig[0][i]) <= RT(1e-12) * (fabs(dp) + 1));
+        assert_true(fabs((double)p->dsig[3][i]) <= RT(1e-12) * (fabs(dp) + 1));
+        sum += (double)p->vol[i] * dp, mag += (double)p->vol[i] * fabs(dp);
+    }
+    assert_true(fabs(sum) <= RT(1e-12) * mag);
+    flow_rates(b, p, &f->g.view, &c);
+    assert_true(p->dsig[0][b] > 0); /* dp/dt < 0 at the bump */
+    size_t nb = tu_find(p, (int64_t)((n / 2) * n + n / 2 + 1));
+    flow_rates(nb, p, &f->g.view, &c);
+    assert_true(p->dsig[0][nb] < 0); /* and > 0 beside it */
 }
+
+static void test_conservation_riemann(void **st) { conservation_and_sign(*st, STAB_RIEMANN); }
+static void test_conservation_delta(void **st) { conservation_and_sign(*st, STAB_DELTA); }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_riemann_pair),
-        cmocka_unit_test(test_hydrostatic_at_rest),
-        cmocka_unit_test(test_conservation_and_sign),
+        TU_FX_TEST(test_hydrostatic_riemann),
+        TU_FX_TEST(test_hydrostatic_delta),
+        TU_FX_TEST(test_conservation_riemann),
+        TU_FX_TEST(test_conservation_delta),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
