@@ -21,6 +21,8 @@ sys.path.insert(0, HERE)
 import drum_analysis as da  # noqa: E402
 import snap  # noqa: E402
 
+TRAPZ = getattr(np, "trapezoid", None) or np.trapz  # numpy 2 renamed it
+
 
 def layer(d):
     frac, pts = d.midchord(400)
@@ -33,7 +35,7 @@ def layer(d):
     dep, ut = dep[ok], ut[ok]
     k = np.argmax(ut < 0) if np.any(ut < 0) else len(ut) - 1
     delta = dep[k]
-    Q = np.trapz(ut[: k + 1], dep[: k + 1])
+    Q = TRAPZ(ut[: k + 1], dep[: k + 1])
     Mn, M2 = float(np.dot(d.M, d.n)), float(np.dot(d.M, d.M))
     L2 = d.R ** 2 - (M2 - Mn * Mn)  # half chord^2: R^2 - (distance of the surface line from the centre)^2
     return delta, Q, ut.max(), L2
