@@ -557,12 +557,8 @@ static void flow_ctx_of(const struct scene *sc, const sph_ctx *k, const seg_para
     f->alpha_av = (real)sc->flow.alpha_av;
     f->stab = flow_stab_of(sc);
     f->eta_r = (real)sc->flow.riemann_eta;
-    /* the pressure diffusion (momentum.h mom_pdiff): riemann with
-     * Flow:riemann_diffusion on K / (rho c_s), the continuity dissipation of the
-     * acoustic Riemann solver (dp = (K / rho) drho); delta 2 delta h c_s; else 0 */
-    f->pdiff = f->stab == STAB_RIEMANN ? (sc->flow.riemann_diffusion ? f->m.K / (f->rho * f->cs) : R(0.0))
-             : f->stab == STAB_DELTA   ? R(2.0) * (real)sc->flow.delta * k->h * f->cs
-                                       : R(0.0);
+    f->pdiff = flow_pdiff_coef(f->stab, (int)sc->flow.riemann_diffusion, (real)sc->flow.delta, f->m.K, f->rho,
+                               f->cs, k->h);
     for (int d = 0; d < 3; ++d) f->g[d] = (real)sc->physics.gravity[d];
     f->sp = *sp;
 }

@@ -2,7 +2,8 @@
  * mom_riemann, mom_pdiff; flow.h flow_rates_team), against exact answers:
  *  - the Riemann pair term (Zhang, Hu & Adams 2017 with their limiter):
  *    none for separating pairs, -eta dU^2 / rho below the cap (so quadratic
- *    in the closing speed dU), -c dU / rho above it, to round-off;
+ *    in the closing speed dU), -c dU / rho above it and against a wall, to
+ *    round-off;
  *  - the pressure diffusion leaves a hydrostatic column at rest untouched,
  *    free surface included, where the support is cut: the pair differences
  *    less rho g.x_ji vanish pair by pair (a wrong sign of the hydrostatic part
@@ -24,7 +25,7 @@ static flow_ctx ctx(int stab)
     flow_ctx c = tu_flow_ctx(1e5, DR);
     c.stab = stab;
     c.eta_r = 3;
-    c.pdiff = stab == STAB_RIEMANN ? c.m.K / (c.rho * c.cs) : R(2.0) * R(0.1) * c.k.h * c.cs;
+    c.pdiff = flow_pdiff_coef(stab, 1, R(0.1), c.m.K, c.rho, c.cs, c.k.h); /* riemann with its diffusion on */
     return c;
 }
 
@@ -34,13 +35,15 @@ static void test_riemann_pair(void **st)
     const real rho = 1500, c = 3, eta = 3;
     real x[3] = {(real)DR, 0, 0}, r2 = (real)(DR * DR);
     real sep[3] = {R(0.01), 0, 0}; /* u_ij . x_ij > 0: separating */
-    assert_true(mom_riemann(eta, c, rho, sep, x, r2) == 0);
+    assert_true(mom_riemann(eta, c, rho, sep, x, r2, 0) == 0);
     real slow[3] = {R(-0.02), R(0.05), 0}; /* closing at dU = 0.02 m/s, a shear part that does not count */
     double want = -3.0 * 0.02 * 0.02 / 1500;
-    assert_true(fabs(mom_riemann(eta, c, rho, slow, x, r2) - want) <= RT(1e-12) * fabs(want));
+    assert_true(fabs(mom_riemann(eta, c, rho, slow, x, r2, 0) - want) <= RT(1e-12) * fabs(want));
     real fast[3] = {R(-2.0), 0, 0}; /* eta dU = 6 > c: the cap */
     want = -3.0 * 2.0 / 1500;
-    assert_true(fabs(mom_riemann(eta, c, rho, fast, x, r2) - want) <= RT(1e-12) * fabs(want));
+    assert_true(fabs(mom_riemann(eta, c, rho, fast, x, r2, 0) - want) <= RT(1e-12) * fabs(want));
+    want = -3.0 * 0.02 / 1500; /* a wall dummy: unlimited, beta = c at any closing speed */
+    assert_true(fabs(mom_riemann(eta, c, rho, slow, x, r2, 1) - want) <= RT(1e-12) * fabs(want));
 }
 
 /* Hydrostatic stress -p I, p = rho |g| (H - y), on a block with dummy rows

@@ -56,6 +56,18 @@ typedef struct flow_ctx {
                      * Pi of (3.9), which then sees sigma + p0 I: a uniform p0 exerts no force; else 0 */
 } flow_ctx;
 
+/* The pressure diffusion's coefficient flow_ctx.pdiff (mom_pdiff) from the
+ * bulk modulus K, the density rho, the sound speed cs and the kernel's h:
+ * riemann with its diffusion on, K / (rho c_s), the acoustic Riemann
+ * solver's continuity dissipation written for the pressure (dp = (K / rho)
+ * drho); delta, 2 delta h c_s (Antuono et al. 2010); else 0 (none). */
+HD_INLINE real flow_pdiff_coef(int stab, int riemann_diffusion, real delta, real K, real rho, real cs, real h)
+{
+    if (stab == STAB_RIEMANN) return riemann_diffusion ? K / (rho * cs) : R(0.0);
+    if (stab == STAB_DELTA) return R(2.0) * delta * h * cs;
+    return R(0.0);
+}
+
 /* Dummy d's velocity and stress from the sums over the material in its
  * support (ws.w = 0: none in reach, the wall's velocity and zero stress). */
 HD_INLINE void flow_wall_set(size_t d, particles_t *p, const flow_ctx *c, const wall_sums *wsp)
@@ -169,10 +181,8 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
         if (c->stab == STAB_MONAGHAN) {
             if (c->alpha_av > 0) Pi = mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij);
         } else {
-            /* against a wall (a dummy j) the acoustic Riemann problem unlimited (beta = c_s):
-             * the limiter is for the shear of the bulk, not for a particle closing on a wall */
             if (c->stab == STAB_RIEMANN)
-                Pi = mom_riemann(p->kind[j] == KIND_MATERIAL ? c->eta_r : R(1e30), c->cs, c->rho, uij, xij, r2);
+                Pi = mom_riemann(c->eta_r, c->cs, c->rho, uij, xij, r2, p->kind[j] != KIND_MATERIAL);
             /* the pressure difference less its hydrostatic part rho g.x_ji (Fourtakas et al.
              * 2019): a free surface, where the support is cut, is not driven by rho g */
             if (c->pdiff > 0) {

@@ -52,13 +52,16 @@ HD_INLINE real mom_av(real alpha, real cs, real h, real rho_i, real rho_j, const
  * pairs, else 0: quadratic in the closing speed below c / eta, where
  * Monaghan's (3.10) is linear in it with the factor alpha c h / r, so that a
  * smooth shear flow (dU ~ gdot r) feels it as a viscosity eta gdot r^2, not
- * alpha c h. No c in it below the cap: it does not follow the stiffness E. */
-HD_INLINE real mom_riemann(real eta, real cs, real rho, const real uij[3], const real xij[3], real r2)
+ * alpha c h. No c in it below the cap: it does not follow the stiffness E.
+ * Against a wall (j a dummy, wall set) the acoustic Riemann problem is taken
+ * unlimited, beta = c: the limiter is for the shear of the bulk, not for a
+ * particle closing on a wall. */
+HD_INLINE real mom_riemann(real eta, real cs, real rho, const real uij[3], const real xij[3], real r2, int wall)
 {
     real ux = uij[0] * xij[0] + uij[1] * xij[1] + uij[2] * xij[2];
     if (ux >= 0 || r2 <= 0) return 0;
     real dU = -ux / (real)sqrt((double)r2);
-    real beta = eta * dU < cs ? eta * dU : cs;
+    real beta = wall || eta * dU >= cs ? cs : eta * dU;
     return -beta * dU / rho;
 }
 
