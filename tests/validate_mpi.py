@@ -91,6 +91,10 @@ CASES = [
     ("drum_EV_metis", "drum_2d_EV.yml", 800, DRUM + ["Parallel:method=metis"], "migrate"),
     # Flow:stabilization riemann (physics/momentum.h): its pair terms read the ghosts' stress and kind
     ("drum_EV_riemann", "drum_2d_EV.yml", 800, DRUM + ["Flow:stabilization=riemann"], "migrate"),
+    # delta-SPH pressure diffusion (physics/momentum.h mom_pdiff): reads the ghosts' pressure and position
+    ("drum_EV_delta", "drum_2d_EV.yml", 400, DRUM + ["Flow:stabilization=delta"], None),
+    # shifting of the granular material (ST_SHIFT) with the tensorial yield, on a rotating drum
+    ("drum_EV_shift", "drum_2d_EV.yml", 400, DRUM + ["Flow:shifting=fickian", "Material:yield=mu_I"], None),
     # periodic axes (Geometry:periodic, mpi/halo.h): a layer sliding down a
     # 40-degree incline, periodic along x; slabs cut across the period (x) and
     # along it (y), and a 3D layer periodic along x and z

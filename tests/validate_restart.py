@@ -241,6 +241,21 @@ def test_drum(args):
     stop_restart(args, "drum", DRUM, DRUM_P, 73, 160)
 
 
+# Issue 30's options, each of which keeps state or changes what a step reads:
+# the Riemann dissipation with shifting, the excluded background pressure and
+# the tensorial yield surface together; the delta-SPH pressure diffusion alone.
+OPTION_CASES = [
+    ("drum_riemann_shift_mu_I", ["Flow:stabilization=riemann", "Flow:shifting=fickian",
+                                 "Flow:background_pressure=excluded", "Material:yield=mu_I"]),
+    ("drum_delta", ["Flow:stabilization=delta"]),
+]
+
+
+def test_options(args):
+    for name, keys in OPTION_CASES:
+        stop_restart(args, name, DRUM, DRUM_P + keys, 73, 160)
+
+
 def mpi(np_):
     return ["mpirun", "--oversubscribe", "--allow-run-as-root", "-np", str(np_)]
 
@@ -434,6 +449,7 @@ def main():
     test_walltime(args)
     test_badfile(args, box_a)
     test_drum(args)
+    test_options(args)
     test_drum_ranks(args)
     test_chute(args)
     test_silo(args)
