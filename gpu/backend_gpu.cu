@@ -1,4 +1,7 @@
-/* backend_gpu.cu — the CUDA backend (struct backend, src/sim.h).
+/* gpu/backend_gpu.cu — the CUDA backend (struct backend, src/sim.h): its
+ * registration, the bounds and the check (the step's one synchronisation),
+ * the copies to and from the host, the end of a run; the design of the
+ * whole backend (gpu/README.md lists its units).
  *
  * The particle arrays live on the device for the whole run; the host copy
  * s->p is refreshed only by to_host (snapshots, diagnostics, error reports).
@@ -39,7 +42,7 @@
  * Ghosts are HALO 3 lattice cells deep (ghost_depth), so that a set made at
  * a list build still covers the 2h + 2 skin that a Verlet list needs while
  * particles move. At a build the device migrates particles and makes fresh
- * ghosts itself (gpu_exchange.cuh: the decisions of mpi/halo.c through
+ * ghosts itself (gpu_exchange.cu: the decisions of mpi/halo.c through
  * mpi/halo_geom.h, bit for bit; the host sees counts), and the send and
  * receive lists follow the device sort on the device (hx_sorted);
  * SPHSEG_GPU_HOSTX=1 takes the old path through the host (the owned arrays
@@ -56,39 +59,15 @@
  * the ghosts arrive; likewise the shear-rate refresh overlaps the
  * concentration rates of levels >= 2. Each particle is computed by the same
  * body whatever the pass, so results do not depend on the overlap. */
-#include <math.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <time.h>
-#include <unistd.h>
-#include <cuda_runtime.h>
-#include <cub/device/device_radix_sort.cuh>
-#include <cub/device/device_reduce.cuh>
-#include <cub/device/device_scan.cuh>
-#include <thrust/iterator/counting_iterator.h>
-#include <thrust/iterator/transform_iterator.h>
-extern "C" {
-#include "core/error.h"
-#include "core/tuning.h"
-#include "mpi/comm.h"
-#include "sim.h"
-#include "stages.h"
-}
+#include "gpu.cuh"
 
-/* The backend is one translation unit (no relocatable device code): its parts,
- * by concern, in this order. */
-#include "gpu_store.cuh"
-#include "gpu_launch.cuh"
-#include "gpu_setup.cuh"
-#include "gpu_nbr.cuh"
-#include "gpu_halo.cuh"
-#include "gpu_ipc.cuh"
-#include "gpu_exchange.cuh"
-#include "gpu_step.cuh"
-
+int g_local_rank;
+struct gpu_prof prof;
+static const char *prof_name[P_NPROF] = {"save start, advance, motion", "bounding box (+sync)",
+                                          "cell keys, radix sort, start/end", "permute arrays", "neighbour list",
+                                          "HCSR classification", "dummy walls, renormalisation L",
+                                          "flow rates (+seg. coefficients)", "concentration rates", "Shepard filter",
+                                          "dt bounds, blow-up check (+sync)"};
 
 /* Owned particles only: no refresh needs to land first. */
 static void gpu_bounds(sim_t *s, double out[STEP_NBOUNDS])
