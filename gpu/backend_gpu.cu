@@ -59,7 +59,7 @@
  * the ghosts arrive; likewise the shear-rate refresh overlaps the
  * concentration rates of levels >= 2. Each particle is computed by the same
  * body whatever the pass, so results do not depend on the overlap. */
-#include "gpu.cuh"
+#include "gpu_reduce.cuh"
 
 int g_local_rank;
 struct gpu_prof prof;

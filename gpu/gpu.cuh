@@ -5,8 +5,9 @@
  * permutation and refresh tables, the pass selections, the device halo
  * state, gpu_t (the device store, the cell and neighbour lists, the pending
  * stages), the per-stage profiler (SPHSEG_GPU_PROFILE); the launches and
- * reductions (gpu_launch.cuh); the functions one unit calls in another, by
- * the unit that defines them. */
+ * the reductions' functors (gpu_launch.cuh; reduce itself, with CUB, in
+ * gpu_reduce.cuh); the functions one unit calls in another, by the unit
+ * that defines them. */
 #ifndef SPHSEG_GPU_CUH
 #define SPHSEG_GPU_CUH
 
@@ -19,9 +20,6 @@
 #include <time.h>
 #include <unistd.h>
 #include <cuda_runtime.h>
-#include <cub/device/device_reduce.cuh>
-#include <thrust/iterator/counting_iterator.h>
-#include <thrust/iterator/transform_iterator.h>
 extern "C" {
 #include "core/error.h"
 #include "core/tuning.h"

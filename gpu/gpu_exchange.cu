@@ -15,7 +15,7 @@
  * measuring and comparing the two. */
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
-#include "gpu.cuh"
+#include "gpu_reduce.cuh"
 
 /* ---- the decomposition on the device ------------------------------------ */
 

@@ -1,8 +1,8 @@
 /* gpu/gpu_launch.cuh — launching, included by gpu.cuh (templates: each unit
  * instantiates the kernels it launches): one thread per particle (each),
  * teams of T threads per particle for the neighbour loops (team, the launch
- * bounds); and the CUB reductions with their functors (bounding box,
- * bounds, the blow-up check). */
+ * bounds); and the functors of the reductions (bounding box, bounds, the
+ * blow-up check; reduce itself is gpu_reduce.cuh's). */
 #ifndef SPHSEG_GPU_LAUNCH_CUH
 #define SPHSEG_GPU_LAUNCH_CUH
 
@@ -63,7 +63,7 @@ template <class F> static void team(const gpu_t *g, size_t n, F f)
     }
 }
 
-/* ---- reductions (functors for CUB) -------------------------------------- */
+/* ---- the reductions' functors (reduce, gpu_reduce.cuh) ------------------ */
 
 struct box_of {
     particles_t p;
@@ -168,13 +168,6 @@ struct chkb_merge {
 struct max_real {
     __device__ real operator()(real a, real b) const { return b > a ? b : a; }
 };
-
-template <class It, class T, class Op> static void reduce(gpu_t *g, It in, T *out, size_t n, Op op, T init)
-{
-    size_t bytes = 0;
-    CK(cub::DeviceReduce::Reduce(NULL, bytes, in, out, (int64_t)n, op, init, g->st));
-    CK(cub::DeviceReduce::Reduce(scratch(g, bytes), bytes, in, out, (int64_t)n, op, init, g->st));
-}
 
 struct max_uint {
     __device__ unsigned operator()(unsigned a, unsigned b) const { return b > a ? b : a; }

@@ -5,7 +5,7 @@
  * reach, the halo levels). The pair loops that read the lists are in
  * gpu_pairs.cu. */
 #include <cub/device/device_radix_sort.cuh>
-#include "gpu.cuh"
+#include "gpu_reduce.cuh"
 
 /* ---- the neighbour build ------------------------------------------------- */
 

@@ -4,7 +4,7 @@
  * conc_step) and the Shepard filter; each walks the stage table's plan for
  * its hook (src/stages.h), a case per stage. The kernels over the neighbour
  * lists are gpu_pairs.cu's; the per-particle ones are here. */
-#include "gpu.cuh"
+#include "gpu_reduce.cuh"
 
 
 /* ---- the hooks ----------------------------------------------------------- */
