@@ -90,7 +90,7 @@ struct dhalo {
     int nev;
     long full, refresh;          /* exchanges at builds; refreshes */
     double full_s;               /* host seconds in the exchanges at builds */
-    int dev;                     /* exchanges at builds on the device (gpu_exchange.cuh); 0: through the
+    int dev;                     /* exchanges at builds on the device (gpu_exchange.cu); 0: through the
                                   * host (SPHSEG_GPU_HOSTX=1) */
     int nnb;                     /* channels of the lists held */
     /* the device exchange: the decomposition's arrays (and host shadows), per-particle counts and
@@ -104,7 +104,7 @@ struct dhalo {
     unsigned long long *dcnt, *hcnt;
     size_t cap_hcnt;
     int *derr, *herr;
-    /* CUDA IPC channels (gpu_ipc.cuh): which, for which channel set; two send buffers used in turn,
+    /* CUDA IPC channels (gpu_ipc.cu): which, for which channel set; two send buffers used in turn,
      * their handles and generations; the peers' descriptors and mapped buffers; the receive buffer;
      * the per-channel byte offsets of the IPC segments (host, nnb + 1) */
     int *ipc, nipc, ipc_par, ipc_said;
