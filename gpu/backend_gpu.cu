@@ -1,7 +1,6 @@
 /* gpu/backend_gpu.cu — the CUDA backend (struct backend, src/sim.h): its
- * registration, the bounds and the check (the step's one synchronisation),
- * the copies to and from the host, the end of a run; the design of the
- * whole backend (gpu/README.md lists its units).
+ * registration, the copies to and from the host, the end of a run; the
+ * design of the whole backend (gpu/README.md lists its units).
  *
  * The particle arrays live on the device for the whole run; the host copy
  * s->p is refreshed only by to_host (snapshots, diagnostics, error reports).
@@ -59,7 +58,7 @@
  * the ghosts arrive; likewise the shear-rate refresh overlaps the
  * concentration rates of levels >= 2. Each particle is computed by the same
  * body whatever the pass, so results do not depend on the overlap. */
-#include "gpu_reduce.cuh"
+#include "gpu.cuh"
 
 int g_local_rank;
 struct gpu_prof prof;
@@ -68,56 +67,6 @@ static const char *prof_name[P_NPROF] = {"save start, advance, motion", "boundin
                                           "HCSR classification", "dummy walls, renormalisation L",
                                           "flow rates (+seg. coefficients)", "concentration rates", "Shepard filter",
                                           "dt bounds, blow-up check (+sync)"};
-
-/* Owned particles only: no refresh needs to land first. */
-static void gpu_bounds(sim_t *s, double out[STEP_NBOUNDS])
-{
-    gpu_t *g = gpu_hook(s, 0);
-    if (!g->bnd_fresh) { /* the first step, or a store changed since the check */
-        bnd3 init = {{0, 0, 0}};
-        prof_begin(g->st);
-        gpu_acc_reduce(g);
-        auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{g->d, gpu_step_ctx(s, g)});
-        reduce(g, it, (bnd3 *)g->dres, g->n, bnd_max(), init);
-        CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
-        CK(cudaStreamSynchronize(g->st));
-        prof_end(g->st, P_BOUNDS_CHECK);
-    }
-    g->bnd_fresh = 0;
-    for (int k = 0; k < 3; ++k) out[k] = g->hres[k];
-    real acc;
-    memcpy(&acc, g->hres + STEP_ACC, sizeof acc);
-    out[STEP_ACC] = s->flow_on ? (double)acc : 0.0;
-}
-
-static long gpu_check(sim_t *s)
-{
-    gpu_t *g = gpu_hook(s, 0);
-    prof_begin(g->st);
-    const int acc = g->acc_pending; /* |acc| in the same pass */
-    const step_ctx *dc = gpu_step_ctx(s, g);
-    chkb_of f = {chk_of{g->d, dc, s->t, g->xb[0], g->xb[1], g->xb[2]}, bnd_of{g->d, dc},
-                 acc ? g->amag : NULL};
-    auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), f);
-    chkb init = {{(long long)g->n, 0, 0}, {{0, 0, 0}}, R(0.0)};
-    reduce(g, it, g->dchk, g->n, chkb_merge(), init);
-    if (acc) { /* dres[STEP_ACC] as gpu_acc_reduce leaves it */
-        CK(cudaMemcpyAsync(g->dres + STEP_ACC, &g->dchk->amax, sizeof(real), cudaMemcpyDeviceToDevice, g->st));
-        g->acc_pending = 0;
-    }
-    CK(cudaMemcpyAsync(g->hchk, g->dchk, sizeof(chkb), cudaMemcpyDeviceToHost, g->st));
-    CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
-    CK(cudaStreamSynchronize(g->st));
-    prof_end(g->st, P_BOUNDS_CHECK);
-    for (int k = 0; k < 3; ++k) g->hres[k] = g->hchk->b.v[k];
-    g->bnd_fresh = 1;
-    if (s->halo) hx_resolve(g, s->halo); /* whole pairs only: one may be in flight */
-    const chk *c = &g->hchk->c;
-    double D = sqrt((double)c->build2), d = sqrt((double)c->step2), skin = g->skin;
-    g->stale |= D + 2 * d > 0.5 * skin;
-    g->every = !s->flow_on || d > 0.25 * skin; /* prescribed motion: x_n is not kept */
-    return c->first >= (long long)g->n ? -1 : (long)c->first;
-}
 
 static void gpu_to_host(sim_t *s)
 {

@@ -271,5 +271,7 @@ void gpu_advance(sim_t *s, double a, double w);
 void gpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS]);
 void gpu_conc_step(sim_t *s, double a, int last);
 void gpu_filter(sim_t *s);
+void gpu_bounds(sim_t *s, double out[STEP_NBOUNDS]);
+long gpu_check(sim_t *s);
 
 #endif

@@ -2,7 +2,8 @@
  * walls, L), rates (flow pass, concentration coefficients and dC/dt), the
  * held-back save and advance, the concentration windows (conc_begin,
  * conc_step) and the Shepard filter; each walks the stage table's plan for
- * its hook (src/stages.h), a case per stage. The kernels over the neighbour
+ * its hook (src/stages.h), a case per stage; the time-step bounds and the
+ * check (the step's one synchronisation). The kernels over the neighbour
  * lists are gpu_pairs.cu's; the per-particle ones are here. */
 #include "gpu_reduce.cuh"
 
@@ -295,4 +296,56 @@ void gpu_filter(sim_t *s)
         case ST_WALLS: gpu_walls_renorm(s, g, 1, 0, sel_all()); break;
         default: error_exit(1, "backend_gpu: stage %d has no body in filter", m->ids[HOOK_FILTER][k]);
         }
+}
+
+/* ---- the step's bounds and check ------------------------------------------ */
+
+/* Owned particles only: no refresh needs to land first. */
+void gpu_bounds(sim_t *s, double out[STEP_NBOUNDS])
+{
+    gpu_t *g = gpu_hook(s, 0);
+    if (!g->bnd_fresh) { /* the first step, or a store changed since the check */
+        bnd3 init = {{0, 0, 0}};
+        prof_begin(g->st);
+        gpu_acc_reduce(g);
+        auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{g->d, gpu_step_ctx(s, g)});
+        reduce(g, it, (bnd3 *)g->dres, g->n, bnd_max(), init);
+        CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
+        CK(cudaStreamSynchronize(g->st));
+        prof_end(g->st, P_BOUNDS_CHECK);
+    }
+    g->bnd_fresh = 0;
+    for (int k = 0; k < 3; ++k) out[k] = g->hres[k];
+    real acc;
+    memcpy(&acc, g->hres + STEP_ACC, sizeof acc);
+    out[STEP_ACC] = s->flow_on ? (double)acc : 0.0;
+}
+
+long gpu_check(sim_t *s)
+{
+    gpu_t *g = gpu_hook(s, 0);
+    prof_begin(g->st);
+    const int acc = g->acc_pending; /* |acc| in the same pass */
+    const step_ctx *dc = gpu_step_ctx(s, g);
+    chkb_of f = {chk_of{g->d, dc, s->t, g->xb[0], g->xb[1], g->xb[2]}, bnd_of{g->d, dc},
+                 acc ? g->amag : NULL};
+    auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), f);
+    chkb init = {{(long long)g->n, 0, 0}, {{0, 0, 0}}, R(0.0)};
+    reduce(g, it, g->dchk, g->n, chkb_merge(), init);
+    if (acc) { /* dres[STEP_ACC] as gpu_acc_reduce leaves it */
+        CK(cudaMemcpyAsync(g->dres + STEP_ACC, &g->dchk->amax, sizeof(real), cudaMemcpyDeviceToDevice, g->st));
+        g->acc_pending = 0;
+    }
+    CK(cudaMemcpyAsync(g->hchk, g->dchk, sizeof(chkb), cudaMemcpyDeviceToHost, g->st));
+    CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
+    CK(cudaStreamSynchronize(g->st));
+    prof_end(g->st, P_BOUNDS_CHECK);
+    for (int k = 0; k < 3; ++k) g->hres[k] = g->hchk->b.v[k];
+    g->bnd_fresh = 1;
+    if (s->halo) hx_resolve(g, s->halo); /* whole pairs only: one may be in flight */
+    const chk *c = &g->hchk->c;
+    double D = sqrt((double)c->build2), d = sqrt((double)c->step2), skin = g->skin;
+    g->stale |= D + 2 * d > 0.5 * skin;
+    g->every = !s->flow_on || d > 0.25 * skin; /* prescribed motion: x_n is not kept */
+    return c->first >= (long long)g->n ? -1 : (long)c->first;
 }
