@@ -162,7 +162,6 @@ typedef struct gpu {
     long long *hfirst;
 } gpu_t;
 
-
 extern int g_local_rank; /* backend_gpu(local_rank) (backend_gpu.cu) */
 
 /* Stage timing (SPHSEG_GPU_PROFILE=1 in the environment): events around each

@@ -37,7 +37,6 @@ void *scratch(gpu_t *g, size_t bytes)
     return g->tmp;
 }
 
-
 /* Per-particle device arrays for at least need particles. The first keep
  * particles of the store are kept (the device exchange grows the store
  * under its owned particles), by way of the spare set, so that at most two

@@ -7,7 +7,6 @@
  * lists are gpu_pairs.cu's; the per-particle ones are here. */
 #include "gpu_reduce.cuh"
 
-
 /* ---- the hooks ----------------------------------------------------------- */
 
 /* The largest |acc| of the last flow-rate evaluation into dres[STEP_ACC] (a
