@@ -58,7 +58,7 @@ ifeq ($(GPU),1)
   NVFLAGS   ?= -O3
   override NVFLAGS   += -std=c++17 -arch=$(CUDA_ARCH) --extended-lambda -I. -Isrc -Xcompiler -Wall
   override CFLAGS    += -DSPHSEG_CUDA
-  GPU_OBJ   := $(BUILD)/obj/gpu/backend_gpu.o
+  GPU_OBJ   := $(patsubst gpu/%.cu,$(BUILD)/obj/gpu/%.o,$(wildcard gpu/*.cu)) # each unit apart, no -rdc
   GPU_LIBS  := -L$(CUDA_HOME)/lib64 -Wl,-rpath,$(CUDA_HOME)/lib64 -lcudart -lstdc++
 endif
 ifeq ($(PRECISION),single)

@@ -1,4 +1,6 @@
-/* backend_gpu.cu — the CUDA backend (struct backend, src/sim.h).
+/* gpu/backend_gpu.cu — the CUDA backend (struct backend, src/sim.h): its
+ * registration, the copies to and from the host, the end of a run; the
+ * design of the whole backend (gpu/README.md lists its units).
  *
  * The particle arrays live on the device for the whole run; the host copy
  * s->p is refreshed only by to_host (snapshots, diagnostics, error reports).
@@ -39,7 +41,7 @@
  * Ghosts are HALO 3 lattice cells deep (ghost_depth), so that a set made at
  * a list build still covers the 2h + 2 skin that a Verlet list needs while
  * particles move. At a build the device migrates particles and makes fresh
- * ghosts itself (gpu_exchange.cuh: the decisions of mpi/halo.c through
+ * ghosts itself (gpu_exchange.cu: the decisions of mpi/halo.c through
  * mpi/halo_geom.h, bit for bit; the host sees counts), and the send and
  * receive lists follow the device sort on the device (hx_sorted);
  * SPHSEG_GPU_HOSTX=1 takes the old path through the host (the owned arrays
@@ -56,89 +58,15 @@
  * the ghosts arrive; likewise the shear-rate refresh overlaps the
  * concentration rates of levels >= 2. Each particle is computed by the same
  * body whatever the pass, so results do not depend on the overlap. */
-#include <math.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <time.h>
-#include <unistd.h>
-#include <cuda_runtime.h>
-#include <cub/device/device_radix_sort.cuh>
-#include <cub/device/device_reduce.cuh>
-#include <cub/device/device_scan.cuh>
-#include <thrust/iterator/counting_iterator.h>
-#include <thrust/iterator/transform_iterator.h>
-extern "C" {
-#include "core/error.h"
-#include "core/tuning.h"
-#include "mpi/comm.h"
-#include "sim.h"
-#include "stages.h"
-}
+#include "gpu.cuh"
 
-/* The backend is one translation unit (no relocatable device code): its parts,
- * by concern, in this order. */
-#include "gpu_store.cuh"
-#include "gpu_launch.cuh"
-#include "gpu_setup.cuh"
-#include "gpu_nbr.cuh"
-#include "gpu_halo.cuh"
-#include "gpu_ipc.cuh"
-#include "gpu_exchange.cuh"
-#include "gpu_step.cuh"
-
-
-/* Owned particles only: no refresh needs to land first. */
-static void gpu_bounds(sim_t *s, double out[STEP_NBOUNDS])
-{
-    gpu_t *g = gpu_hook(s, 0);
-    if (!g->bnd_fresh) { /* the first step, or a store changed since the check */
-        bnd3 init = {{0, 0, 0}};
-        prof_begin(g->st);
-        gpu_acc_reduce(g);
-        auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{g->d, gpu_step_ctx(s, g)});
-        reduce(g, it, (bnd3 *)g->dres, g->n, bnd_max(), init);
-        CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
-        CK(cudaStreamSynchronize(g->st));
-        prof_end(g->st, P_BOUNDS_CHECK);
-    }
-    g->bnd_fresh = 0;
-    for (int k = 0; k < 3; ++k) out[k] = g->hres[k];
-    real acc;
-    memcpy(&acc, g->hres + STEP_ACC, sizeof acc);
-    out[STEP_ACC] = s->flow_on ? (double)acc : 0.0;
-}
-
-static long gpu_check(sim_t *s)
-{
-    gpu_t *g = gpu_hook(s, 0);
-    prof_begin(g->st);
-    const int acc = g->acc_pending; /* |acc| in the same pass */
-    const step_ctx *dc = gpu_step_ctx(s, g);
-    chkb_of f = {chk_of{g->d, dc, s->t, g->xb[0], g->xb[1], g->xb[2]}, bnd_of{g->d, dc},
-                 acc ? g->amag : NULL};
-    auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), f);
-    chkb init = {{(long long)g->n, 0, 0}, {{0, 0, 0}}, R(0.0)};
-    reduce(g, it, g->dchk, g->n, chkb_merge(), init);
-    if (acc) { /* dres[STEP_ACC] as gpu_acc_reduce leaves it */
-        CK(cudaMemcpyAsync(g->dres + STEP_ACC, &g->dchk->amax, sizeof(real), cudaMemcpyDeviceToDevice, g->st));
-        g->acc_pending = 0;
-    }
-    CK(cudaMemcpyAsync(g->hchk, g->dchk, sizeof(chkb), cudaMemcpyDeviceToHost, g->st));
-    CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
-    CK(cudaStreamSynchronize(g->st));
-    prof_end(g->st, P_BOUNDS_CHECK);
-    for (int k = 0; k < 3; ++k) g->hres[k] = g->hchk->b.v[k];
-    g->bnd_fresh = 1;
-    if (s->halo) hx_resolve(g, s->halo); /* whole pairs only: one may be in flight */
-    const chk *c = &g->hchk->c;
-    double D = sqrt((double)c->build2), d = sqrt((double)c->step2), skin = g->skin;
-    g->stale |= D + 2 * d > 0.5 * skin;
-    g->every = !s->flow_on || d > 0.25 * skin; /* prescribed motion: x_n is not kept */
-    return c->first >= (long long)g->n ? -1 : (long)c->first;
-}
+int g_local_rank;
+struct gpu_prof prof;
+static const char *prof_name[P_NPROF] = {"save start, advance, motion", "bounding box (+sync)",
+                                          "cell keys, radix sort, start/end", "permute arrays", "neighbour list",
+                                          "HCSR classification", "dummy walls, renormalisation L",
+                                          "flow rates (+seg. coefficients)", "concentration rates", "Shepard filter",
+                                          "dt bounds, blow-up check (+sync)"};
 
 static void gpu_to_host(sim_t *s)
 {

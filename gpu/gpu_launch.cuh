@@ -1,9 +1,10 @@
-/* gpu/gpu_launch.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
- * compiled in (included in order; not a header of its own).
- * Launching: one thread per particle (each), teams of T threads per particle
- * for the neighbour loops (team, the launch bounds), the permutation kernel;
- * and the CUB reductions with their functors (bounding box, bounds, the
- * blow-up check). */
+/* gpu/gpu_launch.cuh — launching, included by gpu.cuh (templates: each unit
+ * instantiates the kernels it launches): one thread per particle (each),
+ * teams of T threads per particle for the neighbour loops (team, the launch
+ * bounds); and the functors of the reductions (bounding box, bounds, the
+ * blow-up check; reduce itself is gpu_reduce.cuh's). */
+#ifndef SPHSEG_GPU_LAUNCH_CUH
+#define SPHSEG_GPU_LAUNCH_CUH
 
 /* ---- launching ----------------------------------------------------------- */
 
@@ -62,41 +63,7 @@ template <class F> static void team(const gpu_t *g, size_t n, F f)
     }
 }
 
-__global__ void k_permute(perm_tab t, const unsigned *perm, size_t n)
-{
-    size_t k = (size_t)blockIdx.x * blockDim.x + threadIdx.x;
-    if (k >= n) return;
-    int a = blockIdx.y;
-    size_t s = perm[k];
-    switch (t.es[a]) {
-    case 8: ((uint64_t *)t.dst[a])[k] = ((const uint64_t *)t.src[a])[s]; break;
-    case 4: ((uint32_t *)t.dst[a])[k] = ((const uint32_t *)t.src[a])[s]; break;
-    default: ((uint8_t *)t.dst[a])[k] = ((const uint8_t *)t.src[a])[s]; break;
-    }
-}
-
-static void *dev_alloc(size_t bytes)
-{
-    void *p = NULL;
-    cudaError_t e = cudaMalloc(&p, bytes ? bytes : 1);
-    if (e != cudaSuccess)
-        error_exit(1, "GPU out of memory: %zu bytes (%s); use fewer particles per GPU (a larger Geometry:dr "
-                   "or more ranks)", bytes, cudaGetErrorString(e));
-    return p;
-}
-
-/* Grow the CUB scratch to at least bytes. */
-static void *scratch(gpu_t *g, size_t bytes)
-{
-    if (bytes > g->tmp_bytes) {
-        if (g->tmp) CK(cudaFree(g->tmp));
-        g->tmp = dev_alloc(bytes);
-        g->tmp_bytes = bytes;
-    }
-    return g->tmp;
-}
-
-/* ---- reductions (functors for CUB) -------------------------------------- */
+/* ---- the reductions' functors (reduce, gpu_reduce.cuh) ------------------ */
 
 struct box_of {
     particles_t p;
@@ -198,24 +165,12 @@ struct chkb_merge {
         return chkb{chk_merge()(a.c, b.c), bnd_max()(a.b, b.b), b.amax > a.amax ? b.amax : a.amax};
     }
 };
-/* s->step_c on the device for the reductions, sent on the stream when it
- * has changed since the last send (in practice once). */
-static const step_ctx *gpu_step_ctx(sim_t *s, gpu_t *g)
-{
-    if (memcmp(g->hstep, &s->step_c, sizeof(step_ctx))) {
-        memcpy(g->hstep, &s->step_c, sizeof(step_ctx));
-        CK(cudaMemcpyAsync(g->dstep, g->hstep, sizeof(step_ctx), cudaMemcpyHostToDevice, g->st));
-    }
-    return g->dstep;
-}
-
 struct max_real {
     __device__ real operator()(real a, real b) const { return b > a ? b : a; }
 };
 
-template <class It, class T, class Op> static void reduce(gpu_t *g, It in, T *out, size_t n, Op op, T init)
-{
-    size_t bytes = 0;
-    CK(cub::DeviceReduce::Reduce(NULL, bytes, in, out, (int64_t)n, op, init, g->st));
-    CK(cub::DeviceReduce::Reduce(scratch(g, bytes), bytes, in, out, (int64_t)n, op, init, g->st));
-}
+struct max_uint {
+    __device__ unsigned operator()(unsigned a, unsigned b) const { return b > a ? b : a; }
+};
+
+#endif

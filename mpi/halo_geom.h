@@ -1,7 +1,7 @@
 /* halo_geom.h — who owns a lattice cell and whom a particle is a ghost of,
  * as HD_INLINE bodies over a plain view of the decomposition, so that
  * mpi/halo.c (the host exchange) and the GPU backend's device exchange
- * (gpu/gpu_exchange.cuh) decide alike, bit for bit.
+ * (gpu/gpu_exchange.cu) decide alike, bit for bit.
  *
  * A halo_geom is plain data: the numbers of halo_t that the decisions read,
  * and pointers to its arrays (slab bounds, METIS owners, the channels),

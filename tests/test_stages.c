@@ -1,7 +1,7 @@
 /* test_stages.c — what src/stages.c derives from the stage table, against
  * the lists the backends carried by hand before it (issue 15, "Shape":
  * parallel_ghost_arrays in src/run.c, the refreshes of backend_cpu.c,
- * moving_fields in gpu/gpu_halo.cuh), worked out from the bodies' reads:
+ * moving_fields in gpu/gpu_halo.cu), worked out from the bodies' reads:
  *  - the hooks' stage order (prepare: place, exchange, classify, renorm,
  *    walls; rates: flow, coefficients, dC/dt; filter: Shepard, store,
  *    walls), with the stages a run does not solve left out;

@@ -43,7 +43,7 @@ ghost refreshes must change nothing: the 3-rank drum is run twice with them
 and once with SPHSEG_GPU_OVERLAP=0 (synchronous), load balance off (its
 decisions rest on timings), and all three are bit-identical; so is a run whose
 list-build exchanges go through the host (SPHSEG_GPU_HOSTX=1) instead of the
-device (gpu/gpu_exchange.cuh; the logs must say which), and so are the two
+device (gpu/gpu_exchange.cu; the logs must say which), and so are the two
 paths on a periodic METIS chute on 3 ranks and a periodic chute on 1 rank. Without a visible GPU
 (nvidia-smi -L) it prints "SKIP: no GPU visible" and exits 77.
 
@@ -271,7 +271,7 @@ def main():
                                         "bit-identical" if not differ else "differ in " + ", ".join(differ)))
     ok &= not differ
     if gpu:  # the overlapped refreshes change nothing: bit-identical to synchronous ones, and run to run;
-        # the list-build exchange on the device (gpu/gpu_exchange.cuh) is the host's, bit for bit
+        # the list-build exchange on the device (gpu/gpu_exchange.cu) is the host's, bit for bit
         steps = scaled(300, a.steps_scale)
         runs = {}
         for tag, env in (("overlap", None), ("overlap_again", None), ("no_overlap", {"SPHSEG_GPU_OVERLAP": "0"}),

@@ -1,9 +1,11 @@
-/* gpu/gpu_step.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
- * compiled in (included in order; not a header of its own).
- * The step's hooks: prepare (motion, list build or refresh, walls, L), rates
- * (flow pass, concentration coefficients and dC/dt), the held-back save and
- * advance, the concentration windows (conc_begin, conc_step) and the Shepard
- * filter. */
+/* gpu/gpu_step.cu — the step's hooks: prepare (motion, list build or refresh,
+ * walls, L), rates (flow pass, concentration coefficients and dC/dt), the
+ * held-back save and advance, the concentration windows (conc_begin,
+ * conc_step) and the Shepard filter; each walks the stage table's plan for
+ * its hook (src/stages.h), a case per stage; the time-step bounds and the
+ * check (the step's one synchronisation). The kernels over the neighbour
+ * lists are gpu_pairs.cu's; the per-particle ones are here. */
+#include "gpu_reduce.cuh"
 
 /* ---- the hooks ----------------------------------------------------------- */
 
@@ -11,7 +13,7 @@
  * real, widened on read), if not reduced yet: the check folds it into its
  * own pass; a build or a load balance, which reorder the store, take it
  * first. */
-static void gpu_acc_reduce(gpu_t *g)
+void gpu_acc_reduce(gpu_t *g)
 {
     if (!g->acc_pending) return;
     reduce(g, g->amag, (real *)(g->dres + STEP_ACC), g->n, max_real(), R(0.0));
@@ -50,7 +52,7 @@ static int gpu_exchange(sim_t *s, gpu_t *g, int exact)
  * the held-back save and advance with it; ST_WALLS and ST_RENORM are one
  * pass; the owned particles' ST_SEG_COEFFS ride in the ST_FLOW pass; a stage
  * that reads ghosts whose refresh is in flight runs its interior first. */
-static void gpu_prepare(sim_t *s, double t, int classify)
+void gpu_prepare(sim_t *s, double t, int classify)
 {
     gpu_t *g = gpu_get(s);
     g->bnd_fresh = 0;
@@ -85,45 +87,12 @@ static void gpu_prepare(sim_t *s, double t, int classify)
 }
 
 /* Whether hook h runs stage id in this run. */
-static int gpu_plans(const sim_t *s, int h, int id)
+int gpu_plans(const sim_t *s, int h, int id)
 {
     const stage_sched *m = gpu_sched(s);
     for (int k = 0; k < m->n[h]; ++k)
         if (m->ids[h][k] == id) return 1;
     return 0;
-}
-
-/* The flow rates of the owned particles in sl, and with segregation their
- * concentration coefficients (seg_coeffs reads only i's C and the shear
- * rate just computed). */
-template <int RENORM> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
-{
-    particles_t p = g->d;
-    grid_view v = g->view;
-    flow_ctx c = s->flow;
-    seg_ctx sc = s->seg;
-    const int seg = gpu_plans(s, HOOK_RATES, ST_SEG_COEFFS); /* not in windows: at their close */
-    real *amag = g->amag;
-    team(g, g->n, [=] __device__(size_t i, int lane, int T) {
-        if (!sel_on(sl, i)) return;
-        particles_t q = p;
-        const int mat = q.kind[i] == KIND_MATERIAL;
-        real a = mat ? flow_rates_team(i, &q, &v, &c, lane, T, RENORM) : R(0.0);
-        if (lane != 0) return;
-        amag[i] = a;
-        if (seg && mat) seg_coeffs(i, &q, &sc);
-    });
-}
-
-/* (and the owned particles' L when prepare left them due: a kernel of its
- * own, so that the other passes keep the smaller register count) */
-static void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl)
-{
-    prof_begin(g->st);
-    if (s->renorm_due) gpu_flow_pass<1>(s, g, sl);
-    else gpu_flow_pass<0>(s, g, sl);
-    g->acc_pending = 1;
-    prof_end(g->st, P_FLOW);
 }
 
 /* (p: g->d, or g->d reading the window's mean shear rate as gdot) */
@@ -133,15 +102,6 @@ static void gpu_seg_coeffs(sim_t *s, gpu_t *g, particles_t p, size_t a, size_t b
     each(g, b - a, [=] __device__(size_t k) {
         size_t i = a + k;
         if (p.kind[i] == KIND_MATERIAL) seg_coeffs(i, &p, &c);
-    });
-}
-
-static void gpu_dcdt(sim_t *s, gpu_t *g, particles_t p, sel sl)
-{
-    grid_view v = g->view;
-    seg_ctx c = s->seg;
-    team(g, g->n, [=] __device__(size_t i, int lane, int T) {
-        if (sel_on(sl, i)) seg_dCdt_team(i, &p, &v, &c, lane, T);
     });
 }
 
@@ -168,7 +128,7 @@ static void gpu_conc_rates(sim_t *s, gpu_t *g)
     prof_end(g->st, P_SEG);
 }
 
-static void gpu_rates(sim_t *s)
+void gpu_rates(sim_t *s)
 {
     gpu_t *g = gpu_hook(s, 1);
     const stage_sched *m = gpu_sched(s);
@@ -199,7 +159,7 @@ static void gpu_rates(sim_t *s)
  * (integrate_step calls save_start, advance, prepare in a row), or alone
  * when another hook comes first (gpu_hook). Each particle's updates are its
  * own, so running them together changes nothing. */
-static void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t)
+void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t)
 {
     const int sv = g->pend_save, ad = g->pend_adv;
     if (!sv && !ad && !place) return;
@@ -222,32 +182,24 @@ static void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t)
 
 /* ST_SAVE is held back (above); ST_SHIFT runs the held-back save first,
  * since it adds the shift to the saved copies. */
-static void gpu_save_start(sim_t *s)
+void gpu_save_start(sim_t *s)
 {
     gpu_t *g = gpu_hook(s, 1);
     const stage_sched *m = gpu_sched(s);
     for (int k = 0; k < m->n[HOOK_SAVE]; ++k) switch (m->ids[HOOK_SAVE][k]) {
         case ST_SAVE: g->pend_save = 1; break;
-        case ST_SHIFT: {
+        case ST_SHIFT:
             gpu_settle(s, g);
             gpu_step_kernel(s, g, 0, 0.0);
-            particles_t p = g->d;
-            grid_view v = g->view;
-            shift_ctx c = s->shift;
-            const real dt = (real)s->dt;
             prof_begin(g->st);
-            team(g, g->n, [=] __device__(size_t i, int lane, int T) {
-                particles_t q = p;
-                if (q.kind[i] == KIND_MATERIAL) shift_team(i, &q, &v, &c, dt, lane, T);
-            });
+            gpu_shift_pass(s, g);
             prof_end(g->st, P_MOTION);
             break;
-        }
         default: error_exit(1, "backend_gpu: stage %d has no body in save_start", m->ids[HOOK_SAVE][k]);
         }
 }
 
-static void gpu_advance(sim_t *s, double a, double w)
+void gpu_advance(sim_t *s, double a, double w)
 {
     gpu_t *g = gpu_get(s); /* a save_start just before stays held */
     if (g->pend_adv) gpu_step_kernel(s, g, 0, 0.0);
@@ -261,7 +213,7 @@ static void gpu_advance(sim_t *s, double a, double w)
 /* Concentration windows (sim.h): the mean shear rate over the window, here
  * and in the ghosts; L of every material particle at the window's end; the
  * bounds at that rate (into dres[0..2]: the next gpu_bounds takes its own). */
-static void gpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS])
+void gpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS])
 {
     gpu_t *g = gpu_hook(s, 1);
     gpu_settle(s, g);
@@ -278,14 +230,7 @@ static void gpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS])
             if (s->halo) gpu_refresh(s, g, fields_tab(g, m->refresh[1][ST_SHEAR_MEAN], 1));
             break;
         }
-        case ST_WIN_RENORM: {
-            grid_view v = g->view;
-            seg_ctx sc = s->seg;
-            team(g, g->n + g->ng, [=] __device__(size_t i, int lane, int T) {
-                if (p.kind[i] == KIND_MATERIAL) seg_renorm_team(i, &p, &v, &sc, lane, T);
-            });
-            break;
-        }
+        case ST_WIN_RENORM: gpu_win_renorm(s, g); break;
         case ST_WIN_BOUNDS: {
             particles_t q = p;
             q.gdot = p.gsum;
@@ -304,7 +249,7 @@ static void gpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS])
 
 /* One midpoint step of C alone (length a) at the window's mean shear rate;
  * the ghosts' C refreshed after each stage. */
-static void gpu_conc_step(sim_t *s, double a, int last)
+void gpu_conc_step(sim_t *s, double a, int last)
 {
     gpu_t *g = gpu_hook(s, 1);
     gpu_settle(s, g);
@@ -331,21 +276,16 @@ static void gpu_conc_step(sim_t *s, double a, int last)
     prof_end(g->st, P_SEG);
 }
 
-static void gpu_filter(sim_t *s)
+void gpu_filter(sim_t *s)
 {
     gpu_t *g = gpu_hook(s, 1);
     gpu_settle(s, g);
     const stage_sched *m = gpu_sched(s);
     particles_t p = g->d;
-    grid_view v = g->view;
-    flow_ctx c = s->flow;
     for (int k = 0; k < m->n[HOOK_FILTER]; ++k) switch (m->ids[HOOK_FILTER][k]) {
         case ST_SHEPARD:
             prof_begin(g->st);
-            team(g, g->n, [=] __device__(size_t i, int lane, int T) {
-                particles_t q = p;
-                if (q.kind[i] == KIND_MATERIAL) flow_shepard_team(i, &q, &v, &c, lane, T);
-            });
+            gpu_shepard_pass(s, g);
             break;
         case ST_SHEPARD_STORE:
             each(g, g->n, [=] __device__(size_t i) { flow_shepard_store(i, &p); });
@@ -355,4 +295,56 @@ static void gpu_filter(sim_t *s)
         case ST_WALLS: gpu_walls_renorm(s, g, 1, 0, sel_all()); break;
         default: error_exit(1, "backend_gpu: stage %d has no body in filter", m->ids[HOOK_FILTER][k]);
         }
+}
+
+/* ---- the step's bounds and check ------------------------------------------ */
+
+/* Owned particles only: no refresh needs to land first. */
+void gpu_bounds(sim_t *s, double out[STEP_NBOUNDS])
+{
+    gpu_t *g = gpu_hook(s, 0);
+    if (!g->bnd_fresh) { /* the first step, or a store changed since the check */
+        bnd3 init = {{0, 0, 0}};
+        prof_begin(g->st);
+        gpu_acc_reduce(g);
+        auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), bnd_of{g->d, gpu_step_ctx(s, g)});
+        reduce(g, it, (bnd3 *)g->dres, g->n, bnd_max(), init);
+        CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
+        CK(cudaStreamSynchronize(g->st));
+        prof_end(g->st, P_BOUNDS_CHECK);
+    }
+    g->bnd_fresh = 0;
+    for (int k = 0; k < 3; ++k) out[k] = g->hres[k];
+    real acc;
+    memcpy(&acc, g->hres + STEP_ACC, sizeof acc);
+    out[STEP_ACC] = s->flow_on ? (double)acc : 0.0;
+}
+
+long gpu_check(sim_t *s)
+{
+    gpu_t *g = gpu_hook(s, 0);
+    prof_begin(g->st);
+    const int acc = g->acc_pending; /* |acc| in the same pass */
+    const step_ctx *dc = gpu_step_ctx(s, g);
+    chkb_of f = {chk_of{g->d, dc, s->t, g->xb[0], g->xb[1], g->xb[2]}, bnd_of{g->d, dc},
+                 acc ? g->amag : NULL};
+    auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), f);
+    chkb init = {{(long long)g->n, 0, 0}, {{0, 0, 0}}, R(0.0)};
+    reduce(g, it, g->dchk, g->n, chkb_merge(), init);
+    if (acc) { /* dres[STEP_ACC] as gpu_acc_reduce leaves it */
+        CK(cudaMemcpyAsync(g->dres + STEP_ACC, &g->dchk->amax, sizeof(real), cudaMemcpyDeviceToDevice, g->st));
+        g->acc_pending = 0;
+    }
+    CK(cudaMemcpyAsync(g->hchk, g->dchk, sizeof(chkb), cudaMemcpyDeviceToHost, g->st));
+    CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
+    CK(cudaStreamSynchronize(g->st));
+    prof_end(g->st, P_BOUNDS_CHECK);
+    for (int k = 0; k < 3; ++k) g->hres[k] = g->hchk->b.v[k];
+    g->bnd_fresh = 1;
+    if (s->halo) hx_resolve(g, s->halo); /* whole pairs only: one may be in flight */
+    const chk *c = &g->hchk->c;
+    double D = sqrt((double)c->build2), d = sqrt((double)c->step2), skin = g->skin;
+    g->stale |= D + 2 * d > 0.5 * skin;
+    g->every = !s->flow_on || d > 0.25 * skin; /* prescribed motion: x_n is not kept */
+    return c->first >= (long long)g->n ? -1 : (long)c->first;
 }

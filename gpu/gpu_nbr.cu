@@ -1,17 +1,13 @@
-/* gpu/gpu_nbr.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
- * compiled in (included in order; not a header of its own).
- * The neighbour build (cells by CUB radix sort, the permutation of the
- * store, the Verlet lists with their skin, the dummies out of reach, the
- * halo levels), the HCSR classification, and the boundary passes (dummy
- * walls and the renormalisation L). */
+/* gpu/gpu_nbr.cu — the neighbour pass's build: the cells (bounding box,
+ * keys, CUB radix sort, cell ranges), the staging of the store in cell order
+ * (the permutation into the spare set; the halo lists follow), the Verlet
+ * lists with their skin, and what the new lists mark (the dummies out of
+ * reach, the halo levels). The pair loops that read the lists are in
+ * gpu_pairs.cu. */
+#include <cub/device/device_radix_sort.cuh>
+#include "gpu_reduce.cuh"
 
 /* ---- the neighbour build ------------------------------------------------- */
-
-static void hx_sorted(gpu_t *g, const unsigned *perm, size_t n); /* gpu_exchange.cuh */
-
-struct max_uint {
-    __device__ unsigned operator()(unsigned a, unsigned b) const { return b > a ? b : a; }
-};
 
 /* Every array of the store, from the current set into the spare one. */
 static perm_tab perm_all(const gpu_t *g)
@@ -24,6 +20,33 @@ static perm_tab perm_all(const gpu_t *g)
         t.dst[a] = part_array_get(&g->alt, (size_t)a);
     }
     return t;
+}
+
+__global__ void k_permute(perm_tab t, const unsigned *perm, size_t n)
+{
+    size_t k = (size_t)blockIdx.x * blockDim.x + threadIdx.x;
+    if (k >= n) return;
+    int a = blockIdx.y;
+    size_t s = perm[k];
+    switch (t.es[a]) {
+    case 8: ((uint64_t *)t.dst[a])[k] = ((const uint64_t *)t.src[a])[s]; break;
+    case 4: ((uint32_t *)t.dst[a])[k] = ((const uint32_t *)t.src[a])[s]; break;
+    default: ((uint8_t *)t.dst[a])[k] = ((const uint8_t *)t.src[a])[s]; break;
+    }
+}
+
+/* The store gathered by perm (perm[k] = old index now at k, over n) into the
+ * spare set, which becomes the store (the build's sort; the kept particles
+ * of a migration). */
+void gpu_permute(gpu_t *g, const unsigned *perm, size_t n)
+{
+    perm_tab t = perm_all(g);
+    dim3 grid((unsigned)((n + 255) / 256), (unsigned)t.n);
+    if (n) k_permute<<<grid, 256, 0, g->st>>>(t, perm, n);
+    CK(cudaGetLastError());
+    particles_t tmp = g->d;
+    g->d = g->alt;
+    g->alt = tmp;
 }
 
 /* The halo lists follow the particles through the sort (perm[k] = old
@@ -48,14 +71,8 @@ static void gpu_follow(gpu_t *g, halo_t *hl, const unsigned *perm, size_t n)
 static void gpu_permute_store(gpu_t *g, const unsigned *perm, size_t n)
 {
     prof_begin(g->st);
-    perm_tab t = perm_all(g);
-    dim3 grid((unsigned)((n + 255) / 256), (unsigned)t.n);
-    if (n) k_permute<<<grid, 256, 0, g->st>>>(t, perm, n);
-    CK(cudaGetLastError());
+    gpu_permute(g, perm, n);
     prof_end(g->st, P_PERMUTE);
-    particles_t tmp = g->d;
-    g->d = g->alt;
-    g->alt = tmp;
     g->view.start = g->start;
     g->view.end = g->end;
     g->view.gstart = g->ng ? g->start + g->ncell : NULL;
@@ -95,7 +112,7 @@ static void gpu_list(gpu_t *g, int dim, real list2, size_t n)
 }
 
 /* From the new list: the dummies no material reaches (wact) and the halo
- * levels (see the top). */
+ * levels (backend_gpu.cu, at the top). */
 static void gpu_marks(gpu_t *g, size_t n, size_t nown)
 {
     particles_t q = g->d;
@@ -113,7 +130,7 @@ static void gpu_marks(gpu_t *g, size_t n, size_t nown)
             wa[i] = (uint8_t)r;
         });
     }
-    if (g->lvl) { /* halo levels (see the top) from the new list */
+    if (g->lvl) { /* halo levels (backend_gpu.cu, at the top) from the new list */
         uint8_t *lvl = g->lvl;
         grid_view vl = g->view;
         each(g, n, [=] __device__(size_t i) { lvl[i] = i >= nown ? 0 : 3; });
@@ -140,7 +157,7 @@ static void gpu_marks(gpu_t *g, size_t n, size_t nown)
  * when origin is given (multi-rank exact builds: HCSR cell types as on one
  * rank); the list of the particles within sqrt(list2). With ghosts, the
  * permutation goes back to the halo lists (halo_sorted). */
-static void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, const real *origin)
+void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, const real *origin)
 {
     g->builds++;
     const size_t n = g->n + g->ng, nown = g->n;
@@ -202,88 +219,4 @@ static void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, c
     gpu_permute_store(g, perm, n);
     gpu_list(g, dim, list2, n);
     gpu_marks(g, n, nown);
-}
-
-/* HCSR classification (bound.c on the CPU): cell types, then the two sweeps,
- * over owned particles and ghosts. */
-static void gpu_classify(gpu_t *g, const sph_ctx *kc)
-{
-    particles_t p = g->d;
-    grid_view v = g->view;
-    sph_ctx k = *kc;
-    size_t *mat = g->cell_mat, n = g->n + g->ng;
-    unsigned char *type = g->cell_type, *cls = g->cls;
-    bound_sums *sums = g->sums;
-    prof_begin(g->st);
-    each(g, g->ncell, [=] __device__(size_t c) {
-        mat[c] = bound_cell_material(&v, &p, c);
-    });
-    for (int pass = 0; pass < 2; ++pass)
-        each(g, g->ncell, [=] __device__(size_t c) { type[c] = bound_cell_type(&v, type, mat, c, pass); });
-    each(g, n, [=] __device__(size_t i) {
-        p.bclass[i] = (uint8_t)bound_class_first(i, &p, &v, &k, type, &sums[i]);
-    });
-    each(g, n, [=] __device__(size_t i) {
-        particles_t q = p;
-        cls[i] = (unsigned char)bound_class_second(i, &q, &v, &k, type, &sums[i]);
-    });
-    CK(cudaMemcpyAsync(p.bclass, cls, n, cudaMemcpyDeviceToDevice, g->st));
-    prof_end(g->st, P_CLASSIFY);
-}
-
-/* Pass selections: everything (one rank, or right after a build), the
- * particles whose support reads no ghost data (level >= lo), the rest. */
-static sel sel_all(void) { return sel{NULL, 0, 0}; }
-static sel sel_in(const gpu_t *g, int lo) { return g->lvl ? sel{g->lvl, (uint8_t)lo, 3} : sel_all(); }
-static sel sel_bd(const gpu_t *g, int lo) { return sel{g->lvl, 0, (uint8_t)(lo - 1)}; }
-
-/* Over owned particles and ghosts in sl: the dummy walls (paper §4.1;
- * walls) and the conservative scheme's L of the material (renorm). Neither
- * reads what the other writes: a small store (several threads per
- * particle, latency-bound) runs them as one kernel, a large one as two (the
- * merged kernel would run both at the larger register count: 2 % slower on
- * the 3D drum, docs/gpu.md). */
-/* Dummy i's wall state: its loop when material may be in reach (wa[i]),
- * else flow_wall_none, the same result without the loop (the list holds no
- * material, so the loop's sums would be zero): about half the dummies of a
- * drum lie above the bed or deep in an end wall. */
-__device__ __forceinline__ void wall_one(size_t i, particles_t *q, const grid_view *v, const flow_ctx *c,
-                                         const uint8_t *wa, int lane, int T)
-{
-    if (!wa || wa[i]) flow_wall_team(i, q, v, c, lane, T);
-    else if (lane == 0) flow_wall_none(i, q, c);
-}
-
-static void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl)
-{
-    particles_t p = g->d;
-    grid_view v = g->view;
-    flow_ctx c = s->flow;
-    seg_ctx sc = s->seg;
-    const size_t n = g->n + g->ng;
-    const size_t rlo = s->renorm_due ? g->n : 0; /* the owned L due in the flow rates: the ghosts' here */
-    const uint8_t *wa = g->wact;
-    if (rlo >= n) renorm = 0;
-    if (!walls && !renorm) return;
-    prof_begin(g->st);
-    if (walls && renorm && g->team > 1) {
-        team(g, n, [=] __device__(size_t i, int lane, int T) {
-            if (!sel_on(sl, i)) return;
-            particles_t q = p;
-            if (q.kind[i] == KIND_DUMMY) wall_one(i, &q, &v, &c, wa, lane, T);
-            else if (q.kind[i] == KIND_MATERIAL && i >= rlo) seg_renorm_team(i, &q, &v, &sc, lane, T);
-        });
-    } else {
-        if (walls)
-            team(g, n, [=] __device__(size_t i, int lane, int T) {
-                particles_t q = p;
-                if (q.kind[i] == KIND_DUMMY && sel_on(sl, i)) wall_one(i, &q, &v, &c, wa, lane, T);
-            });
-        if (renorm) /* particles rlo.. only: with the owned L due later, just the ghosts */
-            team(g, n - rlo, [=] __device__(size_t k, int lane, int T) {
-                const size_t i = rlo + k;
-                if (p.kind[i] == KIND_MATERIAL && sel_on(sl, i)) seg_renorm_team(i, &p, &v, &sc, lane, T);
-            });
-    }
-    prof_end(g->st, P_WALLS);
 }

@@ -1,16 +1,12 @@
-/* gpu/gpu_halo.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
- * compiled in (included in order; not a header of its own).
- * Ghosts on several ranks: packing the refreshed fields, the exchanges at
- * list builds and the refreshes between them, synchronous or overlapped with
- * the interior's passes. */
+/* gpu/gpu_halo.cu — ghosts on several ranks: packing the refreshed fields,
+ * the byte exchanges (hx_post, hx_land; CUDA IPC segments through
+ * gpu_ipc.cu), the host path of the exchange at list builds, and the
+ * refreshes between builds, synchronous or overlapped with the interior's
+ * passes; which fields a refresh carries comes from the stage table
+ * (src/stages.h: fields_tab, moving_fields). */
+#include "gpu.cuh"
 
 /* ---- ghost refreshes (several ranks) ------------------------------------------ */
-
-/* CUDA IPC between the ranks of one node (gpu_ipc.cuh, included after this part). */
-static void ipc_setup(sim_t *s, gpu_t *g);
-static char *ipc_send_buffer(gpu_t *g, size_t bytes);
-static void ipc_post(sim_t *s, gpu_t *g);
-static void ipc_land(sim_t *s, gpu_t *g);
 
 static size_t r8(size_t b) { return (b + 7) / 8 * 8; }
 
@@ -62,7 +58,7 @@ __global__ void k_self(ftab t, const unsigned *src, const unsigned *dst, size_t 
 
 /* Is channel k of the halo a channel to this rank itself; its partner (the
  * channel that receives what k sends) in *kp. */
-static int hx_self(const halo_t *h, int k, int *kp)
+int hx_self(const halo_t *h, int k, int *kp)
 {
     if (h->nb[k] != h->rank) return 0;
     for (int q = 0; q < h->nnb; ++q)
@@ -70,13 +66,13 @@ static int hx_self(const halo_t *h, int k, int *kp)
     error_exit(1, "backend_gpu: self channel %d of rank %d has no partner", k, h->rank);
 }
 
-static void ft_add(ftab *t, void *p, size_t es)
+void ft_add(ftab *t, void *p, size_t es)
 {
     if (t->n >= FT_MAX) error_exit(1, "backend_gpu: more than %d refresh fields", FT_MAX);
     t->p[t->n] = p, t->es[t->n] = (unsigned char)es, t->n++;
 }
 
-static void *grow_dev(void *p, size_t *cap, size_t need)
+void *grow_dev(void *p, size_t *cap, size_t need)
 {
     if (need <= *cap && p) return p;
     if (p) CK(cudaFree(p));
@@ -94,18 +90,11 @@ static void *grow_pinned(void *p, size_t *cap, size_t need)
     return q;
 }
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* GPU time spent on the halo: an event pair around each piece of halo work
  * on the stream (pack and copy out; wait, copy in and unpack), summed into
  * halo_t.wall_exposed once both have completed (at the next check, or when
  * the ring is full). */
-static void hx_resolve(gpu_t *g, halo_t *h)
+void hx_resolve(gpu_t *g, halo_t *h)
 {
     dhalo *x = g->hx;
     if (!x) return;
@@ -161,7 +150,7 @@ static void gpu_shift_images(sim_t *s, gpu_t *g, const ftab &t, int self)
  * stage them (or hand the device buffer to a CUDA-aware MPI) and post the
  * exchange; shift: the periodic images' positions of the self channels
  * moved (a refresh, the ghosts of a build; not a migration). */
-static void hx_post(sim_t *s, gpu_t *g, const ftab &t, int shift)
+void hx_post(sim_t *s, gpu_t *g, const ftab &t, int shift)
 {
     halo_t *h = s->halo;
     dhalo *x = g->hx;
@@ -208,7 +197,7 @@ static void hx_post(sim_t *s, gpu_t *g, const ftab &t, int shift)
     }
     hx_mark(g, h, 1);
     /* the host buffer is read by MPI next; the IPC peers read ibuf once told, and this stream's copies
-     * out of their buffers (gpu_ipc.cuh) must have drained before they are told */
+     * out of their buffers (gpu_ipc.cu) must have drained before they are told */
     if (x->sb[m] || x->nipc) CK(cudaStreamSynchronize(g->st));
     if (x->nipc) ipc_post(s, g);
     h->wall_comm += now() - t0;
@@ -218,7 +207,7 @@ static void hx_post(sim_t *s, gpu_t *g, const ftab &t, int shift)
 /* Complete the exchange hx_post posted: wait for the messages, unpack
  * fields t into the slots ridx (by roff). The GPU's wait for them (idle)
  * plus the copy and unpack count as exposed halo time. */
-static void hx_land(sim_t *s, gpu_t *g, const ftab &t)
+void hx_land(sim_t *s, gpu_t *g, const ftab &t)
 {
     halo_t *h = s->halo;
     dhalo *x = g->hx;
@@ -242,7 +231,7 @@ static void hx_land(sim_t *s, gpu_t *g, const ftab &t)
 
 /* Start a refresh of fields t of the ghosts: pack the send lists on the
  * device, stage, post (hx_post); gpu_refresh_finish lands it. */
-static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
+void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
 {
     dhalo *x = g->hx;
     if (x->pending) error_exit(1, "backend_gpu: a refresh is already in flight");
@@ -254,7 +243,7 @@ static void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t)
 
 /* Complete the refresh in flight: unpack into the ghost slots, shift the
  * periodic images' positions. */
-static void gpu_refresh_finish(sim_t *s, gpu_t *g)
+void gpu_refresh_finish(sim_t *s, gpu_t *g)
 {
     dhalo *x = g->hx;
     if (!x || !x->pending) return;
@@ -264,14 +253,14 @@ static void gpu_refresh_finish(sim_t *s, gpu_t *g)
 }
 
 /* Refresh fields t of the ghosts now (no overlap). */
-static void gpu_refresh(sim_t *s, gpu_t *g, const ftab &t)
+void gpu_refresh(sim_t *s, gpu_t *g, const ftab &t)
 {
     gpu_refresh_start(s, g, t);
     gpu_refresh_finish(s, g);
 }
 
 /* The refresh in flight lands; then the boundary passes it held back. */
-static void gpu_settle(sim_t *s, gpu_t *g)
+void gpu_settle(sim_t *s, gpu_t *g)
 {
     dhalo *x = g->hx;
     if (!x || !x->pending) return;
@@ -282,7 +271,7 @@ static void gpu_settle(sim_t *s, gpu_t *g)
 
 /* Every array of the owned particles into the host copy s->p (its ghosts
  * are not kept there). */
-static void gpu_download(sim_t *s, gpu_t *g)
+void gpu_download(sim_t *s, gpu_t *g)
 {
     CK(cudaStreamSynchronize(g->st));
     part_reserve(&s->p, g->n); /* the device exchange may have grown the store */
@@ -294,7 +283,7 @@ static void gpu_download(sim_t *s, gpu_t *g)
 
 /* At a list build on several ranks: the owned particles to the host, where
  * mpi/halo.c migrates them and makes fresh ghosts; everything back. */
-static void gpu_full_exchange(sim_t *s, gpu_t *g)
+void gpu_full_exchange(sim_t *s, gpu_t *g)
 {
     double t0 = now();
     particles_t *hp = &s->p;
@@ -309,7 +298,7 @@ static void gpu_full_exchange(sim_t *s, gpu_t *g)
 }
 
 /* Room for the per-channel offsets of m channels (host). */
-static void hx_offsets(dhalo *x, int m)
+void hx_offsets(dhalo *x, int m)
 {
     free(x->soff), free(x->roff), free(x->sb), free(x->rb), free(x->ib), free(x->irb);
     x->cap_nb = m + 1;
@@ -323,7 +312,7 @@ static void hx_offsets(dhalo *x, int m)
 }
 
 /* After the build's sort: the send lists and ghost slots to the device. */
-static void gpu_halo_lists(sim_t *s, gpu_t *g)
+void gpu_halo_lists(sim_t *s, gpu_t *g)
 {
     halo_t *h = s->halo;
     dhalo *x = g->hx;
@@ -351,7 +340,7 @@ static void gpu_halo_lists(sim_t *s, gpu_t *g)
 
 /* The fields f (src/stages.h) of the device store as a refresh table;
  * trim2d: a 2D store's z components and xz, yz stresses left out. */
-static ftab fields_tab(const gpu_t *g, uint32_t f, int trim2d)
+ftab fields_tab(const gpu_t *g, uint32_t f, int trim2d)
 {
     ftab t;
     t.n = 0;
@@ -364,9 +353,9 @@ static ftab fields_tab(const gpu_t *g, uint32_t f, int trim2d)
 /* What the ghosts need when the particles moved between list builds (the
  * GPU keeps its ghosts between builds): the stage table's moving fields
  * (stage_moving_fields; windows: C is refreshed by conc_step). */
-static const stage_sched *gpu_sched(const sim_t *s) { return stage_schedule(stage_flags(s)); }
+const stage_sched *gpu_sched(const sim_t *s) { return stage_schedule(stage_flags(s)); }
 
-static ftab moving_fields(const sim_t *s, const gpu_t *g)
+ftab moving_fields(const sim_t *s, const gpu_t *g)
 {
     return fields_tab(g, gpu_sched(s)->moving, 1);
 }

@@ -1,6 +1,4 @@
-/* gpu/gpu_ipc.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
- * compiled in (included in order; not a header of its own).
- * CUDA IPC between the ranks of one node (issue 31): where MPI is not
+/* gpu/gpu_ipc.cu — CUDA IPC between the ranks of one node (issue 31): where MPI is not
  * CUDA-aware, a channel between two ranks whose GPUs can reach each other
  * (the same device, or peers over NVLink or PCIe) carries its segments
  * device to device instead of through pinned host memory and MPI. The MPI
@@ -24,6 +22,7 @@
  * whether IPC is on (SPHSEG_GPU_IPC=0 turns it off; a CUDA-aware MPI gets
  * the device buffers instead), then each side's "I can map yours"; a channel
  * is IPC when both can. Self channels (periodic images) never are. */
+#include "gpu.cuh"
 
 struct ipc_hello {
     char host[64], bus[32];
@@ -49,7 +48,7 @@ static int ipc_wanted(const dhalo *x)
 
 /* Decide, per channel, whether it goes by IPC (x->ipc[k]). Collective among
  * neighbours; runs on every rank at once (halo_t.gen changes everywhere). */
-static void ipc_setup(sim_t *s, gpu_t *g)
+void ipc_setup(sim_t *s, gpu_t *g)
 {
     halo_t *h = s->halo;
     dhalo *x = g->hx;
@@ -89,7 +88,7 @@ static void ipc_setup(sim_t *s, gpu_t *g)
 
 /* The send buffer of this exchange's parity, at least bytes long; a new
  * allocation gets a new generation and handle. */
-static char *ipc_send_buffer(gpu_t *g, size_t bytes)
+char *ipc_send_buffer(gpu_t *g, size_t bytes)
 {
     dhalo *x = g->hx;
     int p = x->ipc_par;
@@ -109,7 +108,7 @@ static char *ipc_send_buffer(gpu_t *g, size_t bytes)
 
 /* After the pack has completed: a descriptor to every IPC neighbour (the
  * segment of channel k at x->ib[k]); theirs into x->ipc_in. Blocking. */
-static void ipc_post(sim_t *s, gpu_t *g)
+void ipc_post(sim_t *s, gpu_t *g)
 {
     halo_t *h = s->halo;
     dhalo *x = g->hx;
@@ -150,7 +149,7 @@ static const char *ipc_peer(gpu_t *g, int r, const ipc_desc *d)
 
 /* Copy every IPC channel's segment from its sender into x->dripc (at
  * x->irb[k]), on the stream. */
-static void ipc_land(sim_t *s, gpu_t *g)
+void ipc_land(sim_t *s, gpu_t *g)
 {
     halo_t *h = s->halo;
     dhalo *x = g->hx;
@@ -167,7 +166,7 @@ static void ipc_land(sim_t *s, gpu_t *g)
 
 /* At the end of the run (every rank): the peers' buffers unmapped, then,
  * once every rank has unmapped (a collective), this rank's own freed. */
-static void ipc_free(dhalo *x)
+void ipc_free(dhalo *x)
 {
     for (int e = 0; e < x->nmap; ++e)
         if (x->map[e].ptr) CK(cudaIpcCloseMemHandle(x->map[e].ptr));

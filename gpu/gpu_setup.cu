@@ -1,8 +1,8 @@
-/* gpu/gpu_setup.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
- * compiled in (included in order; not a header of its own).
- * Set-up: device selection, the store's allocation and growth (gpu_reserve),
- * host-device copies, the team size rule, gpu_get (the backend's state,
- * created on first use) and gpu_hook. */
+/* gpu/gpu_setup.cu — set-up: device selection, device allocation and the CUB
+ * scratch, the store's allocation and growth (gpu_reserve), host-device
+ * copies, the team size rule, gpu_get (the backend's state, created on
+ * first use), gpu_hook, and the reductions' step_ctx on the device. */
+#include "gpu.cuh"
 
 /* ---- set-up -------------------------------------------------------------- */
 
@@ -16,12 +16,33 @@ extern "C" int gpu_devices(void)
     return n;
 }
 
+void *dev_alloc(size_t bytes)
+{
+    void *p = NULL;
+    cudaError_t e = cudaMalloc(&p, bytes ? bytes : 1);
+    if (e != cudaSuccess)
+        error_exit(1, "GPU out of memory: %zu bytes (%s); use fewer particles per GPU (a larger Geometry:dr "
+                   "or more ranks)", bytes, cudaGetErrorString(e));
+    return p;
+}
+
+/* Grow the CUB scratch to at least bytes. */
+void *scratch(gpu_t *g, size_t bytes)
+{
+    if (bytes > g->tmp_bytes) {
+        if (g->tmp) CK(cudaFree(g->tmp));
+        g->tmp = dev_alloc(bytes);
+        g->tmp_bytes = bytes;
+    }
+    return g->tmp;
+}
+
 /* Per-particle device arrays for at least need particles. The first keep
  * particles of the store are kept (the device exchange grows the store
  * under its owned particles), by way of the spare set, so that at most two
  * sets are held at once; with keep 0 nothing is (callers upload after).
  * The work arrays (keys, lists, levels) are never kept: a build follows. */
-static void gpu_reserve(gpu_t *g, size_t need, size_t keep)
+void gpu_reserve(gpu_t *g, size_t need, size_t keep)
 {
     if (need <= g->cap && g->key) return;
     size_t cap = g->key ? need + need / 8 + 1024 : need; /* one rank: exactly n, as before */
@@ -82,7 +103,7 @@ static void gpu_reserve(gpu_t *g, size_t need, size_t keep)
 }
 
 /* Host arrays [a, b) of every particle array to the device. */
-static void gpu_upload(gpu_t *g, const particles_t *h, size_t a, size_t b)
+void gpu_upload(gpu_t *g, const particles_t *h, size_t a, size_t b)
 {
     for (size_t k = 0; k < part_narrays(); ++k) {
         size_t es = part_array_esize(k);
@@ -93,7 +114,7 @@ static void gpu_upload(gpu_t *g, const particles_t *h, size_t a, size_t b)
 }
 
 /* The counts in the device structs (kernels read p.n, p.ng). */
-static void gpu_counts(gpu_t *g, size_t n, size_t ng)
+void gpu_counts(gpu_t *g, size_t n, size_t ng)
 {
     g->n = n, g->ng = ng;
     g->d.n = g->alt.n = n;
@@ -118,7 +139,7 @@ static int gpu_team_size(int dim, size_t n)
     return t;
 }
 
-static gpu_t *gpu_get(sim_t *s)
+gpu_t *gpu_get(sim_t *s)
 {
     if (s->be_data) return (gpu_t *)s->be_data;
     gpu_t *g = (gpu_t *)calloc(1, sizeof *g);
@@ -182,15 +203,24 @@ static gpu_t *gpu_get(sim_t *s)
     return g;
 }
 
-static void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t);
-
 /* gpu_get for a hook: the held-back save and advance run first; for a hook
  * that changes the store (mut), the bounds taken by the last check no
  * longer hold. */
-static gpu_t *gpu_hook(sim_t *s, int mut)
+gpu_t *gpu_hook(sim_t *s, int mut)
 {
     gpu_t *g = gpu_get(s);
     gpu_step_kernel(s, g, 0, 0.0);
     if (mut) g->bnd_fresh = 0;
     return g;
+}
+
+/* s->step_c on the device for the reductions, sent on the stream when it
+ * has changed since the last send (in practice once). */
+const step_ctx *gpu_step_ctx(sim_t *s, gpu_t *g)
+{
+    if (memcmp(g->hstep, &s->step_c, sizeof(step_ctx))) {
+        memcpy(g->hstep, &s->step_c, sizeof(step_ctx));
+        CK(cudaMemcpyAsync(g->dstep, g->hstep, sizeof(step_ctx), cudaMemcpyHostToDevice, g->st));
+    }
+    return g->dstep;
 }

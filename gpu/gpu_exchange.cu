@@ -1,7 +1,5 @@
-/* gpu/gpu_exchange.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
- * compiled in (included in order; not a header of its own).
- * The exchange at a list build on several ranks, on the device (issue 31):
- * the lattice origin from a device reduction, the periodic wrap, the
+/* gpu/gpu_exchange.cu — the exchange at a list build on several ranks, on the
+ * device (issue 31): the lattice origin from a device reduction, the periodic wrap, the
  * migrants and the ghosts chosen by kernels with the same decisions as
  * mpi/halo.c (mpi/halo_geom.h), compacted and sorted by channel on the
  * device, packed, exchanged as byte segments (pinned host staging, or the
@@ -15,6 +13,9 @@
  * shifted by the same arithmetic. SPHSEG_GPU_HOSTX=1 takes the host path
  * instead (gpu_full_exchange: download, halo_exchange, upload), for
  * measuring and comparing the two. */
+#include <cub/device/device_radix_sort.cuh>
+#include <cub/device/device_scan.cuh>
+#include "gpu_reduce.cuh"
 
 /* ---- the decomposition on the device ------------------------------------ */
 
@@ -294,14 +295,8 @@ static void hx_migrate(sim_t *s, gpu_t *g, const halo_geom &v)
     hx_slots(g, nkeep, nin);
     const ftab from = all_tab(&g->d);
     hx_post(s, g, from, 0); /* packs the migrants before the compaction below overwrites the spare set */
-    if (nkeep < n) { /* the kept ones in order into the spare set, which becomes the store */
-        perm_tab t = perm_all(g);
-        dim3 gr((unsigned)((nkeep + 255) / 256), (unsigned)t.n);
-        if (nkeep) k_permute<<<gr, 256, 0, g->st>>>(t, x->keep, nkeep);
-        CK(cudaGetLastError());
-        particles_t tmp = g->d;
-        g->d = g->alt, g->alt = tmp;
-    }
+    if (nkeep < n) gpu_permute(g, x->keep, nkeep); /* the kept ones in order into the spare set, which
+                                                      * becomes the store */
     hx_land(s, g, all_tab(&g->d));
     gpu_counts(g, nkeep + nin, 0);
 }
@@ -323,7 +318,7 @@ static void hx_ghosts(sim_t *s, gpu_t *g, const halo_geom &v)
 }
 
 /* At a list build on several ranks: migrate and make ghosts on the device. */
-static void gpu_device_exchange(sim_t *s, gpu_t *g)
+void gpu_device_exchange(sim_t *s, gpu_t *g)
 {
     double t0 = now(), comm0 = s->halo->wall_comm;
     dhalo *x = g->hx;
@@ -342,7 +337,7 @@ static void gpu_device_exchange(sim_t *s, gpu_t *g)
 
 /* After the build's sort (perm[k] = old index now at k, over all n
  * particles): the send lists and the ghost slots follow on the device. */
-static void hx_sorted(gpu_t *g, const unsigned *perm, size_t n)
+void hx_sorted(gpu_t *g, const unsigned *perm, size_t n)
 {
     dhalo *x = g->hx;
     x->inv = grow_dev_t(x->inv, &x->cap_inv, n);

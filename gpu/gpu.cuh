@@ -1,9 +1,32 @@
-/* gpu/gpu_store.cuh — part of gpu/backend_gpu.cu, the one translation unit it is
- * compiled in (included in order; not a header of its own).
+/* gpu/gpu.cuh — the CUDA backend's private header, included by each unit of gpu/
+ * (compiled apart, without relocatable device code: every kernel lives in
+ * the unit that launches it; templates and __device__ inline helpers here).
  * The CUDA backend's types: the CK error check, sizes and limits, the
  * permutation and refresh tables, the pass selections, the device halo
  * state, gpu_t (the device store, the cell and neighbour lists, the pending
- * stages), and the per-stage profiler (SPHSEG_GPU_PROFILE). */
+ * stages), the per-stage profiler (SPHSEG_GPU_PROFILE); the launches and
+ * the reductions' functors (gpu_launch.cuh; reduce itself, with CUB, in
+ * gpu_reduce.cuh); the functions one unit calls in another, by the unit
+ * that defines them. */
+#ifndef SPHSEG_GPU_CUH
+#define SPHSEG_GPU_CUH
+
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+#include <cuda_runtime.h>
+extern "C" {
+#include "core/error.h"
+#include "core/tuning.h"
+#include "mpi/comm.h"
+#include "sim.h"
+#include "stages.h"
+}
 
 #define CK(call)                                                                                     \
     do {                                                                                             \
@@ -38,7 +61,7 @@ struct ftab {
 };
 
 /* Which particles a kernel pass runs on: all (lvl NULL), or those whose
- * halo level (0 ghost, 1..3 owned, see the top) lies in [lo, hi]. */
+ * halo level (0 ghost, 1..3 owned; backend_gpu.cu, at the top) lies in [lo, hi]. */
 struct sel {
     const uint8_t *lvl;
     uint8_t lo, hi;
@@ -67,7 +90,7 @@ struct dhalo {
     int nev;
     long full, refresh;          /* exchanges at builds; refreshes */
     double full_s;               /* host seconds in the exchanges at builds */
-    int dev;                     /* exchanges at builds on the device (gpu_exchange.cuh); 0: through the
+    int dev;                     /* exchanges at builds on the device (gpu_exchange.cu); 0: through the
                                   * host (SPHSEG_GPU_HOSTX=1) */
     int nnb;                     /* channels of the lists held */
     /* the device exchange: the decomposition's arrays (and host shadows), per-particle counts and
@@ -81,7 +104,7 @@ struct dhalo {
     unsigned long long *dcnt, *hcnt;
     size_t cap_hcnt;
     int *derr, *herr;
-    /* CUDA IPC channels (gpu_ipc.cuh): which, for which channel set; two send buffers used in turn,
+    /* CUDA IPC channels (gpu_ipc.cu): which, for which channel set; two send buffers used in turn,
      * their handles and generations; the peers' descriptors and mapped buffers; the receive buffer;
      * the per-channel byte offsets of the IPC segments (host, nnb + 1) */
     int *ipc, nipc, ipc_par, ipc_said;
@@ -139,30 +162,27 @@ typedef struct gpu {
     long long *hfirst;
 } gpu_t;
 
-static int g_local_rank;
+extern int g_local_rank; /* backend_gpu(local_rank) (backend_gpu.cu) */
 
 /* Stage timing (SPHSEG_GPU_PROFILE=1 in the environment): events around each
  * stage with a synchronisation after it, so the stages do not overlap and
- * the total runs slower than without; a table at the end of the run. */
+ * the total runs slower than without; a table at the end of the run
+ * (gpu_finish; the state is defined in backend_gpu.cu). */
 enum { P_MOTION, P_BBOX, P_SORT, P_PERMUTE, P_LIST, P_CLASSIFY, P_WALLS, P_FLOW, P_SEG, P_FILTER, P_BOUNDS_CHECK,
        P_NPROF };
-static const char *prof_name[P_NPROF] = {"save start, advance, motion", "bounding box (+sync)",
-                                          "cell keys, radix sort, start/end", "permute arrays", "neighbour list",
-                                          "HCSR classification", "dummy walls, renormalisation L",
-                                          "flow rates (+seg. coefficients)", "concentration rates", "Shepard filter",
-                                          "dt bounds, blow-up check (+sync)"};
-static struct {
+struct gpu_prof {
     int on;
     cudaEvent_t a, b;
     double ms[P_NPROF];
     long calls[P_NPROF];
-} prof;
+};
+extern struct gpu_prof prof;
 
-static void prof_begin(cudaStream_t st)
+static inline void prof_begin(cudaStream_t st)
 {
     if (prof.on) CK(cudaEventRecord(prof.a, st));
 }
-static void prof_end(cudaStream_t st, int k)
+static inline void prof_end(cudaStream_t st, int k)
 {
     if (!prof.on) return;
     CK(cudaEventRecord(prof.b, st));
@@ -172,3 +192,85 @@ static void prof_end(cudaStream_t st, int k)
     prof.ms[k] += ms;
     prof.calls[k]++;
 }
+
+static inline double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Pass selections: everything (one rank, or right after a build), the
+ * particles whose support reads no ghost data (level >= lo), the rest. */
+static inline sel sel_all(void) { return sel{NULL, 0, 0}; }
+static inline sel sel_in(const gpu_t *g, int lo) { return g->lvl ? sel{g->lvl, (uint8_t)lo, 3} : sel_all(); }
+static inline sel sel_bd(const gpu_t *g, int lo) { return sel{g->lvl, 0, (uint8_t)(lo - 1)}; }
+
+/* ---- set-up (gpu_setup.cu) ----------------------------------------------- */
+void *dev_alloc(size_t bytes);
+void *scratch(gpu_t *g, size_t bytes);
+void gpu_reserve(gpu_t *g, size_t need, size_t keep);
+void gpu_upload(gpu_t *g, const particles_t *h, size_t a, size_t b);
+void gpu_counts(gpu_t *g, size_t n, size_t ng);
+gpu_t *gpu_get(sim_t *s);
+gpu_t *gpu_hook(sim_t *s, int mut);
+const step_ctx *gpu_step_ctx(sim_t *s, gpu_t *g);
+
+#include "gpu_launch.cuh"
+
+/* ---- the neighbour pass: build (gpu_nbr.cu), pair loops (gpu_pairs.cu) --- */
+void gpu_permute(gpu_t *g, const unsigned *perm, size_t n);
+void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, const real *origin);
+void gpu_classify(gpu_t *g, const sph_ctx *kc);
+void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl);
+void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl);
+void gpu_dcdt(sim_t *s, gpu_t *g, particles_t p, sel sl);
+void gpu_shift_pass(sim_t *s, gpu_t *g);
+void gpu_shepard_pass(sim_t *s, gpu_t *g);
+void gpu_win_renorm(sim_t *s, gpu_t *g);
+
+/* ---- ghosts on several ranks (gpu_halo.cu) ------------------------------- */
+int hx_self(const halo_t *h, int k, int *kp);
+void ft_add(ftab *t, void *p, size_t es);
+void *grow_dev(void *p, size_t *cap, size_t need);
+void hx_resolve(gpu_t *g, halo_t *h);
+void hx_post(sim_t *s, gpu_t *g, const ftab &t, int shift);
+void hx_land(sim_t *s, gpu_t *g, const ftab &t);
+void gpu_refresh_start(sim_t *s, gpu_t *g, const ftab &t);
+void gpu_refresh_finish(sim_t *s, gpu_t *g);
+void gpu_refresh(sim_t *s, gpu_t *g, const ftab &t);
+void gpu_settle(sim_t *s, gpu_t *g);
+void gpu_download(sim_t *s, gpu_t *g);
+void gpu_full_exchange(sim_t *s, gpu_t *g);
+void hx_offsets(dhalo *x, int m);
+void gpu_halo_lists(sim_t *s, gpu_t *g);
+ftab fields_tab(const gpu_t *g, uint32_t f, int trim2d);
+const stage_sched *gpu_sched(const sim_t *s);
+ftab moving_fields(const sim_t *s, const gpu_t *g);
+
+/* ---- CUDA IPC between the ranks of one node (gpu_ipc.cu) ----------------- */
+void ipc_setup(sim_t *s, gpu_t *g);
+char *ipc_send_buffer(gpu_t *g, size_t bytes);
+void ipc_post(sim_t *s, gpu_t *g);
+void ipc_land(sim_t *s, gpu_t *g);
+void ipc_free(dhalo *x);
+
+/* ---- the exchange at a list build on the device (gpu_exchange.cu) -------- */
+void gpu_device_exchange(sim_t *s, gpu_t *g);
+void hx_sorted(gpu_t *g, const unsigned *perm, size_t n);
+
+/* ---- the step's hooks (gpu_step.cu) -------------------------------------- */
+void gpu_acc_reduce(gpu_t *g);
+int gpu_plans(const sim_t *s, int h, int id);
+void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t);
+void gpu_prepare(sim_t *s, double t, int classify);
+void gpu_rates(sim_t *s);
+void gpu_save_start(sim_t *s);
+void gpu_advance(sim_t *s, double a, double w);
+void gpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS]);
+void gpu_conc_step(sim_t *s, double a, int last);
+void gpu_filter(sim_t *s);
+void gpu_bounds(sim_t *s, double out[STEP_NBOUNDS]);
+long gpu_check(sim_t *s);
+
+#endif
