@@ -114,6 +114,13 @@ static void gpu_finish(sim_t *s)
         message("gpu halo (rank %d): %ld exchanges at list builds (%.3f s, %s), %ld refreshes, %zu ghosts, "
                 "%.3f s of halo on the device timeline (exposed)", s->halo->rank, x->full, x->full_s,
                 x->dev ? "device" : "host", x->refresh, g->ng, s->halo->wall_exposed);
+        if (x->dev && x->full > 1) {
+            double k = 1e3 / (double)(x->full - 1);
+            message("gpu halo (rank %d): the first exchange at a build %.1f ms (it allocates), the %ld others %.1f ms "
+                    "each: origin %.2f, migrants chosen %.2f, moved %.2f, ghosts chosen %.2f, sent %.2f ms",
+                    s->halo->rank, 1e3 * x->first_s, x->full - 1, (x->full_s - x->first_s) * k, x->ph[0] * k,
+                    x->ph[1] * k, x->ph[2] * k, x->ph[3] * k, x->ph[4] * k);
+        }
         void *db[] = {x->sidx, x->ridx, x->dsend, x->drecv, x->gbound, x->gpart, x->gnb, x->cnt, x->off,
                       x->pk, x->pk2, x->pv, x->keep, x->inv, x->dcnt, x->derr};
         for (size_t k = 0; k < sizeof db / sizeof db[0]; ++k)

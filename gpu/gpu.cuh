@@ -73,6 +73,10 @@ __device__ __forceinline__ bool sel_on(const sel &s, size_t i)
 
 /* Halo state of a multi-rank run on the device. */
 enum { HX_EV = 64 };
+/* The phases of a device exchange at a build, timed at points where the host waits anyway
+ * (gpu_exchange.cu): the origin; the migrants chosen and counted; moved (sent, the store
+ * compacted, received); the ghosts chosen and counted; their fields sent and received. */
+enum { HX_PHASES = 5 };
 struct dhalo {
     unsigned *sidx, *ridx;       /* send lists (neighbour order), ghost slots of the received */
     size_t cap_s, cap_r;
@@ -90,6 +94,9 @@ struct dhalo {
     int nev;
     long full, refresh;          /* exchanges at builds; refreshes */
     double full_s;               /* host seconds in the exchanges at builds */
+    double first_s;              /* of which the first (it allocates the exchange's buffers) */
+    double ph[HX_PHASES];        /* the device exchange's phases after the first, host seconds summed */
+    double tmark[HX_PHASES + 1]; /* the current exchange's phase boundaries (now()) */
     int dev;                     /* exchanges at builds on the device (gpu_exchange.cu); 0: through the
                                   * host (SPHSEG_GPU_HOSTX=1) */
     int nnb;                     /* channels of the lists held */

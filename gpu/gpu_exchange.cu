@@ -289,6 +289,7 @@ static void hx_migrate(sim_t *s, gpu_t *g, const halo_geom &v)
     const size_t n = g->n;
     size_t nmig = hx_choose<HX_MIGRATE>(s, g, v, "migration");
     size_t nin = hx_lists(s, g, nmig), nkeep = n - nmig;
+    x->tmark[2] = now();
     h->migrated += (long long)nmig;
     /* posted even when nothing moves here: a neighbour waits for this rank's (empty) segments */
     gpu_reserve(g, nkeep + nin > n ? nkeep + nin : n, n);
@@ -299,6 +300,8 @@ static void hx_migrate(sim_t *s, gpu_t *g, const halo_geom &v)
                                                       * becomes the store */
     hx_land(s, g, all_tab(&g->d));
     gpu_counts(g, nkeep + nin, 0);
+    CK(cudaStreamSynchronize(g->st)); /* the next phase waits on its scan anyway; this times the move alone */
+    x->tmark[3] = now();
 }
 
 /* halo_make_ghosts on the device: every owned particle near another
@@ -310,6 +313,7 @@ static void hx_ghosts(sim_t *s, gpu_t *g, const halo_geom &v)
     dhalo *x = g->hx;
     const size_t n = g->n;
     size_t ng = hx_lists(s, g, hx_choose<HX_GHOSTS>(s, g, v, "ghosts"));
+    x->tmark[4] = now();
     gpu_reserve(g, n + ng, n);
     gpu_counts(g, n, ng);
     hx_slots(g, n, ng);
@@ -323,13 +327,19 @@ void gpu_device_exchange(sim_t *s, gpu_t *g)
     double t0 = now(), comm0 = s->halo->wall_comm;
     dhalo *x = g->hx;
     gpu_counts(g, g->n, 0); /* the old ghosts are dropped */
+    x->tmark[0] = t0;
     hx_origin(s, g);
+    x->tmark[1] = now();
     hx_wrap(s, g);
     halo_geom v = hx_geom(s, g);
     hx_migrate(s, g, v);
     hx_ghosts(s, g, v);
     CK(cudaStreamSynchronize(g->st));
-    double dt = now() - t0;
+    x->tmark[HX_PHASES] = now();
+    double dt = x->tmark[HX_PHASES] - t0;
+    if (!x->full) x->first_s = dt;
+    else
+        for (int k = 0; k < HX_PHASES; ++k) x->ph[k] += x->tmark[k + 1] - x->tmark[k];
     x->full++, x->full_s += dt;
     s->halo->wall_comm = comm0 + dt; /* all of it, as halo_exchange counts its own */
     s->halo->wall_exposed += dt;
