@@ -45,6 +45,7 @@ done
 run_one badinput bash tests/test_badinput.sh "$BUILD/sphseg"
 run_one inputs bash tests/test_inputs.sh "$BUILD/sphseg"
 run_one keys bash tests/test_keys.sh "$BUILD/sphseg"
+run_one doc_links "$PYTHON" tools/doc_links.py
 run_one mpi_launch bash tests/test_launch.sh "$BUILD/sphseg"
 run_one mpi_halo_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUILD/tests/test_halo"
 run_one checkpoint_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUILD/tests/test_checkpoint"

@@ -1,7 +1,7 @@
 """Shear box of paper §5 (van der Vaart et al. 2015) at CI size.
 
 Reference: the 1D finite-volume solution of the same PDE (tools/seg1d.py,
-converged to < 1e-4 at 800 cells, docs/ref_fv_convergence.md). The SPH
+converged to < 1e-4 at 800 cells, docs/data/ref_fv/ref_fv_convergence.md). The SPH
 profile C(z) (row means) is compared at t/T = 20, 40, 80 by MAE and RMSE
 (eqs. 5.3-5.4). Tolerances, from the full study (docs/shearbox.md):
   - conservative scheme, all four cases (flux x V/D model) at dr/H = 0.04:

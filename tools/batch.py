@@ -133,10 +133,11 @@ def run_cases_or_exit(cases, sphseg, work, limit_s=900):
     return recs
 
 
-def study_main(doc, sets, cases_of, on_done, cmd_report, jobs=1, argv=None):
+def study_main(doc, sets, cases_of, on_done, cmd_report, study, jobs=1, argv=None):
     """The command line the validation studies share: `run` (the cases of
     --set through `cases_of`, picked by --only, on_done(args, case, record)
-    as each ends) and `report` (cmd_report(args) over --out folders)."""
+    as each ends) and `report` (cmd_report(args) over --out folders; its
+    charts into --docs, by default the study's data folder docs/data/STUDY)."""
     import argparse
     ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -152,7 +153,8 @@ def study_main(doc, sets, cases_of, on_done, cmd_report, jobs=1, argv=None):
     r.add_argument("--keep", action="store_true", help="keep the snapshots")
     p = sub.add_parser("report")
     p.add_argument("--out", required=True, nargs="+", help="the run folders (several: their cases merged)")
-    p.add_argument("--docs", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "docs"))
+    p.add_argument("--docs", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "docs", "data", study),
+                   help="folder for the charts (default docs/data/%s)" % study)
     p.add_argument("--table", help="also write the tables (markdown) here")
     a = ap.parse_args(argv)
     if a.cmd == "report":

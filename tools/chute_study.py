@@ -28,7 +28,7 @@ number of the flux normal to the base, Pe = V cos(theta) H / D (the flux
 along the slope is uniform and drops out).
 
   python3 tools/chute_study.py run --sphseg build/sphseg --out out/chute_study [--backend gpu] [--set full]
-  python3 tools/chute_study.py report --out out/chute_study --docs docs
+  python3 tools/chute_study.py report --out out/chute_study [--docs docs/data/chute]
 
 `run` reduces each run's snapshots to row profiles (profiles.csv: t, y, u, C
 of each lattice row) and deletes the snapshots unless --keep.
@@ -438,7 +438,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("resolution", "stabilization", "regimes", "3d", "seg", "flowrule"), cases, reduce_done, cmd_report, jobs=4,
+    batch.study_main(__doc__, ("resolution", "stabilization", "regimes", "3d", "seg", "flowrule"), cases, reduce_done, cmd_report, "chute", jobs=4,
                      argv=argv)
 
 

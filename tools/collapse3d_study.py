@@ -15,7 +15,7 @@ least two); the final height is the highest material within 2 dr of the
 axis. Runs go to 7 sqrt(H0 / g) (the flow stops within about 3).
 
   python3 tools/collapse3d_study.py run --sphseg build/sphseg --out out/collapse3d [--backend gpu] [--set ...]
-  python3 tools/collapse3d_study.py report --out out/collapse3d --docs docs
+  python3 tools/collapse3d_study.py report --out out/collapse3d [--docs docs/data/collapse3d]
 """
 import math
 import os
@@ -176,7 +176,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("resolution", "aspect"), cases, reduce_done, cmd_report, jobs=1, argv=argv)
+    batch.study_main(__doc__, ("resolution", "aspect"), cases, reduce_done, cmd_report, "collapse3d", jobs=1, argv=argv)
 
 
 if __name__ == "__main__":

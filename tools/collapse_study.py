@@ -19,7 +19,7 @@ material at the wall (x < 2 dr). The flow stops within a few sqrt(H0 / g)
 (Lube et al.: about 3); runs go to 0.02 + 7 sqrt(H0 / g).
 
   python3 tools/collapse_study.py run --sphseg build/sphseg --out out/collapse_study [--backend gpu]
-  python3 tools/collapse_study.py report --out out/collapse_study --docs docs
+  python3 tools/collapse_study.py report --out out/collapse_study [--docs docs/data/collapse]
 """
 import math
 import os
@@ -182,7 +182,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("aspect", "yield", "resolution"), cases, reduce_done, cmd_report, argv=argv)
+    batch.study_main(__doc__, ("aspect", "yield", "resolution"), cases, reduce_done, cmd_report, "collapse", argv=argv)
 
 
 if __name__ == "__main__":

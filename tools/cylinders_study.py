@@ -38,7 +38,7 @@ and the post's dummies, periodic): 3.7 % at t = 0 at L/dr = 20, where the
 square lattice is cut by the post, whose dummies do not lie on it.
 
   python3 tools/cylinders_study.py run --sphseg build/sphseg --out out/cylinders [--backend gpu] [--set ...]
-  python3 tools/cylinders_study.py report --out out/cylinders --docs docs
+  python3 tools/cylinders_study.py report --out out/cylinders [--docs docs/data/cylinders]
 """
 import csv
 import glob
@@ -282,7 +282,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("resolution", "pressure", "fraction", "shifting", "background"), cases, reduce_done, cmd_report, jobs=4,
+    batch.study_main(__doc__, ("resolution", "pressure", "fraction", "shifting", "background"), cases, reduce_done, cmd_report, "cylinders", jobs=4,
                      argv=argv)
 
 

@@ -3,8 +3,8 @@
 (issue "Granular flow"), on the rotating drum of inputs/drum_2d_EV.yml.
 
   tools/granular_study.py run --out DIR [--jobs N] [--sphseg B] [--sphseg-single B] [--quick]
-  tools/granular_study.py analyze --out DIR [--docs docs]
-  tools/granular_study.py chart --out DIR [--docs docs]     # from the CSV files alone
+  tools/granular_study.py analyze --out DIR [--docs docs/data/granular]
+  tools/granular_study.py chart --out DIR [--docs docs/data/granular]     # from the CSV files alone
 
 run: every case below as its own sphseg process, N at a time (one OpenMP
 thread each unless the case says more), recording exit status, wall time,
@@ -337,10 +337,10 @@ def main():
     r.add_argument("--timeout", type=float, default=None, help="wall seconds per case (rc 124 past it)")
     a = sub.add_parser("analyze")
     a.add_argument("--out", required=True)
-    a.add_argument("--docs", default=os.path.join(HERE, "..", "docs"))
+    a.add_argument("--docs", default=os.path.join(HERE, "..", "docs", "data", "granular"))
     c = sub.add_parser("chart", help="redraw the stability and trade charts from the CSV files")
     c.add_argument("--out", required=True)
-    c.add_argument("--docs", default=os.path.join(HERE, "..", "docs"))
+    c.add_argument("--docs", default=os.path.join(HERE, "..", "docs", "data", "granular"))
     args = ap.parse_args()
     {"run": cmd_run, "analyze": cmd_analyze, "chart": cmd_chart}[args.cmd](args)
 

@@ -135,7 +135,7 @@ def cmd_report(a):
     return 0
 
 
-STEADY = {5.0: 0.5, 20.0: 0.3, 40.0: 0.7, 100.0: 0.5}  # Pe: phi0 (tests/validate_steady.py, docs/steady_table.md)
+STEADY = {5.0: 0.5, 20.0: 0.3, 40.0: 0.7, 100.0: 0.5}  # Pe: phi0 (tests/validate_steady.py, docs/data/steady/steady_table.md)
 
 
 def cmd_steady(a):

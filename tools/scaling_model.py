@@ -53,7 +53,7 @@ per direction), B_net 25 GB/s between nodes (InfiniBand HDR200/NDR), lat 3 us.
 
   /usr/bin/python3 tools/scaling_model.py --check-device
   /usr/bin/python3 tools/scaling_model.py --settings fast|table1 [--precision single|double]
-      [--intra ipc|staged] [--gpus-per-node 8] [--b-net 25e9] [--cuda-aware] [--png docs/parallel_model.png]
+      [--intra ipc|staged] [--gpus-per-node 8] [--b-net 25e9] [--cuda-aware] [--png docs/data/parallel/parallel_model.png]
   /usr/bin/python3 tools/scaling_model.py [--check] [--check-skin] [--skin-png PNG]
 """
 import argparse
@@ -84,8 +84,8 @@ def build_record(precision):
 # two GPUs (0.2 m). Each row: the 1-GPU rate of the same call (R1), the 2-GPU rate (R2), list builds, seconds of
 # the build exchanges and of exposed halo (rank 0's log line), the stepping wall, and the role in the fit:
 # "fit" (efficiency and build time fitted), "build" (build time fitted, efficiency out of sample), "check".
-DX, IPC, IPC2 = ("docs/parallel_data/device_exchange_h200x2.txt", "docs/parallel_data/ipc_h200x2.txt",
-                 "docs/parallel_data/ipc_h200x2_run2.txt")
+DX, IPC, IPC2 = ("docs/data/parallel/device_exchange_h200x2.txt", "docs/data/parallel/ipc_h200x2.txt",
+                 "docs/data/parallel/ipc_h200x2_run2.txt")
 MEASURED = [
     # key, settings, precision, transport, mode, skin, R1, R2, builds, build_s, exposed_s, wall_s, role, file
     ("fast single staged weak", "fast", "single", "staged", "weak", 0.1, 3.0416e8, 5.6126e8, 12, 0.345, 0.602, 8.302, "fit", DX),
@@ -304,7 +304,7 @@ def skin_args():
 
 
 def check_skin(_a):
-    """The model's list builds and rates against the skin runs (docs/parallel_data/skin_h200x2.txt)."""
+    """The model's list builds and rates against the skin runs (docs/data/parallel/skin_h200x2.txt)."""
     N = 1.1236e7
     a = skin_args()
     print("| skin | builds in 200 steps: model, measured | 1-GPU rate: model, measured | "
@@ -503,7 +503,7 @@ def parser():
                     help="time step, s (default from --settings: fast 2.504e-5, Table 1 3.958e-7, docs/gpu.md)")
     ap.add_argument("--v-max", type=float, default=0.037,
                     help="largest particle speed, m/s (default: from the measured build interval, 18.2 steps at "
-                         "skin 0.1 and dt 2.504e-5 s: docs/parallel_data/skin_h200x2.txt)")
+                         "skin 0.1 and dt 2.504e-5 s: docs/data/parallel/skin_h200x2.txt)")
     ap.add_argument("--check-device", action="store_true",
                     help="the model against every measured 2-GPU run (fitted and out of sample) and exit")
     ap.add_argument("--check-skin", action="store_true",

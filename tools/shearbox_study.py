@@ -7,13 +7,13 @@ and speed of the concentration schemes against the 1D FV reference.
       runs sphseg once per (case, scheme, dr/H), OMP_NUM_THREADS=1 each, N at a
       time, and records the wall time of every run in DIR/runs.csv (needs only
       the Python standard library, so it runs on any machine with the binary);
-  python3 tools/shearbox_study.py analyze --out DIR [DIR ...] [--docs docs]
+  python3 tools/shearbox_study.py analyze --out DIR [DIR ...] [--docs docs/data/shearbox]
       compares every run with the reference at t/T = 20, 40, 80 (MAE, RMSE,
       eqs. 5.3-5.4; saved in DIR/errors.csv, which later analyses reuse when
-      DIR/runs.csv and the snapshots are gone), merges the folders, and writes docs/shearbox_table.md (error table,
+      DIR/runs.csv and the snapshots are gone), merges the folders, and writes docs/data/shearbox/shearbox_table.md (error table,
       observed orders, drift of sum C_i V_i, wall times) and the charts
-      docs/shearbox_convergence.png, docs/shearbox_speed_accuracy.png,
-      docs/shearbox_drift.png.
+      docs/data/shearbox/shearbox_convergence.png, docs/data/shearbox/shearbox_speed_accuracy.png,
+      docs/data/shearbox/shearbox_drift.png.
 A run that stops with exit status 3 (numerical blow-up) is recorded as
 unstable with the time it reached.
 """
@@ -276,7 +276,7 @@ def main(argv=None):
     r.add_argument("--sphseg", default=os.path.join(HERE, "..", "build", "sphseg"))
     z = sub.add_parser("analyze")
     z.add_argument("--out", required=True, nargs="+", help="study folders (merged)")
-    z.add_argument("--docs", default=os.path.join(HERE, "..", "docs"))
+    z.add_argument("--docs", default=os.path.join(HERE, "..", "docs", "data", "shearbox"))
     a = ap.parse_args(argv)
     return cmd_run(a) if a.cmd == "run" else cmd_analyze(a)
 

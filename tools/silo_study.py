@@ -18,7 +18,7 @@ each particle rho dr^2 per unit depth) over the window from T0 after the
 opening opens to the time half of the fill has left.
 
   python3 tools/silo_study.py run --sphseg build/sphseg --out out/silo_study [--backend gpu]
-  python3 tools/silo_study.py report --out out/silo_study --docs docs
+  python3 tools/silo_study.py report --out out/silo_study [--docs docs/data/silo]
 """
 import glob
 import math
@@ -185,7 +185,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("beverloo", "height", "resolution", "mixed"), cases, tidy_done, cmd_report, argv=argv)
+    batch.study_main(__doc__, ("beverloo", "height", "resolution", "mixed"), cases, tidy_done, cmd_report, "silo", argv=argv)
 
 
 if __name__ == "__main__":

@@ -3,10 +3,10 @@
 "Stabilisation"): the surface speed (largest mid-chord speed,
 tools/drum_analysis.py) against dr at t = 2.5, 5 and 10 s for monaghan
 (alpha_av 3.162 at E 1e4 Pa, the alpha sqrt(E) rule) and riemann, from
-docs/granular_data/stabilization/drum_ev_runs.csv, beside the paper's DEM
+docs/data/stabilization/drum_ev_runs.csv, beside the paper's DEM
 surface speed (6 cm/s at 20 s, 7 at 40 s: paper §5.3, a later time than these).
 
-  /usr/bin/python3 tools/stab_chart.py [--csv CSV] [--png docs/granular_stabilization.png]
+  /usr/bin/python3 tools/stab_chart.py [--csv CSV] [--png docs/data/stabilization/granular_stabilization.png]
 """
 import argparse
 import csv
@@ -18,8 +18,8 @@ DR = {"1": 1.0, "05": 0.5, "025": 0.25}
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--csv", default=os.path.join(HERE, "..", "docs", "granular_data", "stabilization", "drum_ev_runs.csv"))
-    ap.add_argument("--png", default=os.path.join(HERE, "..", "docs", "granular_stabilization.png"))
+    ap.add_argument("--csv", default=os.path.join(HERE, "..", "docs", "data", "stabilization", "drum_ev_runs.csv"))
+    ap.add_argument("--png", default=os.path.join(HERE, "..", "docs", "data", "stabilization", "granular_stabilization.png"))
     a = ap.parse_args()
     pts = {}  # (stab, t) -> {dr: speed}; the latest call wins (B after A)
     for r in csv.DictReader(open(a.csv)):

@@ -4,7 +4,7 @@ concentrations phi0 and Peclet numbers Pe = V H / D, two resolutions and two
 schemes. A column at rest starts uniform at phi0 and runs to t = 4 H^2/D
 (tests/validate_steady.py holds the run set-up; this is its full version).
 
-  python3 tools/steady_study.py [--sphseg build/sphseg] [--work DIR] [--md docs/steady_table.md]
+  python3 tools/steady_study.py [--sphseg build/sphseg] [--work DIR] [--md docs/data/steady/steady_table.md]
 """
 import argparse
 import os
@@ -25,7 +25,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--sphseg", default=os.path.join(HERE, "..", "build", "sphseg"))
     ap.add_argument("--work", default="/tmp/sphseg_steady")
-    ap.add_argument("--md", default=os.path.join(HERE, "..", "docs", "steady_table.md"))
+    ap.add_argument("--md", default=os.path.join(HERE, "..", "docs", "data", "steady", "steady_table.md"))
     a = ap.parse_args()
     lines = ["| dr/H | phi0 | Pe | V h / D | scheme | MAE | max error | mean C |", "|---|---|---|---|---|---|---|---|"]
     for res in (0.04, 0.02):

@@ -3,7 +3,7 @@
 
   tools/time_to_solution.py run [--sphseg build/sphseg] [--backend gpu] [--steps 200]
                                 [--scene inputs/drum_3d.yml] [-P Section:key=value ...]
-  tools/time_to_solution.py chart [--data docs/time_to_solution.csv] [--png docs/time_to_solution.png]
+  tools/time_to_solution.py chart [--data docs/data/gpu/time_to_solution.csv] [--png docs/data/gpu/time_to_solution.png]
 
 run: the drum (by default inputs/drum_3d.yml at dr = 0.25 mm and length 0.1 m,
 1.1e7 particles, the issue's drum; -P changes any key, e.g. -P
@@ -21,7 +21,7 @@ default) STEPS should cover at least one window (K <= 100): the default 200
 does. The rate of a short run stands for the whole revolution: a turning
 drum's cost per step does not change with time (the neighbour counts do not).
 
-chart: docs/time_to_solution.png from the CSV of measured points (one row
+chart: docs/data/gpu/time_to_solution.png from the CSV of measured points (one row
 per combination of levers: the hours per revolution from `run`, the error
 columns from the 2D EV drum studies of docs/gpu.md, each row naming its
 source); rows whose error was not measured are drawn on the cost axis only.
@@ -127,8 +127,8 @@ def main():
     r.add_argument("--steps", type=int, default=200)
     r.add_argument("-P", action="append", default=[], help="Section:key=value, after the drum's own")
     c = sub.add_parser("chart")
-    c.add_argument("--data", default=os.path.join(HERE, "..", "docs", "time_to_solution.csv"))
-    c.add_argument("--png", default=os.path.join(HERE, "..", "docs", "time_to_solution.png"))
+    c.add_argument("--data", default=os.path.join(HERE, "..", "docs", "data", "gpu", "time_to_solution.csv"))
+    c.add_argument("--png", default=os.path.join(HERE, "..", "docs", "data", "gpu", "time_to_solution.png"))
     a = ap.parse_args()
     cmd_run(a) if a.what == "run" else cmd_chart(a)
 
