@@ -6,9 +6,9 @@
 #   make test    unit, validation and bad-input tests; ends with "N passed, N failed"
 #                (REQUIRE_GPU=1: a GPU test that skips, exit 77, fails; FAIL_FAST=1: stop at the first failure)
 #   make test-mutants  plant one bug at a time in a scratch copy and run the suite on it
-#                (tools/mutants.py; not part of CI: half an hour to an hour on 2 cores)
+#                (tools/dev/mutants.py; not part of CI: half an hour to an hour on 2 cores)
 #   make test-slurm  a one-node SLURM (installed and started when root): real sbatch/srun jobs (tests/test_slurm.sh)
-#   make bench   particle-steps per second, CPU (tools/bench.sh) and, where a GPU is visible, GPU (tools/bench_gpu.sh)
+#   make bench   particle-steps per second, CPU (tools/bench/bench.sh) and, where a GPU is visible, GPU (tools/bench/bench_gpu.sh)
 # Variables a cluster user may set (e.g. from modules):
 #   CC, MPICC            C compiler and MPI wrapper (mpicc)
 #   PRECISION            double (default) | single
@@ -118,14 +118,14 @@ $(BUILD)/tests/%: tests/%.c $(CORE_OBJ) $(HEADERS)
 	$(MPICC) $(CFLAGS) $(LDFLAGS) $< $(CORE_OBJ) $(LIBS) -lcmocka -o $@
 
 deps:
-	@bash tools/deps.sh
+	@bash tools/dev/deps.sh
 
 deps-test:
-	@bash tools/deps.sh --tests
+	@bash tools/dev/deps.sh --tests
 
 run: deps all
 	$(BUILD)/sphseg inputs/shearbox_2d.yml -o out/shearbox_2d --overwrite
-	$(PYTHON) tools/shearbox_compare.py out/shearbox_2d
+	$(PYTHON) -m tools.analysis.shearbox_compare out/shearbox_2d
 
 unit: $(UNIT_BINS)
 
@@ -133,16 +133,16 @@ test: all unit
 	@PYTHON=$(PYTHON) BUILD=$(BUILD) UNIT_TESTS="$(UNIT_TESTS)" bash tests/run.sh
 
 test-mutants:
-	$(PYTHON) tools/mutants.py $(MUTANTS_ARGS)
+	$(PYTHON) -m tools.dev.mutants $(MUTANTS_ARGS)
 
 test-slurm: all
 	@PYTHON=$(PYTHON) bash tests/test_slurm.sh $(BUILD)/sphseg
 
 bench: all
-	@PYTHON=$(PYTHON) bash tools/bench.sh $(BUILD)/sphseg
+	@PYTHON=$(PYTHON) bash tools/bench/bench.sh $(BUILD)/sphseg
 	@if [ "$(GPU)" = 1 ] && nvidia-smi >/dev/null 2>&1; then \
 	    $(MAKE) PRECISION=single BUILD=$(BUILD)-single $(BUILD)-single/sphseg >/dev/null && \
-	    bash tools/bench_gpu.sh $(BUILD)/bench_gpu.csv $(BUILD)/sphseg $(BUILD)-single/sphseg; \
+	    bash tools/bench/bench_gpu.sh $(BUILD)/bench_gpu.csv $(BUILD)/sphseg $(BUILD)-single/sphseg; \
 	else echo "(no GPU visible: GPU benchmark skipped)"; fi
 
 format:

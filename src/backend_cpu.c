@@ -138,7 +138,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
                        * classify themselves alike; the refresh (from_owner) makes them the
                        * owner's values bit for bit whatever the summation order. Without psi in
                        * it the paper-scheme shear box and EN drum on 2 and 3 ranks were
-                       * bit-identical (issue 20, tools/mutants.py ghost_psi_stale) */
+                       * bit-identical (issue 20, tools/dev/mutants.py ghost_psi_stale) */
         if (!((s->hcsr && c->classify) || c->classify == 2)) return 0;
         bound_classify(&s->bw, p, &s->grid, &s->seg.k);
         return 1;

@@ -2,7 +2,7 @@
 tests/validate_drum3d.py, 3D), printed as ok/FAIL lines by Checks."""
 import numpy as np
 
-import snap
+from tools.analysis import snap
 
 
 class Checks:

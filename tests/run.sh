@@ -7,7 +7,9 @@
 # device runs) a skip is a failure. The unit tests are those the Makefile
 # lists (UNIT_TESTS, as make test passes it; else read from the Makefile):
 # a missing binary fails. FAIL_FAST=1 stops at the first failure
-# (tools/mutants.py).
+# (tools/dev/mutants.py). The Python tests run as modules from the repository
+# root (python3 -m tests.validate_drum ...), so that they import tools/ and tests/
+# as packages (from tools.analysis import snap; from tests.containers import ...).
 set -u
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
@@ -45,6 +47,7 @@ done
 run_one badinput bash tests/test_badinput.sh "$BUILD/sphseg"
 run_one inputs bash tests/test_inputs.sh "$BUILD/sphseg"
 run_one keys bash tests/test_keys.sh "$BUILD/sphseg"
+run_one doc_links "$PYTHON" -m tools.dev.doc_links
 run_one mpi_launch bash tests/test_launch.sh "$BUILD/sphseg"
 run_one mpi_halo_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUILD/tests/test_halo"
 run_one checkpoint_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUILD/tests/test_checkpoint"
@@ -64,17 +67,17 @@ run_one fulldisk bash tests/test_fulldisk.sh "$BUILD/sphseg"
 run_one paraview bash tests/test_paraview.sh "$BUILD/sphseg"
 run_one outdir bash tests/test_outdir.sh "$BUILD/sphseg"
 run_one extremes bash tests/test_extremes.sh "$BUILD/sphseg"
-run_one restart_guard "$PYTHON" tests/test_restart_guard.py --sphseg "$BUILD/sphseg" --work "$tmp/restart_guard"
+run_one restart_guard "$PYTHON" -m tests.test_restart_guard --sphseg "$BUILD/sphseg" --work "$tmp/restart_guard"
 for v in tests/validate_*.py; do
     case " ${vals[*]} " in *" $v "*) ;; *) vals+=("$v") ;; esac
 done
 for v in "${vals[@]}"; do
-    run_one "$(basename "$v" .py)" "$PYTHON" "$v" --sphseg "$BUILD/sphseg" --work "$tmp/$(basename "$v" .py)"
+    run_one "$(basename "$v" .py)" "$PYTHON" -m "tests.$(basename "$v" .py)" --sphseg "$BUILD/sphseg" --work "$tmp/$(basename "$v" .py)"
 done
 
 # the multi-rank comparison and the restarts again on the GPU backend (skipped without a GPU)
-run_one validate_mpi_gpu "$PYTHON" tests/validate_mpi.py --backend gpu --sphseg "$BUILD/sphseg" --work "$tmp/validate_mpi_gpu"
-run_one validate_restart_gpu "$PYTHON" tests/validate_restart.py --backend gpu --sphseg "$BUILD/sphseg" --work "$tmp/validate_restart_gpu"
+run_one validate_mpi_gpu "$PYTHON" -m tests.validate_mpi --backend gpu --sphseg "$BUILD/sphseg" --work "$tmp/validate_mpi_gpu"
+run_one validate_restart_gpu "$PYTHON" -m tests.validate_restart --backend gpu --sphseg "$BUILD/sphseg" --work "$tmp/validate_restart_gpu"
 
 [ ${#skipped[@]} -gt 0 ] && echo "skipped: ${skipped[*]}"
 [ $fail -gt 0 ] && echo "failed: ${failed[*]}"

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The job scripts in their no-SLURM mode: jobs/scaling_weak.sbatch on a tiny
 # shear box with RANKS=1 writes a CSV with the documented columns and a
-# positive rate; tools/scaling_plot.py reads it (1-rank rows only) and writes
+# positive rate; tools/bench/scaling_plot.py reads it (1-rank rows only) and writes
 # its PNG and table; the done: parser reads halo_s when present and leaves it
 # empty when not; restart_chain.sh submits K jobs chained by afterok (a stub
 # sbatch) and passes --restart OUTDIR only when OUTDIR holds a checkpoint;
@@ -37,7 +37,7 @@ assert float(r['particle_steps_per_s']) > 0 and float(r['wall_s']) > 0 and int(r
 assert r['scaled_key'] == 'Geometry:dr' and float(r['scaled_value']) == 0.00348 and float(r['dr']) == 0.00348, r
 assert float(r['halo_s']) == 0, r  # one rank: no halo exchange
 PYEOF"
-"$PY" tools/scaling_plot.py "$tmp/weak.csv" --png "$tmp/s.png" >"$tmp/plot.log" 2>&1
+"$PY" -m tools.bench.scaling_plot "$tmp/weak.csv" --png "$tmp/s.png" >"$tmp/plot.log" 2>&1
 check "scaling_plot on 1-rank rows" "[ $? -eq 0 ] && [ -s '$tmp/s.png' ] && grep -q '^| weak | 1 |.*| 1.000 |' '$tmp/plot.log'" || cat "$tmp/plot.log"
 
 source jobs/common.sh

@@ -34,7 +34,7 @@ line, in bounded time, on 1, 2 and 3 ranks; never exit 0 on a damaged file,
   writing so that the blocked ranks end); a FIFO checkpoint_prev.h5 beside a
   good checkpoint.h5 is passed over.
 
-    /usr/bin/python3 tests/test_restart_guard.py --sphseg build/sphseg --work DIR [--mutants 300]
+    /usr/bin/python3 -m tests.test_restart_guard --sphseg build/sphseg --work DIR [--mutants 300]
 """
 import argparse
 import concurrent.futures
@@ -48,8 +48,7 @@ import time
 import h5py
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from ckpt_seal import reseal  # noqa: E402
+from tests.ckpt_seal import reseal  # noqa: E402
 
 MPI = ["mpirun", "--oversubscribe", "--allow-run-as-root"]
 SHEAR, DRUM = "inputs/shearbox_2d.yml", "inputs/drum_2d_EV.yml"

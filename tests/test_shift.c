@@ -4,7 +4,7 @@
  * exact answers:
  *  - the lattice moment S = -(1/d) sum_j V_j f r^2 of the Wendland C2
  *    kernel at h = 1.5 dr: 0.997399 in 2D (an independent sum in numpy,
- *    tools/poiseuille_study.py lattice_laplacian: 0.9973992684); 3D near 1;
+ *    tools/studies/poiseuille_study.py lattice_laplacian: 0.9973992684); 3D near 1;
  *  - the normalised viscous term on u = (y^2, 0, 0) gives an interior
  *    particle the acceleration nu Laplacian u = (2 nu, 0, 0) to round-off
  *    (Morris's sum alone gives 2 nu S, 0.26 % low);

@@ -18,7 +18,7 @@ sum C_i V_i conserved to round-off, in runs where the unlimited scheme
   - the shear box of paper §5 (inputs/shearbox_2d.yml), shear-rate model,
     symmetric flux, dr/H = 0.04, 80 periods: C up to 1.039 without the
     limiter (t/T ~ 60), within [0, 1] with it; the limiter's MAE against the
-    1D reference (tools/seg1d.py) <= 0.03 at t/T = 20, 40, 80 (the
+    1D reference (tools/analysis/seg1d.py) <= 0.03 at t/T = 20, 40, 80 (the
     tolerance of tests/validate_shearbox.py) and at t/T = 80 no more than
     10 % above the unlimited scheme's (measured 0.0200 against 0.0241).
 
@@ -35,12 +35,10 @@ import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import snap  # noqa: E402
-import study  # noqa: E402
-from drum_invariants import Checks, diagnostics_columns  # noqa: E402
-from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tools.analysis import snap  # noqa: E402
+from tools.studies import study  # noqa: E402
+from tests.drum_invariants import Checks, diagnostics_columns  # noqa: E402
+from tests.containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 LO, HI = -1e-3, 1 + 1e-3
 DRIFT = {"double": 1e-12, "single": 1e-5}

@@ -23,7 +23,7 @@ every particle of a row within 1e-9 of u_max of its row's mean (the periodic ima
 uniform along x); and the lid's 3 layers of dummies carry the lid's wall id
 (the snapshot header's Walls) and lie above y = H.
 
-  python3 tests/validate_channel.py --sphseg build-dev/sphseg --work /tmp/vc
+  python3 -m tests.validate_channel --sphseg build-dev/sphseg --work /tmp/vc
 """
 import os
 import subprocess
@@ -32,10 +32,8 @@ import sys
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import snap  # noqa: E402
-sys.path.insert(0, HERE)
-from containers import row_profile, sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tools.analysis import snap  # noqa: E402
+from tests.containers import row_profile, sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 SCENE = os.path.join(HERE, "..", "inputs", "poiseuille_2d.yml")
 

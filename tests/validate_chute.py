@@ -2,7 +2,7 @@
 the analytic Bagnold solution of the model's mu(I) rheology, its flowing and
 arrested regimes, and the Gray & Chugunov steady segregation profile.
 
-Reference (tools/chute_study.py; docs/validation.md "Chute"): the yield
+Reference (tools/studies/chute_study.py; docs/validation.md "Chute"): the yield
 sqrt(J2) = k_mu(mu(I)) p gives tau / p = k_mu(mu(I)) = tan(theta) in simple
 shear, a uniform I and u(z) ~ H^1.5 - (H - z)^1.5; the layer rests below
 atan k_mu(mu_s) = 19.3 degrees and accelerates above atan k_mu(mu_d) = 28.2.
@@ -35,11 +35,9 @@ import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import batch  # noqa: E402
-import chute_study as cs  # noqa: E402
-from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tools.studies import batch  # noqa: E402
+from tools.studies import chute_study as cs  # noqa: E402
+from tests.containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 TOL_MEAN, TOL_ROWS, TOL_REST, MIN_GROWTH, TOL_SEG = 0.06, 0.09, 0.02, 0.10, 0.02
 

@@ -43,11 +43,9 @@ import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import batch  # noqa: E402
-import chute_study as cs  # noqa: E402
-from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tools.studies import batch  # noqa: E402
+from tools.studies import chute_study as cs  # noqa: E402
+from tests.containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 H, DR, T_END = 0.06, 0.003, 1.2
 TOL_REST, TOL_CREEP_GROWTH, MIN_FLOW, MIN_CONTRAST = 0.10, 0.10, 0.5, 5.0

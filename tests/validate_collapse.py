@@ -2,7 +2,7 @@
 experimental laws of two-dimensional columns (Lube, Huppert, Sparks &
 Freundt 2005, Phys. Rev. E 72, 041301): runout (L_inf - L0)/L0 = 1.2 a for
 a < 2.3, final height H_inf = H0 for a < 1.15 and a^(2/5) L0 above
-(tools/collapse_study.py, docs/validation.md "Column collapse").
+(tools/studies/collapse_study.py, docs/validation.md "Column collapse").
 
 L0 = 2 cm at dr = 1 mm (L0/dr = 20, as the study's aspect sweep).
   a = 0.5: the model agrees with the law: measured runout 0.97 and final
@@ -20,11 +20,9 @@ is lost.
 import os
 import sys
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import batch  # noqa: E402
-import collapse_study as cs  # noqa: E402
-from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tools.studies import batch  # noqa: E402
+from tools.studies import collapse_study as cs  # noqa: E402
+from tests.containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 # a: (runout / Lube, height / Lube) expected, tolerance (relative)
 EXPECT = {0.5: ((1.0, 1.0), 0.15), 2.0: ((1.66, 0.76), 0.12)}

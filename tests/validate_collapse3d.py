@@ -1,6 +1,6 @@
 """Axisymmetric collapse of a granular column (inputs/collapse_3d.yml, one
 quarter) at a CI size against Lube, Huppert, Sparks & Hallworth (2004):
-(r_inf - R0) / R0 = 1.6 a^(1/2) for a > 1.7 (tools/collapse3d_study.py,
+(r_inf - R0) / R0 = 1.6 a^(1/2) for a > 1.7 (tools/studies/collapse3d_study.py,
 docs/validation.md "Axisymmetric collapse").
 
 a = 2 at R0/dr = 8 (800 material particles), to 5 sqrt(H0 / g) = 0.23 s:
@@ -20,12 +20,10 @@ import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import batch  # noqa: E402
-import collapse3d_study as cs  # noqa: E402
-import snap  # noqa: E402
-from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tools.studies import batch  # noqa: E402
+from tools.studies import collapse3d_study as cs  # noqa: E402
+from tools.analysis import snap  # noqa: E402
+from tests.containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 TOL_RUNOUT = 0.20
 

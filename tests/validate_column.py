@@ -16,9 +16,8 @@ import os
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import column_check  # noqa: E402
-from containers import run_scene, sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tools.analysis import column_check  # noqa: E402
+from tests.containers import run_scene, sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 SCENE = os.path.join(HERE, "..", "inputs", "column_2d.yml")
 

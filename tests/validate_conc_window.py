@@ -38,10 +38,9 @@ import sys
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import drum_compare  # noqa: E402
-import snap  # noqa: E402
-from drum_invariants import Checks  # noqa: E402  (tests/drum_invariants.py)
+from tools.analysis import drum_compare  # noqa: E402
+from tools.analysis import snap  # noqa: E402
+from tests.drum_invariants import Checks  # noqa: E402  (tests/drum_invariants.py)
 
 DRUM = os.path.join(HERE, "..", "inputs", "drum_2d_EV.yml")
 T_END = 0.6

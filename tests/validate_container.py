@@ -31,7 +31,7 @@ Container:regions, src/setup_container.c):
     the inside plus the outflow conserved to 1e-12, nothing beyond a wall;
   - its 3D extrusion sets up and runs 20 steps, with end walls end_lo, end_hi.
 
-  python3 tests/validate_container.py --sphseg build/sphseg --work /tmp/v
+  python3 -m tests.validate_container --sphseg build/sphseg --work /tmp/v
 """
 import csv
 import os
@@ -41,11 +41,9 @@ import sys
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-sys.path.insert(0, HERE)
-import snap  # noqa: E402
-from drum_invariants import Checks  # noqa: E402  (tests/drum_invariants.py)
-from containers import (sphseg_work_args, CHUTE, CHUTE_AS_CONTAINER, COLUMN_AS_CONTAINER, DRUM3D_AS_CONTAINER,  # noqa: E402
+from tools.analysis import snap  # noqa: E402
+from tests.drum_invariants import Checks  # noqa: E402  (tests/drum_invariants.py)
+from tests.containers import (sphseg_work_args, CHUTE, CHUTE_AS_CONTAINER, COLUMN_AS_CONTAINER, DRUM3D_AS_CONTAINER,  # noqa: E402
                         DRUM_AS_CONTAINER, HOPPER, HOPPER_3D, SHEARBOX_AS_CONTAINER)
 
 INPUTS = os.path.join(HERE, "..", "inputs")

@@ -1,6 +1,6 @@
 """Stokes flow through a square lattice of cylinders (inputs/cylinders_2d.yml)
 at a CI size: a post (a cylinder wall with its material outside) in a cell
-periodic along x and y (tools/cylinders_study.py, docs/validation.md
+periodic along x and y (tools/studies/cylinders_study.py, docs/validation.md
 "Cylinder lattice").
 
 Reference: the superficial velocity U of Sangani & Acrivos (1982) for a
@@ -22,12 +22,10 @@ import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import batch  # noqa: E402
-import cylinders_study as cs  # noqa: E402
-import snap  # noqa: E402
-from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tools.studies import batch  # noqa: E402
+from tools.studies import cylinders_study as cs  # noqa: E402
+from tools.analysis import snap  # noqa: E402
+from tests.containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 TOL_U, TOL_VY = 0.10, 0.01
 

@@ -25,7 +25,7 @@ physical invariants of paper §6 with tolerances.
                  0.28, 0.65 at t = 1, 1.5, 2 s); a constant friction mu_s
                  keeps every one within it;
   segregation:   small grains move toward the core: the segregation index of
-                 tools/drum_analysis.py (C-weighted versus plain mean distance
+                 tools/analysis/drum_analysis.py (C-weighted versus plain mean distance
                  from the bed's centroid) is positive at 2 s and larger than
                  at 1.5 s;
   conservation:  the relative drift of sum C_i V_i, recomputed from the
@@ -42,12 +42,11 @@ import sys
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import drum_analysis  # noqa: E402
-import snap  # noqa: E402
-from drum_invariants import (Checks, diagnostics_columns, drum_omega, kmu, mass_bounds_conservation,  # noqa: E402
+from tools.analysis import drum_analysis  # noqa: E402
+from tools.analysis import snap  # noqa: E402
+from tests.drum_invariants import (Checks, diagnostics_columns, drum_omega, kmu, mass_bounds_conservation,  # noqa: E402
                              omega_of, stress_ratio)
-from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tests.containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 SCENE = os.path.join(HERE, "..", "inputs", "drum_2d_EV.yml")
 FRICTION_FRAC = 0.1

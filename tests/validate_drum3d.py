@@ -48,11 +48,10 @@ import sys
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import drum_analysis  # noqa: E402
-import snap  # noqa: E402
-from drum_invariants import Checks, diagnostics_columns, mass_bounds_conservation, omega_of  # noqa: E402
-from containers import run_scene, sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tools.analysis import drum_analysis  # noqa: E402
+from tools.analysis import snap  # noqa: E402
+from tests.drum_invariants import Checks, diagnostics_columns, mass_bounds_conservation, omega_of  # noqa: E402
+from tests.containers import run_scene, sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 SCENE = os.path.join(HERE, "..", "inputs", "drum_3d.yml")
 BASE = ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025", "Material:E=1e5",

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The 3D drum analysis of tools/drum_analysis.py (Axial) on synthetic
+"""The 3D drum analysis of tools/analysis/drum_analysis.py (Axial) on synthetic
 snapshots whose answers are known by construction (no sphseg run):
 
   a bed of lattice points (spacing dr) inside the drum's circle below a plane
@@ -45,8 +45,7 @@ import h5py
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import drum_analysis as da  # noqa: E402
+from tools.analysis import drum_analysis as da  # noqa: E402
 
 DR, R, L = 1e-3, 0.035, 0.024
 PAR = {"Geometry": {"dr": DR, "radius": R, "length": L, "h_factor": 1.5, "dim": 3}}
@@ -169,8 +168,8 @@ def main():
     import csv
     import subprocess
     cf = os.path.join(a.work, "axial.csv")
-    pr = subprocess.run([sys.executable, os.path.join(HERE, "..", "tools", "drum_analysis.py"), rd, "--zbins", "8",
-                         "--csv", cf], capture_output=True, text=True)
+    pr = subprocess.run([sys.executable, "-m", "tools.analysis.drum_analysis", os.path.abspath(rd), "--zbins", "8",
+                         "--csv", os.path.abspath(cf)], capture_output=True, text=True, cwd=os.path.join(HERE, ".."))
     rows = list(csv.DictReader(open(cf))) if pr.returncode == 0 and os.path.exists(cf) else []
     ok = len(rows) == 1 and all(abs(float(rows[0]["angle_z%d" % k]) - ax6.bins[k].angle) < 1e-9 for k in range(8)) \
         and abs(float(rows[0]["speed_end0"]) - ax6.end0.surface_speed()) < 1e-12

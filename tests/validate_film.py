@@ -33,13 +33,10 @@ import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import snap  # noqa: E402
+from tools.analysis import snap  # noqa: E402
 
 H, DR, NU, G = 0.01, 0.0005, 1e-3, 4.905
-sys.path.insert(0, HERE)
-from containers import FILM as FILM_CASE, row_profile, run_column, sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tests.containers import FILM as FILM_CASE, row_profile, run_column, sphseg_work_args  # noqa: E402  (tests/containers.py)
 FILM = FILM_CASE + ["Run:t_end=0.3", "Output:dt=0.05", "Run:progress_s=1e9"]
 TIMES, TOL, TOL_ROW = (0.05, 0.1, 0.3), 0.025, 1e-9
 

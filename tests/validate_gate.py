@@ -29,11 +29,8 @@ import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import snap  # noqa: E402
-sys.path.insert(0, HERE)
-from containers import run_column  # noqa: E402  (tests/containers.py)
+from tools.analysis import snap  # noqa: E402
+from tests.containers import run_column  # noqa: E402  (tests/containers.py)
 
 BACKEND = "cpu"
 DR, W, H, RUN, T_OPEN = 0.0025, 0.05, 0.05, 0.1, 0.03

@@ -29,16 +29,14 @@ import sys
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import snap  # noqa: E402
+from tools.analysis import snap  # noqa: E402
 
 INPUTS = os.path.join(HERE, "..", "inputs")
 TOL = 1e-8
 TOL_C1 = 1e-4
 
 # name, scene, steps, overrides
-sys.path.insert(0, HERE)
-from containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
+from tests.containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
                         SILO, pick_cases)
 
 CASES = [

@@ -63,15 +63,14 @@ import tempfile
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import snap  # noqa: E402
+from tools.analysis import snap  # noqa: E402
 
 INPUTS = os.path.join(HERE, "..", "inputs")
 TOL = 1e-10     # CPU, any scheme, across rank counts
 TOL_GPU = 1e-8  # GPU runs, and the GPU against the CPU
 TOL_C1 = 1e-4   # GPU runs of the paper scheme
 DRUM = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:shepard_every=20"]
-from containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
+from tests.containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
                         SILO, pick_cases)
 
 # name, scene, steps, overrides, what must happen on several ranks

@@ -24,12 +24,9 @@ import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import snap  # noqa: E402
+from tools.analysis import snap  # noqa: E402
 
-sys.path.insert(0, HERE)
-from containers import SILO as SILO_CASE, run_column, sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tests.containers import SILO as SILO_CASE, run_column, sphseg_work_args  # noqa: E402  (tests/containers.py)
 SILO = SILO_CASE + ["Run:t_end=0.15", "Output:dt=0.05", "Output:diag_dt=0.005", "Run:progress_s=1e9"]
 TOL = 1e-12
 

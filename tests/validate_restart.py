@@ -78,10 +78,8 @@ import h5py
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import snap  # noqa: E402
-sys.path.insert(0, HERE)
-from ckpt_seal import reseal  # noqa: E402  (a checkpoint changed on purpose is sealed again)
+from tools.analysis import snap  # noqa: E402
+from tests.ckpt_seal import reseal  # noqa: E402  (a checkpoint changed on purpose is sealed again)
 
 BOX = os.path.join(HERE, "..", "inputs", "shearbox_2d.yml")
 DRUM = os.path.join(HERE, "..", "inputs", "drum_2d_EV.yml")
@@ -89,7 +87,7 @@ BOX_P = ["Geometry:dr=0.00348", "Run:t_end=13", "Output:dt=3.25", "Run:progress_
 DRUM_P = ["Geometry:dr=0.0025", "Material:E=1e5", "Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.001",
           "Run:progress_s=1e9"]
 COLUMN = os.path.join(HERE, "..", "inputs", "column_2d.yml")
-from containers import CHUTE, SILO  # noqa: E402  (tests/containers.py)
+from tests.containers import CHUTE, SILO  # noqa: E402  (tests/containers.py)
 CHUTE_P = CHUTE + ["Parallel:axis=x", "Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.001", "Run:progress_s=1e9"]
 SILO_P = SILO + ["Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.002", "Run:progress_s=1e9"]
 OK = True

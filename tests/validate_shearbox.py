@@ -1,7 +1,7 @@
 """Shear box of paper §5 (van der Vaart et al. 2015) at CI size.
 
-Reference: the 1D finite-volume solution of the same PDE (tools/seg1d.py,
-converged to < 1e-4 at 800 cells, docs/ref_fv_convergence.md). The SPH
+Reference: the 1D finite-volume solution of the same PDE (tools/analysis/seg1d.py,
+converged to < 1e-4 at 800 cells, docs/data/ref_fv/ref_fv_convergence.md). The SPH
 profile C(z) (row means) is compared at t/T = 20, 40, 80 by MAE and RMSE
 (eqs. 5.3-5.4). Tolerances, from the full study (docs/shearbox.md):
   - conservative scheme, all four cases (flux x V/D model) at dr/H = 0.04:
@@ -21,10 +21,9 @@ import os
 import subprocess
 import sys
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools"))
-import snap  # noqa: E402
-import study  # noqa: E402
-from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tools.analysis import snap  # noqa: E402
+from tools.studies import study  # noqa: E402
+from tests.containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 MAE_CONS, MAE_DIRECT = 0.03, 0.06
 ORDER_MIN = 2.0

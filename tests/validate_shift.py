@@ -1,9 +1,9 @@
 """Particle shifting (Flow:shifting fickian, src/physics/shift.h) regularises
 a disordered arrangement: the lattice of cylinders (inputs/cylinders_2d.yml,
-tools/cylinders_study.py) at a CI size, L/dr = 20, 30 Pa, to 0.5 s, with and
+tools/studies/cylinders_study.py) at a CI size, L/dr = 20, 30 Pa, to 0.5 s, with and
 without shifting, side by side.
 
-The measure is the disorder of tools/cylinders_study.py: the relative
+The measure is the disorder of tools/studies/cylinders_study.py: the relative
 standard deviation over the fluid particles of the kernel sum
 sum_j V_j W_ij (fluid and the post's dummies, periodic). At t = 0 it is
 3.7 %: the square lattice is cut by the post, whose dummies do not lie on
@@ -20,7 +20,7 @@ shifting; there is no analytic value.
 Σ C_i V_i and the unit-level properties (the shift back to a site, the
 Taylor step, the free surface, C and V untouched) are tests/test_shift.c's.
 
-  python3 tests/validate_shift.py --sphseg build/sphseg --work /tmp/vs
+  python3 -m tests.validate_shift --sphseg build/sphseg --work /tmp/vs
 """
 import argparse
 import os
@@ -28,11 +28,9 @@ import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import batch  # noqa: E402
-import cylinders_study as cs  # noqa: E402
-import snap  # noqa: E402
+from tools.studies import batch  # noqa: E402
+from tools.studies import cylinders_study as cs  # noqa: E402
+from tools.analysis import snap  # noqa: E402
 
 T_END, WINDOW = 0.5, (0.3, 0.5)
 TOL_START, TOL_OFF, TOL_U = 0.5, 0.75, 0.15

@@ -1,5 +1,5 @@
 """Silo discharge (inputs/silo_2d.yml) at a CI size against the Beverloo law
-Q = C rho_b sqrt(g) (W - k d)^(3/2) (tools/silo_study.py,
+Q = C rho_b sqrt(g) (W - k d)^(3/2) (tools/studies/silo_study.py,
 docs/validation.md "Silo").
 
 The study (H100, dr 1 mm, fill 10 cm, W = 8..24 mm) fitted C = 1.313 and
@@ -15,16 +15,13 @@ and 15 cm. Here: fill 5 cm, W = 8 and 16 mm at dr 1 mm to 0.4 s.
     flows less evenly, and 1.0 % at 16 mm).
 """
 import math
-import os
 import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import batch  # noqa: E402
-import silo_study as ss  # noqa: E402
-from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tools.studies import batch  # noqa: E402
+from tools.studies import silo_study as ss  # noqa: E402
+from tests.containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 C_FIT, KD_FIT = 1.313, 0.00353
 TOL_RATE, TOL_RATIO, TOL_STEADY = 0.08, 0.06, 0.10

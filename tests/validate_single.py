@@ -9,7 +9,7 @@ drift by 1.3e-5 in these 15 169 steps (and 1.5e-8 with concentration
 windows), measured on the dev machine before the change. Checked:
 
   conservation: the drift of sum C_i V_i recomputed from the single run's
-                snapshots (tools/drum_compare.py) is < 1e-13 with C in every
+                snapshots (tools/analysis/drum_compare.py) is < 1e-13 with C in every
                 step and with windows (measured 3e-16 and 0);
   accuracy:     single against double, C in every step: rms |C - C_double|
                 < 2e-8 (measured 9.4e-9), the dynamic angle within 0.01
@@ -28,9 +28,8 @@ import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tools"))
-import drum_compare  # noqa: E402
-from drum_invariants import Checks  # noqa: E402  (tests/drum_invariants.py)
+from tools.analysis import drum_compare  # noqa: E402
+from tests.drum_invariants import Checks  # noqa: E402  (tests/drum_invariants.py)
 
 DRUM = os.path.join(HERE, "..", "inputs", "drum_2d_EV.yml")
 OVER = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:alpha_av=1", "Run:t_end=0.6", "Output:dt=0.3",

@@ -4,7 +4,7 @@ for symmetric flux, constant V and D, no-flux top and base, the steady
 profile depends only on the mean concentration phi0 and Pe = V H / D.
 
 A column at rest (Kinematics:velocity rest) starts uniform at C = phi0 and
-runs to t = 4 H^2/D, by which time the FV reference (tools/seg1d.py) has
+runs to t = 4 H^2/D, by which time the FV reference (tools/analysis/seg1d.py) has
 converged to its steady state to < 1e-6. Tolerance: MAE <= MAE_TOL at
 dr/H = 0.04 (the error of the SPH profile against eq. 28; the reference
 shows the remaining time-dependence is negligible): 0.012, twice the largest
@@ -19,11 +19,10 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools"))
-import seg1d  # noqa: E402
-import snap  # noqa: E402
-import study  # noqa: E402
-from containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tools.analysis import seg1d  # noqa: E402
+from tools.analysis import snap  # noqa: E402
+from tools.studies import study  # noqa: E402
+from tests.containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 MAE_TOL = 0.012
 CASES = [(0.5, 5.0), (0.3, 20.0), (0.7, 40.0)]

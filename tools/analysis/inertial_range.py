@@ -1,0 +1,148 @@
+"""The inertial numbers a run reaches, against the window where incompressible
+mu(I) is well posed (Barker, Schaeffer, Bohorquez & Gray 2015).
+
+Window. For mu(I) = mu_s + (mu_d - mu_s) / (I0 / I + 1) and nu = I mu'(I) / mu,
+short waves of the 2D incompressible equations about a uniform shear grow as
+k^2 (ill-posed) unless
+
+    C(I) = 4 nu^2 - 4 nu + mu^2 (1 - nu / 2)^2 < 0.
+
+(Derivation, docs/granular.md "Well-posedness": principal axes of the base
+strain rate D0 = diag(d, -d), a perturbation of wavevector k at angle phi,
+c = cos(2 phi); the growth rate is -(mu p k^2 / (2 rho d)) G(c) / (1 - m c),
+m = mu (1 - nu / 2), G(c) = nu + (1 - nu) c^2 - m c, whose minimum over c is
+nu - m^2 / (4 (1 - nu)). It is the form of Barker & Gray 2017, eq. 3.9, as
+alexjarosch/OpenFOAM-muI utils/calc_IN1.py writes it.) C -> mu_s^2 > 0 as
+I -> 0 and mu_d^2 > 0 as I -> inf: ill-posed at both ends.
+
+Run. Each material particle's I = gdot d_avg / sqrt(p / rho_s) (ShearRate,
+Stress, Concentration of the snapshots; Grains and Material from the run's
+used_params.yml), among the flowing particles: p > 0, at the yield surface
+(sqrt(J2) within 1 % of k p, k from Material:yield) and sheared at least
+--gdot-fraction (0.1) of the snapshot's 99th-percentile shear rate. The shear
+rate is what tells: the geostatic start puts a whole bed on the yield
+surface, and a drum's bed stays there as it turns, while only its surface
+layer shears (2D EV drum at 8 s: gdot 1-10 1/s and 2 cm/s off the rigid
+rotation in the layer; below 1 1/s and 0.3 mm/s off it elsewhere).
+
+  python3 -m tools.analysis.inertial_range window [--mu-s 0.382 --mu-d 0.682 --I0 0.279]
+  python3 -m tools.analysis.inertial_range run OUTDIR [--from T] [--gdot-fraction 0.1]
+"""
+import argparse
+import math
+import os
+
+import numpy as np
+
+from tools.analysis import snap  # noqa: E402
+
+
+def criterion(I, mu_s, mu_d, I0):
+    """C(I) above: < 0 well posed."""
+    I = np.asarray(I, float)
+    mu = mu_s + (mu_d - mu_s) * I / (I + I0)
+    nu = I * (mu_d - mu_s) * I0 / (I + I0) ** 2 / mu
+    return 4 * nu * nu - 4 * nu + mu * mu * (1 - nu / 2) ** 2
+
+
+def window(mu_s, mu_d, I0):
+    """(I_low, I_high) of the well-posed window, or None; bisection on C."""
+    I = np.logspace(-8, 4, 4001)
+    ok = np.where(criterion(I, mu_s, mu_d, I0) < 0)[0]
+    if len(ok) == 0:
+        return None
+
+    def edge(a, b):  # C changes sign between a and b
+        sa = criterion(a, mu_s, mu_d, I0) < 0
+        for _ in range(200):
+            m = math.sqrt(a * b)
+            if (criterion(m, mu_s, mu_d, I0) < 0) == sa:
+                a = m
+            else:
+                b = m
+        return math.sqrt(a * b)
+
+    return edge(I[ok[0] - 1], I[ok[0]]), edge(I[ok[-1]], I[ok[-1] + 1])
+
+
+def params(outdir):
+    import yaml
+    with open(os.path.join(outdir, "used_params.yml")) as f:
+        u = yaml.safe_load(f)
+    m, g = u["Material"], u["Grains"]
+    return {"mu_s": float(m["mu_s"]), "mu_d": float(m["mu_d"]), "I0": float(m["I0"]), "rho_s": float(m["rho_s"]),
+            "yield": str(m.get("yield", "drucker_prager")), "d_small": float(g["d_small"]),
+            "d_large": float(g["d_large"])}
+
+
+def kmu(mu):
+    return 3 * mu / np.sqrt(9 + 12 * mu * mu)
+
+
+def inertial_numbers(s, P, gdot_fraction=0.1):
+    """I of the flowing material particles of snapshot s (and the count of
+    the material with p > 0)."""
+    mat = np.asarray(s["Kind"]) == snap.MATERIAL
+    S = np.asarray(s["Stress"])[mat]
+    g = np.asarray(s["ShearRate"])[mat]
+    C = np.asarray(s["Concentration"])[mat]
+    p = -(S[:, 0] + S[:, 1] + S[:, 2]) / 3
+    dev = S[:, :3] + p[:, None]
+    tau = np.sqrt(0.5 * (dev ** 2).sum(1) + (S[:, 3:] ** 2).sum(1))
+    d = P["d_small"] * C + P["d_large"] * (1 - C)
+    pos = p > 0
+    I = np.zeros_like(p)
+    I[pos] = g[pos] * d[pos] / np.sqrt(p[pos] / P["rho_s"])
+    mu = P["mu_s"] + (P["mu_d"] - P["mu_s"]) * I / (I + P["I0"])
+    k = mu if P["yield"] == "mu_I" else kmu(mu)
+    flowing = pos & (tau >= 0.99 * k * p) & (g >= gdot_fraction * np.percentile(g, 99))
+    return I[flowing], int(pos.sum())
+
+
+def cmd_window(a):
+    w = window(a.mu_s, a.mu_d, a.I0)
+    print("mu_s %g, mu_d %g, I0 %g: well posed for %.4g < I < %.4g" % (a.mu_s, a.mu_d, a.I0, w[0], w[1]))
+
+
+def cmd_run(a):
+    P = params(a.outdir)
+    lo, hi = window(P["mu_s"], P["mu_d"], P["I0"])
+    Is, npos, nsnap = [], 0, 0
+    for path in snap.list_snapshots(a.outdir):
+        s = snap.read_snapshot(path)
+        if float(s["Time"]) < a.t_from - 1e-9:
+            continue
+        I, n = inertial_numbers(s, P, a.gdot_fraction)
+        Is.append(I)
+        npos += n
+        nsnap += 1
+    I = np.concatenate(Is) if Is else np.zeros(0)
+    if not len(I):
+        print("%s: no flowing particles in %d snapshots from t = %g s" % (a.outdir, nsnap, a.t_from))
+        return
+    q = np.percentile(I, [1, 5, 25, 50, 75, 95, 99])
+    print("%s (%s, %d snapshots from t = %g s): %d flowing of %d material particle-snapshots with p > 0 (%.1f %%)" % (
+        a.outdir, P["yield"], nsnap, a.t_from, len(I), npos, 100.0 * len(I) / max(npos, 1)))
+    print("  well-posed window %.4g < I < %.4g (mu_s %g, mu_d %g, I0 %g)" % (lo, hi, P["mu_s"], P["mu_d"], P["I0"]))
+    print("  I percentiles 1/5/25/50/75/95/99: " + " ".join("%.3g" % v for v in q))
+    print("  below the window: %.1f %%, inside: %.1f %%, above: %.1f %%" % (
+        100.0 * np.mean(I <= lo), 100.0 * np.mean((I > lo) & (I < hi)), 100.0 * np.mean(I >= hi)))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    w = sub.add_parser("window")
+    w.add_argument("--mu-s", type=float, default=0.382)
+    w.add_argument("--mu-d", type=float, default=0.682)
+    w.add_argument("--I0", type=float, default=0.279)
+    r = sub.add_parser("run")
+    r.add_argument("outdir")
+    r.add_argument("--from", dest="t_from", type=float, default=0.0)
+    r.add_argument("--gdot-fraction", type=float, default=0.1)
+    a = ap.parse_args(argv)
+    (cmd_window if a.cmd == "window" else cmd_run)(a)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1 @@
+"""Benchmarks (make bench), scaling charts and the scaling model."""

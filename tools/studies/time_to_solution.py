@@ -1,0 +1,136 @@
+#!/usr/bin/env python3
+"""Time to solution of the 3D drum: device-hours (or core-hours) per revolution.
+
+  python3 -m tools.studies.time_to_solution run [--sphseg build/sphseg] [--backend gpu] [--steps 200]
+                                [--scene inputs/drum_3d.yml] [-P Section:key=value ...]
+  python3 -m tools.studies.time_to_solution chart [--data docs/data/gpu/time_to_solution.csv] [--png docs/data/gpu/time_to_solution.png]
+
+run: the drum (by default inputs/drum_3d.yml at dr = 0.25 mm and length 0.1 m,
+1.1e7 particles, the issue's drum; -P changes any key, e.g. -P
+Material:E=1e5 -P Flow:alpha_av=1) runs STEPS steps with snapshots off, and
+the tool prints the measured rate (particle-steps/s of sphseg's "done:"
+line, which leaves out set-up and output), the time step the run took (the
+last diagnostics row's dt: the flow's acoustic step, 3.19) and from them
+
+    steps per revolution  = (60 / Walls:rpm) / dt
+    hours per revolution  = steps per revolution / (rate / particles) / 3600
+
+in GPU-hours on --backend gpu (one GPU), core-hours on the CPU (times
+OMP_NUM_THREADS). With concentration windows (Segregation:every, auto by
+default) STEPS should cover at least one window (K <= 100): the default 200
+does. The rate of a short run stands for the whole revolution: a turning
+drum's cost per step does not change with time (the neighbour counts do not).
+
+chart: docs/data/gpu/time_to_solution.png from the CSV of measured points (one row
+per combination of levers: the hours per revolution from `run`, the error
+columns from the 2D EV drum studies of docs/gpu.md, each row naming its
+source); rows whose error was not measured are drawn on the cost axis only.
+"""
+import argparse
+import csv
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+from tools import ROOT  # noqa: E402
+from tools.analysis import snap  # noqa: E402
+
+DRUM = ["Geometry:dr=0.00025", "Geometry:length=0.1"]
+
+
+def measure(sphseg, scene, backend, steps, over, work):
+    """Run the drum briefly; returns a dict of what the hours come from."""
+    out = os.path.join(work, "tts")
+    cmd = [sphseg, scene, "-o", out, "--backend", backend, "-P", "Run:max_steps=%d" % steps,
+           "-P", "Output:snapshots=off", "-P", "Run:progress_s=1e9"]
+    for o in DRUM + list(over):
+        cmd += ["-P", o]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit("time_to_solution: sphseg exited with %d: %s" % (r.returncode, (r.stderr or r.stdout).strip()[-400:]))
+    log = r.stdout
+    n = re.search(r"(\d+) material \+ (\d+) dummy particles", log)
+    done = re.search(r"done: (\d+) steps, .* ([\d.e+-]+) particle-steps/s", log)
+    rpm = re.search(r"^\s*rpm: ([\d.e+-]+)", open(os.path.join(out, "used_params.yml")).read(), re.M)
+    if not (n and done and rpm):
+        sys.exit("time_to_solution: could not read the particle count, the rate or Walls:rpm from the run")
+    dg = snap.read_diagnostics(out)
+    npart = int(n.group(1)) + int(n.group(2))
+    rate = float(done.group(2))
+    dt = float(dg["dt"][-1])
+    threads = int(os.environ.get("OMP_NUM_THREADS", os.cpu_count() or 1)) if backend == "cpu" else 1
+    steps_rev = 60.0 / float(rpm.group(1)) / dt
+    hours = steps_rev / (rate / npart) / 3600.0 * threads
+    windows = re.search(r"concentration: (\d+) windows of ([\d.]+) flow steps", log)
+    return {"particles": npart, "rate": rate, "dt": dt, "steps_per_rev": steps_rev, "hours_per_rev": hours,
+            "unit": "GPU-hours" if backend == "gpu" else "core-hours (%d threads)" % threads,
+            "windows": windows.group(0) if windows else "C in every flow step"}
+
+
+def cmd_run(a):
+    with tempfile.TemporaryDirectory() as work:
+        m = measure(a.sphseg, a.scene, a.backend, a.steps, a.P, work)
+    print("drum: %s %s, %d particles; %s" % (a.scene, " ".join("-P " + o for o in DRUM + a.P), m["particles"],
+                                              m["windows"]))
+    print("rate %.4g particle-steps/s (%.4g steps/s), dt %.4g s, %.4g steps per revolution"
+          % (m["rate"], m["rate"] / m["particles"], m["dt"], m["steps_per_rev"]))
+    print("%.4g %s per revolution (%.3g days)" % (m["hours_per_rev"], m["unit"], m["hours_per_rev"] / 24))
+
+
+def cmd_chart(a):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rows = list(csv.DictReader(open(a.data)))
+    fig, ax = plt.subplots(1, 2, figsize=(12, 5.2), sharex=True)
+    for k, (col, lab) in enumerate([("speed_err", "surface speed"), ("seg_err", "segregation index")]):
+        for r in rows:
+            h = float(r["gpu_hours_per_rev"])
+            e = r[col].strip()
+            if e:
+                t10 = r.get("t_s", "5").strip() == "10"
+                ax[k].loglog(h, max(abs(float(e)), 1e-3), "s" if t10 else "o", ms=7,
+                             label=r["label"] + (" (t = 10 s)" if t10 else ""))
+            else:
+                ax[k].axvline(h, ls=":", lw=1, color="gray")
+                ax[k].annotate(r["label"] + "\n(error not measured)", (h, 1.2e-3), fontsize=6, rotation=90,
+                               ha="right", va="bottom", color="gray")
+        ax[k].axvline(6, color="k", lw=0.8, ls="--")
+        ax[k].annotate(" goal: 6 h", (6, 0.5), fontsize=8, ha="left")
+        ax[k].set_xlabel("GPU-hours per revolution\n(3D drum, 1.1e7 particles, H100: measured rate)")
+        ax[k].set_ylabel("|relative error| of the %s\n(2D EV drum, Table 1 resolution, t = 5 s (o) or 10 s (s))" % lab)
+        ax[k].set_ylim(1e-3, 1.5)
+        ax[k].grid(alpha=0.3, which="both")
+    h, l = ax[0].get_legend_handles_labels()
+    fig.legend(h, l, fontsize=8, loc="lower center", ncol=3)
+    fig.suptitle("Time to solution against accuracy (errors below 1e-3 drawn at 1e-3; reference: Table 1, "
+                 "C in every step)", fontsize=9)
+    for k in range(2):
+        ax[k].set_xlim(3, 2000)
+    fig.tight_layout(rect=(0, 0.1, 1, 0.95))
+    fig.savefig(a.png, dpi=120)
+    print("wrote %s" % a.png)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="what", required=True)
+    r = sub.add_parser("run")
+    r.add_argument("--sphseg", default=os.path.join(ROOT, "build", "sphseg"))
+    r.add_argument("--scene", default=os.path.join(ROOT, "inputs", "drum_3d.yml"))
+    r.add_argument("--backend", default="gpu", choices=["gpu", "cpu"])
+    r.add_argument("--steps", type=int, default=200)
+    r.add_argument("-P", action="append", default=[], help="Section:key=value, after the drum's own")
+    c = sub.add_parser("chart")
+    c.add_argument("--data", default=os.path.join(ROOT, "docs", "data", "gpu", "time_to_solution.csv"))
+    c.add_argument("--png", default=os.path.join(ROOT, "docs", "data", "gpu", "time_to_solution.png"))
+    a = ap.parse_args()
+    cmd_run(a) if a.what == "run" else cmd_chart(a)
+
+
+if __name__ == "__main__":
+    main()
