@@ -5,8 +5,8 @@ few parameters fitted to the 2-GPU runs (docs/parallel.md, "Scaling model").
 
 Per step on the slowest rank (gpu/backend_gpu.cu: ghosts kept between list
 builds, refreshed with device packing and overlapped with interior work;
-gpu/gpu_exchange.cuh: the exchange at a list build on the device;
-gpu/gpu_ipc.cuh: CUDA IPC between the GPUs of one node):
+gpu/gpu_exchange.cu: the exchange at a list build on the device;
+gpu/gpu_ipc.cu: CUDA IPC between the GPUs of one node):
   faces     a slab has two neighbours: P = 2 one face; 2 < P <= G (--gpus-per-node)
             two faces inside the node; P > G the slowest rank has one face inside
             the node and one to the next node
@@ -59,7 +59,7 @@ per direction), B_net 25 GB/s between nodes (InfiniBand HDR200/NDR), lat 3 us.
 import argparse
 import math
 
-# ---- what the code sends (gpu/gpu_halo.cuh, src/stages.c, src/core/fields.h) ----------------------------------
+# ---- what the code sends (gpu/gpu_halo.cu, src/stages.c, src/core/fields.h) ----------------------------------
 # The drum runs with concentration windows (Segregation:every auto), so a refresh when the particles moved carries
 # stage_moving_fields = x, v, sig (tests/test_stages.c): 3 + 3 + 6 reals. Two such refreshes a step (two prepares),
 # and sig (6 reals) after the Shepard store every Flow:shepard_every = 30 steps; the windows' C and gsum once a
