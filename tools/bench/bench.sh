@@ -41,8 +41,8 @@ gran() { # dim dr width height depth [every]
     local tend; tend=$(python3 -c "print(100*0.1*1.5*$dr/29.96)")
     OMP_NUM_THREADS=$threads "$bin" inputs/column_2d.yml -o "$tmp/g$dim$dr" --overwrite -P Geometry:dim=$dim -P Geometry:dr=$dr \
         -P Geometry:width=$W -P Geometry:height=$H -P Geometry:depth=$D -P Initial:stress=geostatic \
-        -P Segregation:enabled=on -P Segregation:model=shear_rate -P Segregation:d_small=0.00025 \
-        -P Segregation:d_large=0.0005 -P Initial:C_below=0.5 -P Initial:C_above=0.5 -P Flow:damping_until=0 \
+        -P Segregation:enabled=on -P Segregation:model=shear_rate -P Grains:d_small=0.00025 \
+        -P Grains:d_large=0.0005 -P Initial:C_below=0.5 -P Initial:C_above=0.5 -P Flow:damping_until=0 \
         -P Run:t_end=$tend -P Output:dt=$tend -P Run:progress_s=1e9 -P Segregation:every=$every > "$tmp/log" 2>&1 || true
     local n line steps wall rate
     n=$(sed -n 's/.*, \([0-9]*\) material + \([0-9]*\) dummy.*/\1 \2/p' "$tmp/log" | awk '{print $1+$2}')

@@ -61,8 +61,8 @@ sweep() { # precision binary
         steps=$(python3 -c "print(max(20, min(400, int(1e9 / $n))))")
         one 3d_block "$prec" "$bin" "$steps" inputs/column_2d.yml Geometry:dim=3 Geometry:dr="$dr" \
             Geometry:width=0.1 Geometry:height=0.1 Geometry:depth=0.1 Initial:stress=geostatic \
-            Segregation:enabled=on Segregation:model=shear_rate Segregation:d_small=0.00025 \
-            Segregation:d_large=0.0005 Initial:C_below=0.5 Initial:C_above=0.5 Flow:damping_until=0 Run:t_end=1e3 \
+            Segregation:enabled=on Segregation:model=shear_rate Grains:d_small=0.00025 \
+            Grains:d_large=0.0005 Initial:C_below=0.5 Initial:C_above=0.5 Flow:damping_until=0 Run:t_end=1e3 \
             Segregation:every=1
     done
     for n in 1e4 1e5 1e6 1e7 3e7; do

@@ -30,8 +30,8 @@ for t in $threads; do
     for ((r = 0; r < repeat; ++r)); do
         OMP_NUM_THREADS=$t "$bin" inputs/column_2d.yml -o "$tmp/out" --overwrite --backend cpu -P Geometry:dim=3 -P Geometry:dr=$dr \
             -P Geometry:width=0.04 -P Geometry:height=0.05 -P Geometry:depth=0.04 -P Initial:stress=geostatic \
-            -P Segregation:enabled=on -P Segregation:model=shear_rate -P Segregation:d_small=0.00025 \
-            -P Segregation:d_large=0.0005 -P Initial:C_below=0.5 -P Initial:C_above=0.5 -P Flow:damping_until=0 \
+            -P Segregation:enabled=on -P Segregation:model=shear_rate -P Grains:d_small=0.00025 \
+            -P Grains:d_large=0.0005 -P Initial:C_below=0.5 -P Initial:C_above=0.5 -P Flow:damping_until=0 \
             -P Run:t_end=$tend -P Output:dt=$tend -P Run:progress_s=1e9 -P Segregation:every=1 \
             > "$tmp/log" 2>&1 || { echo "run on $t thread(s) failed:" >&2; tail -5 "$tmp/log" >&2; exit 1; }
         line=$(grep '^done:' "$tmp/log")
