@@ -18,6 +18,14 @@ bin of width 2 dr holds at least two); the final height is the highest
 material at the wall (x < 2 dr). The flow stops within a few sqrt(H0 / g)
 (Lube et al.: about 3); runs go to 0.02 + 7 sqrt(H0 / g).
 
+The set "lagree" runs the columns of Lagree, Staron & Popinet (2011, J. Fluid
+Mech. 686, 378) at their mu(I) parameters and compares the final deposits with
+the contact-dynamics (CD) deposits their paper compares with. Its fronts are
+grain-scale: the foremost bin of the wall-connected deposit thicker than 1.5 d
+and 3 d (what a CD deposit or an experiment can see), beside the front above,
+which follows a film thinner than a grain and does not converge with dr at
+these parameters (docs/validation.md, "Against contact dynamics").
+
   python3 -m tools.studies.collapse_study run --sphseg build/sphseg --out out/collapse_study [--backend gpu]
   python3 -m tools.studies.collapse_study report --out out/collapse_study [--docs docs/data/collapse]
 """
@@ -56,8 +64,38 @@ def case(name, a, L0=0.02, dr=0.001, **extra):
     return batch.Case(name, SCENE, over, a=a, L0=L0, H0=H0, dr=dr, t_end=t_end)
 
 
+# Lagree, Staron & Popinet (2011): mu_s 0.32, delta mu 0.28, I0 0.4 (their Gerris example
+# doc/examples/column/column.gfs and Basilisk sandbox/M1EMN/Exemples/granular.h), I with the
+# continuum's own density (rho_s = rho), no-slip base, the column's axis a symmetry line; the grain
+# size d over the half-width R0 = L0 of each aspect ratio, from the grain counts of the CD data.
+LAGREE = {"Material:mu_s": 0.32, "Material:mu_d": 0.60, "Material:I0": 0.4, "Material:rho_s": 1500,
+          "Material:yield": "mu_I"}
+LAGREE_D = {0.5: 1 / 60, 1.42: 1.42 / 65, 6.26: 0.04623}  # d / R0
+# The CD final deposits (Staron's contact dynamics of disks, as plotted by Lagree's Basilisk
+# example granular_column.c: files Img/ShapeTime.A-01, A-04, A-03.dat), measured from the last
+# output block: runout (L - R0)/R0 where the deposit is thicker than 1.5 d and 3 d, and the
+# height at the axis over R0 (docs/data/collapse/lagree/README.md says how).
+LAGREE_CD = {0.5: (0.91, 0.76, 0.48), 1.42: (3.36, 2.90, 0.73), 6.26: (12.28, 10.38, 1.20)}
+LAGREE_N = (20, 40, 80, 160)  # L0 / dr
+
+
+def lagree_case(a, n, L0=0.02, **extra):
+    d = LAGREE_D[a] * L0
+    over = dict(LAGREE)
+    over.update({"Grains:d_small": "%.6g" % d, "Grains:d_large": "%.6g" % (d * 1.0001),
+                 "Geometry:runout": round(L0 * (3 * float(lube_runout(a)) + 2), 4)})
+    over.update(extra)
+    c = case("a%g_%s_n%d" % (a, over["Material:yield"], n), a, L0=L0, dr=L0 / n, **over)
+    c.meta["d"] = d
+    return c
+
+
 def cases(which):
     c = []
+    if which == "lagree":  # not in "full": the L0/dr = 160 runs want a GPU
+        for a in sorted(LAGREE_D):
+            for n in LAGREE_N:
+                c.append(lagree_case(a, n))
     if which in ("full", "aspect"):
         for a in (0.5, 1, 2, 3, 5, 7, 10):
             c.append(case("a%g" % a, a))
@@ -95,6 +133,47 @@ def reduce_run(outdir, dr, keep=False):
         batch.write_csv(os.path.join(outdir, "deposit.csv"), ["x", "top"],
                         [[(k + 0.5) * 2 * dr, last[b == k, 1].max() + 0.5 * dr] for k in np.unique(b)])
     return len(rows)
+
+
+def thickness_fronts(deposit, dr, L0, thresholds):
+    """Runout (L - L0)/L0 of the deposit connected to the wall (deposit.csv: bins of 2 dr, top of the
+    highest particle + dr/2), at the right edge of its foremost bin whose top exceeds each threshold."""
+    x, top = np.atleast_1d(deposit["x"]), np.atleast_1d(deposit["top"])
+    k = np.round((x - dr) / (2 * dr)).astype(int)  # bin index (x is the bin's centre)
+    o = np.argsort(k)
+    k, x, top = k[o], x[o], top[o]
+    gap = np.nonzero(np.diff(k) > 1)[0]
+    end = gap[0] + 1 if len(gap) else len(k)  # the first empty bin ends the wall-connected deposit
+    out = []
+    for thr in thresholds:
+        hit = np.nonzero(top[:end] > thr)[0]
+        out.append((x[hit[-1]] + dr - L0) / L0 if len(hit) else float("nan"))
+    return out
+
+
+def lagree_table(runs, where, P):
+    names = [n for n in runs if re.fullmatch(r"a[0-9.]+_(mu_I|drucker_prager)_n[0-9]+", n)]
+    if not names:
+        return
+    P("")
+    P("| a | yield | L0/dr | runout (front above) | runout, h > 1.5 d | CD | ratio | runout, h > 3 d | CD | ratio | "
+      "H_inf/R0 (top) | CD | ratio | wall (s) | backend |")
+    P("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    key = lambda n: (float(runs[n]["a"]), n.split("_n")[0], float(runs[n]["L0"]) / float(runs[n]["dr"]))
+    for n in sorted(names, key=key):
+        r, f = runs[n], load(where[n], n)
+        av, L0, dr = float(r["a"]), float(r["L0"]), float(r["dr"])
+        if av not in LAGREE_CD:
+            continue
+        d = LAGREE_D[av] * L0
+        dep = np.genfromtxt(os.path.join(where[n], n, "deposit.csv"), delimiter=",", names=True)
+        f15, f3 = thickness_fronts(dep, dr, L0, (1.5 * d, 3 * d))
+        x, top = np.atleast_1d(dep["x"]), np.atleast_1d(dep["top"])
+        h = top[x < 2 * dr].max() / L0 if np.any(x < 2 * dr) else float("nan")
+        cd = LAGREE_CD[av]
+        P("| %g | %s | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.3f | %.2f | %.2f | %s | %s |" % (
+            av, n.split("_n")[0].split("_", 1)[1], round(L0 / dr), (f["front"][-1] - L0) / L0, f15, cd[0], f15 / cd[0],
+            f3, cd[1], f3 / cd[1], h, cd[2], h / cd[2], r["wall_s"], r.get("backend", "")))
 
 
 def reduce_done(a, c, rec):
@@ -176,11 +255,12 @@ def cmd_report(a):
         ax.legend(fontsize=8)
         fig.tight_layout()
         fig.savefig(os.path.join(a.docs, "validation_collapse_deposit.png"), dpi=110)
+    lagree_table(runs, where, P)
     batch.report_tables(a, lines)
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("aspect", "yield", "resolution"), cases, reduce_done, cmd_report, "collapse", argv=argv)
+    batch.study_main(__doc__, ("aspect", "yield", "resolution", "lagree"), cases, reduce_done, cmd_report, "collapse", argv=argv)
 
 
 if __name__ == "__main__":
