@@ -81,6 +81,9 @@ typedef struct halo {
                             * exposed_measured = 1; otherwise all of wall_comm */
     int exposed_measured;
     long long migrated;    /* particles this rank sent to a neighbour, in total */
+    long recut_checks;     /* load-balance checks past the threshold (src/run.c), and */
+    long recuts;           /* those that moved the bounds; */
+    double recut_s;        /* their wall seconds: the state to the host, the re-cut, back, prepared */
     long long bytes;       /* bytes this rank sent to its neighbours (migration, ghosts, refreshes) */
     long long messages;    /* point-to-point sends of this rank, counts included */
     long gen;              /* bumped whenever the channels are set (on every rank at once) */

@@ -69,6 +69,10 @@ void report_end(sim_t *s, diag *d, double io)
                 s->halo->exposed_measured ? "; with the GPU, also waits for the device before a pack" : "",
                 s->step > d->step0 ? 1e-6 * (double)comm_sum_ll(s->halo->bytes) / comm_size() / (double)(s->step - d->step0) : 0.0,
                 s->step > d->step0 ? (double)comm_sum_ll(s->halo->messages) / comm_size() / (double)(s->step - d->step0) : 0.0);
+    if (s->halo && comm_sum_ll(s->halo->recut_checks) > 0)
+        message("load balance: %ld checks past the threshold, %ld re-cuts, %.3f s on the slowest rank (the state "
+                "to the host, the re-cut, back and prepared again)", s->halo->recut_checks, s->halo->recuts,
+                comm_max(s->halo->recut_s));
     message("done: %ld steps, %.3f s wall, %.4e particle-steps/s, max |drift of sum C V| %.3e, %.3f s of the "
             "wall in output and diagnostics (not in the rate), %.3f s in halo exchange", s->step, wall,
             stepping > 0 ? (double)(s->step - d->step0) * ntot / stepping : 0.0, d->max_drift, io, halo);

@@ -87,11 +87,15 @@ static void parallel_balance(sim_t *s, double *cost)
     if (!s->halo || every == 0 || s->step % (long)every != 0) return;
     double thr = s->sc->parallel.balance_threshold, imb = halo_imbalance(s->halo, *cost);
     if (imb > thr) {
+        double t0 = diag_wall();
         s->be->to_host(s); /* the re-cut reads positions and moves whole particles */
         if (halo_recut(s->halo, &s->p, *cost, imb, thr)) {
             s->be->from_host(s);
             s->be->prepare(s, s->t, !s->win.on);
+            s->halo->recuts++;
         }
+        s->halo->recut_checks++;
+        s->halo->recut_s += diag_wall() - t0;
     }
     *cost = 0;
 }
