@@ -56,14 +56,14 @@ static const cyaml_schema_value_t gravity_entry = {CYAML_VALUE_FLOAT(CYAML_FLAG_
     }                                                                                                          \
     ;
 #define KF(sec, m, st, k, req, def, lo, hi, open, when, doc) CYAML_FIELD_FLOAT(#k, req, struct st, k),
-#define KE(sec, m, st, k, strs, def, doc) ENM(st, k, strs),
+#define KE(sec, m, st, k, type, strs, def, doc) ENM(st, k, strs),
 #define KU(sec, m, st, k, def, doc) CYAML_FIELD_UINT(#k, OPT, struct st, k),
 #define KS(sec, m, st, k, mn, mx, def, doc) CYAML_FIELD_STRING_PTR(#k, OPT, struct st, k, mn, mx),
 #define KV(sec, m, st, k, n, def, doc) CYAML_FIELD_SEQUENCE_FIXED(#k, OPT, struct st, k, &gravity_entry, n),
-#define KL(sec, m, st, k, entry, max, doc) \
+#define KL(sec, m, st, k, est, entry, max, doc) \
     CYAML_FIELD_SEQUENCE(#k, OPT | CYAML_FLAG_POINTER, struct st, k, &entry, 0, max),
 #define EKF(sec, st, k, doc) CYAML_FIELD_FLOAT(#k, OPT, struct st, k),
-#define EKE(sec, st, k, strs, doc) ENM(st, k, strs),
+#define EKE(sec, st, k, type, strs, doc) ENM(st, k, strs),
 #define EKU(sec, st, k, doc) CYAML_FIELD_UINT(#k, OPT, struct st, k),
 #define EKS(sec, st, k, mn, mx, doc) CYAML_FIELD_STRING_PTR(#k, OPT, struct st, k, mn, mx),
 #define EKV(sec, st, k, n, doc) CYAML_FIELD_SEQUENCE_FIXED(#k, OPT, struct st, k, &gravity_entry, n),
@@ -92,7 +92,7 @@ static const struct scene_default scene_defaults[] = {
 #undef KF
 #define KF(sec, m, st, k, req, def, lo, hi, open, when, doc) {sec, #k, def},
 #undef KE
-#define KE(sec, m, st, k, strs, def, doc) {sec, #k, def},
+#define KE(sec, m, st, k, type, strs, def, doc) {sec, #k, def},
 #undef KU
 #define KU(sec, m, st, k, def, doc) {sec, #k, def},
 #undef KS

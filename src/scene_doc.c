@@ -34,7 +34,8 @@ static const struct scene_doc scene_docs[] = {
 #define KF(sec, m, st, k, req, def, lo, hi, open, when, doc) \
     {sec, #k, DOC_NUM, NULL, 0, (req) == REQ, def, lo, hi, open, when, doc},
 #undef KE
-#define KE(sec, m, st, k, strs, def, doc) {sec, #k, DOC_NAME, strs, CYAML_ARRAY_LEN(strs), 0, def, 0, 0, 0, NO_RANGE, doc},
+#define KE(sec, m, st, k, type, strs, def, doc) \
+    {sec, #k, DOC_NAME, strs, CYAML_ARRAY_LEN(strs), 0, def, 0, 0, 0, NO_RANGE, doc},
 #undef KU
 #define KU(sec, m, st, k, def, doc) {sec, #k, DOC_UINT, NULL, 0, 0, def, 0, 0, 0, NO_RANGE, doc},
 #undef KS
@@ -42,11 +43,13 @@ static const struct scene_doc scene_docs[] = {
 #undef KV
 #define KV(sec, m, st, k, n, def, doc) {sec, #k, DOC_VEC, NULL, n, 0, def, 0, 0, 0, NO_RANGE, doc},
 #undef KL
-#define KL(sec, m, st, k, entry, max, doc) {sec, #k, DOC_LIST, NULL, max, 0, NULL, 0, 0, 0, NO_RANGE, doc},
+#define KL(sec, m, st, k, est, entry, max, doc) \
+    {sec, #k, DOC_LIST, NULL, max, 0, NULL, 0, 0, 0, NO_RANGE, doc},
 #undef EKF
 #define EKF(sec, st, k, doc) {sec ":K", #k, DOC_NUM, NULL, 0, 0, NULL, 0, 0, 0, NO_RANGE, doc},
 #undef EKE
-#define EKE(sec, st, k, strs, doc) {sec ":K", #k, DOC_NAME, strs, CYAML_ARRAY_LEN(strs), 0, NULL, 0, 0, 0, NO_RANGE, doc},
+#define EKE(sec, st, k, type, strs, doc) \
+    {sec ":K", #k, DOC_NAME, strs, CYAML_ARRAY_LEN(strs), 0, NULL, 0, 0, 0, NO_RANGE, doc},
 #undef EKU
 #define EKU(sec, st, k, doc) {sec ":K", #k, DOC_UINT, NULL, 0, 0, NULL, 0, 0, 0, NO_RANGE, doc},
 #undef EKS

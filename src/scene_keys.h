@@ -1,22 +1,28 @@
 /* scene_keys.h — every key of the scene file, declared once (no include
- * guard: src/scene.c and src/scene_doc.c include it once per use, after
- * src/scene_keys_none.h, defining the row macros they read):
- * the libcyaml schema, the defaults, the ranges of the numbers, the
- * documentation (sphseg --keys, docs/keys.md) and so the echo
- * (used_params.yml) all come from these rows.
+ * guard: src/scene.h, src/scene.c and src/scene_doc.c include it once per
+ * use, after src/scene_keys_none.h, defining the row macros they read):
+ * the members of the section structs (scene.h), the libcyaml schema, the
+ * defaults, the ranges of the numbers, the documentation (sphseg --keys,
+ * docs/keys.md) and so the echo (used_params.yml) all come from these rows.
  *
  *   SECTION(Name, member of struct scene, its struct) ... END_SECTION(member)
- *   KF(Section, member, struct, key, REQ|OPT, default, lo, hi, open, when, doc)  a number; a range
- *      lo..hi (open: LO_OPEN, HI_OPEN, CLOSED), checked when `when` (ALWAYS, IF_CONSTANT,
+ *   KF(Section, member, struct, key, REQ|OPT, default, lo, hi, open, when, doc)  a number (double); a
+ *      range lo..hi (open: LO_OPEN, HI_OPEN, CLOSED), checked when `when` (ALWAYS, IF_CONSTANT,
  *      IF_SHEAR_RATE; NO_RANGE: none)
- *   KE(..., key, names, default, doc)  one of the names     KU(..., key, default, doc)  an unsigned
- *   KS(..., key, min, max, default, doc)  a string           KV(..., key, n, default, doc)  n numbers
- *   KL(..., key, entry, max, doc)  a list of mappings, each entry's keys in ENTRY(entry, struct,
- *      Name) ... END_ENTRY(entry, struct), rows EKF, EKE, EKU, EKS, EKV (no default: zero, and no
- *      range: the checks of scene_check.c check_wall and check_region)
+ *   KE(..., key, type, names, default, doc)  one of the names, held as `type` (an enum of scene.h,
+ *      int or unsigned)                     KU(..., key, default, doc)  an unsigned
+ *   KS(..., key, min, max, default, doc)  a string (char *)   KV(..., key, n, default, doc)  n doubles
+ *   KL(..., key, entry struct, entry, max, doc)  a list of mappings (a pointer and key_count), each
+ *      entry's keys in ENTRY(entry, struct, Name) ... END_ENTRY(entry, struct), rows EKF, EKE, EKU,
+ *      EKS, EKV (no default: zero, and no range: the checks of scene_check.c check_wall and
+ *      check_region)
  * A default is YAML text, NULL for a required key or one without a default.
- * A new key is one row here and its member in struct scene (scene.h). */
-#ifndef SPHSEG_SCENE_KEYS_NAMES /* once per translation unit: the names of the enumerated keys */
+ * The doc is the key's one description: units, default, meaning.
+ * A new key is one row here: its member in the section's struct follows
+ * (scene.h; the members that are not keys are there, SCENE_NOT_KEYS_). */
+/* once per translation unit: the names of the enumerated keys (not for
+ * scene.h, which reads the rows only: SCENE_KEYS_ROWS_ONLY) */
+#if !defined(SPHSEG_SCENE_KEYS_NAMES) && !defined(SCENE_KEYS_ROWS_ONLY)
 #define SPHSEG_SCENE_KEYS_NAMES
 static const cyaml_strval_t geom_types[] = {
     {"shearbox", GEOM_SHEARBOX}, {"column", GEOM_COLUMN}, {"drum", GEOM_DRUM}, {"container", GEOM_CONTAINER}};
@@ -62,7 +68,7 @@ enum { CLOSED = 0, LO_OPEN = 1, HI_OPEN = 2 };          /* bound kinds, ORed */
 ENTRY(cwall, scene_wall, "Container:walls")
     EKS("Container:walls", scene_wall, name, 1, 32,
        "for the log and the snapshot header Walls; default wallK (K its place in the list)")
-    EKE("Container:walls", scene_wall, shape, cwall_shapes,
+    EKE("Container:walls", scene_wall, shape, enum cwall_shape, cwall_shapes,
        "segment | cylinder | ends (3D: the end walls z = 0 and z = depth, which take this entry's slip and motion; without one they are fixed and slip as Walls:side_slip); default segment")
     EKV("Container:walls", scene_wall, from, 2,
        "segment: its ends (x, y), m; the material lies on its left going from -> to, so a closed container lists its walls counter-clockwise")
@@ -72,25 +78,27 @@ ENTRY(cwall, scene_wall, "Container:walls")
        "cylinder: its axis (along z) at (x, y), m; ends turning: the axis they turn about")
     EKF("Container:walls", scene_wall, radius,
        "cylinder: radius, m")
-    EKE("Container:walls", scene_wall, material, cwall_sides,
+    EKE("Container:walls", scene_wall, material, enum cwall_side, cwall_sides,
        "cylinder: inside (a drum) | outside (a post: its dummies are nl rings inside its radius); default inside")
-    EKE("Container:walls", scene_wall, slip, slips,
+    EKE("Container:walls", scene_wall, slip, enum wall_slip, slips,
        "no_slip (4.1) | free_slip (4.2); default no_slip")
-    EKE("Container:walls", scene_wall, motion, cwall_motions,
+    EKE("Container:walls", scene_wall, motion, enum cwall_motion, cwall_motions,
        "fixed | translating | turning (a cylinder, or the ends, about the axis along z through centre); default fixed")
     EKV("Container:walls", scene_wall, velocity, 3,
        "translating: m/s; default [0, 0, 0]")
     EKF("Container:walls", scene_wall, rpm,
        "turning: rev/min, >= 0")
-    EKE("Container:walls", scene_wall, direction, rot_dirs,
+    EKE("Container:walls", scene_wall, direction, enum rot_dir, rot_dirs,
        "turning: clockwise | counterclockwise (seen with y up); default clockwise")
     EKF("Container:walls", scene_wall, open_at,
        "s, >= 0: the wall is a gate, removed at this time; absent: it stays")
     EKU("Container:walls", scene_wall, priority,
        "a lattice site behind two walls is a dummy of the one of higher priority, else of the one it lies further behind (a box's base: 1, keeping its corners); default 0; a gate's are taken last")
 END_ENTRY(cwall, scene_wall)
+/* An entry of Container:regions: where the material is at the start and its
+ * C. Regions must not overlap and must lie inside the walls. */
 ENTRY(region, scene_region, "Container:regions")
-    EKE("Container:regions", scene_region, shape, region_shapes,
+    EKE("Container:regions", scene_region, shape, enum region_shape, region_shapes,
        "box | sector | fill | column (3D: an upright circular column, its axis along y through centre = (x, z), radius r_out, from floor (default 0) up to level); default box")
     EKV("Container:regions", scene_region, lo, 2,
        "box: lower-left and upper-right corners (x, y), m")
@@ -142,7 +150,7 @@ SECTION("Run", run, scene_run)
       "\"auto\" (default: gpu when built with CUDA and a device is present) | \"cpu\" | \"gpu\"")
 END_SECTION(run)
 SECTION("Geometry", geometry, scene_geometry)
-    KE("Geometry", geometry, scene_geometry, type, geom_types, "shearbox",
+    KE("Geometry", geometry, scene_geometry, type, enum geom_type, geom_types, "shearbox",
       "shearbox | column | drum | container (the walls and regions of the Container section); default shearbox")
     KU("Geometry", geometry, scene_geometry, dim, "2",
       "2, or 3 for the column, the drum and a container; default 2")
@@ -162,9 +170,9 @@ SECTION("Geometry", geometry, scene_geometry)
       "3D drum: length along the axis (z) between the end walls, m; default 0.02")
     KF("Geometry", geometry, scene_geometry, fill, OPT, "0.42", 0, 1, LO_OPEN | HI_OPEN, ALWAYS,
       "drum: filling level R_f = (H + R)/2R (paper §6), in (0,1); default 0.42")
-    KE("Geometry", geometry, scene_geometry, periodic, periodic_axes, "none",
+    KE("Geometry", geometry, scene_geometry, periodic, unsigned, periodic_axes, "none",
       "column or container: the axes without walls, where the material continues periodically (none | x | y | xy | z | xz | yz | xyz; y and the z ones need a container, z needs dim 3; the period is Geometry:width along x, Geometry:height along y, Geometry:depth along z, from 0, at least 6 supports 2h; a container's walls and regions must lie within it, and a 3D container periodic in z has no end walls); default none")
-    KE("Geometry", geometry, scene_geometry, lid, on_off, "off",
+    KE("Geometry", geometry, scene_geometry, lid, int, on_off, "off",
       "column: on | off: a rigid wall over the material at y = height (a channel between the base and the lid, with the base's slip); default off")
     KF("Geometry", geometry, scene_geometry, runout, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "column: the floor continues this far past the material (x from width to width + runout), closed by a side wall there; the material is held at x = width by a gate until Walls:gate_open; default 0 (no runout, no gate)")
@@ -172,13 +180,17 @@ SECTION("Geometry", geometry, scene_geometry)
       "column: an opening of this width (m) in the base, centred on x = width/2 (3D: a square opening, also centred on z = depth/2), through which material falls; default 0 (none)")
 END_SECTION(geometry)
 SECTION("Kinematics", kinematics, scene_kinematics)
-    KE("Kinematics", kinematics, scene_kinematics, velocity, kin_types, "oscillatory_shear",
+    KE("Kinematics", kinematics, scene_kinematics, velocity, enum kin_type, kin_types, "oscillatory_shear",
       "rest | oscillatory_shear | computed; default oscillatory_shear")
     KF("Kinematics", kinematics, scene_kinematics, gamma0, OPT, "0.5773502691896257", 0, INFINITY, HI_OPEN, ALWAYS,
       "shear amplitude (tan of max wall angle); default tan 30 deg")
     KF("Kinematics", kinematics, scene_kinematics, period, OPT, "13", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "T, s; default 13")
 END_SECTION(kinematics)
+/* The grains: their sizes, read by the flow's mu(I) (d_avg in I, eq. 2.13)
+ * and by the segregation (V, D of eq. 2.7), so that a flow-only run needs
+ * no segregation key. Until this section existed they were
+ * Segregation:d_small and :d_large, which are still read (with a warning). */
 SECTION("Grains", grains, scene_grains)
     KF("Grains", grains, scene_grains, d_small, OPT, "0.004", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "d^S, m; default 0.004")
@@ -186,15 +198,15 @@ SECTION("Grains", grains, scene_grains)
       "d^L, m; default 0.008; > d_small")
 END_SECTION(grains)
 SECTION("Segregation", segregation, scene_segregation)
-    KE("Segregation", segregation, scene_segregation, enabled, on_off, "on",
+    KE("Segregation", segregation, scene_segregation, enabled, int, on_off, "on",
       "on | off: solve the concentration equation; default on")
-    KE("Segregation", segregation, scene_segregation, flux, seg_fluxes, "symmetric",
+    KE("Segregation", segregation, scene_segregation, flux, enum seg_flux, seg_fluxes, "symmetric",
       "symmetric (2.8) | asymmetric (2.9); default symmetric")
     KF("Segregation", segregation, scene_segregation, A, OPT, "1.6", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "eq. (2.9); default 1.6")
     KF("Segregation", segregation, scene_segregation, kappa, OPT, "0.89", 0, 1, HI_OPEN, ALWAYS,
       "eq. (2.9), in [0,1); default 0.89")
-    KE("Segregation", segregation, scene_segregation, model, seg_models, "constant",
+    KE("Segregation", segregation, scene_segregation, model, enum seg_model, seg_models, "constant",
       "constant | shear_rate (2.7); default constant")
     KF("Segregation", segregation, scene_segregation, V, OPT, NULL, 0, INFINITY, HI_OPEN, IF_CONSTANT,
       "m/s, constant model")
@@ -204,11 +216,11 @@ SECTION("Segregation", segregation, scene_segregation)
       "eq. (2.7b), shear_rate model; default 0.11")
     KF("Segregation", segregation, scene_segregation, chi_D, OPT, "0.0307", 0, INFINITY, LO_OPEN | HI_OPEN, IF_SHEAR_RATE,
       "eq. (2.7a), shear_rate model; default 0.0307")
-    KE("Segregation", segregation, scene_segregation, scheme, seg_schemes, "conservative",
+    KE("Segregation", segregation, scene_segregation, scheme, enum seg_scheme, seg_schemes, "conservative",
       "paper | direct | conservative; default conservative")
-    KE("Segregation", segregation, scene_segregation, renormalize, on_off, "on",
+    KE("Segregation", segregation, scene_segregation, renormalize, int, on_off, "on",
       "on | off: conservative scheme's symmetric kernel renormalisation (restores consistency where the support is cut); default on")
-    KE("Segregation", segregation, scene_segregation, limiter, seg_limiters, "donor",
+    KE("Segregation", segregation, scene_segregation, limiter, enum seg_limiter, seg_limiters, "donor",
       "none | donor: conservative scheme only (paper and direct ignore it). donor caps each pair's segregation flux Q_i + Q_j at 2 A (V_i + V_j) min(C_u, 1 - C_d), u the particle it takes small grains from and d the one it gives them to, and bounds the time step with a wave speed of at least A V: C stays in [0, 1] (docs/numerics.md, Bounded C); none: the flux uncapped, as before issue 30 (C may leave [0, 1]); default donor")
     KF("Segregation", segregation, scene_segregation, drift_tol, OPT, "1e-3", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "relative drift of sum C_i V_i that triggers a warning; default 1e-3")
@@ -222,7 +234,7 @@ SECTION("Initial", initial, scene_initial)
       "C for y/H > split; default 1")
     KF("Initial", initial, scene_initial, split, OPT, "0.5", 0, 1, CLOSED, ALWAYS,
       "split height as a fraction of H; default 0.5")
-    KE("Initial", initial, scene_initial, stress, init_stresses, "geostatic",
+    KE("Initial", initial, scene_initial, stress, enum init_stress, init_stresses, "geostatic",
       "zero | geostatic (sigma_yy = -rho g depth, sigma_xx = sigma_zz = K0 sigma_yy, K0 = nu/(1-nu), then returned to the yield cone); default geostatic")
     KF("Initial", initial, scene_initial, pressure, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "Pa, >= 0: a uniform pressure added to that initial stress of the material (a Newtonian fluid's background pressure, which keeps its pressure above the tension cut-off where the flow lowers it); default 0")
@@ -232,7 +244,7 @@ SECTION("Output", output, scene_output)
       "s between snapshots, required")
     KF("Output", output, scene_output, diag_dt, OPT, NULL, 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "s between diagnostics rows; default dt/20")
-    KE("Output", output, scene_output, snapshots, on_off, "on",
+    KE("Output", output, scene_output, snapshots, int, on_off, "on",
       "on | off: write snapshot files (off: benchmarks, diagnostics only); default on")
     KF("Output", output, scene_output, checkpoint_dt, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "s of simulated time between checkpoints (OUTDIR/checkpoint.h5); default 0 = none")
@@ -243,10 +255,12 @@ SECTION("Physics", physics, scene_physics)
     KF("Physics", physics, scene_physics, rho, OPT, "1500", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "bulk density, kg/m^3 (eqs. 2.3-2.4; paper Table 1); default 1500")
 END_SECTION(physics)
+/* The mu(I) elastoplastic material (paper §2.3, Table 1), or a Newtonian
+ * fluid; computed flow only. */
 SECTION("Material", material, scene_material)
-    KE("Material", material, scene_material, model, mat_models, "granular",
+    KE("Material", material, scene_material, model, enum mat_model, mat_models, "granular",
       "granular | newtonian; default granular")
-    KE("Material", material, scene_material, yield, mat_yields, "drucker_prager",
+    KE("Material", material, scene_material, yield, enum mat_yield, mat_yields, "drucker_prager",
       "granular: the yield surface sqrt(J2) = k p, drucker_prager (the paper's k = k_mu(mu(I)) = 3 mu / sqrt(9 + 12 mu^2), eq. 2.12: in simple shear tau / p = k_mu, onset at atan k_mu(mu_s)) | mu_I (k = mu(I): |tau| = mu(I) p, Jop, Forterre & Pouliquen 2006: onset at atan mu_s); default drucker_prager")
     KF("Material", material, scene_material, eta, OPT, "0.001", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "newtonian: dynamic viscosity, Pa s; default 1e-3")
@@ -265,14 +279,15 @@ SECTION("Material", material, scene_material)
     KF("Material", material, scene_material, lambda, OPT, "0.001", 0, INFINITY, HI_OPEN, ALWAYS,
       "regularization of (2.14), 1/s; default 0.001")
 END_SECTION(material)
+/* Momentum and stress solver options; computed flow only. */
 SECTION("Flow", flow, scene_flow)
-    KE("Flow", flow, scene_flow, stabilization, flow_stabs, "monaghan",
+    KE("Flow", flow, scene_flow, stabilization, enum flow_stab, flow_stabs, "monaghan",
       "what damps the acoustic noise of the momentum and stress equations: monaghan (the paper's artificial viscosity 3.10, Flow:alpha_av; it also acts as a shear viscosity alpha c_s h / 8 that follows E and h) | riemann (the low-dissipation Riemann solver of Zhang, Hu & Adams 2017: a pair pressure rho beta dU / 2 on the closing speed dU along the pair, beta = min(Flow:riemann_eta dU, c_s), beta = c_s against a wall; with Flow:riemann_diffusion on also its pressure diffusion) | delta (delta-SPH pressure diffusion 2 Flow:delta h c_s, Antuono et al. 2010, with no momentum dissipation); the pressure diffusions act on the pressure less its hydrostatic part (Fourtakas et al. 2019); default monaghan (docs/granular.md \"Stabilisation\")")
     KF("Flow", flow, scene_flow, alpha_av, OPT, "0.1", 0, INFINITY, HI_OPEN, ALWAYS,
       "artificial viscosity coefficient (3.10), Flow:stabilization monaghan; default 0.1; 0 = off")
     KF("Flow", flow, scene_flow, riemann_eta, OPT, "3", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "Flow:stabilization riemann: the limiter's eta in beta = min(eta dU, c_s); default 3 (Zhang, Hu & Adams 2017)")
-    KE("Flow", flow, scene_flow, riemann_diffusion, on_off, "off",
+    KE("Flow", flow, scene_flow, riemann_diffusion, unsigned, on_off, "off",
       "Flow:stabilization riemann: on | off: also diffuse the pressure at the Riemann solver's rate K / (rho c_s) (its continuity dissipation, less the hydrostatic part); default off: measured to compact a free surface at a constant rate (docs/granular.md \"Stabilisation\")")
     KF("Flow", flow, scene_flow, delta, OPT, "0.1", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "Flow:stabilization delta: the diffusion coefficient delta of delta-SPH; default 0.1 (Antuono et al. 2010; Marrone et al. 2011)")
@@ -282,46 +297,53 @@ SECTION("Flow", flow, scene_flow)
       "velocity damping -zeta u added to (3.9), 1/s, for settling (dynamic relaxation); default 0")
     KF("Flow", flow, scene_flow, damping_until, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "damping acts while t < damping_until, s; default 0")
-    KE("Flow", flow, scene_flow, shifting, flow_shiftings, "off",
+    KE("Flow", flow, scene_flow, shifting, enum flow_shifting, flow_shiftings, "off",
       "particle shifting: off (the paper's) | fickian: each step a material particle moves by -A h |u| dt sum_j V_j (1 + 0.2 (W_ij/W(dr))^4) grad W_ij (Lind et al. 2012), along a free surface only there, its velocity and stress carried by a first-order Taylor step, its C and volume unchanged; default off")
     KF("Flow", flow, scene_flow, shift_coeff, OPT, "2", 0, INFINITY, HI_OPEN, ALWAYS,
       "A of Flow:shifting fickian (D = A h |u| dt), -; Lind et al. (2012) take 2; default 2")
-    KE("Flow", flow, scene_flow, background_pressure, flow_backgrounds, "momentum",
+    KE("Flow", flow, scene_flow, background_pressure, enum flow_background, flow_backgrounds, "momentum",
       "Newtonian fluid: its background pressure Initial:pressure acts in the momentum pair term (3.9) like any pressure (momentum) | is left out of it, keeping the pressure above the tension cut-off only (excluded; Adami, Hu & Adams 2013, where it drives only the particles' regularisation); the granular material ignores it; default momentum")
 END_SECTION(flow)
+/* Rigid walls by dummy particles (paper §4.1). */
 SECTION("Walls", walls, scene_walls)
-    KE("Walls", walls, scene_walls, slip, slips, "no_slip",
+    KE("Walls", walls, scene_walls, slip, enum wall_slip, slips, "no_slip",
       "box base and drum wall: no_slip (4.1) | free_slip (4.2); default no_slip")
-    KE("Walls", walls, scene_walls, side_slip, slips, "free_slip",
+    KE("Walls", walls, scene_walls, side_slip, enum wall_slip, slips, "free_slip",
       "box side walls; default free_slip")
     KF("Walls", walls, scene_walls, gate_open, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "s: the gate of a column with a runout (Geometry:runout) is removed at this time, >= 0; default 0 (at the start)")
     KF("Walls", walls, scene_walls, rpm, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "drum rotation speed, rev/min, >= 0; default 0")
-    KE("Walls", walls, scene_walls, direction, rot_dirs, "clockwise",
+    KE("Walls", walls, scene_walls, direction, enum rot_dir, rot_dirs, "clockwise",
       "clockwise | counterclockwise (seen with y up); default clockwise")
     KV("Walls", walls, scene_walls, velocity, 3, "[0, 0, 0]",
       "box walls (shear box excepted): prescribed translation velocity, m/s, of the whole container; default [0, 0, 0]")
 END_SECTION(walls)
+/* Multi-rank runs (mpi/halo.h): the slab decomposition and its balance. */
 SECTION("Parallel", parallel, scene_parallel)
-    KE("Parallel", parallel, scene_parallel, method, part_methods, "slabs",
+    KE("Parallel", parallel, scene_parallel, method, enum part_method, part_methods, "slabs",
       "slabs (default) | metis: METIS k-way parts of the coarse-cell graph")
-    KE("Parallel", parallel, scene_parallel, axis, slab_axes, "auto",
+    KE("Parallel", parallel, scene_parallel, axis, enum slab_axis, slab_axes, "auto",
       "auto (the longest extent of the particles) | x | y | z; default auto")
     KU("Parallel", parallel, scene_parallel, balance_every, "200",
       "steps between load-balance checks; 0 = never; default 200")
     KF("Parallel", parallel, scene_parallel, balance_threshold, OPT, "0.1", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "move the slab bounds when the slowest rank's compute time exceeds the mean by more than this fraction; default 0.1")
 END_SECTION(parallel)
+/* An outlet: material particles that fall below a horizontal plane leave the
+ * run (run_guard.c run_drain); their count and sum C_i V_i go to
+ * diagnostics.csv, and the conservation check counts them. */
 SECTION("Outlet", outlet, scene_outlet)
-    KE("Outlet", outlet, scene_outlet, enabled, on_off, "off",
+    KE("Outlet", outlet, scene_outlet, enabled, int, on_off, "off",
       "on | off; default off")
     KF("Outlet", outlet, scene_outlet, below, OPT, "0", 0, 0, 0, NO_RANGE,
       "the plane's height y, m; default 0")
 END_SECTION(outlet)
+/* A container described as data (Geometry:type container; scene.h, enum
+ * cwall_shape and the rest): its walls and its material. */
 SECTION("Container", container, scene_container)
-    KL("Container", container, scene_container, walls, cwall_entry, SCENE_WALLS_MAX,
+    KL("Container", container, scene_container, walls, scene_wall, cwall_entry, SCENE_WALLS_MAX,
       "Geometry:type container: its walls, a list of segments and cylinders in the x-y plane (Container:walls:K keys below; inputs/hopper_2d.yml)")
-    KL("Container", container, scene_container, regions, region_entry, SCENE_REGIONS_MAX,
+    KL("Container", container, scene_container, regions, scene_region, region_entry, SCENE_REGIONS_MAX,
       "Geometry:type container: where the material starts, a list of boxes, sectors and fills, each with its C (Container:regions:K keys below)")
 END_SECTION(container)
