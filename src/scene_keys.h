@@ -10,8 +10,9 @@
  *      range lo..hi (open: LO_OPEN, HI_OPEN, CLOSED), checked when `when` (ALWAYS, IF_CONSTANT,
  *      IF_SHEAR_RATE; NO_RANGE: none)
  *   KE(..., key, type, names, default, doc)  one of the names, held as `type` (an enum of scene.h,
- *      int or unsigned)                     KU(..., key, default, doc)  an unsigned
- *   KS(..., key, min, max, default, doc)  a string (char *)   KV(..., key, n, default, doc)  n doubles
+ *      int or unsigned)
+ *   KU(..., key, default, doc)  an unsigned   KS(..., key, min, max, default, doc)  a string (char *)
+ *   KV(..., key, n, default, doc)  n doubles
  *   KL(..., key, entry struct, entry, max, doc)  a list of mappings (a pointer and key_count), each
  *      entry's keys in ENTRY(entry, struct, Name) ... END_ENTRY(entry, struct), rows EKF, EKE, EKU,
  *      EKS, EKV (no default: zero, and no range: the checks of scene_check.c check_wall and
