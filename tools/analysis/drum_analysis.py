@@ -13,6 +13,8 @@ mid-chord (the surface speed), the segregation index (below), and writes
                        C2 = -V F' grad_g C, C3 = div(D grad C)
   PREFIX_maps.png      C, speed and shear rate over the bed (figs 17, 18, 24, 25)
   PREFIX_global.png    mean C and the drift of sum C_i V_i against time (fig 27)
+and with --profiles FILE the mid-chord profiles as numbers (CSV: t, d_mc/R,
+speed, shear rate, C; NaN beyond the material).
 
 3D drums (snapshot Dimension 3): the material is projected onto the x-y
 plane (the drum's cross-section) and analysed as a 2D drum: all of it, or,
@@ -355,6 +357,17 @@ def pick(paths, times):
     return [paths[int(np.argmin(np.abs(ts - t)))] for t in times]
 
 
+def write_profiles(drums, path):
+    """The mid-chord profiles of figures 19-21 and 26 as numbers, one row per point."""
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["t", "d_mc", "speed", "gdot", "C"])
+        for d in drums:
+            dm, pts = d.midchord()
+            for row in zip(dm, d.interp(pts, d.speed), d.interp(pts, d.gdot), d.interp(pts, d.C)):
+                w.writerow(["%.6g" % d.t] + ["%.6g" % v for v in row])
+
+
 def plot_midchord(drums, png):
     import matplotlib
     matplotlib.use("Agg")
@@ -454,6 +467,8 @@ def main():
     ap.add_argument("--endslab", type=float, help="3D drum: width W (m) of the slabs next to the end walls and at "
                     "mid-length in the axial analysis (default 3 dr)")
     ap.add_argument("--csv", help="3D drum: write the axial analysis, one row per time, to this CSV file")
+    ap.add_argument("--profiles", help="write the mid-chord profiles (t, d_mc/R, speed m/s, shear rate 1/s, C; "
+                    "120 points from the surface to the wall per time) to this CSV file")
     a = ap.parse_args()
     par = used_params(a.outdir)
     paths = snap.list_snapshots(a.outdir)
@@ -478,6 +493,9 @@ def main():
                 w.writeheader()
                 w.writerows(rows)
             print("wrote %s" % a.csv)
+    if a.profiles:
+        write_profiles(drums, a.profiles)
+        print("wrote %s" % a.profiles)
     dg = snap.read_diagnostics(a.outdir, partial=True)
     print("max |relative drift of sum C_i V_i|: %.3e" % np.abs(dg["small_volume_drift"]).max())
     if a.png:
