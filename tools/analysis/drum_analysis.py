@@ -473,7 +473,7 @@ def main():
     par = used_params(a.outdir)
     paths = snap.list_snapshots(a.outdir)
     if a.times:
-        paths = pick(paths, a.times)
+        paths = list(dict.fromkeys(pick(paths, a.times)))  # a time past the last snapshot picks it once
     drums = [Drum(p, par, a.slab) for p in paths]
     print("%8s %9s %10s %12s %12s %10s" % ("t (s)", "angle", "flatness", "max |u| mc", "seg index", "C range"))
     for d in drums:

@@ -26,7 +26,7 @@ lose its order around the post within about 1 s.
 Set "background" (issue 30): shifting with Flow:background_pressure excluded
 (the background pressure left out of the momentum pair term, Adami, Hu &
 Adams 2013) at 30 and 300 Pa and L/dr = 20, 24, 28, 32, without shifting at
-300 Pa, and phi = 0.05-0.3 at L/dr = 20.
+300 Pa, and phi = 0.05-0.3 at L/dr = 20, 32 and 40.
 
 Set "shifting" (issue 30): the same cell with Flow:shifting fickian (Lind et
 al. 2012) at L/dr = 20, 30, 40 (30 Pa), and at L/dr = 20 and 30 the
@@ -105,8 +105,10 @@ def cases(which):
             c.append(case("shx_p%g_r20" % p0, rows=20, p0=p0, shifting="fickian", background="excluded"))
         c.append(case("nsx_p300_r20", rows=20, p0=300.0, background="excluded"))
         c.append(case("shx_res24", rows=24, shifting="fickian", background="excluded"))  # 20: shx_p30_r20
-        for phi in (0.05, 0.1, 0.2, 0.3):
-            c.append(case("shx_phi%g_r20" % phi, rows=20, phi=phi, shifting="fickian", background="excluded"))
+        for rows in (20, 32, 40):  # 32, 40: the fractions at finer cells (phi 0.126 is shx_res32)
+            for phi in (0.05, 0.1, 0.2, 0.3):
+                c.append(case("shx_phi%g_r%d" % (phi, rows), rows=rows, phi=phi, shifting="fickian",
+                              background="excluded"))
         for rows in (28, 32):  # (16 is below the period's 6 supports)
             c.append(case("shx_res%d" % rows, rows=rows, shifting="fickian", background="excluded"))
     if which in ("full", "fraction"):
