@@ -83,9 +83,6 @@ void settings_warn_stabilization(const struct scene *sc)
                 "degrees sinks 0.23 mm/s with riemann's, 0.075 mm/s with delta's, at dr 0.5 mm), and in the 2D drum "
                 "at 10 kPa particles left through the wall within 3-8 s (docs/granular.md \"Stabilisation\")",
                 f->stabilization == FLOW_STAB_DELTA ? "Flow:stabilization delta" : "Flow:riemann_diffusion on");
-    else if (f->stabilization == FLOW_STAB_RIEMANN)
-        warning("Flow:stabilization riemann is measured on the chute and on the 2D drum at dr >= 0.7 mm only "
-                "(docs/granular.md \"Stabilisation\"); check a run of yours against monaghan");
 }
 
 void settings_warn_drum(const struct scene *sc)

@@ -26,8 +26,10 @@ void settings_warn_drum(const struct scene *sc);
  * flows, so a softer material (a longer step) must raise alpha. */
 void settings_warn_alpha_sqrt_e(const struct scene *sc);
 
-/* Flow:stabilization riemann or delta: what they were measured to do wrong
- * (docs/granular.md "Stabilisation"), once at start-up of a computed flow. */
+/* Flow:stabilization delta, or riemann with Flow:riemann_diffusion on: what
+ * their pressure diffusion was measured to do wrong (docs/granular.md
+ * "Stabilisation"), once at start-up of a computed flow. riemann without it
+ * is the drum and chute scenes' setting and says nothing. */
 void settings_warn_stabilization(const struct scene *sc);
 
 #endif

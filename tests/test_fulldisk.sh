@@ -59,7 +59,7 @@ done
 # left (if one was written) continues.
 sweep=$tmp/sweep
 mkdir -p "$sweep"
-drum=(inputs/drum_2d_EV.yml -P Geometry:dr=0.0025 -P Material:E=1e5 -P Flow:alpha_av=1)
+drum=(inputs/drum_2d_EV.yml -P Geometry:dr=0.0025 -P Material:E=1e5)
 one_line_exit4() { # log rc seconds outdir: the agreed end of a failed write
     local log=$1 rc=$2 secs=$3 o=$4
     [ "$rc" -eq 4 ] && [ "$secs" -le 30 ] && [ "$(grep -c '^sphseg: error:' "$log")" -eq 1 ] &&

@@ -233,7 +233,8 @@ def without_line(work, drum, name, line):
 def test_key_newer(sp, work, drum):
     """A checkpoint written before a key existed (issue 30: Material:yield): its
     scene text lacks the key; at the key's default (the behaviour the code had)
-    it restarts, at another value it is refused naming the key."""
+    it restarts, at another value it is refused naming the key (a state key) or
+    continues with a warning naming it (a model key: Flow:stabilization)."""
     old, ok = without_line(work, drum, "before_yield.h5", "  yield: drucker_prager\n")
     more = ["-P", "Geometry:dr=0.004", "-P", "Run:max_steps=3", "-P", "Output:checkpoint_dt=1"]
     rc, out, err, _ = restart(sp, work, old, DRUM, extra=more)
@@ -251,6 +252,16 @@ def test_key_newer(sp, work, drum):
     rc, out, err, _ = restart(sp, work, old, DRUM, extra=more + ["-P", "Segregation:limiter=none"])
     check("... and restarted with limiter none (the old behaviour) says nothing of it",
           rc == 0 and "Segregation:limiter" not in out + err, f"rc {rc}\n{err}\n{out[-400:]}")
+    # Flow:stabilization came with its default monaghan (the code before it), but the drum scene now sets
+    # riemann: a run of it from before the key continues under riemann, with the warning that says so
+    old, ok = without_line(work, drum, "before_stabilization.h5", "  stabilization: riemann\n")
+    rc, out, err, _ = restart(sp, work, old, DRUM, extra=more)
+    check("a checkpoint from before Flow:stabilization restarted with the drum scene (riemann) warns that the model "
+          "key changed", ok and rc == 0 and "Flow:stabilization ((absent) in the checkpoint, riemann now)" in err,
+          f"rc {rc}\n{err}\n{out[-400:]}")
+    rc, out, err, _ = restart(sp, work, old, DRUM, extra=more + ["-P", "Flow:stabilization=monaghan"])
+    check("... and restarted with monaghan (the code before the key) says nothing of it",
+          rc == 0 and "Flow:stabilization" not in out + err, f"rc {rc}\n{err}\n{out[-400:]}")
 
 
 def test_seal_flips(sp, work, src, run_ok):

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The warnings for flow settings outside the measured range (src/settings_check.c,
 # settings_warn_drum; docs/gpu.md "Stiffness, artificial viscosity and CFL"):
-# alpha_av sqrt(E) more than 2x off Table 1's (0.1 at 10 MPa), and
-# Run:cfl_flow > 0.2, and E below the softest measured accurate (10 kPa). Each probe is a 1-step CPU drum; the warning must be
+# alpha_av sqrt(E) more than 2x off Table 1's (0.1 at 10 MPa; Flow:stabilization
+# monaghan only, which the probes of it set: the drum scene runs riemann), and
+# Run:cfl_flow > 0.2, and E below the softest measured accurate (10 kPa); the
+# pressure diffusion's (settings_warn_stabilization). Each probe is a 1-step CPU drum; the warning must be
 # there when the setting is off and absent when it is in range.
 set -u
 bin=${1:?usage: test_settings_warnings.sh BUILD/sphseg}
@@ -19,12 +21,16 @@ probe() { # name, expect (yes|no), pattern, -P overrides...
     grep -q "warning: .*$pat" "$tmp/log" && got=yes
     if [ "$got" = "$want" ]; then echo "ok   $name"; else echo "FAIL $name: warning '$pat' $got, expected $want"; fail=1; fi
 }
-probe "Table 1 settings: no AV warning" no "alpha_av"
-probe "E 0.1 MPa, alpha 0.1: AV warning" yes "alpha_av \* sqrt(Material:E) is 0.1 times" Material:E=1e5
-probe "E 0.1 MPa, alpha 1.0: no AV warning" no "alpha_av" Material:E=1e5 Flow:alpha_av=1.0
-probe "E 10 MPa, alpha 0.5: AV warning" yes "alpha_av" Flow:alpha_av=0.5
-probe "E 10 kPa, alpha 3.162: no warning at all" no "" Material:E=1e4 Flow:alpha_av=3.162
-probe "E 5 kPa, alpha 4.47: softness warning" yes "Material:E = 5e+03 Pa is softer" Material:E=5e3 Flow:alpha_av=4.472
+M=Flow:stabilization=monaghan # the paper's (3.10), whose alpha_av the AV warning is about
+probe "the scene (riemann) at E 0.1 MPa, alpha 0.1: no warning at all" no "" Material:E=1e5
+probe "Table 1 settings, monaghan: no AV warning" no "alpha_av" $M
+probe "E 0.1 MPa, alpha 0.1: AV warning" yes "alpha_av \* sqrt(Material:E) is 0.1 times" $M Material:E=1e5
+probe "E 0.1 MPa, alpha 1.0: no AV warning" no "alpha_av" $M Material:E=1e5 Flow:alpha_av=1.0
+probe "E 10 MPa, alpha 0.5: AV warning" yes "alpha_av" $M Flow:alpha_av=0.5
+probe "E 10 kPa, alpha 3.162: no warning at all" no "" $M Material:E=1e4 Flow:alpha_av=3.162
+probe "E 5 kPa, alpha 4.47: softness warning" yes "Material:E = 5e+03 Pa is softer" $M Material:E=5e3 Flow:alpha_av=4.472
+probe "riemann's pressure diffusion: its warning" yes "Flow:riemann_diffusion on: the pressure diffusion" \
+    Flow:riemann_diffusion=on
 probe "cfl_flow 0.2: no CFL warning" no "cfl_flow" Run:cfl_flow=0.2
 probe "cfl_flow 0.3: CFL warning" yes "Run:cfl_flow = 0.3 > 0.2" Run:cfl_flow=0.3
 exit $fail

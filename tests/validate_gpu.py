@@ -57,16 +57,18 @@ CASES = [
                                         "Physics:gravity=[0, -9.81, 0]"]),
     ("drum_EV", "drum_2d_EV.yml", 60, ["Flow:shepard_every=20", "Segregation:every=1"]),
     ("drum_EV_win", "drum_2d_EV.yml", 60, ["Flow:shepard_every=20", "Segregation:every=7"]),
-    # Flow:stabilization (physics/momentum.h): the Riemann dissipation and pressure diffusion, delta-SPH
+    # Flow:stabilization (physics/momentum.h): the Riemann dissipation (the drum and chute scenes' own, in the
+    # cases above at E 10 MPa) and pressure diffusion, delta-SPH
     ("drum_EV_riemann", "drum_2d_EV.yml", 300, ["Flow:stabilization=riemann", "Material:E=1e5",
                                                 "Flow:shepard_every=20", "Segregation:every=7"]),
     ("drum_EV_delta", "drum_2d_EV.yml", 300, ["Flow:stabilization=delta", "Material:E=1e5",
                                               "Flow:shepard_every=20", "Segregation:every=7"]),
     ("drum_EN", "drum_2d_EN.yml", 60, ["Segregation:every=10"]),
+    # the paper's path: its scheme and its Flow:stabilization monaghan (the drum scenes set riemann)
     ("drum_EV_paper", "drum_2d_EV.yml", 40, ["Segregation:scheme=paper", "Geometry:dr=0.001",
-                                             "Segregation:every=1"]),
+                                             "Segregation:every=1", "Flow:stabilization=monaghan"]),
     ("drum_EV_paper_win", "drum_2d_EV.yml", 40, ["Segregation:scheme=paper", "Geometry:dr=0.001",
-                                                 "Segregation:every=6"]),
+                                                 "Segregation:every=6", "Flow:stabilization=monaghan"]),
     ("drum_3d", "drum_3d.yml", 40, ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025",
                                     "Material:E=1e5", "Walls:rpm=15", "Flow:shepard_every=20",
                                     "Segregation:every=8"]),

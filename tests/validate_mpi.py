@@ -73,14 +73,17 @@ DRUM = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:shepard_every=20"]
 from tests.containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
                         SILO, pick_cases)
 
-# name, scene, steps, overrides, what must happen on several ranks
+# name, scene, steps, overrides, what must happen on several ranks. The drums
+# run their scenes' Flow:stabilization riemann but for the paper's path,
+# drum_EV and drum_EN_paper, which set the paper's monaghan (3.10).
 CASES = [
     ("shearbox", "shearbox_2d.yml", 40, [], None),
     ("shearbox_paper", "shearbox_2d.yml", 40, ["Segregation:scheme=paper"], None),
     ("column_3d", "column_2d.yml", 30, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.05",
                                         "Geometry:depth=0.05", "Geometry:height=0.1"], None),
-    ("drum_EV", "drum_2d_EV.yml", 1500, DRUM, "migrate"),
-    ("drum_EN_paper", "drum_2d_EN.yml", 300, DRUM + ["Segregation:scheme=paper"], None),
+    ("drum_EV", "drum_2d_EV.yml", 1500, DRUM + ["Flow:stabilization=monaghan"], "migrate"),
+    ("drum_EN_paper", "drum_2d_EN.yml", 300, DRUM + ["Segregation:scheme=paper", "Flow:stabilization=monaghan"],
+     None),
     ("drum_balance", "drum_2d_EV.yml", 400, DRUM + ["Geometry:dr=0.0015", "Parallel:axis=y",
                                                     "Parallel:balance_every=50",
                                                     "Parallel:balance_threshold=1e-6"], "balance"),
@@ -88,7 +91,8 @@ CASES = [
     ("drum_3d", "drum_3d.yml", 60, ["Geometry:dr=0.0025", "Geometry:length=0.025", "Material:E=1e5",
                                     "Segregation:every=9"], None),
     ("drum_EV_metis", "drum_2d_EV.yml", 800, DRUM + ["Parallel:method=metis"], "migrate"),
-    # Flow:stabilization riemann (physics/momentum.h): its pair terms read the ghosts' stress and kind
+    # Flow:stabilization riemann (physics/momentum.h; the drum scenes' own): its pair terms read the ghosts'
+    # stress and kind
     ("drum_EV_riemann", "drum_2d_EV.yml", 800, DRUM + ["Flow:stabilization=riemann"], "migrate"),
     # delta-SPH pressure diffusion (physics/momentum.h mom_pdiff): reads the ghosts' pressure and position
     ("drum_EV_delta", "drum_2d_EV.yml", 400, DRUM + ["Flow:stabilization=delta"], None),
