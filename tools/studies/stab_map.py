@@ -135,12 +135,18 @@ def cmd_report(a):
     sc = None
     for a_, (stab, dr) in zip(ax[0], panels):
         rows = [r for r in R.values() if r["stab"] == stab and float(r["dr"]) == dr]
-        good = [r for r in rows if r["ok"]]
+        good = [r for r in rows if r["ok"] and "err" in r]
+        noref = [r for r in rows if r["ok"] and "err" not in r]  # ran, no chi 0.2 run to compare with
         bad = [r for r in rows if not r["ok"]]
         if good:
             sc = a_.scatter([float(r["cfl"]) for r in good], [float(r["E"]) for r in good], s=90,
-                            c=[r.get("err", 0.0) for r in good], cmap="viridis_r", vmin=0, vmax=0.3,
+                            c=[r["err"] for r in good], cmap="viridis_r", vmin=0, vmax=0.3,
                             edgecolors="k", linewidths=0.5)
+        for r in noref:
+            a_.plot(float(r["cfl"]), float(r["E"]), "o", color="0.6", mec="k", ms=10)
+            a_.annotate("ran (no χ 0.2 run)", (float(r["cfl"]), float(r["E"])), fontsize=6, xytext=(4, -10),
+                        textcoords="offset points")
+        a_.set_xlim(0.1, 2.1)
         for r in bad:
             if r["how"].startswith("not finished"):  # no verdict: drawn apart from a failure
                 a_.plot(float(r["cfl"]), float(r["E"]), "o", mfc="none", color="0.5", ms=10)
