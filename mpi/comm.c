@@ -1,7 +1,9 @@
 /* comm.c — see comm.h. */
 #include "comm.h"
 #include <mpi.h>
+#include <stdlib.h>
 #include "../src/core/error.h"
+#include "../src/core/ksum.h"
 
 int comm_rank(void)
 {
@@ -25,6 +27,17 @@ static double comm_reduce(double x, MPI_Op op)
 }
 
 double comm_sum(double x) { return comm_reduce(x, MPI_SUM); }
+double comm_sum_compensated(double hi, double lo)
+{
+    int n = comm_size();
+    double mine[2] = {hi, lo}, *all = malloc(2 * (size_t)n * sizeof *all);
+    if (!all) error_exit(1, "out of memory in comm_sum_compensated");
+    MPICHECK(MPI_Allgather(mine, 2, MPI_DOUBLE, all, 2, MPI_DOUBLE, MPI_COMM_WORLD));
+    ksum k = {0, 0};
+    for (int r = 0; r < 2 * n; ++r) ksum_add(&k, all[r]);
+    free(all);
+    return ksum_value(k);
+}
 double comm_max(double x) { return comm_reduce(x, MPI_MAX); }
 double comm_min(double x) { return comm_reduce(x, MPI_MIN); }
 

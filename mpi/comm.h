@@ -8,6 +8,10 @@ int comm_size(void);
 /* Rank among the ranks of this node (picks the GPU). */
 int comm_local_rank(void);
 double comm_sum(double x);
+/* The sum over ranks of a compensated per-rank sum (hi, lo), itself summed
+ * compensated in rank order: the same on every rank and, to round-off of the
+ * total, independent of how the particles are split and ordered. */
+double comm_sum_compensated(double hi, double lo);
 double comm_max(double x);
 double comm_min(double x);
 long long comm_sum_ll(long long x);

@@ -7,6 +7,7 @@
 #include <string.h>
 #include <time.h>
 #include "core/error.h"
+#include "core/ksum.h"
 #include "io.h"
 #include "mpi/comm.h"
 
@@ -32,13 +33,14 @@ double diag_wall(void)
 diag_values diag_measure(const sim_t *s)
 {
     const particles_t *p = &s->p;
-    double small = 0, ke = 0, vmax = 0, cmin = INFINITY, cmax = -INFINITY;
+    ksum small = {0, 0};
+    double ke = 0, vmax = 0, cmin = INFINITY, cmax = -INFINITY;
     long long nm = 0;
     for (size_t i = 0; i < p->n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
         double v2 = 0;
         for (int d = 0; d < 3; ++d) v2 += (double)p->v[d][i] * p->v[d][i];
-        small += (double)p->C[i] * p->vol[i];
+        ksum_add(&small, (double)p->C[i] * p->vol[i]);
         ke += 0.5 * s->sc->physics.rho * p->vol[i] * v2;
         vmax = fmax(vmax, sqrt(v2));
         cmin = fmin(cmin, p->C[i]);
@@ -47,7 +49,7 @@ diag_values diag_measure(const sim_t *s)
     }
     diag_values v;
     v.n_material = comm_sum_ll(nm);
-    v.small_volume = comm_sum(small);
+    v.small_volume = comm_sum_compensated(small.s, small.c);
     v.kinetic_energy = comm_sum(ke);
     v.max_speed = comm_max(vmax);
     v.C_min = comm_min(cmin);

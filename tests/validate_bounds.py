@@ -53,7 +53,7 @@ def c_range(out):
 def conserved(check, out, name, rho):
     prec = snap.read_snapshot(snap.list_snapshots(out)[0]).get("Precision", "double")
     c = snap.conservation(out)
-    check(name + " conservation", c["drift"] <= DRIFT[prec] and c["column"] <= 1e-12 and c["reported"] == 0,
+    check(name + " conservation", c["drift"] <= DRIFT[prec] and c["column"] <= 1e-15 and c["reported"] == 0,
           "drift of sum C_i V_i %.1e from %d snapshots (%s, tolerance %.0e), small_volume column within %.1e"
           % (c["drift"], c["snapshots"], prec, DRIFT[prec], c["column"]))
     diagnostics_columns(check, out, rho)
