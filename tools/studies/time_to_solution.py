@@ -22,7 +22,9 @@ default) STEPS should cover at least one window (K <= 100): the default 200
 does. The rate of a short run stands for the whole revolution: a turning
 drum's cost per step does not change with time (the neighbour counts do not).
 
-chart: docs/data/gpu/time_to_solution.png from the CSV of measured points (one row
+chart: docs/data/gpu/time_to_solution.png from the CSV of measured points
+(--data, --png; --reference and --error-note name what the errors are
+against, e.g. for time_to_solution_riemann.csv) (one row
 per combination of levers: the hours per revolution from `run`, the error
 columns from the 2D EV drum studies of docs/gpu.md, each row naming its
 source); rows whose error was not measured are drawn on the cost axis only.
@@ -88,8 +90,12 @@ def cmd_chart(a):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     rows = list(csv.DictReader(open(a.data)))
-    fig, ax = plt.subplots(1, 2, figsize=(12, 5.2), sharex=True)
-    for k, (col, lab) in enumerate([("speed_err", "surface speed"), ("seg_err", "segregation index")]):
+    panels = [("speed_err", "surface speed"), ("seg_err", "segregation index")]
+    panels = [p for p in panels if any(r[p[0]].strip() for r in rows)]  # a column nobody measured: no panel
+    fig, ax = plt.subplots(1, len(panels), figsize=(12 if len(panels) > 1 else 10, 5.2 if len(panels) > 1 else 6.2), sharex=True, squeeze=False)
+    ax = ax[0]
+    hours = [float(r["gpu_hours_per_rev"]) for r in rows]
+    for k, (col, lab) in enumerate(panels):
         for r in rows:
             h = float(r["gpu_hours_per_rev"])
             e = r[col].strip()
@@ -103,17 +109,19 @@ def cmd_chart(a):
                                ha="right", va="bottom", color="gray")
         ax[k].axvline(6, color="k", lw=0.8, ls="--")
         ax[k].annotate(" goal: 6 h", (6, 0.5), fontsize=8, ha="left")
+        if a.band:
+            ax[k].axhline(a.band, color="g", lw=0.8, ls="--")
+            ax[k].annotate(" %g %% of the reference" % (100 * a.band), (min(hours) / 1.4, a.band * 1.1), fontsize=8)
         ax[k].set_xlabel("GPU-hours per revolution\n(3D drum, 1.1e7 particles, H100: measured rate)")
-        ax[k].set_ylabel("|relative error| of the %s\n(2D EV drum, Table 1 resolution, t = 5 s (o) or 10 s (s))" % lab)
+        ax[k].set_ylabel("|relative error| of the %s\n(%s)" % (lab, a.error_note))
         ax[k].set_ylim(1e-3, 1.5)
         ax[k].grid(alpha=0.3, which="both")
+        ax[k].set_xlim(min(3.0, min(hours) / 1.5), max(2000.0 if len(panels) > 1 else 0, max(hours) * 1.5))
     h, l = ax[0].get_legend_handles_labels()
-    fig.legend(h, l, fontsize=8, loc="lower center", ncol=3)
-    fig.suptitle("Time to solution against accuracy (errors below 1e-3 drawn at 1e-3; reference: Table 1, "
-                 "C in every step)", fontsize=9)
-    for k in range(2):
-        ax[k].set_xlim(3, 2000)
-    fig.tight_layout(rect=(0, 0.1, 1, 0.95))
+    fig.legend(h, l, fontsize=8, loc="lower center", ncol=3 if len(panels) > 1 else 2)
+    fig.suptitle("Time to solution against accuracy (errors below 1e-3 drawn at 1e-3)\nreference: %s" % a.reference,
+                 fontsize=9)
+    fig.tight_layout(rect=(0, 0.1 if len(panels) > 1 else 0.17, 1, 0.93))
     fig.savefig(a.png, dpi=120)
     print("wrote %s" % a.png)
 
@@ -130,6 +138,10 @@ def main():
     c = sub.add_parser("chart")
     c.add_argument("--data", default=os.path.join(ROOT, "docs", "data", "gpu", "time_to_solution.csv"))
     c.add_argument("--png", default=os.path.join(ROOT, "docs", "data", "gpu", "time_to_solution.png"))
+    c.add_argument("--reference", default="Table 1, C in every step", help="what the errors are against (title)")
+    c.add_argument("--error-note", default="2D EV drum, Table 1 resolution, t = 5 s (o) or 10 s (s)",
+                   help="where the errors come from (axis label)")
+    c.add_argument("--band", type=float, help="draw this relative error as a line (e.g. 0.02)")
     a = ap.parse_args()
     cmd_run(a) if a.what == "run" else cmd_chart(a)
 
