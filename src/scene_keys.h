@@ -288,6 +288,8 @@ SECTION("Flow", flow, scene_flow)
       "artificial viscosity coefficient (3.10), Flow:stabilization monaghan; default 0.1; 0 = off")
     KF("Flow", flow, scene_flow, riemann_eta, OPT, "3", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "Flow:stabilization riemann: the limiter's eta in beta = min(eta dU, c_s); default 3 (Zhang, Hu & Adams 2017)")
+    KF("Flow", flow, scene_flow, bed_damping, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "Flow:stabilization riemann: Monaghan's (3.10) with this alpha on the pairs of material below the yield surface only, weighted by 1 - max(q_i, q_j), q = sqrt(J2) / (k(mu_s) p) (1 at p <= 0): damps the quasi-static bed's elastic noise, none in the yielded flow; it vanishes on a rigid rotation; default 0 = off (docs/granular.md \"The bed's noise drives the segregation\")")
     KE("Flow", flow, scene_flow, riemann_diffusion, unsigned, on_off, "off",
       "Flow:stabilization riemann: on | off: also diffuse the pressure at the Riemann solver's rate K / (rho c_s) (its continuity dissipation, less the hydrostatic part); default off: measured to compact a free surface at a constant rate (docs/granular.md \"Stabilisation\")")
     KF("Flow", flow, scene_flow, delta, OPT, "0.1", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,

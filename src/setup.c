@@ -552,11 +552,13 @@ static void flow_ctx_of(const struct scene *sc, const sph_ctx *k, const seg_para
     f->m.mu_s = (real)m->mu_s, f->m.mu_d = (real)m->mu_d;
     f->m.I0 = (real)m->I0, f->m.lambda = (real)m->lambda;
     f->yield = flow_yield_of(sc);
+    f->bed_k = stress_yield_k(f->yield, f->m.mu_s);
     f->rho = (real)sc->physics.rho;
     f->cs = stress_sound_speed(f->m.G, f->m.K, f->rho);
     f->alpha_av = (real)sc->flow.alpha_av;
     f->stab = flow_stab_of(sc);
     f->eta_r = (real)sc->flow.riemann_eta;
+    f->bed_alpha = f->stab == STAB_RIEMANN && f->m.G > 0 ? (real)sc->flow.bed_damping : R(0.0);
     f->pdiff = flow_pdiff_coef(f->stab, (int)sc->flow.riemann_diffusion, (real)sc->flow.delta, f->m.K, f->rho,
                                f->cs, k->h);
     for (int d = 0; d < 3; ++d) f->g[d] = (real)sc->physics.gravity[d];

@@ -12,7 +12,12 @@
  *    round-off, and moves a pressure bump down: the bump's rate is negative,
  *    its neighbours' positive;
  *  - it is isotropic: the deviatoric stress rate is the elastic one (zero
- *    at rest). */
+ *    at rest);
+ *  - riemann's bed damping (Flow:bed_damping, flow.h flow_bed_q): a particle
+ *    moving through a bed far inside the yield cone is slowed by it (its
+ *    acceleration against the motion grows), not at all when the stress is
+ *    on the cone (the flowing layer) or where p <= 0; a rigid rotation of the
+ *    bed feels none of it (to round-off against the moving particle's). */
 #include "physics/flow.h"
 #include <string.h>
 #include "testutil.h"
@@ -113,6 +118,55 @@ static void conservation_and_sign(tu_fx *f, int stab)
 static void test_conservation_riemann(void **st) { conservation_and_sign(*st, STAB_RIEMANN); }
 static void test_conservation_delta(void **st) { conservation_and_sign(*st, STAB_DELTA); }
 
+/* A 9 x 9 block, no walls, no gravity, p = 1000 Pa with deviator q of the
+ * static cone (sig_xy = q k p); velocities from vel(x, y). Returns the
+ * x-acceleration of the centre particle with the bed damping at alpha. */
+static double bed_accel(tu_fx *f, double q, double alpha, void (*vel)(double, double, double *))
+{
+    particles_t *p = &f->p;
+    flow_ctx c = ctx(STAB_RIEMANN);
+    c.g[1] = 0, c.pdiff = 0;
+    c.bed_alpha = (real)alpha, c.bed_k = stress_yield_k(YIELD_DRUCKER_PRAGER, c.m.mu_s);
+    int n = 9;
+    part_free(p); /* a fresh block each call (tu_block2d allocates) */
+    tu_block2d(p, n, n, DR, 0, 0);
+    for (size_t i = 0; i < p->n; ++i) {
+        for (int k = 0; k < 6; ++k) p->sig[k][i] = 0;
+        for (int k = 0; k < 3; ++k) p->sig[k][i] = -1000;
+        p->sig[3][i] = (real)(q * c.bed_k * 1000); /* sqrt(J2) = |sig_xy| */
+        double u[2];
+        vel(p->x[0][i], p->x[1][i], u);
+        p->v[0][i] = (real)u[0], p->v[1][i] = (real)u[1], p->v[2][i] = 0;
+    }
+    tu_fx_list(f, c.k.h);
+    size_t b = tu_find(p, (int64_t)((n / 2) * n + n / 2));
+    flow_rates(b, p, &f->g.view, &c);
+    return (double)p->acc[0][b];
+}
+
+static double xc_(void) { return 4.5 * DR; } /* the centre particle's x and y on tu_block2d's lattice */
+static void one_moving(double x, double y, double *u)
+{
+    u[0] = fabs(x - xc_()) < 0.1 * DR && fabs(y - xc_()) < 0.1 * DR ? 0.01 : 0, u[1] = 0;
+}
+static void rigid(double x, double y, double *u) { u[0] = -0.5 * (y - xc_()), u[1] = 0.5 * (x - xc_()); }
+
+static void test_bed_damping(void **st)
+{
+    tu_fx *f = *st;
+    double a0 = bed_accel(f, 0, 0, one_moving), a1 = bed_accel(f, 0, 1, one_moving);
+    double damp = a1 - a0; /* the damping's own acceleration of the moving particle */
+    assert_true(damp < 0 && fabs(damp) > 1e-3 * fabs(a0) + 1e-6);
+    /* half way to the cone: weight 1 - 0.5 */
+    double half = bed_accel(f, 0.5, 1, one_moving) - bed_accel(f, 0.5, 0, one_moving);
+    assert_true(fabs(half - 0.5 * damp) <= 1e-9 * fabs(damp));
+    /* on the cone (yielded): none */
+    assert_true(bed_accel(f, 1, 1, one_moving) == bed_accel(f, 1, 0, one_moving));
+    /* a rigid rotation: u_ij . x_ij = 0, none to round-off */
+    double r0 = bed_accel(f, 0, 0, rigid), r1 = bed_accel(f, 0, 1, rigid);
+    assert_true(fabs(r1 - r0) <= RT(1e-9) * fabs(damp));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -121,6 +175,7 @@ int main(void)
         TU_FX_TEST(test_hydrostatic_delta),
         TU_FX_TEST(test_conservation_riemann),
         TU_FX_TEST(test_conservation_delta),
+        TU_FX_TEST(test_bed_damping),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

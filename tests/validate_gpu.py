@@ -61,6 +61,8 @@ CASES = [
     # cases above at E 10 MPa) and pressure diffusion, delta-SPH
     ("drum_EV_riemann", "drum_2d_EV.yml", 300, ["Flow:stabilization=riemann", "Material:E=1e5",
                                                 "Flow:shepard_every=20", "Segregation:every=7"]),
+    ("drum_EV_bed", "drum_2d_EV.yml", 300, ["Flow:stabilization=riemann", "Flow:bed_damping=1", "Material:E=1e5",
+                                            "Flow:shepard_every=20", "Segregation:every=7"]),
     ("drum_EV_delta", "drum_2d_EV.yml", 300, ["Flow:stabilization=delta", "Material:E=1e5",
                                               "Flow:shepard_every=20", "Segregation:every=7"]),
     ("drum_EN", "drum_2d_EN.yml", 60, ["Segregation:every=10"]),

@@ -94,6 +94,8 @@ CASES = [
     # Flow:stabilization riemann (physics/momentum.h; the drum scenes' own): its pair terms read the ghosts'
     # stress and kind
     ("drum_EV_riemann", "drum_2d_EV.yml", 800, DRUM + ["Flow:stabilization=riemann"], "migrate"),
+    # riemann's bed damping (physics/flow.h flow_bed_q): reads the ghosts' stress on both sides of the pair
+    ("drum_EV_bed", "drum_2d_EV.yml", 400, DRUM + ["Flow:stabilization=riemann", "Flow:bed_damping=1"], None),
     # delta-SPH pressure diffusion (physics/momentum.h mom_pdiff): reads the ghosts' pressure and position
     ("drum_EV_delta", "drum_2d_EV.yml", 400, DRUM + ["Flow:stabilization=delta"], None),
     # shifting of the granular material (ST_SHIFT) with the tensorial yield, on a rotating drum

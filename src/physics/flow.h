@@ -38,6 +38,9 @@ typedef struct flow_ctx {
     int stab;      /* Flow:stabilization: STAB_MONAGHAN (the paper's 3.10) | STAB_RIEMANN | STAB_DELTA */
     real alpha_av; /* Monaghan coefficient of (3.10), monaghan only; 0 switches it off */
     real eta_r;    /* riemann: the limiter's eta (Zhang, Hu & Adams 2017: 3) */
+    real bed_alpha; /* riemann: Flow:bed_damping, Monaghan's alpha on unyielded material pairs
+                     * (flow_bed_q); 0 = off */
+    real bed_k;     /* the static yield cone's slope k(mu_s) of Material:yield (stress_yield_k) */
     real pdiff;    /* the pressure diffusion's coefficient (mom_pdiff): riemann with
                     * Flow:riemann_diffusion on K / (rho c_s); delta 2 delta h c_s; 0 = none */
     real g[3];     /* gravity, m/s^2 */
@@ -55,6 +58,21 @@ typedef struct flow_ctx {
     real p_back;    /* Flow:background_pressure excluded (Newtonian fluid): 2 p0 / rho^2, added to the pair's
                      * Pi of (3.9), which then sees sigma + p0 I: a uniform p0 exerts no force; else 0 */
 } flow_ctx;
+
+/* How near particle i's stress is to the static yield cone sqrt(J2) = k p
+ * (k = k(mu_s), flow_ctx.bed_k): q = sqrt(J2) / (k p), 1 at p <= 0 (a free
+ * surface, tension). The bed damping (Flow:bed_damping) weights a material
+ * pair by 1 - max(q_i, q_j) where that is positive: full in a bed at rest
+ * far inside the cone, none in material at or past yield (the flowing
+ * layer, whose mu(I) >= mu_s puts it on its cone), so the rheology alone
+ * sets the flow. Monaghan's pair term (mom_av) vanishes on a rigid rotation
+ * (u_ij . x_ij = 0), so the bed's turning with the drum is not damped. */
+HD_INLINE real flow_bed_q(const real s[6], real k)
+{
+    const real p = stress_pressure(s);
+    if (!(p > 0)) return R(1.0);
+    return (real)sqrt((double)stress_J2(s)) / (k * p);
+}
 
 /* The pressure diffusion's coefficient flow_ctx.pdiff (mom_pdiff) from the
  * bulk modulus K, the density rho, the sound speed cs and the kernel's h:
@@ -163,6 +181,7 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
      * distance test by SPH_EARLY_LOADS (hd.h) */
     const real xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]}, ui[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
     const real pi = stress_pressure(si);
+    const real qi = c->bed_alpha > 0 ? flow_bed_q(si, c->bed_k) : R(1.0);
     real pd = R(0.0); /* the pressure diffusion, Pa/s (riemann, delta) */
     NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
         if (j == i) continue;
@@ -183,6 +202,10 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
         } else {
             if (c->stab == STAB_RIEMANN)
                 Pi = mom_riemann(c->eta_r, c->cs, c->rho, uij, xij, r2, p->kind[j] != KIND_MATERIAL);
+            if (c->bed_alpha > 0 && qi < R(1.0) && p->kind[j] == KIND_MATERIAL) {
+                const real qj = flow_bed_q(sj, c->bed_k), w = R(1.0) - (qi > qj ? qi : qj);
+                if (w > 0) Pi += w * mom_av(c->bed_alpha, c->cs, k->h, c->rho, c->rho, uij, xij);
+            }
             /* the pressure difference less its hydrostatic part rho g.x_ji (Fourtakas et al.
              * 2019): a free surface, where the support is cut, is not driven by rho g */
             if (c->pdiff > 0) {

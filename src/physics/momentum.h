@@ -5,6 +5,7 @@
  * grad_i W_ij = kernel_f(r) x_ij with x_ij = x_i - x_j. */
 #ifndef SPHSEG_MOMENTUM_H
 #define SPHSEG_MOMENTUM_H
+#include <math.h>
 #include "hd.h"
 #include "kernel.h"
 

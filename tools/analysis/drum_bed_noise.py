@@ -6,7 +6,7 @@ the code computes there (gdot, which drives the segregation velocity
 V = chi_V gdot d, eq. 2.7) and the speed off the rigid rotation are noise.
 Printed per snapshot: the bed's gdot (median, 90th percentile), the median
 |u - omega x r| there, and the mean C in the bed and in the material row at
-the wall (r/R > 0.985, y < -0.3 R), where small grains driven down by a noisy
+the wall (r > R - max(0.015 R, 1.5 dr), y < -0.3 R), where small grains driven down by a noisy
 gdot collect (docs/granular.md, "The bed's noise drives the segregation").
 Drum of inputs/drum_2d_EV.yml: R 35 mm, 5 rpm clockwise.
 
@@ -23,10 +23,10 @@ from tools.analysis import snap  # noqa: E402
 R, OMEGA = 0.035, -5 * 2 * np.pi / 60  # radius (m); the wall's rate (rad/s, clockwise)
 
 
-def measure(x, y, u, v, C, g):
+def measure(x, y, u, v, C, g, dr):
     r = np.hypot(x, y)
     bed = (r > 0.7 * R) & (r < 0.95 * R) & (y < -0.6 * R)
-    wall = (r > 0.985 * R) & (y < -0.3 * R)
+    wall = (r > R - max(0.015 * R, 1.5 * dr)) & (y < -0.3 * R)  # the material row at the wall (two at dr <= 0.35 mm)
     off = np.hypot(u + OMEGA * y, v - OMEGA * x)  # |u - omega x r|, omega along z
     return {"bed_n": int(bed.sum()), "gdot_median": float(np.median(g[bed])), "gdot_p90": float(np.percentile(g[bed], 90)),
             "off_rigid_median": float(np.median(off[bed])), "C_bed": float(C[bed].mean()), "wall_n": int(wall.sum()),
@@ -42,14 +42,15 @@ def main():
                                                          "C bed", "C wall", "gdot wall", "C max"))
     for f in a.files:
         if a.csv:
-            x, y, u, v, C, g = np.loadtxt(f, delimiter=",", skiprows=1, usecols=range(6)).T
+            x, y, u, v, C, g, V = np.loadtxt(f, delimiter=",", skiprows=1, usecols=range(7)).T
         else:
             s = snap.read_snapshot(f)
             m = s["Kind"] == snap.MATERIAL
             x, y = s["Coordinates"][m, 0], s["Coordinates"][m, 1]
             u, v = s["Velocities"][m, 0], s["Velocities"][m, 1]
             C, g = np.asarray(s["Concentration"])[m], np.asarray(s["ShearRate"])[m]
-        r = measure(x, y, u, v, C, g)
+            V = np.asarray(s["Volume"])[m]
+        r = measure(x, y, u, v, C, g, float(np.sqrt(np.median(V))))  # 2D: V = dr^2
         name = os.path.basename(os.path.dirname(os.path.abspath(f))) + "/" + os.path.basename(f)
         print("%-28s %8d %8.2f/s %8.2f/s %9.2e m/s %7.3f %7.3f %7.2f/s %6.3f" % (
             name[-28:], r["bed_n"], r["gdot_median"], r["gdot_p90"], r["off_rigid_median"], r["C_bed"], r["C_wall"],
