@@ -92,16 +92,16 @@ def cmd_chart(a):
     rows = list(csv.DictReader(open(a.data)))
     panels = [("speed_err", "surface speed"), ("seg_err", "segregation index")]
     panels = [p for p in panels if any(r[p[0]].strip() for r in rows)]  # a column nobody measured: no panel
-    fig, ax = plt.subplots(1, len(panels), figsize=(12 if len(panels) > 1 else 10, 5.2 if len(panels) > 1 else 6.2), sharex=True, squeeze=False)
+    fig, ax = plt.subplots(1, len(panels), figsize=(12 if len(panels) > 1 else 10, 6.6), sharex=True, squeeze=False)
     ax = ax[0]
     hours = [float(r["gpu_hours_per_rev"]) for r in rows]
     for k, (col, lab) in enumerate(panels):
-        for r in rows:
+        for n, r in enumerate(rows):
             h = float(r["gpu_hours_per_rev"])
             e = r[col].strip()
-            if e:
+            if e:  # one colour per row in every panel, whichever rows a panel lacks
                 t10 = r.get("t_s", "5").strip() == "10"
-                ax[k].loglog(h, max(abs(float(e)), 1e-3), "s" if t10 else "o", ms=7,
+                ax[k].loglog(h, max(abs(float(e)), 1e-3), "s" if t10 else "o", ms=7, color="C%d" % (n % 10),
                              label=r["label"] + (" (t = 10 s)" if t10 else ""))
             else:
                 ax[k].axvline(h, ls=":", lw=1, color="gray")
@@ -114,14 +114,15 @@ def cmd_chart(a):
             ax[k].annotate(" %g %% of the reference" % (100 * a.band), (min(hours) / 1.4, a.band * 1.1), fontsize=8)
         ax[k].set_xlabel("GPU-hours per revolution\n(3D drum, 1.1e7 particles, H100: measured rate)")
         ax[k].set_ylabel("|relative error| of the %s\n(%s)" % (lab, a.error_note))
-        ax[k].set_ylim(1e-3, 1.5)
+        errs = [abs(float(r[col])) for r in rows if r[col].strip()]
+        ax[k].set_ylim(1e-3, max([1.5] + [1.5 * e for e in errs]))
         ax[k].grid(alpha=0.3, which="both")
-        ax[k].set_xlim(min(3.0, min(hours) / 1.5), max(2000.0 if len(panels) > 1 else 0, max(hours) * 1.5))
+        ax[k].set_xlim(min(3.0, min(hours) / 1.5), max(hours) * 1.5)
     h, l = ax[0].get_legend_handles_labels()
-    fig.legend(h, l, fontsize=8, loc="lower center", ncol=3 if len(panels) > 1 else 2)
+    fig.legend(h, l, fontsize=8, loc="lower center", ncol=2)
     fig.suptitle("Time to solution against accuracy (errors below 1e-3 drawn at 1e-3)\nreference: %s" % a.reference,
                  fontsize=9)
-    fig.tight_layout(rect=(0, 0.1 if len(panels) > 1 else 0.17, 1, 0.93))
+    fig.tight_layout(rect=(0, 0.06 + 0.032 * ((len(h) + 1) // 2), 1, 0.93))
     fig.savefig(a.png, dpi=120)
     print("wrote %s" % a.png)
 
