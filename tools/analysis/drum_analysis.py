@@ -80,6 +80,13 @@ def used_params(outdir):
         return yaml.safe_load(f)
 
 
+def drum_wall(par):
+    """The drum's radius R (m) and its wall's signed rate omega (rad/s about +z,
+    y up: clockwise is negative) from a run's used_params.yml."""
+    w = float(par["Walls"]["rpm"]) * 2 * np.pi / 60
+    return float(par["Geometry"]["radius"]), (-w if par["Walls"].get("direction", "clockwise") == "clockwise" else w)
+
+
 class Drum:
     """One snapshot of a drum run with the derived quantities."""
 

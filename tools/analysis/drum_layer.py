@@ -51,7 +51,7 @@ def main():
         p = paths[-1] if a.time is None else da.pick(paths, [a.time])[0]
         d = da.Drum(p, par)
         delta, Q, us, L2 = layer(d)
-        w = float(par["Walls"]["rpm"]) * 2 * np.pi / 60
+        w = abs(da.drum_wall(par)[1])
         print("%-28s %6.2f %7.2f %9.2f %8.1f %10.3e %10.3e %6.2f" % (
             os.path.basename(o.rstrip("/")), d.t, 1e3 * d.dr, 1e3 * delta, delta / d.dr, Q, w * L2 / 2, 100 * us))
 
