@@ -68,6 +68,8 @@ run_one paraview bash tests/test_paraview.sh "$BUILD/sphseg"
 run_one outdir bash tests/test_outdir.sh "$BUILD/sphseg"
 run_one extremes bash tests/test_extremes.sh "$BUILD/sphseg"
 run_one restart_guard "$PYTHON" -m tests.test_restart_guard --sphseg "$BUILD/sphseg" --work "$tmp/restart_guard"
+# issue 30: the finite-element mu(I) drum reference against exact and analytic answers (no sphseg run)
+run_one drum_mui_ref "$PYTHON" -m tests.test_drum_mui_ref
 for v in tests/validate_*.py; do
     case " ${vals[*]} " in *" $v "*) ;; *) vals+=("$v") ;; esac
 done

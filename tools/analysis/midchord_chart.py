@@ -9,8 +9,11 @@ Each CSV is a `drum_analysis --profiles` file (t, d_mc/R, speed m/s, shear
 rate, C). --dem-ev marks the surface speeds of the EV drum's DEM as Zhu, Peng
 & Wu (2024, §6.2, text to figures 20-21) state them: "around 6 cm/s at t = 20
 s to 7 cm/s at t = 40 s" (at d_mc = 0; the figures' scattered DEM points are
-not given as numbers). --table prints each run's largest speed on the
-mid-chord (the surface speed of drum_analysis) per time.
+not given as numbers). --fem LABEL=CSV adds a steady profile of the
+finite-element mu(I) reference (tools/analysis/drum_mui_ref.py --profile:
+depth_m, u_x_m_per_s; drawn in every panel, its |u_x| against depth / R, R
+from --radius, default 0.035 m). --table prints each run's largest speed on
+the mid-chord (the surface speed of drum_analysis) per time.
 """
 import argparse
 import csv
@@ -32,6 +35,16 @@ def read_profiles(path):
     return dict(out)
 
 
+def read_fem(path, radius):
+    """(depth / R list, |u_x| cm/s list) of one drum_mui_ref --profile CSV."""
+    d, u = [], []
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            d.append(float(r["depth_m"]) / radius)
+            u.append(100 * abs(float(r["u_x_m_per_s"])))
+    return d, u
+
+
 def nearest(prof, t):
     k = min(prof, key=lambda s: abs(s - t))
     return k, prof[k]
@@ -43,8 +56,11 @@ def main():
     ap.add_argument("--times", type=float, nargs="+", default=[20, 30, 40])
     ap.add_argument("--png")
     ap.add_argument("--dem-ev", action="store_true", help="mark the EV drum's DEM surface speeds of the paper's text")
+    ap.add_argument("--fem", action="append", default=[], help="LABEL=CSV (drum_mui_ref --profile), steady")
+    ap.add_argument("--radius", type=float, default=0.035, help="the drum's radius for --fem, m")
     ap.add_argument("--table", action="store_true")
     a = ap.parse_args()
+    fems = [(spec.rsplit("=", 1)[0], read_fem(spec.rsplit("=", 1)[1], a.radius)) for spec in a.fem]
     runs = []
     for spec in a.run:
         label, path = spec.rsplit("=", 1)
@@ -57,6 +73,8 @@ def main():
                 k, (_, u) = nearest(prof, t)
                 row.append("%10.2f" % max(v for v in u if v == v) if abs(k - t) < 0.5 else "%10s" % "-")
             print("%-34s" % label + "".join(row))
+        for label, (_, u) in fems:
+            print("%-34s" % label + "".join("%10.2f" % max(u) for _ in a.times))
         if a.dem_ev:
             print("%-34s" % "DEM (EV), paper's text" + "".join(
                 "%10s" % ("%.1f" % DEM_EV_SURFACE[t] if t in DEM_EV_SURFACE else "-") for t in a.times))
@@ -72,6 +90,8 @@ def main():
             k, (d, u) = nearest(prof, t)
             if abs(k - t) < 0.5:
                 axq.plot(u, d, color="C%d" % i, ls="-" if i % 2 == 0 else "--", label=label)
+        for i, (label, (d, u)) in enumerate(fems):
+            axq.plot(u, d, color="k", ls=[":", "-.", "--"][i % 3], lw=1.5, label=label)
         if a.dem_ev and t in DEM_EV_SURFACE:
             axq.plot([DEM_EV_SURFACE[t]], [0.0], "k*", ms=12, label="DEM surface (EV), paper's text")
         axq.set_title("t = %g s" % t, fontsize=10)

@@ -1,0 +1,118 @@
+#!/usr/bin/env python3
+"""The finite-element mu(I) drum reference (tools/analysis/drum_mui_ref.py)
+checked against answers known without it (no sphseg run; about 15 s on 2 cores):
+
+- the rheology: the onset angles atan k(mu_s) of the two yield surfaces (19.3
+  and 20.9 deg) and mu(I0) = (mu_s + mu_d) / 2;
+- rigid rotation: a full disk, constant viscosity, no gravity, wall velocity
+  Omega x r. The exact solution u = Omega x r, p = const lies in the P2-P1
+  space: max |u - Omega x r| / (|Omega| R) < 1e-9 and max |p - mean p| < 1e-6 Pa
+  (round-off);
+- Poiseuille: the channel [0, 2] x [0, 1], eta = 1, the parabola on the
+  boundary: P2-P1 holds u = y (1 - y), p = -2 (x - 1) exactly: errors < 1e-10;
+- manufactured solution with variable viscosity (eta = 1 + x,
+  u = (sin pi x cos pi y, -cos pi x sin pi y), p = cos pi x cos pi y) on 8x8
+  and 16x16 meshes: the L2 orders of u and p against Taylor-Hood's theory (3
+  and 2), u >= 2.7 and p >= 1.8;
+- the Bagnold layer: the mu(I) flow down a plane inclined at 23 deg
+  (drucker_prager; 27 deg for mu_I), 5 mm deep, in a periodic strip solved with
+  the drum's own machinery (Newton, free surface u_y = 0 with the reaction
+  gauge), against the analytic u = (2/3) I_theta sqrt(rho g cos / rho_s) / d
+  (h^1.5 - (h - y)^1.5), k(mu(I_theta)) = tan theta: max error < 1 % of the
+  surface speed (the (h - y)^1.5 singularity limits P2 to order 1.5), the FE
+  pressure the lithostatic rho g cos theta (h - y) to 1e-6, Newton <= 12
+  iterations;
+- a coarse drum (h 1.0 / 3.0 mm) at theta 21.3 deg: the discrete torque
+  identity T_wall + T_g + M = 0 (the rigid-rotation test field, exact for
+  consistent reactions) to 1e-6 |T_g|; mass conservation through the
+  mid-chord (flux above the u_x = 0 point = flux below) to 2 %; the bed's
+  pressure the lithostatic rho g cos theta (y_s - y) to 2 %; the two
+  evaluations of the surface moment (consistent reactions, pointwise
+  sigma_yy) agree to 1 % of |T_g|; the surface speed
+  within 5 % of the fine study's 0.080 m/s (tools/analysis/drum_mui_ref.py,
+  meshes 1 and 2, this tool's own converged answer: a regression guard, not an
+  independent reference).
+
+    /usr/bin/python3 -m tests.test_drum_mui_ref [--sphseg IGNORED --work IGNORED]
+"""
+import argparse
+import sys
+import time
+
+import numpy as np
+
+from tools.analysis import drum_mui_ref as m  # noqa: E402
+
+FAILS = []
+
+
+def check(name, value, tol, ok, ref):
+    print("%s %s: %.3e (tolerance %s; reference: %s)" % ("PASS" if ok else "FAIL", name, value, tol, ref))
+    if not ok:
+        FAILS.append(name)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--sphseg", default=None, help="ignored (the runner passes it)")
+    ap.add_argument("--work", default=None, help="ignored")
+    ap.parse_known_args()
+    t0 = time.time()
+
+    # the rheology, against values known without the module: a layer starts to flow at
+    # atan k(mu_s), 19.3 deg for drucker_prager (the paper's k_mu, eq. 2.12; the drum scenes'
+    # comment) and 20.9 deg for mu_I (Pouliquen 1999, h_stop of these glass beads); mu(I) at
+    # I = I0 is (mu_s + mu_d) / 2 (Jop, Forterre & Pouliquen 2006)
+    for yld, onset in (("drucker_prager", 19.3), ("mu_I", 20.9)):
+        th = np.degrees(np.arctan(m.k_of_mu(m.MU_S, yld)))
+        check("onset angle atan k(mu_s), %s (deg)" % yld, th, "%.1f +- 0.05" % onset, abs(th - onset) < 0.05,
+              "paper eq. 2.12 / Pouliquen 1999")
+    p, d = 123.0, 4.0e-4
+    mu_half = float(m.mu_of(m.I0 * np.sqrt(p / m.RHO_S) / d, p, d))
+    check("mu(I0) - (mu_s + mu_d)/2", abs(mu_half - 0.5 * (m.MU_S + m.MU_D)), "1e-12",
+          abs(mu_half - 0.5 * (m.MU_S + m.MU_D)) < 1e-12, "Jop, Forterre & Pouliquen 2006")
+
+    eu, ep = m.rigid_disk(h=0.004)
+    check("rigid rotation, max|u - Omega x r|/(|Omega| R)", eu, "1e-9", eu < 1e-9, "exact, in the P2 space")
+    check("rigid rotation, max|p - mean p| (Pa)", ep, "1e-6", ep < 1e-6, "exact p = const")
+
+    eu, ep = m.poiseuille(4)
+    check("Poiseuille, max nodal velocity error", eu, "1e-10", eu < 1e-10, "exact parabola, in P2")
+    check("Poiseuille, max nodal pressure error", ep, "1e-10", ep < 1e-10, "exact linear p, in P1")
+
+    e8, e16 = m.manufactured(8), m.manufactured(16)
+    ou, op = np.log2(e8[0] / e16[0]), np.log2(e8[1] / e16[1])
+    print("     manufactured L2 errors: u %.3e -> %.3e, p %.3e -> %.3e" % (e8[0], e16[0], e8[1], e16[1]))
+    check("manufactured (eta = 1 + x), L2 order of u", ou, ">= 2.7", ou >= 2.7, "Taylor-Hood theory 3")
+    check("manufactured (eta = 1 + x), L2 order of p", op, ">= 1.8", op >= 1.8, "Taylor-Hood theory 2")
+
+    for yld, th in (("drucker_prager", 23.0), ("mu_I", 27.0)):
+        err, es, epp, its, ok = m.bagnold(theta_deg=th, ny=16, yld=yld)
+        check("Bagnold %s %.0f deg, max|u - u_exact|/u_s" % (yld, th), err, "1e-2", err < 1e-2 and ok,
+              "analytic Bagnold profile")
+        check("Bagnold %s, surface speed relative error" % yld, es, "1e-2", es < 1e-2, "analytic Bagnold profile")
+        check("Bagnold %s, max|p - rho g cos (h - y)|/p_max" % yld, epp, "1e-6", epp < 1e-6, "lithostatic (exact)")
+        check("Bagnold %s, Newton iterations" % yld, its, "<= 12", its <= 12, "quadratic convergence")
+
+    dr = m.Drum(1.0e-3, 3.0e-3)
+    o = m.drum_solve(dr, 21.3, gdot_min=1e-2)
+    print("     coarse drum: %d elements, u_surf %.4f m/s, delta %.2f mm, T_wall %.4f, T_g %.4f, M %.2e / %.2e, "
+          "its %d" % (o["elems"], o["speed"], o["delta"] * 1e3, o["T_wall"], o["T_g"], o["M"], o["M_pt"], o["its"]))
+    check("drum, converged", float(o["ok"]), "True", o["ok"], "Newton to du/u < 1e-6")
+    r = abs(o["resid"]) / abs(o["T_g"])
+    check("drum, |T_wall + T_g + M| / |T_g|", r, "1e-6", r < 1e-6, "discrete torque identity")
+    fq = abs(o["q_layer"] - o["q_bed"]) / o["q_layer"]
+    check("drum, mid-chord flux above vs below u_x = 0", fq, "2e-2", fq < 2e-2, "mass conservation")
+    check("drum, bed pressure vs lithostatic", o["pdev"], "2e-2", o["pdev"] < 2e-2, "rho g cos theta (y_s - y)")
+    dm = abs(o["M"] - o["M_pt"]) / abs(o["T_g"])
+    check("drum, |M(reactions) - M(pointwise)| / |T_g|", dm, "1e-2", dm < 1e-2, "the same moment two ways")
+    ds = abs(o["speed"] / 0.080 - 1)
+    check("drum, surface speed vs the fine study's 0.080 m/s", ds, "5e-2", ds < 5e-2,
+          "this tool's mesh-converged value (regression guard)")
+
+    print("%d checks failed; %.0f s" % (len(FAILS), time.time() - t0))
+    return 1 if FAILS else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
