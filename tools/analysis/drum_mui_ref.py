@@ -90,6 +90,7 @@ depth against d. The torque balance sets theta*.
 
   /usr/bin/python3 -m tools.analysis.drum_mui_ref                 # meshes 1 and 2 x 2 gdot_min (about 15 min on 2 cores)
   /usr/bin/python3 -m tools.analysis.drum_mui_ref --rpm 10 --angles 21.5 22 22.5 23 --gdot-min 1e-3
+  /usr/bin/python3 -m tools.analysis.drum_mui_ref --fill 0.591 --d 0.0004725 --angles 20.5 21 21.5 22   # the EN drum
   /usr/bin/python3 -m tools.analysis.drum_mui_ref --theta 21.3 --meshes 1 --gdot-min 1e-3 --profile p.csv
   /usr/bin/python3 -m tools.analysis.drum_mui_ref --yield mu_I --angles 23 24 25 26 27
 
@@ -890,6 +891,8 @@ def main(argv=None):
     ap.add_argument("--eta-max", type=float, default=1e12, help="viscosity cap, Pa s")
     ap.add_argument("--d", type=float, default=D_GRAIN, help="grain diameter, m")
     ap.add_argument("--rpm", type=float, default=RPM, help="the wall's rate, rev/min, clockwise (default 5)")
+    ap.add_argument("--fill", type=float, default=FILL,
+                    help="filling level R_f = (H + R) / 2R (default 0.42, the EV drum; the EN drum's is 0.591)")
     ap.add_argument("--inertia", action="store_true", help="add rho u_old . grad u (Picard)")
     ap.add_argument("--pressure", choices=("lithostatic", "coupled"), default="lithostatic",
                     help="the p in eta: rho g cos(theta) (y_s - y) (default), or the FE pressure (see the docstring)")
@@ -906,14 +909,14 @@ def main(argv=None):
         angles = [20.5, 21.0, 21.3, 21.6, 22.0, 22.5] if a.yld == "drucker_prager" else [24.0, 25.0, 26.0, 27.0, 28.0]
     meshes = [(a.h_fine, a.h_coarse or 4 * a.h_fine)] if a.h_fine else [MESHES[k] for k in a.meshes]
     print("drum mu(I) reference: R %.4f m, y_s %.4f m, %.1f rpm clockwise, rho %.0f, rho_s %.0f, d %.3g m, "
-          "yield %s, inertia %s, p in eta %s" % (R, YS, a.rpm, RHO, RHO_S, a.d, a.yld, "on" if a.inertia else "off",
+          "yield %s, inertia %s, p in eta %s" % (R, (2 * a.fill - 1) * R, a.rpm, RHO, RHO_S, a.d, a.yld, "on" if a.inertia else "off",
                                              a.pressure))
     print("u_surf m/s, delta mm, q m^2/s, torques N m/m (ccw +), p-dev = max|p - p_lith|/p_lith max in the bed")
     summary = []
     T0 = time.time()
     for hf, hc in meshes:
         t = time.time()
-        drum = Drum(hf, hc, omega=-a.rpm * 2 * np.pi / 60)
+        drum = Drum(hf, hc, ys=(2 * a.fill - 1) * R, omega=-a.rpm * 2 * np.pi / 60)
         print("\nmesh h_fine %.2f mm h_coarse %.2f mm: %d elements, %d P2 nodes, %d dofs (%.1f s)"
               % (hf * 1e3, hc * 1e3, len(drum.S.tris), drum.nodes, drum.S.ndof, time.time() - t))
         for gm in a.gdot_min:
