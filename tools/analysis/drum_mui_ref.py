@@ -249,7 +249,6 @@ class Space:
         inv = inv.ravel()
         self.edges = edges
         self.bedges = edges[cnt == 1]  # boundary edges (geometric)
-        ne = len(edges)
         self.X = np.vstack([pts, 0.5 * (pts[edges[:, 0]] + pts[edges[:, 1]])])  # node coordinates
         self.enodes_geo = np.c_[tris, nv + inv.reshape(3, E).T]  # (E, 6): v0 v1 v2 m01 m12 m20
         # dof identification (periodic): vertices through vmap, midpoints through their mapped edge
@@ -280,7 +279,6 @@ class Space:
         self._build_structure()
 
     def _build_structure(self):
-        E = len(self.tris)
         N = self.N
         vd = np.c_[self.enodes, N + self.enodes]  # (E, 12) velocity dofs
         rows = np.repeat(vd, 12, axis=1).ravel()
