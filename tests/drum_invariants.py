@@ -2,7 +2,7 @@
 tests/validate_drum3d.py, 3D), printed as ok/FAIL lines by Checks."""
 import numpy as np
 
-from tools.analysis import snap
+from tools.analysis import drum_analysis, snap
 
 
 class Checks:
@@ -89,8 +89,7 @@ def omega_of(x, v, vol):
 def drum_omega(par):
     """The drum's angular velocity from the used parameters, rad/s
     (counter-clockwise > 0)."""
-    w = par["Walls"]
-    return (1 if w["direction"] == "counterclockwise" else -1) * float(w["rpm"]) * 2 * np.pi / 60
+    return drum_analysis.drum_wall(par)[1]
 
 
 def kmu(mu):

@@ -110,6 +110,9 @@ import scipy.sparse.linalg as spla
 from scipy.optimize import brentq
 from scipy.spatial import Delaunay
 
+from tools.analysis.inertial_range import kmu  # noqa: E402
+from tools.studies import chute_study  # noqa: E402
+
 # the drum of inputs/drum_2d_EV.yml and the Table 1 material
 R, FILL, RPM, G = 0.035, 0.42, 5.0, 9.81
 RHO, RHO_S, D_GRAIN = 1500.0, 2500.0, 0.375e-3
@@ -125,8 +128,9 @@ QW = np.array([0.225] + [0.132394152788506] * 3 + [0.125939180544827] * 3)
 
 
 def k_of_mu(mu, yld):
-    """sqrt(J2) / p for a friction coefficient mu: drucker_prager 3 mu / sqrt(9 + 12 mu^2), mu_I mu."""
-    return 3 * mu / np.sqrt(9 + 12 * mu * mu) if yld == "drucker_prager" else mu
+    """sqrt(J2) / p for a friction coefficient mu: drucker_prager k_mu = 3 mu / sqrt(9 + 12 mu^2)
+    (inertial_range.kmu), mu_I mu."""
+    return kmu(mu) if yld == "drucker_prager" else mu
 
 
 def mu_of(gdot, p, d=D_GRAIN):
@@ -135,18 +139,6 @@ def mu_of(gdot, p, d=D_GRAIN):
     with np.errstate(invalid="ignore", divide="ignore"):
         f = np.where(a + gdot > 0, gdot / (a + gdot), 1.0)
     return MU_S + (MU_D - MU_S) * f
-
-
-def I_of_mu(mu):
-    """The inverse of mu(I) = mu_s + (mu_d - mu_s) I / (I0 + I)."""
-    return I0 * (mu - MU_S) / (MU_D - mu)
-
-
-def mu_of_k(k, yld):
-    """The inverse of k_of_mu."""
-    if yld == "mu_I":
-        return k
-    return 3 * k / np.sqrt(9 - 12 * k * k)  # k^2 (9 + 12 mu^2) = 9 mu^2
 
 
 # ---------------------------------------------------------------- meshes
@@ -770,10 +762,9 @@ def manufactured(n):
 
 def bagnold_exact(y, h, theta_deg, yld="drucker_prager", d=D_GRAIN):
     """The steady mu(I) layer of depth h on a plane inclined at theta (u = 0 at y = 0):
-    u = (2/3) I sqrt(rho g cos / rho_s) / d (h^1.5 - (h - y)^1.5), k(mu(I)) = tan theta."""
-    th = np.radians(theta_deg)
-    I = I_of_mu(mu_of_k(np.tan(th), yld))
-    return 2 / 3 * I * np.sqrt(RHO * G * np.cos(th) / RHO_S) / d * (h ** 1.5 - (h - y) ** 1.5)
+    the chute study's analytic Bagnold profile (tools/studies/chute_study.py bagnold, the
+    reference of tests/validate_chute.py; same Table 1 material)."""
+    return chute_study.bagnold(y, theta_deg, h, chute_study.READING[yld], d)
 
 
 def bagnold(theta_deg=23.0, h=0.005, ny=16, nx=4, yld="drucker_prager", gdot_min=1e-3, tol=1e-8, method="newton",
