@@ -70,6 +70,8 @@ run_one extremes bash tests/test_extremes.sh "$BUILD/sphseg"
 run_one restart_guard "$PYTHON" -m tests.test_restart_guard --sphseg "$BUILD/sphseg" --work "$tmp/restart_guard"
 # issue 30: the finite-element mu(I) drum reference against exact and analytic answers (no sphseg run)
 run_one drum_mui_ref "$PYTHON" -m tests.test_drum_mui_ref
+# issue 30: how the drum tools read a mid-chord (surface speeds, mass depth, the layer's fluxes) on known beds
+run_one drum_readers "$PYTHON" -m tests.test_drum_readers --work "$tmp/drum_readers"
 for v in tests/validate_*.py; do
     case " ${vals[*]} " in *" $v "*) ;; *) vals+=("$v") ;; esac
 done

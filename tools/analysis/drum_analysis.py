@@ -6,7 +6,8 @@ drum_3d.yml), after paper §6:
 
 prints, per snapshot time asked (nearest snapshot): the dynamic angle of the
 free surface and how flat it is (rolling regime), the largest speed on the
-mid-chord (the surface speed), the segregation index (below), and writes
+mid-chord (the surface speed), the segregation index (below), the top grains'
+speed, and writes
   PREFIX_midchord.png  speed, shear rate and C along the mid-chord (figs 19-21, 26)
   PREFIX_rates.png     the three concentration-rate contributions along the
                        mid-chord (figs 28-29): C1 = -F grad_g V,
@@ -35,7 +36,14 @@ from the line, in dr. Mid-chord: from M, the foot of the perpendicular from
 the drum centre to the surface line, along the inward normal of the line
 down to the drum wall; depth d_mc = distance from M, normalised by R (the
 paper's normalised mid-chord depth). Fields on the mid-chord are Shepard
-interpolations of the material particles within 2h.
+interpolations of the material particles within 2h. Surface speed ("max |u|
+mc"): the largest interpolated speed on the mid-chord. It averages particles
+below the surface over 2h, so it reads low by an amount that falls with dr
+(tools/analysis/drum_fe_read.py: 3.2, 1.2, 0.5 % of the FE reference's at dr
+0.5, 0.25, 0.125 mm, h = 1.5 dr). "top grains u": the mean speed of the
+surface grains (the highest particle of each bin, those the line is fitted to)
+within 0.1 R of M along the line; it reads the speed at the top row's depth,
+dr / 2.
 Segregation index: (<r> - <r>_C) / <r>, with <r> the mean distance of the
 material particles from the bed's centroid and <r>_C the same mean weighted
 by C: positive when small grains gather in the core (figs 24-25), 0 when
@@ -124,13 +132,12 @@ class Drum:
         lo, hi = x[:, 0].min(), x[:, 0].max()
         edges = np.arange(lo, hi + 2 * dr, 2 * dr)
         k = np.digitize(x[:, 0], edges)
-        bx, by = [], []
+        top = []
         for b in np.unique(k):
             sel = k == b
-            j = np.argmax(np.where(sel, x[:, 1], -np.inf))
-            bx.append(x[j, 0])
-            by.append(x[j, 1])
-        bx, by = np.array(bx), np.array(by)
+            top.append(int(np.argmax(np.where(sel, x[:, 1], -np.inf))))
+        self.top = np.array(top)  # the surface grains: the highest particle of each bin
+        bx, by = x[self.top, 0], x[self.top, 1]
         mid = 0.5 * (lo + hi)
         core = np.abs(bx - mid) <= 0.3 * (hi - lo)
         a, b = np.polyfit(bx[core], by[core], 1)
@@ -168,6 +175,16 @@ class Drum:
         """The largest speed on the mid-chord, m/s."""
         _, pts = self.midchord()
         return float(np.nanmax(self.interp(pts, self.speed)))
+
+    def surface_grain_speed(self, window=0.1):
+        """The mean speed of the surface grains (the particles the surface line is fitted to) within
+        window R of M along the line, m/s: what a camera tracking the top grains reads. Unlike
+        surface_speed it averages no particles below the surface, so its bias is the top row's depth,
+        dr / 2 times the shear rate there (tools/analysis/drum_fe_read.py)."""
+        t = np.array([1.0, self.slope]) / np.hypot(1.0, self.slope)
+        s = (self.x[self.top] - self.M) @ t
+        near = self.top[np.abs(s) <= window * self.R]
+        return float(np.mean(self.speed[near])) if len(near) else float("nan")
 
     def segregation_index(self):
         c = np.average(self.x, axis=0, weights=self.vol)
@@ -482,11 +499,12 @@ def main():
     if a.times:
         paths = list(dict.fromkeys(pick(paths, a.times)))  # a time past the last snapshot picks it once
     drums = [Drum(p, par, a.slab) for p in paths]
-    print("%8s %9s %10s %12s %12s %10s" % ("t (s)", "angle", "flatness", "max |u| mc", "seg index", "C range"))
+    print("%8s %9s %10s %12s %12s %10s %13s" % ("t (s)", "angle", "flatness", "max |u| mc", "seg index", "C range",
+                                                  "top grains u"))
     for d in drums:
-        print("%8.3f %8.2f° %8.2f dr %9.2f cm/s %12.4f %5.3f-%5.3f"
+        print("%8.3f %8.2f° %8.2f dr %9.2f cm/s %12.4f %5.3f-%5.3f %8.2f cm/s"
               % (d.t, d.angle, d.flatness, 100 * d.surface_speed(), d.segregation_index(),
-                 d.C.min(), d.C.max()))
+                 d.C.min(), d.C.max(), 100 * d.surface_grain_speed()))
     axs = []
     if paths and int(snap.read_snapshot(paths[0]).get("Dimension", 2)) == 3:
         axs = [Axial(p, par, a.zbins, a.endslab) for p in paths]

@@ -3,12 +3,37 @@
 the velocity along the free surface u_t(d) at depth d below it, the layer's
 thickness delta (the depth where u_t turns from downslope to the bed's
 upslope rotation), its downslope flux Q = integral of u_t over the layer, and
-the kinematic flux the turning bed feeds it, omega L^2 / 2 (L the half chord;
-a rigid bed in the rolling regime supplies exactly this through the
-mid-chord). If Q matches and delta shrinks with dr, the layer's thickness,
-not the supply, sets the surface speed.
+the flux a rigid bed would carry up through the mid-chord below the layer,
+omega (R^2 - (r_M + delta)^2) / 2 (r_M the surface's distance from the axis;
+in a steady rolling drum the layer carries down what the bed brings up), and
+omega L^2 / 2 (L the half chord: the same with delta -> 0). If Q matches and
+delta shrinks with dr, the layer's thickness, not the supply, sets the surface
+speed.
 
-  /usr/bin/python3 -m tools.analysis.drum_layer OUTDIR [OUTDIR ...] [--time T]
+With --stress CSV (2D drums): the stress state down the mid-chord, to hold
+against the mu(I) law point by point. Per depth (Shepard interpolations of the
+material particles, as drum_analysis): u_t, the pressure p = -tr sigma / 3,
+sqrt(J2), their ratio, the shear rate, C, I = gdot d_avg / sqrt(p / rho_s),
+the yield ratio k(mu(I)) that a particle on its yield surface would hold at
+that I (Material:yield), and the lithostatic pressure rho g cos(theta) z of a
+uniform layer, z = depth + dr / 2 (the top row's centres lie half a spacing
+below the material's edge), and phi, the particles' kernel-summed volume
+fraction sum_j V_j W_ij (1 where they hold their nominal volumes), from the
+particles of a strip |s| < 0.05 R about the mid-chord. A summary is printed at
+1-mm steps, with the net flux through the mid-chord twice: the integral of the
+interpolated u_t, and the strip's particles' own sum V u_t / width. In a
+steady drum both are 0; the first is not when the line fitted to the top
+grains runs below the material's surface (it starts the mid-chord there).
+
+It also writes CSV_particles.csv (CSV less .csv): the strip's particles
+against their mass depth zeta, the volume of the strip's material above them
+per width (half their own), in bins of dr: zeta, their mean depth below the
+line, u_t, p, sqrt(J2), the shear rate and their count. zeta is the depth
+below a flat surface holding the same material (the finite-element reference's
+depth, tools/analysis/drum_mui_ref.py), whatever the fitted line misses, and
+the profile's flux is the particles'.
+
+  /usr/bin/python3 -m tools.analysis.drum_layer OUTDIR [OUTDIR ...] [--time T] [--stress CSV]
 """
 import argparse
 import os
@@ -16,9 +41,11 @@ import os
 import numpy as np
 
 from tools.analysis import drum_analysis as da  # noqa: E402
+from tools.analysis import inertial_range as ir  # noqa: E402
 from tools.analysis import snap  # noqa: E402
 
 TRAPZ = getattr(np, "trapezoid", None) or np.trapz  # numpy 2 renamed it
+STRIP = 0.05  # --stress: half-width of the strip about the mid-chord, in R
 
 
 def layer(d):
@@ -33,27 +60,113 @@ def layer(d):
     k = np.argmax(ut < 0) if np.any(ut < 0) else len(ut) - 1
     delta = dep[k]
     Q = TRAPZ(ut[: k + 1], dep[: k + 1])
-    Mn, M2 = float(np.dot(d.M, d.n)), float(np.dot(d.M, d.M))
-    L2 = d.R ** 2 - (M2 - Mn * Mn)  # half chord^2: R^2 - (distance of the surface line from the centre)^2
-    return delta, Q, ut.max(), L2
+    rM = float(np.hypot(*d.M))  # M is the foot of the perpendicular from the axis
+    return delta, Q, ut.max(), d.R ** 2 - rM ** 2, d.R ** 2 - (rM + delta) ** 2
+
+
+def stress_profile(d, s, outdir, npts=400):
+    """The mid-chord columns of --stress (module doc), as a dict of arrays."""
+    P = ir.params(outdir)
+    par = d.par
+    mat = np.asarray(s["Kind"]) == snap.MATERIAL
+    S = np.asarray(s["Stress"])[mat]
+    p = -(S[:, 0] + S[:, 1] + S[:, 2]) / 3
+    dev = S[:, :3] + p[:, None]
+    tau = np.sqrt(0.5 * (dev ** 2).sum(1) + (S[:, 3:] ** 2).sum(1))
+    frac, pts = d.midchord(npts)
+    t = np.array([d.n[1], -d.n[0]])
+    ut = d.interp(pts, d.v @ t)
+    if np.nanmean(ut[: len(ut) // 10]) < 0:
+        ut = -ut
+    o = {"depth": frac * d.R, "u_t": ut, "p": d.interp(pts, p), "sqrtJ2": d.interp(pts, tau),
+         "gdot": d.interp(pts, d.gdot), "C": d.interp(pts, d.C)}
+    dav = P["d_small"] * o["C"] + P["d_large"] * (1 - o["C"])
+    pp = np.maximum(o["p"], 1e-12)
+    o["ratio"] = o["sqrtJ2"] / pp
+    o["I"] = o["gdot"] * dav / np.sqrt(pp / P["rho_s"])
+    mu = P["mu_s"] + (P["mu_d"] - P["mu_s"]) * o["I"] / (o["I"] + P["I0"])
+    o["k_mu_I"] = mu if P["yield"] == "mu_I" else ir.kmu(mu)
+    ph = par.get("Physics", {})
+    g = float(np.hypot(*np.asarray(ph.get("gravity", [0, -9.81, 0]), float)[:2]))
+    rho = float(ph.get("rho", 1500.0))
+    o["p_lith"] = rho * g * np.cos(np.radians(d.angle)) * (o["depth"] + 0.5 * d.dr)
+    # the particles themselves, in a strip |s| < STRIP R about the mid-chord: their kernel-summed volume
+    # fraction phi_i = sum_j V_j W_ij (Wendland C2, support 2 h; 1 where they hold their nominal volumes,
+    # below 1 within 2 h of the surface), averaged in depth bins of 2 dr, and the flux they carry through it
+    rel = d.x - d.M
+    s_along, z = rel @ t, rel @ d.n
+    strip = np.where(np.abs(s_along) < STRIP * d.R)[0]
+    phi = np.empty(len(strip))
+    for q, i in enumerate(strip):
+        j = d.tree.query_ball_point(d.x[i], 2 * d.h)
+        r = np.hypot(*(d.x[j] - d.x[i]).T) / d.h
+        phi[q] = np.sum(d.vol[j] * (1 - r / 2) ** 4 * (2 * r + 1)) * 7 / (4 * np.pi * d.h ** 2)
+    edges = np.arange(-2 * d.dr, o["depth"][-1] + 2 * d.dr, 2 * d.dr)
+    k = np.digitize(z[strip], edges)
+    zc = np.array([z[strip][k == b].mean() for b in np.unique(k)])
+    pc = np.array([phi[k == b].mean() for b in np.unique(k)])
+    o["phi"] = np.interp(o["depth"], zc, pc)
+    vt = d.v @ t * (1 if np.nanmean(d.interp(pts[:8], d.v @ t)) >= 0 else -1)
+    W = 2 * STRIP * d.R
+    o["flux_particles"] = np.full(npts, float(np.sum(d.vol[strip] * vt[strip]) / W))
+    # the strip's particles against their mass depth zeta: the volume of the strip's material above
+    # them per width (half their own), which is the FE's depth below its flat surface whatever the
+    # line fitted to the top grains misses; averaged in bins of dr
+    order = strip[np.argsort(z[strip])]
+    zeta = (np.cumsum(d.vol[order]) - 0.5 * d.vol[order]) / W
+    b = np.floor(zeta / d.dr).astype(int)
+    part = {"zeta": [], "z": [], "u_t": [], "p": [], "sqrtJ2": [], "gdot": [], "n": []}
+    for k in np.unique(b):
+        sel = order[b == k]
+        for key, val in (("zeta", zeta[b == k]), ("z", z[sel]), ("u_t", vt[sel]), ("p", p[sel]), ("sqrtJ2", tau[sel]),
+                         ("gdot", d.gdot[sel])):
+            part[key].append(float(np.mean(val)))
+        part["n"].append(len(sel))
+    o["particles"] = {k: np.array(v) for k, v in part.items()}
+    return o
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("outdirs", nargs="+")
     ap.add_argument("--time", type=float, default=None, help="snapshot nearest this time (default: the last)")
+    ap.add_argument("--stress", help="2D drums: write the stress state down the mid-chord to this CSV (one run: "
+                    "this name; several: RUN_ prefixed)")
     a = ap.parse_args()
-    print("%-28s %6s %7s %9s %8s %10s %10s %6s" % ("run", "t (s)", "dr (mm)", "delta (mm)", "delta/dr",
-                                                 "Q (m^2/s)", "w L^2/2", "u_s cm/s"))
+    print("%-28s %6s %7s %9s %8s %10s %10s %10s %6s" % ("run", "t (s)", "dr (mm)", "delta (mm)", "delta/dr",
+                                                       "Q (m^2/s)", "bed below", "w L^2/2", "u_s cm/s"))
     for o in a.outdirs:
         par = da.used_params(o)
         paths = snap.list_snapshots(o)
         p = paths[-1] if a.time is None else da.pick(paths, [a.time])[0]
-        d = da.Drum(p, par)
-        delta, Q, us, L2 = layer(d)
+        s = snap.read_snapshot(p)
+        d = da.Drum(p, par, snapshot=s)
+        delta, Q, us, L2, B2 = layer(d)
         w = abs(da.drum_wall(par)[1])
-        print("%-28s %6.2f %7.2f %9.2f %8.1f %10.3e %10.3e %6.2f" % (
-            os.path.basename(o.rstrip("/")), d.t, 1e3 * d.dr, 1e3 * delta, delta / d.dr, Q, w * L2 / 2, 100 * us))
+        run = os.path.basename(o.rstrip("/"))
+        print("%-28s %6.2f %7.2f %9.2f %8.1f %10.3e %10.3e %10.3e %6.2f" % (
+            run, d.t, 1e3 * d.dr, 1e3 * delta, delta / d.dr, Q, w * B2 / 2, w * L2 / 2, 100 * us))
+        if a.stress:
+            sp = stress_profile(d, s, o)
+            path = a.stress if len(a.outdirs) == 1 else os.path.join(os.path.dirname(a.stress) or ".",
+                                                                     run + "_" + os.path.basename(a.stress))
+            pp = sp.pop("particles")
+            np.savetxt(path[:-4] + "_particles.csv" if path.endswith(".csv") else path + "_particles",
+                       np.c_[tuple(pp.values())], delimiter=",", header=",".join(pp), comments="", fmt="%.6g")
+            keys = list(sp)
+            np.savetxt(path, np.c_[tuple(sp[k] for k in keys)], delimiter=",", header=",".join(keys),
+                       comments="", fmt="%.6g")
+            print("  %6s %8s %8s %8s %8s %8s %8s %8s %8s %8s" % ("z (mm)", "u_t cm/s", "p (Pa)", "p_lith", "J2^.5/p",
+                                                                   "k(mu(I))", "gdot", "I", "C", "phi"))
+            for z in np.arange(0.0, 1e3 * delta + 1.0, 1.0):
+                v = {k: np.interp(1e-3 * z, sp["depth"], sp[k]) for k in keys}
+                print("  %6.1f %8.3f %8.2f %8.2f %8.4f %8.4f %8.2f %8.4f %8.3f %8.3f" % (
+                    z, 100 * v["u_t"], v["p"], v["p_lith"], v["ratio"], v["k_mu_I"], v["gdot"], v["I"], v["C"],
+                    v["phi"]))
+            ok = ~np.isnan(sp["u_t"])
+            print("  net flux through the mid-chord: interpolated %.3e m^2/s, the particles of the strip %.3e "
+                  "(0 in a steady drum)" % (TRAPZ(sp["u_t"][ok], sp["depth"][ok]), sp["flux_particles"][0]))
+            print("  wrote %s" % path)
 
 
 if __name__ == "__main__":

@@ -25,7 +25,7 @@ surface, and a drum's bed stays there as it turns, while only its surface
 layer shears (2D EV drum at 8 s: gdot 1-10 1/s and 2 cm/s off the rigid
 rotation in the layer; below 1 1/s and 0.3 mm/s off it elsewhere).
 
-  python3 -m tools.analysis.inertial_range window [--mu-s 0.382 --mu-d 0.682 --I0 0.279]
+  python3 -m tools.analysis.inertial_range window [--mu-s 0.382 --mu-d 0.682 --I0 0.279] [--pr-alpha 1.9]
   python3 -m tools.analysis.inertial_range run OUTDIR [--from T] [--gdot-fraction 0.1]
 """
 import argparse
@@ -99,9 +99,30 @@ def inertial_numbers(s, P, gdot_fraction=0.1):
     return I[flowing], int(pos.sum())
 
 
+def partial_regularisation(mu_s, mu_d, I0, alpha):
+    """Barker & Gray's (2017) partially regularised law below the window's lower edge I_N1:
+    mu(I) = sqrt(alpha / ln(A / I)) with A = I_N1 exp(alpha / mu(I_N1)^2), continuous at I_N1 (as
+    alexjarosch/OpenFOAM-muI muIreg writes it). Returns (I_N1, A, mu(I_N1))."""
+    lo = window(mu_s, mu_d, I0)[0]
+    mu_lo = mu_s + (mu_d - mu_s) * lo / (lo + I0)
+    return lo, lo * math.exp(alpha / (mu_lo * mu_lo)), mu_lo
+
+
 def cmd_window(a):
     w = window(a.mu_s, a.mu_d, a.I0)
     print("mu_s %g, mu_d %g, I0 %g: well posed for %.4g < I < %.4g" % (a.mu_s, a.mu_d, a.I0, w[0], w[1]))
+    if a.pr_alpha:
+        lo, A, mu_lo = partial_regularisation(a.mu_s, a.mu_d, a.I0, a.pr_alpha)
+        print("partial regularisation (Barker & Gray 2017), alpha %g: mu = sqrt(alpha / ln(A / I)) below "
+              "I_N1 = %.4g, A = %.4g; mu(1e-4) = %.4f, mu(1e-6) = %.4f (mu_s %g)" % (
+                  a.pr_alpha, lo, A, math.sqrt(a.pr_alpha / math.log(A / 1e-4)),
+                  math.sqrt(a.pr_alpha / math.log(A / 1e-6)), a.mu_s))
+        print("  a steady uniform layer whose shear stress ratio is mu = tan(theta) (the mu_I yield surface) "
+              "flows at I = A exp(-alpha / mu^2):")
+        for th in a.angles:
+            m = math.tan(math.radians(th))
+            if m < mu_lo:
+                print("    %5.2f deg: I = %.3g" % (th, A * math.exp(-a.pr_alpha / (m * m))))
 
 
 def cmd_run(a):
@@ -136,6 +157,10 @@ def main(argv=None):
     w.add_argument("--mu-s", type=float, default=0.382)
     w.add_argument("--mu-d", type=float, default=0.682)
     w.add_argument("--I0", type=float, default=0.279)
+    w.add_argument("--pr-alpha", type=float, default=None, help="also Barker & Gray's (2017) partially "
+                   "regularised law with this alpha (theirs: 1.9)")
+    w.add_argument("--angles", type=float, nargs="+", default=[19.0, 20.0, 20.5, 20.9],
+                   help="slopes (deg) at which --pr-alpha reports the layer's I")
     r = sub.add_parser("run")
     r.add_argument("outdir")
     r.add_argument("--from", dest="t_from", type=float, default=0.0)

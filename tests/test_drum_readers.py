@@ -1,0 +1,124 @@
+#!/usr/bin/env python3
+"""How the drum tools read a mid-chord (tools/analysis/drum_analysis.py,
+drum_layer.py, drum_fe_read.py), checked on beds whose answer is known
+without them (no sphseg run; a few seconds):
+
+A layer u(z) = U (1 - (z / delta)^1.5) (Bagnold's shape, U 8 cm/s, delta 6 mm,
+0 below), p(z) = rho g cos(theta) z, laid by drum_fe_read.lattice_drum on a
+lattice of spacing dr in the 35-mm drum's segment below a surface at 21.2 deg,
+5.6 mm from the axis (the EV drum's), rows parallel to it, the top row's
+centres dr / 2 below it. dr 0.7 and 0.5 mm put exactly W / dr columns in the
+strip of width W = 0.1 R of drum_layer, so a row of the strip holds W dr of
+material, as a disordered bed does on average.
+
+- drum_analysis: the fitted angle is the surface's (1e-9 deg); the top grains'
+  speed is u(dr / 2) exactly (round-off: they are the top row); the largest
+  Shepard-interpolated speed reads below u(0), by less at the finer dr (the
+  reading's bias of docs/granular.md, which drum_fe_read measures);
+- drum_layer.layer: the squared half chord is R^2 - r_M^2 and the squared
+  radius below the layer R^2 - (r_M + delta_read)^2 (r_M the fitted line's
+  distance from the axis, 5.6 mm + dr / 2), to 1e-12 (the formula before this
+  test returned R^2);
+- drum_layer's mass depth zeta: the strip's rows come out at zeta = (k + 1/2)
+  dr, the depth below the material's edge (1e-9 of dr), each with u(zeta) and
+  p(zeta) (1e-9 relative); the particles' flux is the row sum of u dr, and the
+  interpolated mid-chord profile, which starts at the fitted line, carries less
+  (it misses the top half row);
+- the lithostatic pressure of --stress (depth + dr / 2) matches the
+  interpolated p inside the bed (depth 3-5 mm, 1e-3 relative).
+
+    /usr/bin/python3 -m tests.test_drum_readers [--sphseg IGNORED --work IGNORED]
+"""
+import argparse
+import os
+import sys
+import tempfile
+
+import numpy as np
+
+from tools.analysis import drum_analysis as da  # noqa: E402
+from tools.analysis import drum_fe_read as fr  # noqa: E402
+from tools.analysis import drum_layer as dl  # noqa: E402
+
+FAILS = []
+R, YS, THETA, U, DELTA, RHO, G = 0.035, 0.0056, 21.2, 0.08, 0.006, 1500.0, 9.81
+
+
+def check(name, value, tol, ok, ref):
+    print("%s %s: %.3e (tolerance %s; reference: %s)" % ("PASS" if ok else "FAIL", name, value, tol, ref))
+    if not ok:
+        FAILS.append(name)
+
+
+def profile():
+    z = np.linspace(0.0, R - YS, 4001)
+    u = np.where(z < DELTA, U * (1 - np.clip(z / DELTA, 0, 1) ** 1.5), 0.0)
+    p = RHO * G * np.cos(np.radians(THETA)) * z
+    return z, u, p
+
+
+def params_dir(work):
+    os.makedirs(work, exist_ok=True)
+    with open(os.path.join(work, "used_params.yml"), "w") as f:
+        f.write("Material:\n  mu_s: 0.382\n  mu_d: 0.682\n  I0: 0.279\n  rho_s: 2500\n  yield: drucker_prager\n"
+                "Grains:\n  d_small: 0.00025\n  d_large: 0.0005\nPhysics:\n  rho: %g\n  gravity: [0, %g, 0]\n"
+                % (RHO, -G))
+    return work
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--sphseg", default=None, help="ignored (the runner passes it)")
+    ap.add_argument("--work", default=None, help="directory for the run parameters (default: a temporary one)")
+    a = ap.parse_known_args()[0]
+    work = params_dir(a.work or tempfile.mkdtemp(prefix="drum_readers_"))
+    z, u, p = profile()
+    bias = {}
+    for dr in (0.0007, 0.0005):
+        s, par = fr.lattice_drum(z, u, THETA, R, dr, 1.5, p=p)
+        d = da.Drum(None, par, snapshot=s)
+        tag = "dr %.1f mm" % (1e3 * dr)
+        check(tag + " fitted angle - theta (deg)", abs(d.angle - THETA), 1e-9, abs(d.angle - THETA) < 1e-9,
+              "the lattice's rows")
+        ug = d.surface_grain_speed()
+        uh = np.interp(0.5 * dr, z, u)
+        check(tag + " top grains / u(dr/2) - 1", abs(ug / uh - 1), 1e-12, abs(ug / uh - 1) < 1e-12, "the top row")
+        bias[dr] = d.surface_speed() / U - 1
+        check(tag + " Shepard reading / u(0) - 1", bias[dr], "in (-0.1, 0)", -0.1 < bias[dr] < 0,
+              "a one-sided average below the surface")
+        delta, Q, us, L2, B2 = dl.layer(d)
+        rM = YS + 0.5 * dr
+        eL = abs(L2 - (R * R - rM * rM)) / (R * R)
+        check(tag + " half chord^2", eL, 1e-12, eL < 1e-12, "R^2 - r_M^2")
+        eB = abs(B2 - (R * R - (rM + delta) ** 2)) / (R * R)
+        check(tag + " radius^2 below the layer", eB, 1e-12, eB < 1e-12, "R^2 - (r_M + delta)^2")
+        sp = dl.stress_profile(d, s, work)
+        pp = sp["particles"]
+        nrow = min(len(pp["zeta"]), int(0.9 * DELTA / dr))
+        k = np.arange(nrow)
+        ez = np.max(np.abs(pp["zeta"][:nrow] - (k + 0.5) * dr)) / dr
+        check(tag + " zeta of the rows - (k + 1/2) dr, in dr", ez, 1e-9, ez < 1e-9, "the lattice's rows")
+        zr = (k + 0.5) * dr
+        eu = np.max(np.abs(pp["u_t"][:nrow] - np.interp(zr, z, u))) / U
+        check(tag + " u_t(zeta) - u", eu, 1e-9, eu < 1e-9, "the laid profile")
+        ep = np.max(np.abs(pp["p"][1:nrow] / np.interp(zr[1:], z, p) - 1))
+        check(tag + " p(zeta) / p - 1", ep, 1e-9, ep < 1e-9, "the laid pressure")
+        rows = np.sum(np.interp((np.arange(int(DELTA / dr) + 2) + 0.5) * dr, z, u)) * dr
+        fp = sp["flux_particles"][0]
+        check(tag + " particles' flux / row sum - 1", abs(fp / rows - 1), 1e-9, abs(fp / rows - 1) < 1e-9,
+              "sum over the rows of u dr")
+        ok = ~np.isnan(sp["u_t"])
+        fi = dl.TRAPZ(sp["u_t"][ok], sp["depth"][ok])
+        check(tag + " interpolated flux / particles' flux", fi / fp, "< 1", fi / fp < 1,
+              "the mid-chord starts at the fitted line, half a row down")
+        inb = (sp["depth"] > 0.003) & (sp["depth"] < 0.005)
+        el = np.max(np.abs(sp["p"][inb] / sp["p_lith"][inb] - 1))
+        check(tag + " interpolated p / lithostatic - 1 at 3-5 mm", el, 1e-3, el < 1e-3, "rho g cos(theta) (z + dr/2)")
+    check("reading bias shrinks with dr", abs(bias[0.0005]) / abs(bias[0.0007]), "< 1",
+          abs(bias[0.0005]) < abs(bias[0.0007]), "a support of 2 h = 3 dr")
+    print("test_drum_readers: %s" % ("FAIL: " + ", ".join(FAILS) if FAILS else "all checks passed"))
+    sys.exit(1 if FAILS else 0)
+
+
+if __name__ == "__main__":
+    main()

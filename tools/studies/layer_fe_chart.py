@@ -1,0 +1,86 @@
+#!/usr/bin/env python3
+"""The 2D drum's flowing layer against its mass depth: SPH at several spacings
+beside the finite-element mu(I) reference (docs/granular.md "The layer point by
+point").
+
+  /usr/bin/python3 -m tools.studies.layer_fe_chart --fe FE_prof.csv --png OUT.png \
+      --run "LABEL=A_particles.csv,B_particles.csv" [--run ...] [--d 0.000375] [--rho-s 2500]
+
+Each --run is one or more `drum_layer --stress` particle files (zeta, u_t, p,
+gdot, ...) whose profiles are averaged on a common zeta grid (several
+snapshots of one run). --fe is `drum_mui_ref --profile` (depth, u, p). Three
+panels against the depth zeta: the speed along the surface; the SPH's speed
+over the FE's less one; the SPH's inertial number I = gdot d / sqrt(p / rho_s)
+(d: the grain size, the FE's well-mixed 0.375 mm for a run without
+segregation) with the lower edge of mu(I)'s well-posed window (Barker et al.
+2015; tools/analysis/inertial_range.py) and the ill-posed band below it.
+"""
+import argparse
+import warnings
+
+import numpy as np
+
+from tools.analysis import inertial_range as ir  # noqa: E402
+
+
+def average(paths, grid):
+    cols = {}
+    for path in paths:
+        a = np.genfromtxt(path, delimiter=",", names=True)
+        for k in ("u_t", "p", "gdot"):
+            cols.setdefault(k, []).append(np.interp(grid, a["zeta"], a[k], left=np.nan, right=np.nan))
+    with warnings.catch_warnings():  # past a run's deepest bin every file is NaN
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return {k: np.nanmean(v, axis=0) for k, v in cols.items()}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--fe", required=True, help="drum_mui_ref --profile CSV")
+    ap.add_argument("--run", action="append", required=True, help="LABEL=CSV[,CSV...] (drum_layer particle files)")
+    ap.add_argument("--png", required=True)
+    ap.add_argument("--d", type=float, default=0.000375, help="grain size in I, m (default 0.000375)")
+    ap.add_argument("--rho-s", type=float, default=2500.0, help="grain density in I (default 2500)")
+    ap.add_argument("--zmax", type=float, default=0.009, help="deepest zeta drawn, m (default 0.009)")
+    a = ap.parse_args()
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fe = np.loadtxt(a.fe, delimiter=",", skiprows=1)
+    zf, uf = fe[:, 0], fe[:, 1]
+    grid = np.linspace(0.0, a.zmax, 181)
+    lo, _ = ir.window(0.382, 0.682, 0.279)
+    fig, ax = plt.subplots(1, 3, figsize=(13, 4.6), sharey=True)
+    ax[0].plot(100 * uf[zf <= a.zmax], 1e3 * zf[zf <= a.zmax], "k-", lw=2, label="FE mu(I)")
+    for spec in a.run:
+        label, files = spec.split("=", 1)
+        r = average(files.split(","), grid)
+        ok = ~np.isnan(r["u_t"])
+        ax[0].plot(100 * r["u_t"][ok], 1e3 * grid[ok], ".-", ms=3, label=label)
+        ufe = np.interp(grid, zf, uf)
+        rel = np.where(np.abs(ufe) > 0.01 * np.abs(uf).max(), r["u_t"] / ufe - 1, np.nan)
+        ax[1].plot(100 * rel[ok], 1e3 * grid[ok], ".-", ms=3, label=label)
+        I = r["gdot"] * a.d / np.sqrt(np.maximum(r["p"], 1e-9) / a.rho_s)
+        ax[2].semilogx(I[ok], 1e3 * grid[ok], ".-", ms=3, label=label)
+    ax[0].set_xlabel("speed along the surface (cm/s)")
+    ax[0].set_ylabel("mass depth zeta (mm)")
+    ax[0].axvline(0, color="0.7", lw=0.8)
+    ax[1].set_xlabel("SPH / FE - 1 (%)")
+    ax[1].axvline(0, color="0.7", lw=0.8)
+    ax[1].set_xlim(-25, 15)
+    ax[2].set_xlabel("inertial number I (SPH)")
+    ax[2].axvline(lo, color="r", lw=1)
+    ax[2].axvspan(1e-5, lo, color="r", alpha=0.08)
+    ax[2].set_xlim(1e-4, 0.3)
+    ax[2].text(lo * 0.9, 0.3, "ill-posed\nI < %.4f" % lo, color="r", ha="right", va="top", fontsize=8)
+    for x in ax:
+        x.grid(alpha=0.3)
+        x.legend(fontsize=8)
+    ax[0].invert_yaxis()
+    fig.tight_layout()
+    fig.savefig(a.png, dpi=120)
+    print("wrote %s" % a.png)
+
+
+if __name__ == "__main__":
+    main()
