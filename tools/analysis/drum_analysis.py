@@ -95,6 +95,12 @@ def drum_wall(par):
     return float(par["Geometry"]["radius"]), (-w if par["Walls"].get("direction", "clockwise") == "clockwise" else w)
 
 
+def wendland(q):
+    """The Wendland C2 kernel's shape at q = r / h (support 2 h), unnormalised: (1 - q/2)^4 (2 q + 1);
+    times 7 / (4 pi h^2) in 2D it is the solver's kernel."""
+    return np.where(q < 2, (1 - q / 2) ** 4 * (2 * q + 1), 0.0)
+
+
 class Drum:
     """One snapshot of a drum run with the derived quantities."""
 
@@ -157,8 +163,7 @@ class Drum:
             idx = self.tree.query_ball_point(p, 2 * self.h)
             if not idx:
                 continue
-            r = np.hypot(*(self.x[idx] - p).T) / self.h
-            w = np.where(r < 2, (1 - r / 2) ** 4 * (2 * r + 1), 0) * self.vol[idx]
+            w = wendland(np.hypot(*(self.x[idx] - p).T) / self.h) * self.vol[idx]
             if w.sum() > 0:
                 out[q] = np.dot(w, field[idx]) / w.sum()
         return out

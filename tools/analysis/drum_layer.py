@@ -48,13 +48,18 @@ TRAPZ = getattr(np, "trapezoid", None) or np.trapz  # numpy 2 renamed it
 STRIP = 0.05  # --stress: half-width of the strip about the mid-chord, in R
 
 
+def downslope(d, pts):
+    """The unit vector along the surface line, pointing down the slope (where the mid-chord's top
+    tenth, the points pts, flows)."""
+    t = np.array([d.n[1], -d.n[0]])
+    top = d.interp(pts[: max(len(pts) // 10, 1)], d.v @ t)
+    return t if np.nanmean(top) >= 0 else -t
+
+
 def layer(d):
     frac, pts = d.midchord(400)
     dep = frac * d.R
-    t = np.array([d.n[1], -d.n[0]])  # along the surface
-    ut = d.interp(pts, d.v @ t)
-    if np.nanmean(ut[: len(ut) // 10]) < 0:  # orient t downslope: the surface flows down
-        ut = -ut
+    ut = d.interp(pts, d.v @ downslope(d, pts))
     ok = ~np.isnan(ut)
     dep, ut = dep[ok], ut[ok]
     k = np.argmax(ut < 0) if np.any(ut < 0) else len(ut) - 1
@@ -65,53 +70,47 @@ def layer(d):
 
 
 def stress_profile(d, s, outdir, npts=400):
-    """The mid-chord columns of --stress (module doc), as a dict of arrays."""
+    """The mid-chord columns of --stress (module doc), as a dict of arrays; "particles" holds the
+    strip's profile against the mass depth (strip_profile)."""
     P = ir.params(outdir)
-    par = d.par
-    mat = np.asarray(s["Kind"]) == snap.MATERIAL
-    S = np.asarray(s["Stress"])[mat]
-    p = -(S[:, 0] + S[:, 1] + S[:, 2]) / 3
-    dev = S[:, :3] + p[:, None]
-    tau = np.sqrt(0.5 * (dev ** 2).sum(1) + (S[:, 3:] ** 2).sum(1))
+    p, tau = ir.pressure_tau(np.asarray(s["Stress"])[np.asarray(s["Kind"]) == snap.MATERIAL])
     frac, pts = d.midchord(npts)
-    t = np.array([d.n[1], -d.n[0]])
-    ut = d.interp(pts, d.v @ t)
-    if np.nanmean(ut[: len(ut) // 10]) < 0:
-        ut = -ut
-    o = {"depth": frac * d.R, "u_t": ut, "p": d.interp(pts, p), "sqrtJ2": d.interp(pts, tau),
+    t = downslope(d, pts)
+    o = {"depth": frac * d.R, "u_t": d.interp(pts, d.v @ t), "p": d.interp(pts, p), "sqrtJ2": d.interp(pts, tau),
          "gdot": d.interp(pts, d.gdot), "C": d.interp(pts, d.C)}
     dav = P["d_small"] * o["C"] + P["d_large"] * (1 - o["C"])
     pp = np.maximum(o["p"], 1e-12)
     o["ratio"] = o["sqrtJ2"] / pp
     o["I"] = o["gdot"] * dav / np.sqrt(pp / P["rho_s"])
-    mu = P["mu_s"] + (P["mu_d"] - P["mu_s"]) * o["I"] / (o["I"] + P["I0"])
-    o["k_mu_I"] = mu if P["yield"] == "mu_I" else ir.kmu(mu)
-    ph = par.get("Physics", {})
+    o["k_mu_I"] = ir.yield_ratio(P, o["I"])
+    ph = d.par.get("Physics", {})
     g = float(np.hypot(*np.asarray(ph.get("gravity", [0, -9.81, 0]), float)[:2]))
     rho = float(ph.get("rho", 1500.0))
     o["p_lith"] = rho * g * np.cos(np.radians(d.angle)) * (o["depth"] + 0.5 * d.dr)
-    # the particles themselves, in a strip |s| < STRIP R about the mid-chord: their kernel-summed volume
-    # fraction phi_i = sum_j V_j W_ij (Wendland C2, support 2 h; 1 where they hold their nominal volumes,
-    # below 1 within 2 h of the surface), averaged in depth bins of 2 dr, and the flux they carry through it
+    strip_profile(d, t, p, tau, o)
+    return o
+
+
+def strip_profile(d, t, p, tau, o):
+    """The particles of the strip |s| < STRIP R about the mid-chord, into o: their kernel-summed volume
+    fraction phi_i = sum_j V_j W_ij (1 where they hold their nominal volumes, below 1 within 2 h of the
+    surface) in depth bins of 2 dr ("phi"), the flux they carry through the mid-chord
+    ("flux_particles"), and their profile against the mass depth zeta ("particles": the volume of the
+    strip's material above them per width, half their own; the FE's depth below its flat surface
+    whatever the line fitted to the top grains misses), in bins of dr."""
     rel = d.x - d.M
-    s_along, z = rel @ t, rel @ d.n
-    strip = np.where(np.abs(s_along) < STRIP * d.R)[0]
+    z = rel @ d.n
+    strip = np.where(np.abs(rel @ t) < STRIP * d.R)[0]
     phi = np.empty(len(strip))
     for q, i in enumerate(strip):
         j = d.tree.query_ball_point(d.x[i], 2 * d.h)
-        r = np.hypot(*(d.x[j] - d.x[i]).T) / d.h
-        phi[q] = np.sum(d.vol[j] * (1 - r / 2) ** 4 * (2 * r + 1)) * 7 / (4 * np.pi * d.h ** 2)
-    edges = np.arange(-2 * d.dr, o["depth"][-1] + 2 * d.dr, 2 * d.dr)
-    k = np.digitize(z[strip], edges)
+        phi[q] = np.sum(d.vol[j] * da.wendland(np.hypot(*(d.x[j] - d.x[i]).T) / d.h)) * 7 / (4 * np.pi * d.h ** 2)
+    k = np.digitize(z[strip], np.arange(-2 * d.dr, o["depth"][-1] + 2 * d.dr, 2 * d.dr))
     zc = np.array([z[strip][k == b].mean() for b in np.unique(k)])
-    pc = np.array([phi[k == b].mean() for b in np.unique(k)])
-    o["phi"] = np.interp(o["depth"], zc, pc)
-    vt = d.v @ t * (1 if np.nanmean(d.interp(pts[:8], d.v @ t)) >= 0 else -1)
+    o["phi"] = np.interp(o["depth"], zc, [phi[k == b].mean() for b in np.unique(k)])
+    vt = d.v @ t
     W = 2 * STRIP * d.R
-    o["flux_particles"] = np.full(npts, float(np.sum(d.vol[strip] * vt[strip]) / W))
-    # the strip's particles against their mass depth zeta: the volume of the strip's material above
-    # them per width (half their own), which is the FE's depth below its flat surface whatever the
-    # line fitted to the top grains misses; averaged in bins of dr
+    o["flux_particles"] = np.full(len(o["depth"]), float(np.sum(d.vol[strip] * vt[strip]) / W))
     order = strip[np.argsort(z[strip])]
     zeta = (np.cumsum(d.vol[order]) - 0.5 * d.vol[order]) / W
     b = np.floor(zeta / d.dr).astype(int)
@@ -122,8 +121,7 @@ def stress_profile(d, s, outdir, npts=400):
                          ("gdot", d.gdot[sel])):
             part[key].append(float(np.mean(val)))
         part["n"].append(len(sel))
-    o["particles"] = {k: np.array(v) for k, v in part.items()}
-    return o
+    o["particles"] = {key: np.array(v) for key, v in part.items()}
 
 
 def main():

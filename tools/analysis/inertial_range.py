@@ -79,22 +79,32 @@ def kmu(mu):
     return 3 * mu / np.sqrt(9 + 12 * mu * mu)
 
 
+def pressure_tau(S):
+    """p = -tr(sigma) / 3 and sqrt(J2) of snapshot stresses S (N x 6: xx, yy, zz, xy, xz, yz)."""
+    S = np.asarray(S)
+    p = -(S[:, 0] + S[:, 1] + S[:, 2]) / 3
+    dev = S[:, :3] + p[:, None]
+    return p, np.sqrt(0.5 * (dev ** 2).sum(1) + (S[:, 3:] ** 2).sum(1))
+
+
+def yield_ratio(P, I):
+    """k(mu(I)): the ratio sqrt(J2) / p on the yield surface of P's Material:yield at inertial number I."""
+    mu = P["mu_s"] + (P["mu_d"] - P["mu_s"]) * I / (I + P["I0"])
+    return mu if P["yield"] == "mu_I" else kmu(mu)
+
+
 def inertial_numbers(s, P, gdot_fraction=0.1):
     """I of the flowing material particles of snapshot s (and the count of
     the material with p > 0)."""
     mat = np.asarray(s["Kind"]) == snap.MATERIAL
-    S = np.asarray(s["Stress"])[mat]
+    p, tau = pressure_tau(np.asarray(s["Stress"])[mat])
     g = np.asarray(s["ShearRate"])[mat]
     C = np.asarray(s["Concentration"])[mat]
-    p = -(S[:, 0] + S[:, 1] + S[:, 2]) / 3
-    dev = S[:, :3] + p[:, None]
-    tau = np.sqrt(0.5 * (dev ** 2).sum(1) + (S[:, 3:] ** 2).sum(1))
     d = P["d_small"] * C + P["d_large"] * (1 - C)
     pos = p > 0
     I = np.zeros_like(p)
     I[pos] = g[pos] * d[pos] / np.sqrt(p[pos] / P["rho_s"])
-    mu = P["mu_s"] + (P["mu_d"] - P["mu_s"]) * I / (I + P["I0"])
-    k = mu if P["yield"] == "mu_I" else kmu(mu)
+    k = yield_ratio(P, I)
     flowing = pos & (tau >= 0.99 * k * p) & (g >= gdot_fraction * np.percentile(g, 99))
     return I[flowing], int(pos.sum())
 
