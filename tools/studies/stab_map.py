@@ -3,13 +3,15 @@
 with Flow:stabilization riemann over the elastic modulus E and the time-step
 factor chi_CFL, at two resolutions.
 
-  python3 -m tools.studies.stab_map run --sphseg build/sphseg --out DIR [--set riemann,fine,monaghan] [--jobs 2]
+  python3 -m tools.studies.stab_map run --sphseg build/sphseg --out DIR [--set riemann,fine,gpu,monaghan] [--jobs 2] [--backend gpu]
   python3 -m tools.studies.stab_map report --out DIR [--docs docs/data/granular] [--table FILE]
 
 Cases: inputs/drum_2d_EV.yml to t = 1.5 s (the bed starts to avalanche at
 about 0.75 s), snapshots every 0.25 s.
   riemann   dr 1.4 mm, E = 10 kPa, 0.1 MPa, 1 MPa, chi_CFL 0.2 ... 2.0
   fine      dr 0.7 mm, E = 10 kPa, the same chi_CFL
+  gpu       dr 0.7 and 0.35 mm, E = 10 kPa, 0.1 MPa, 1 MPa, the same chi_CFL
+            (the finer and stiffer corners, for --backend gpu)
   monaghan  dr 1.4 mm, E = 10 kPa, 0.1 MPa, monaghan with alpha = 0.1 sqrt(1e7/E)
             (the alpha sqrt(E) rule), for comparison
 Each run: ran or not, and how it failed (the error line of its log: a
@@ -49,6 +51,9 @@ def cases(which):
         c += [case("riemann", 0.0014, E, x) for E in (1e4, 1e5, 1e6) for x in CFLS]
     if which in ("full", "fine"):
         c += [case("riemann", 0.0007, 1e4, x) for x in CFLS]
+    if which in ("full", "gpu"):
+        c += [case("riemann", dr, E, x) for dr in (0.0007, 0.00035) for E in (1e4, 1e5, 1e6) for x in CFLS
+              if not (dr == 0.0007 and E == 1e4 and which == "full")]  # "full" has that row from "fine"
     if which in ("full", "monaghan"):
         c += [case("monaghan", 0.0014, E, x) for E in (1e4, 1e5) for x in CFLS]
     return c
@@ -85,7 +90,7 @@ def read_or_rebuild(out):
     run that was stopped: "stopped")."""
     if os.path.exists(os.path.join(out, "runs.csv")):
         return batch.read_runs(out)
-    meta = {c.name: c.meta for w in ("riemann", "fine", "monaghan") for c in cases(w)}
+    meta = {c.name: c.meta for w in ("riemann", "fine", "gpu", "monaghan") for c in cases(w)}
     rows = {}
     for n, m in meta.items():
         log = os.path.join(out, n + ".log")
@@ -107,12 +112,14 @@ def profile_error(d, ref):
     return float(np.sqrt(np.mean((u[ok] - ur[ok]) ** 2)) / np.nanmax(ur))
 
 
-def cmd_report(a):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+ROW_KEYS = ("stab", "dr", "E", "cfl", "ok", "how", "angle", "speed", "err", "steps", "wall_s")
+
+
+def reduce_all(outs):
+    """Every run of the folders outs, reduced (reduce_run) with its profile error against the chi 0.2 run
+    of its (stabilisation, dr, E), as dicts of ROW_KEYS."""
     runs, where = {}, {}
-    for out in a.out:
+    for out in outs:
         for n, r in read_or_rebuild(out).items():
             runs[n], where[n] = r, out
     R = {n: dict(reduce_run(where[n], n, r), **{k: r[k] for k in ("stab", "dr", "E", "cfl", "wall_s", "steps")})
@@ -121,6 +128,38 @@ def cmd_report(a):
         ref = "%s_dr%g_E%g_c%g" % (r["stab"], float(r["dr"]) * 1e3, float(r["E"]), REF_CFL)
         if r["ok"] and ref in R and R[ref]["ok"]:
             r["err"] = profile_error(r["drum"], R[ref]["drum"])
+    return {n: {k: r[k] for k in ROW_KEYS if k in r} for n, r in R.items()}
+
+
+def read_rows(path):
+    """The rows a report wrote (stability_map_rows.csv), typed as reduce_all gives them."""
+    import csv
+    R = {}
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            r = {k: v for k, v in r.items() if v != "" or k in ("steps", "wall_s")}  # how, angle, err: absent
+            r["ok"] = r["ok"] == "True"
+            for k in ("angle", "speed", "err"):
+                if k in r:
+                    r[k] = float(r[k])
+            R[r.pop("name")] = r
+    return R
+
+
+def cmd_report(a):
+    """The table, stability_map_rows.csv (the reduced runs) and the chart into --docs. --out: the run
+    folders, or one stability_map_rows.csv of an earlier report (the chart redrawn without the runs)."""
+    import csv
+    if len(a.out) == 1 and a.out[0].endswith(".csv"):
+        R = read_rows(a.out[0])
+    else:
+        R = reduce_all(a.out)
+        os.makedirs(a.docs, exist_ok=True)
+        with open(os.path.join(a.docs, "stability_map_rows.csv"), "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(("name",) + ROW_KEYS)
+            for n in sorted(R):
+                w.writerow([n] + [R[n].get(k, "") for k in ROW_KEYS])
     panels = sorted({(r["stab"], float(r["dr"])) for r in R.values()}, key=lambda p: (p[0] != "riemann", -p[1]))
     lines = ["| stabilisation | dr (mm) | E (Pa) | chi_CFL | result | angle | surface speed (cm/s) | "
              "profile error against chi 0.2 | steps | wall (s) |", "|---|---|---|---|---|---|---|---|---|---|"]
@@ -131,6 +170,14 @@ def cmd_report(a):
             r["stab"], float(r["dr"]) * 1e3, float(r["E"]), float(r["cfl"]), "ran" if r["ok"] else r["how"],
             "%.1f°" % r["angle"] if r["ok"] else "", "%.2f" % (100 * r["speed"]) if r["ok"] else "",
             "%.3f" % r["err"] if "err" in r else "", r["steps"], r["wall_s"]))
+    try:
+        import matplotlib
+    except ImportError:
+        print("matplotlib is missing: no chart; redraw it with report --out %s"
+              % os.path.join(a.docs, "stability_map_rows.csv"))
+        return batch.report_tables(a, lines)
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8), squeeze=False)
     sc = None
     for a_, (stab, dr) in zip(ax[0], panels):
@@ -170,7 +217,7 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("riemann", "fine", "monaghan"), cases, on_done, cmd_report, "granular", jobs=2,
+    batch.study_main(__doc__, ("riemann", "fine", "gpu", "monaghan"), cases, on_done, cmd_report, "granular", jobs=2,
                      argv=argv)
 
 
