@@ -19,7 +19,6 @@ profile C(z) (row means) is compared at t/T = 20, 40, 80 by MAE and RMSE
     its last snapshot readable.
 """
 import os
-import subprocess
 import sys
 
 from tools.analysis import snap  # noqa: E402

@@ -37,8 +37,6 @@ import subprocess
 import sys
 import tempfile
 
-import numpy as np
-
 from tools import ROOT  # noqa: E402
 from tools.analysis import snap  # noqa: E402
 
