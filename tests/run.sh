@@ -72,6 +72,7 @@ run_one restart_guard "$PYTHON" -m tests.test_restart_guard --sphseg "$BUILD/sph
 run_one drum_mui_ref "$PYTHON" -m tests.test_drum_mui_ref
 # issue 30: how the drum tools read a mid-chord (surface speeds, mass depth, the layer's fluxes) on known beds
 run_one drum_readers "$PYTHON" -m tests.test_drum_readers --work "$tmp/drum_readers"
+run_one inertial_range "$PYTHON" -m tests.test_inertial_range
 for v in tests/validate_*.py; do
     case " ${vals[*]} " in *" $v "*) ;; *) vals+=("$v") ;; esac
 done

@@ -37,10 +37,15 @@ import numpy as np
 from tools.analysis import snap  # noqa: E402
 
 
+def mu_of_I(I, mu_s, mu_d, I0):
+    """mu(I) = mu_s + (mu_d - mu_s) / (I0 / I + 1)."""
+    return mu_s + (mu_d - mu_s) * I / (I + I0)
+
+
 def criterion(I, mu_s, mu_d, I0):
     """C(I) above: < 0 well posed."""
     I = np.asarray(I, float)
-    mu = mu_s + (mu_d - mu_s) * I / (I + I0)
+    mu = mu_of_I(I, mu_s, mu_d, I0)
     nu = I * (mu_d - mu_s) * I0 / (I + I0) ** 2 / mu
     return 4 * nu * nu - 4 * nu + mu * mu * (1 - nu / 2) ** 2
 
@@ -89,7 +94,7 @@ def pressure_tau(S):
 
 def yield_ratio(P, I):
     """k(mu(I)): the ratio sqrt(J2) / p on the yield surface of P's Material:yield at inertial number I."""
-    mu = P["mu_s"] + (P["mu_d"] - P["mu_s"]) * I / (I + P["I0"])
+    mu = mu_of_I(I, P["mu_s"], P["mu_d"], P["I0"])
     return mu if P["yield"] == "mu_I" else kmu(mu)
 
 
@@ -114,7 +119,7 @@ def partial_regularisation(mu_s, mu_d, I0, alpha):
     mu(I) = sqrt(alpha / ln(A / I)) with A = I_N1 exp(alpha / mu(I_N1)^2), continuous at I_N1 (as
     alexjarosch/OpenFOAM-muI muIreg writes it). Returns (I_N1, A, mu(I_N1))."""
     lo = window(mu_s, mu_d, I0)[0]
-    mu_lo = mu_s + (mu_d - mu_s) * lo / (lo + I0)
+    mu_lo = mu_of_I(lo, mu_s, mu_d, I0)
     return lo, lo * math.exp(alpha / (mu_lo * mu_lo)), mu_lo
 
 

@@ -1,0 +1,65 @@
+#!/usr/bin/env python3
+"""The well-posedness window and Barker & Gray's partial regularisation of
+tools/analysis/inertial_range.py, against what they must satisfy (no sphseg
+run; under a second):
+
+- the window's edges for Table 1's mu(I) (mu_s 0.382, mu_d 0.682, I0 0.279)
+  are where the criterion C(I) changes sign: C > 0 just outside, < 0 just
+  inside (relative step 1e-6), and C -> mu_s^2 > 0 as I -> 0 (ill-posed, as
+  Barker et al. 2015 state for any mu(I) of this form);
+- the edges as docs/granular.md "Well-posedness" quotes them: 0.01656 and 0.841
+  (1e-3 relative);
+- the partially regularised law sqrt(alpha / ln(A / I)) equals mu(I) at the
+  window's lower edge I_N1 (continuity, which fixes A; 1e-12), lies below mu_s
+  at I = 1e-4, and the I the tool reports for a slope theta inverts it:
+  mu_PR(I) = tan theta (1e-12).
+
+    /usr/bin/python3 -m tests.test_inertial_range [--sphseg IGNORED --work IGNORED]
+"""
+import argparse
+import math
+import sys
+
+from tools.analysis import inertial_range as ir  # noqa: E402
+
+FAILS = []
+MU_S, MU_D, I0, ALPHA = 0.382, 0.682, 0.279, 1.9
+
+
+def check(name, value, tol, ok, ref):
+    print("%s %s: %.3e (tolerance %s; reference: %s)" % ("PASS" if ok else "FAIL", name, value, tol, ref))
+    if not ok:
+        FAILS.append(name)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--sphseg", default=None, help="ignored (the runner passes it)")
+    ap.add_argument("--work", default=None, help="ignored")
+    ap.parse_known_args()
+    lo, hi = ir.window(MU_S, MU_D, I0)
+    C = lambda I: float(ir.criterion(I, MU_S, MU_D, I0))
+    for name, I, inside in (("below I_low", lo * (1 - 1e-6), False), ("above I_low", lo * (1 + 1e-6), True),
+                            ("below I_high", hi * (1 - 1e-6), True), ("above I_high", hi * (1 + 1e-6), False)):
+        c = C(I)
+        check("C(I) " + name, c, "< 0" if inside else "> 0", (c < 0) == inside, "the window's edge")
+    c0 = C(1e-12)
+    check("C(1e-12) - mu_s^2", abs(c0 - MU_S ** 2), 1e-9, abs(c0 - MU_S ** 2) < 1e-9, "I -> 0: nu -> 0")
+    check("I_low / 0.01656 - 1", abs(lo / 0.01656 - 1), 1e-3, abs(lo / 0.01656 - 1) < 1e-3, "docs/granular.md")
+    check("I_high / 0.841 - 1", abs(hi / 0.841 - 1), 1e-3, abs(hi / 0.841 - 1) < 1e-3, "docs/granular.md")
+    IN1, A, mu_lo = ir.partial_regularisation(MU_S, MU_D, I0, ALPHA)
+    mu_pr = lambda I: math.sqrt(ALPHA / math.log(A / I))
+    e = abs(mu_pr(IN1) - ir.mu_of_I(IN1, MU_S, MU_D, I0))
+    check("mu_PR(I_N1) - mu(I_N1)", e, 1e-12, e < 1e-12 and IN1 == lo and mu_lo == ir.mu_of_I(lo, MU_S, MU_D, I0),
+          "continuity at the window's edge")
+    check("mu_PR(1e-4)", mu_pr(1e-4), "< mu_s", mu_pr(1e-4) < MU_S, "no static yield below the edge")
+    for th in (19.0, 20.0):
+        m = math.tan(math.radians(th))
+        I = A * math.exp(-ALPHA / (m * m))
+        check("mu_PR(I(%g deg)) - tan" % th, abs(mu_pr(I) - m), 1e-12, abs(mu_pr(I) - m) < 1e-12, "the inverse")
+    print("test_inertial_range: %s" % ("FAIL: " + ", ".join(FAILS) if FAILS else "all checks passed"))
+    sys.exit(1 if FAILS else 0)
+
+
+if __name__ == "__main__":
+    main()
