@@ -37,12 +37,9 @@ def read_profiles(path):
 
 def read_fem(path, radius):
     """(depth / R list, |u_x| cm/s list) of one drum_mui_ref --profile CSV."""
-    d, u = [], []
-    with open(path) as f:
-        for r in csv.DictReader(f):
-            d.append(float(r["depth_m"]) / radius)
-            u.append(100 * abs(float(r["u_x_m_per_s"])))
-    return d, u
+    from tools.analysis.drum_fe_read import read_profile
+    depth, u, _ = read_profile(path)
+    return list(depth / radius), list(100 * abs(u))
 
 
 def nearest(prof, t):

@@ -21,6 +21,7 @@ import warnings
 import numpy as np
 
 from tools.analysis import inertial_range as ir  # noqa: E402
+from tools.analysis.drum_fe_read import read_profile  # noqa: E402
 
 
 def average(paths, grid):
@@ -46,8 +47,7 @@ def main():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fe = np.loadtxt(a.fe, delimiter=",", skiprows=1)
-    zf, uf = fe[:, 0], fe[:, 1]
+    zf, uf, _ = read_profile(a.fe)
     grid = np.linspace(0.0, a.zmax, 181)
     lo, _ = ir.window(0.382, 0.682, 0.279)
     fig, ax = plt.subplots(1, 3, figsize=(13, 4.6), sharey=True)
