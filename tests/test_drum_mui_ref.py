@@ -35,28 +35,16 @@ checked against answers known without it (no sphseg run; about 15 s on 2 cores):
 
     /usr/bin/python3 -m tests.test_drum_mui_ref [--sphseg IGNORED --work IGNORED]
 """
-import argparse
 import sys
 import time
 
 import numpy as np
 
+from tests.checks import FAILS, check, parse_args  # noqa: E402
 from tools.analysis import drum_mui_ref as m  # noqa: E402
 
-FAILS = []
-
-
-def check(name, value, tol, ok, ref):
-    print("%s %s: %.3e (tolerance %s; reference: %s)" % ("PASS" if ok else "FAIL", name, value, tol, ref))
-    if not ok:
-        FAILS.append(name)
-
-
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--sphseg", default=None, help="ignored (the runner passes it)")
-    ap.add_argument("--work", default=None, help="ignored")
-    ap.parse_known_args()
+    parse_args(__doc__)
     t0 = time.time()
 
     # the rheology, against values known without the module: a layer starts to flow at

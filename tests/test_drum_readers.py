@@ -29,25 +29,18 @@ material, as a disordered bed does on average.
 
     /usr/bin/python3 -m tests.test_drum_readers [--sphseg IGNORED --work IGNORED]
 """
-import argparse
 import os
 import sys
 import tempfile
 
 import numpy as np
 
+from tests.checks import check, parse_args, summary  # noqa: E402
 from tools.analysis import drum_analysis as da  # noqa: E402
 from tools.analysis import drum_fe_read as fr  # noqa: E402
 from tools.analysis import drum_layer as dl  # noqa: E402
 
-FAILS = []
 R, YS, THETA, U, DELTA, RHO, G = 0.035, 0.0056, 21.2, 0.08, 0.006, 1500.0, 9.81
-
-
-def check(name, value, tol, ok, ref):
-    print("%s %s: %.3e (tolerance %s; reference: %s)" % ("PASS" if ok else "FAIL", name, value, tol, ref))
-    if not ok:
-        FAILS.append(name)
 
 
 def profile():
@@ -67,10 +60,7 @@ def params_dir(work):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--sphseg", default=None, help="ignored (the runner passes it)")
-    ap.add_argument("--work", default=None, help="directory for the run parameters (default: a temporary one)")
-    a = ap.parse_known_args()[0]
+    a = parse_args(__doc__, "directory for the run parameters (default: a temporary one)")
     work = params_dir(a.work or tempfile.mkdtemp(prefix="drum_readers_"))
     z, u, p = profile()
     bias = {}
@@ -116,8 +106,7 @@ def main():
         check(tag + " interpolated p / lithostatic - 1 at 3-5 mm", el, 1e-3, el < 1e-3, "rho g cos(theta) (z + dr/2)")
     check("reading bias shrinks with dr", abs(bias[0.0005]) / abs(bias[0.0007]), "< 1",
           abs(bias[0.0005]) < abs(bias[0.0007]), "a support of 2 h = 3 dr")
-    print("test_drum_readers: %s" % ("FAIL: " + ", ".join(FAILS) if FAILS else "all checks passed"))
-    sys.exit(1 if FAILS else 0)
+    sys.exit(summary("test_drum_readers"))
 
 
 if __name__ == "__main__":

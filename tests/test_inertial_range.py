@@ -16,27 +16,17 @@ run; under a second):
 
     /usr/bin/python3 -m tests.test_inertial_range [--sphseg IGNORED --work IGNORED]
 """
-import argparse
 import math
 import sys
 
+from tests.checks import check, parse_args, summary  # noqa: E402
 from tools.analysis import inertial_range as ir  # noqa: E402
 
-FAILS = []
 MU_S, MU_D, I0, ALPHA = 0.382, 0.682, 0.279, 1.9
 
 
-def check(name, value, tol, ok, ref):
-    print("%s %s: %.3e (tolerance %s; reference: %s)" % ("PASS" if ok else "FAIL", name, value, tol, ref))
-    if not ok:
-        FAILS.append(name)
-
-
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--sphseg", default=None, help="ignored (the runner passes it)")
-    ap.add_argument("--work", default=None, help="ignored")
-    ap.parse_known_args()
+    parse_args(__doc__)
     lo, hi = ir.window(MU_S, MU_D, I0)
     C = lambda I: float(ir.criterion(I, MU_S, MU_D, I0))
     for name, I, inside in (("below I_low", lo * (1 - 1e-6), False), ("above I_low", lo * (1 + 1e-6), True),
@@ -57,8 +47,7 @@ def main():
         m = math.tan(math.radians(th))
         I = A * math.exp(-ALPHA / (m * m))
         check("mu_PR(I(%g deg)) - tan" % th, abs(mu_pr(I) - m), 1e-12, abs(mu_pr(I) - m) < 1e-12, "the inverse")
-    print("test_inertial_range: %s" % ("FAIL: " + ", ".join(FAILS) if FAILS else "all checks passed"))
-    sys.exit(1 if FAILS else 0)
+    sys.exit(summary("test_inertial_range"))
 
 
 if __name__ == "__main__":

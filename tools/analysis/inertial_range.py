@@ -92,6 +92,11 @@ def pressure_tau(S):
     return p, np.sqrt(0.5 * (dev ** 2).sum(1) + (S[:, 3:] ** 2).sum(1))
 
 
+def inertial_number(gdot, d, p, rho_s):
+    """I = gdot d / sqrt(p / rho_s), for p > 0."""
+    return gdot * d / np.sqrt(p / rho_s)
+
+
 def yield_ratio(P, I):
     """k(mu(I)): the ratio sqrt(J2) / p on the yield surface of P's Material:yield at inertial number I."""
     mu = mu_of_I(I, P["mu_s"], P["mu_d"], P["I0"])
@@ -108,7 +113,7 @@ def inertial_numbers(s, P, gdot_fraction=0.1):
     d = P["d_small"] * C + P["d_large"] * (1 - C)
     pos = p > 0
     I = np.zeros_like(p)
-    I[pos] = g[pos] * d[pos] / np.sqrt(p[pos] / P["rho_s"])
+    I[pos] = inertial_number(g[pos], d[pos], p[pos], P["rho_s"])
     k = yield_ratio(P, I)
     flowing = pos & (tau >= 0.99 * k * p) & (g >= gdot_fraction * np.percentile(g, 99))
     return I[flowing], int(pos.sum())

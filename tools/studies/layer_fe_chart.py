@@ -60,7 +60,7 @@ def main():
         ufe = np.interp(grid, zf, uf)
         rel = np.where(np.abs(ufe) > 0.01 * np.abs(uf).max(), r["u_t"] / ufe - 1, np.nan)
         ax[1].plot(100 * rel[ok], 1e3 * grid[ok], ".-", ms=3, label=label)
-        I = r["gdot"] * a.d / np.sqrt(np.maximum(r["p"], 1e-9) / a.rho_s)
+        I = ir.inertial_number(r["gdot"], a.d, np.maximum(r["p"], 1e-9), a.rho_s)
         ax[2].semilogx(I[ok], 1e3 * grid[ok], ".-", ms=3, label=label)
     ax[0].set_xlabel("speed along the surface (cm/s)")
     ax[0].set_ylabel("mass depth zeta (mm)")
