@@ -1,8 +1,8 @@
 """Chart of the GPU benchmark (tools/bench/bench_gpu.sh CSVs): particle-steps per
 second against particle count, one line per case and precision.
 Usage: python3 -m tools.bench.bench_chart OUT.png BENCH.csv [BENCH.csv ...]"""
+import argparse
 import csv
-import sys
 
 import matplotlib
 
@@ -11,7 +11,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 
 def main():
-    out, files = sys.argv[1], sys.argv[2:]
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("out", help="the chart, PNG")
+    ap.add_argument("files", nargs="+", help="tools/bench/bench_gpu.sh CSVs")
+    a = ap.parse_args()
+    out, files = a.out, a.files
     rows = [r for f in files for r in csv.DictReader(open(f))]
     fig, ax = plt.subplots(figsize=(6.5, 4.2))
     gpu = rows[0]["gpu"] if rows else ""
