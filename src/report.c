@@ -115,7 +115,10 @@ void report_start(sim_t *s, const outputs *o, const run_cli *c)
     if (s->flow_on)
         message("flow: c_s = %.4g m/s, h/c_s = %.3g s, Shepard filter every %u steps, %s", (double)s->flow.cs,
                 (double)(s->seg.k.h / s->flow.cs), sc->flow.shepard_every, stab_text(sc, st, sizeof st));
-    if (s->flow_on) settings_warn_stabilization(sc);
+    if (s->flow_on) {
+        settings_warn_stabilization(sc);
+        settings_warn_mu_law(sc);
+    }
     if (s->flow_on && sc->geometry.type == GEOM_DRUM) settings_warn_drum(sc); /* measured on drums */
     if (s->win.on && sc->segregation.every_k)
         message("concentration: one midpoint step every %u flow steps (Segregation:every), at the window's mean "

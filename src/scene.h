@@ -38,6 +38,11 @@ enum mat_model { MAT_GRANULAR = 0, MAT_NEWTONIAN = 1 };
  * sqrt(J2) = k_mu(mu(I)) p (2.11-2.12); mu_I, the tensorial law |tau| =
  * sqrt(J2) = mu(I) p of Jop, Forterre & Pouliquen (2006) (physics/stress.h) */
 enum mat_yield { MAT_YIELD_DRUCKER_PRAGER = 0, MAT_YIELD_MU_I = 1 };
+/* Material:mu_law, mu(I) at low I: regularized, the paper's (2.14) (mu -> mu_s
+ * as gdot -> 0: a static yield); partial, the partial regularisation of
+ * Barker & Gray (2017): sqrt(alpha / ln(A / I)) below the well-posed window's
+ * lower edge I_N1 (no static yield: mu -> 0 as I -> 0) */
+enum mat_mu_law { MAT_MU_REGULARIZED = 0, MAT_MU_PARTIAL = 1 };
 /* Flow:stabilization: monaghan, the paper's artificial viscosity (3.10);
  * riemann, the low-dissipation Riemann solver of Zhang, Hu & Adams (2017);
  * delta, delta-SPH pressure diffusion alone (physics/momentum.h). The values

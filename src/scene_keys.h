@@ -53,6 +53,7 @@ static const cyaml_strval_t mat_models[] = {{"granular", MAT_GRANULAR}, {"newton
 static const cyaml_strval_t flow_stabs[] = {
     {"monaghan", FLOW_STAB_MONAGHAN}, {"riemann", FLOW_STAB_RIEMANN}, {"delta", FLOW_STAB_DELTA}};
 static const cyaml_strval_t mat_yields[] = {{"drucker_prager", MAT_YIELD_DRUCKER_PRAGER}, {"mu_I", MAT_YIELD_MU_I}};
+static const cyaml_strval_t mat_mu_laws[] = {{"regularized", MAT_MU_REGULARIZED}, {"partial", MAT_MU_PARTIAL}};
 static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
 
 static const cyaml_strval_t cwall_shapes[] = {
@@ -279,6 +280,10 @@ SECTION("Material", material, scene_material)
       "reference inertial number; default 0.279")
     KF("Material", material, scene_material, lambda, OPT, "0.001", 0, INFINITY, HI_OPEN, ALWAYS,
       "regularization of (2.14), 1/s; default 0.001")
+    KE("Material", material, scene_material, mu_law, enum mat_mu_law, mat_mu_laws, "regularized",
+      "granular: mu(I) at low I, regularized (the paper's eq. 2.14: mu -> mu_s as gdot -> 0, a static yield) | partial (Barker & Gray 2017: below the lower edge I_N1 of the window where incompressible mu(I) is well posed, mu = sqrt(Material:pr_alpha / ln(A / I)), A = I_N1 exp(alpha / mu(I_N1)^2) for continuity, I = sqrt(gdot^2 + Material:lambda^2) d / sqrt(p / rho_s); no static yield: a layer below atan mu_s flows slowly, at 20 deg and mu_I at I = 1.5e-3); default regularized (docs/granular.md \"Well-posedness\")")
+    KF("Material", material, scene_material, pr_alpha, OPT, "1.9", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "Material:mu_law partial: alpha; default 1.9 (Barker & Gray 2017)")
 END_SECTION(material)
 /* Momentum and stress solver options; computed flow only. */
 SECTION("Flow", flow, scene_flow)

@@ -85,6 +85,14 @@ void settings_warn_stabilization(const struct scene *sc)
                 f->stabilization == FLOW_STAB_DELTA ? "Flow:stabilization delta" : "Flow:riemann_diffusion on");
 }
 
+void settings_warn_mu_law(const struct scene *sc)
+{
+    if (sc->material.model == MAT_GRANULAR && sc->material.mu_law == MAT_MU_PARTIAL)
+        warning("Material:mu_law partial: mu(I) has no static yield, so nothing rests on a slope (a mu_I chute layer "
+                "flows at I = 1.5e-3 at 20 degrees, below Pouliquen's onset at 20.9), and the drum's answer changes "
+                "with dr as much as with the regularized law (docs/granular.md \"Well-posedness\")");
+}
+
 void settings_warn_drum(const struct scene *sc)
 {
     settings_warn_alpha_sqrt_e(sc);

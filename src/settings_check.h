@@ -32,4 +32,9 @@ void settings_warn_alpha_sqrt_e(const struct scene *sc);
  * is the drum and chute scenes' setting and says nothing. */
 void settings_warn_stabilization(const struct scene *sc);
 
+/* Material:mu_law partial: no static yield, and no better convergence in
+ * the drum (docs/granular.md "Well-posedness"), once at start-up of a
+ * computed granular flow. */
+void settings_warn_mu_law(const struct scene *sc);
+
 #endif

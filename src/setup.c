@@ -551,6 +551,17 @@ static void flow_ctx_of(const struct scene *sc, const sph_ctx *k, const seg_para
     f->m.rho_s = (real)m->rho_s;
     f->m.mu_s = (real)m->mu_s, f->m.mu_d = (real)m->mu_d;
     f->m.I0 = (real)m->I0, f->m.lambda = (real)m->lambda;
+    f->m.pr_alpha = f->m.pr_A = f->m.pr_IN1 = R(0.0); /* Material:mu_law regularized */
+    if (m->model == MAT_GRANULAR && m->mu_law == MAT_MU_PARTIAL) {
+        double IN1, A;
+        char where[512];
+        if (stress_partial_law(m->mu_s, m->mu_d, m->I0, m->pr_alpha, &IN1, &A))
+            input_error("%s: Material:mu_law partial: mu(I) with mu_s %g, mu_d %g, I0 %g has no lower edge of a "
+                        "well-posed window in I = 1e-8 to 1e4, so there is nothing to regularise; use "
+                        "Material:mu_law regularized",
+                        scene_key_where(sc, "Material", "mu_law", where, sizeof where), m->mu_s, m->mu_d, m->I0);
+        f->m.pr_alpha = (real)m->pr_alpha, f->m.pr_A = (real)A, f->m.pr_IN1 = (real)IN1;
+    }
     f->yield = flow_yield_of(sc);
     f->bed_k = stress_yield_k(f->yield, f->m.mu_s);
     f->rho = (real)sc->physics.rho;

@@ -22,6 +22,11 @@ checked against answers known without it (no sphseg run; about 15 s on 2 cores):
   surface speed (the (h - y)^1.5 singularity limits P2 to order 1.5), the FE
   pressure the lithostatic rho g cos theta (h - y) to 1e-6, Newton <= 12
   iterations;
+- the partial regularisation (Barker & Gray 2017, alpha 1.9): the Newton
+  tangent against a centred difference of eta(gdot) for I 1e-4 to 0.05 (across
+  I_N1) to 1e-5, and the Bagnold layer (mu_I) at 21 deg, where the partial law
+  flows at I = A exp(-alpha / tan^2 theta) = 6.4e-3, against that I's profile
+  to 1 % of the surface speed;
 - a coarse drum (h 1.0 / 3.0 mm) at theta 21.3 deg: the discrete torque
   identity T_wall + T_g + M = 0 (the rigid-rotation test field, exact for
   consistent reactions) to 1e-6 |T_g|; mass conservation through the
@@ -81,6 +86,24 @@ def main():
         check("Bagnold %s, surface speed relative error" % yld, es, "1e-2", es < 1e-2, "analytic Bagnold profile")
         check("Bagnold %s, max|p - rho g cos (h - y)|/p_max" % yld, epp, "1e-6", epp < 1e-6, "lithostatic (exact)")
         check("Bagnold %s, Newton iterations" % yld, its, "<= 12", its <= 12, "quadratic convergence")
+
+    # Material:mu_law partial (Barker & Gray 2017, --pr-alpha 1.9): the Newton tangent
+    # against a centred difference of eta(gdot) across I_N1, and the Bagnold layer at 21 deg
+    # (mu_I), where the partial law flows at I = A exp(-alpha / tan^2) = 6.4e-3 and Table 1's
+    # at 1.8e-3: the exact profile of the partial law's I
+    m.set_partial(1.9)
+    pp, dd = 300.0, 3.75e-4
+    g = np.geomspace(1e-4, 0.05, 41) * np.sqrt(pp / m.RHO_S) / dd  # I from 1e-4 to 0.05, across I_N1
+    P = np.full_like(g, pp)
+    eta, c = m.viscosity(g, P, "mu_I", 1e-3, 1e-12, 1e30, dd, tangent=True)
+    h = 1e-6 * g
+    fd = (m.viscosity(g + h, P, "mu_I", 1e-3, 1e-12, 1e30, dd) - m.viscosity(g - h, P, "mu_I", 1e-3, 1e-12, 1e30, dd)) / (2 * h)
+    et = float(np.max(np.abs(c * g / 4 - fd) / np.abs(fd)))
+    check("partial law: Newton tangent vs centred difference of eta", et, "1e-5", et < 1e-5, "calculus")
+    err, es, epp, its, ok = m.bagnold(theta_deg=21.0, ny=16, yld="mu_I")
+    check("Bagnold mu_I 21 deg, partial law, max|u - u_exact|/u_s", err, "1e-2", err < 1e-2 and ok,
+          "analytic Bagnold profile at I = A exp(-alpha / tan^2 theta)")
+    m.set_partial(None)
 
     dr = m.Drum(1.0e-3, 3.0e-3)
     o = m.drum_solve(dr, 21.3, gdot_min=1e-2)

@@ -4,7 +4,8 @@
 # alpha_av sqrt(E) more than 2x off Table 1's (0.1 at 10 MPa; Flow:stabilization
 # monaghan only, which the probes of it set: the drum scene runs riemann), and
 # Run:cfl_flow > 0.2, and E below the softest measured accurate (10 kPa); the
-# pressure diffusion's (settings_warn_stabilization). Each probe is a 1-step CPU drum; the warning must be
+# pressure diffusion's (settings_warn_stabilization); Material:mu_law partial's
+# (settings_warn_mu_law). Each probe is a 1-step CPU drum; the warning must be
 # there when the setting is off and absent when it is in range.
 set -u
 bin=${1:?usage: test_settings_warnings.sh BUILD/sphseg}
@@ -31,6 +32,8 @@ probe "E 10 kPa, alpha 3.162: no warning at all" no "" $M Material:E=1e4 Flow:al
 probe "E 5 kPa, alpha 4.47: softness warning" yes "Material:E = 5e+03 Pa is softer" $M Material:E=5e3 Flow:alpha_av=4.472
 probe "riemann's pressure diffusion: its warning" yes "Flow:riemann_diffusion on: the pressure diffusion" \
     Flow:riemann_diffusion=on
+probe "Material:mu_law partial: its warning" yes "Material:mu_law partial: mu(I) has no static yield" \
+    Material:E=1e5 Material:mu_law=partial
 probe "cfl_flow 0.2: no CFL warning" no "cfl_flow" Run:cfl_flow=0.2
 probe "cfl_flow 0.3: CFL warning" yes "Run:cfl_flow = 0.3 > 0.2" Run:cfl_flow=0.3
 exit $fail

@@ -5,6 +5,7 @@
  * the invariance of p and J2 under the Jaumann spin terms, Newton's third
  * law for the pair force, and exact velocity gradients of linear fields on
  * a lattice (up to the 0.3 % lattice moment at h = 1.5 dr). */
+#include <string.h>
 #include "physics/kernel.h"
 #include "physics/momentum.h"
 #include "physics/stress.h"
@@ -13,6 +14,7 @@
 static mat_params table1(void)
 {
     mat_params m;
+    memset(&m, 0, sizeof m); /* pr_IN1 = 0: Material:mu_law regularized */
     stress_moduli(10e6, 0.3, &m.G, &m.K); /* paper Table 1 */
     m.rho_s = 2500, m.mu_s = 0.382, m.mu_d = 0.682, m.I0 = 0.279, m.lambda = 0.001;
     return m;
@@ -49,6 +51,47 @@ static void test_mu(void **st)
     double g = 5, p = 800, d = 3.75e-4, I = g * d / sqrt(p / m.rho_s);
     double mu13 = m.mu_s + (m.mu_d - m.mu_s) / (m.I0 / I + 1);
     assert_true(fabs(stress_mu(&m, g, p, d) - mu13) < RT(1e-6));
+}
+
+/* Material:mu_law partial (Barker & Gray 2017) for Table 1's mu(I). The
+ * reference values are tools/analysis/inertial_range.py's (`window --pr-alpha
+ * 1.9`: I_N1 0.01656, A 2554, mu(1e-4) 0.3338, a layer at 20 deg flows at I =
+ * 0.00151), an independent implementation (numpy, a different scan). */
+static void test_mu_partial(void **st)
+{
+    (void)st;
+    double IN1 = 0, A = 0;
+    assert_int_equal(stress_partial_law(0.382, 0.682, 0.279, 1.9, &IN1, &A), 0);
+    assert_true(fabs(IN1 - 0.01656) < 0.00001 && fabs(A - 2554) < 1);
+    /* I_N1 is where the criterion changes sign, ill posed (C > 0) below */
+    assert_true(stress_wellposed_C(IN1 * (1 - 1e-6), 0.382, 0.682, 0.279) > 0);
+    assert_true(stress_wellposed_C(IN1 * (1 + 1e-6), 0.382, 0.682, 0.279) < 0);
+    mat_params m = table1();
+    m.pr_alpha = (real)1.9, m.pr_A = (real)A, m.pr_IN1 = (real)IN1;
+    const double p = 800, d = 3.75e-4, gI = sqrt(p / m.rho_s) / d; /* gdot = I gI */
+    /* no static yield: at gdot = 0, mu at I = lambda d / sqrt(p / rho_s) (lambda's regularisation) */
+    double Il = 0.001 / gI, mu0 = sqrt(1.9 / log(A / Il));
+    assert_true(fabs(stress_mu(&m, 0, p, d) - mu0) < RT(1e-6) && mu0 < 0.32);
+    assert_true(fabs(stress_mu(&m, (real)(1e-4 * gI), p, d) - 0.3338) < 1e-4);
+    double mu20 = tan(20 * M_PI / 180); /* the inverse: I = A exp(-alpha / mu^2) */
+    assert_true(fabs(A * exp(-1.9 / (mu20 * mu20)) - 0.00151) < 0.000005);
+    assert_true(fabs(stress_mu(&m, (real)(0.00151 * gI), p, d) - mu20) < RT(1e-4));
+    /* continuous at I_N1, and monotone through it */
+    double below = stress_mu(&m, (real)(IN1 * (1 - 1e-5) * gI), p, d);
+    double above = stress_mu(&m, (real)(IN1 * (1 + 1e-5) * gI), p, d);
+    assert_true(fabs(above - below) < RT(1e-5) && below <= above);
+    double prev = 0;
+    for (double I = 1e-9; I < 10; I *= 1.7) {
+        double mu = stress_mu(&m, (real)(I * gI), p, d);
+        assert_true(mu > prev - RT(1e-7) && mu < m.mu_d);
+        prev = mu;
+    }
+    /* above I_N1, and at p = 0, the paper's (2.14) */
+    mat_params r = table1();
+    assert_true(stress_mu(&m, (real)(0.1 * gI), p, d) == stress_mu(&r, (real)(0.1 * gI), p, d));
+    assert_true(stress_mu(&m, 1, 0, d) == stress_mu(&r, 1, 0, d));
+    /* nothing to regularise: mu_s = 0 is well posed at 1e-8 already */
+    assert_int_equal(stress_partial_law(0, 0.682, 0.279, 1.9, &IN1, &A), -1);
 }
 
 static void test_return_map(void **st)
@@ -239,7 +282,7 @@ static void test_velgrad_lattice(void **st)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_moduli),       cmocka_unit_test(test_mu),
+        cmocka_unit_test(test_moduli),       cmocka_unit_test(test_mu), cmocka_unit_test(test_mu_partial),
         cmocka_unit_test(test_return_map),   cmocka_unit_test(test_yield_simple_shear),
         cmocka_unit_test(test_return_map_mu_i), cmocka_unit_test(test_elastic_rate),
         cmocka_unit_test(test_pair_terms),   cmocka_unit_test(test_velgrad_lattice)};

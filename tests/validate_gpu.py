@@ -80,6 +80,10 @@ CASES = [
     ("chute", "column_2d.yml", 400, CHUTE),
     # the tensorial mu(I) yield (Material:yield mu_I, stress.h) on the chute scene that uses it
     ("chute_mu_I", "chute_2d.yml", 400, []),
+    # Material:mu_law partial (Barker & Gray 2017, stress.h stress_mu): the layer from rest, below I_N1,
+    # and the drum, whose bed and layer's base sit below it
+    ("chute_partial", "chute_2d.yml", 400, ["Material:mu_law=partial"]),
+    ("drum_EV_partial", "drum_2d_EV.yml", 60, ["Material:mu_law=partial"]),
     # a gate lifted at t = 0.01 s (Geometry:runout, Walls:gate_open): a column collapse
     ("collapse", "column_2d.yml", 1500, COLLAPSE),
     # an outlet under a silo's opening: the device store shrinks (run_guard.c run_drain)

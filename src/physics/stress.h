@@ -21,6 +21,9 @@ typedef struct mat_params {
     real mu_s, mu_d;   /* static and dynamic friction (2.13) */
     real I0;           /* reference inertial number (2.13) */
     real lambda;       /* regularization of (2.14), 1/s; 0.001 in the paper */
+    /* Material:mu_law partial (Barker & Gray 2017): mu = sqrt(pr_alpha /
+     * ln(pr_A / I)) below I = pr_IN1 (stress_partial_law); pr_IN1 = 0: off */
+    real pr_alpha, pr_A, pr_IN1;
 } mat_params;
 
 /* Shear and bulk moduli from Young's modulus E (Pa) and Poisson's ratio nu. */
@@ -62,14 +65,71 @@ HD_INLINE real stress_kmu(real mu) { return R(3.0) * mu / (real)sqrt((double)(R(
 
 /* Regularized mu(I), eq. (2.14): mu_s + (mu_d - mu_s) gdot /
  * (I0 sqrt(p / (rho_s d^2)) + sqrt(gdot^2 + lambda^2)); finite at gdot = 0
- * (gives mu_s) and at p = 0 (gives mu_s + (mu_d - mu_s) gdot / |..|). */
+ * (gives mu_s) and at p = 0 (gives mu_s + (mu_d - mu_s) gdot / |..|).
+ * With the partial regularisation (pr_IN1 > 0) and p > 0, at I = sqrt(gdot^2
+ * + lambda^2) d / sqrt(p / rho_s) < pr_IN1 instead sqrt(pr_alpha / ln(pr_A /
+ * I)) (Barker & Gray 2017; continuous at pr_IN1 to the unregularized mu(I),
+ * from which (2.14) differs there by O(lambda^2 / gdot^2)). lambda regularises
+ * this law at gdot -> 0 as it does (2.14): unregularised, mu -> 0 there with
+ * an infinite slope, so in a bed at rest mu would follow the round-off of
+ * gdot (the CPU and GPU backends then part by 1e-4 in 60 steps of the drum,
+ * tests/validate_gpu.py); with it, mu(gdot = 0) = mu(I_lambda) > 0 (0.30 for
+ * Table 1 at p = 100 Pa), smooth in gdot, and no static yield remains. */
 HD_INLINE real stress_mu(const mat_params *m, real gdot, real p, real davg)
 {
     real pp = p > 0 ? p : R(0.0);
+    if (m->pr_IN1 > 0 && pp > 0) {
+        real I = (real)sqrt((double)(gdot * gdot + m->lambda * m->lambda)) * davg / (real)sqrt((double)(pp / m->rho_s));
+        if (I < m->pr_IN1)
+            return I > 0 ? (real)sqrt((double)(m->pr_alpha / (real)log((double)(m->pr_A / I)))) : R(0.0);
+    }
     real den = m->I0 * (real)sqrt((double)(pp / (m->rho_s * davg * davg))) +
                (real)sqrt((double)(gdot * gdot + m->lambda * m->lambda));
     if (!(den > 0)) return m->mu_s; /* lambda = 0 at gdot = 0, p = 0: the unregularized limit */
     return m->mu_s + (m->mu_d - m->mu_s) * gdot / den;
+}
+
+/* The well-posedness criterion of incompressible mu(I) in 2D (Barker et
+ * al. 2015; Barker & Gray 2017, eq. 3.9) for the unregularized mu(I) =
+ * mu_s + (mu_d - mu_s) I / (I0 + I): with nu = I mu'(I) / mu(I),
+ * C(I) = 4 nu^2 - 4 nu + mu^2 (1 - nu / 2)^2, well posed where C < 0
+ * (docs/granular.md "Well-posedness"). Host only, at setup. */
+static inline double stress_wellposed_C(double I, double mu_s, double mu_d, double I0)
+{
+    double mu = mu_s + (mu_d - mu_s) * I / (I0 + I);
+    double nu = I * (mu_d - mu_s) * I0 / ((I0 + I) * (I0 + I)) / mu;
+    return 4 * nu * nu - 4 * nu + mu * mu * (1 - nu / 2) * (1 - nu / 2);
+}
+
+/* Barker & Gray's (2017) partial regularisation for Table-1-like mu(I):
+ * I_N1, the lower edge of the well-posed window (the first sign change of
+ * stress_wellposed_C from + to - scanning up from I = 1e-8, then bisected
+ * in log I), and A = I_N1 exp(alpha / mu(I_N1)^2), so that
+ * sqrt(alpha / ln(A / I)) is continuous with mu(I) at I_N1. Returns 0, or
+ * -1 where there is no such edge in [1e-8, 1e4] (never well posed, or
+ * already well posed at 1e-8: nothing to regularise); host only,
+ * at setup (tools/analysis/inertial_range.py computes the same). */
+static inline int stress_partial_law(double mu_s, double mu_d, double I0, double alpha, double *IN1, double *A)
+{
+    const int n = 4000;
+    double a = 1e-8;
+    *IN1 = *A = 0;
+    for (int k = 1; k <= n; ++k) {
+        double b = pow(10.0, -8.0 + 12.0 * k / n);
+        if (stress_wellposed_C(b, mu_s, mu_d, I0) < 0) {
+            if (k == 1 && stress_wellposed_C(a, mu_s, mu_d, I0) < 0) break; /* no ill-posed low I */
+            for (int it = 0; it < 200; ++it) {
+                double m = sqrt(a * b);
+                if (stress_wellposed_C(m, mu_s, mu_d, I0) < 0) b = m;
+                else a = m;
+            }
+            double I = sqrt(a * b), mu = mu_s + (mu_d - mu_s) * I / (I0 + I);
+            *IN1 = I, *A = I * exp(alpha / (mu * mu));
+            return 0;
+        }
+        a = b;
+    }
+    return -1;
 }
 
 /* Elastic trial increment rate of (C1): w sigma - sigma w + 2 G e + K tr(eps) I,

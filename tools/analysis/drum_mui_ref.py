@@ -110,7 +110,7 @@ import scipy.sparse.linalg as spla
 from scipy.optimize import brentq
 from scipy.spatial import Delaunay
 
-from tools.analysis.inertial_range import kmu  # noqa: E402
+from tools.analysis.inertial_range import kmu, partial_regularisation  # noqa: E402
 from tools.studies import chute_study  # noqa: E402
 
 # the drum of inputs/drum_2d_EV.yml and the Table 1 material
@@ -133,12 +133,36 @@ def k_of_mu(mu, yld):
     return kmu(mu) if yld == "drucker_prager" else mu
 
 
-def mu_of(gdot, p, d=D_GRAIN):
-    """mu(I) = mu_s + (mu_d - mu_s) gdot / (I0 sqrt(p / (rho_s d^2)) + gdot); mu_d at p <= 0."""
+# --pr-alpha: Barker & Gray's (2017) partial regularisation, (alpha, A, I_N1) of
+# inertial_range.partial_regularisation (Material:mu_law partial); None: off
+PARTIAL = None
+
+
+def set_partial(alpha):
+    """Below I_N1, mu = sqrt(alpha / ln(A / I)) (alpha None: the unregularised law)."""
+    global PARTIAL
+    if alpha is None:
+        PARTIAL = None
+        return
+    IN1, A, _ = partial_regularisation(MU_S, MU_D, I0, alpha)
+    PARTIAL = (alpha, A, IN1)
+
+
+def mu_of(gdot, p, d=D_GRAIN, gdot_min=0.0):
+    """mu(I) = mu_s + (mu_d - mu_s) gdot / (I0 sqrt(p / (rho_s d^2)) + gdot); mu_d at p <= 0.
+    With PARTIAL, below I_N1 sqrt(alpha / ln(A / I)) at the regularised rate's I,
+    I = sqrt(gdot^2 + gdot_min^2) d / sqrt(p / rho_s) (the viscosity's gdot_min: mu stays
+    positive in the rigid bed, where gdot -> 0)."""
     a = I0 * np.sqrt(np.maximum(p, 0.0) / (RHO_S * d * d))
     with np.errstate(invalid="ignore", divide="ignore"):
         f = np.where(a + gdot > 0, gdot / (a + gdot), 1.0)
-    return MU_S + (MU_D - MU_S) * f
+    mu = MU_S + (MU_D - MU_S) * f
+    if PARTIAL is None:
+        return mu
+    alpha, A, IN1 = PARTIAL
+    with np.errstate(invalid="ignore", divide="ignore"):
+        I = np.where(a > 0, I0 * np.sqrt(gdot * gdot + gdot_min * gdot_min) / a, np.inf)
+        return np.where(I < IN1, np.sqrt(alpha / np.log(A / np.maximum(I, 1e-300))), mu)
 
 
 # ---------------------------------------------------------------- meshes
@@ -468,7 +492,7 @@ def viscosity(gdot, p, yld, gdot_min, eta_min, eta_max, d=D_GRAIN, tangent=False
     of the Newton term (D(v):D)(D:D(du))."""
     pp = np.maximum(p, 0.0)
     a = I0 * np.sqrt(pp / (RHO_S * d * d))
-    mu = mu_of(gdot, pp, d)
+    mu = mu_of(gdot, pp, d, gdot_min)
     k = k_of_mu(mu, yld)
     gr = np.sqrt(gdot * gdot + gdot_min * gdot_min)
     eta_raw = k * pp / gr
@@ -479,6 +503,11 @@ def viscosity(gdot, p, yld, gdot_min, eta_min, eta_max, d=D_GRAIN, tangent=False
     gs = np.maximum(gdot, 1e-12 * max(gdot_min, 1e-30))
     with np.errstate(invalid="ignore", divide="ignore"):
         mug_over_g = np.where(a + gs > 0, (MU_D - MU_S) * a / ((a + gs) ** 2 * gs), 0.0)
+        if PARTIAL is not None:  # d mu / d gdot / gdot = mu / (2 gr^2 ln(A / I)) below I_N1
+            alpha, A, IN1 = PARTIAL
+            I = np.where(a > 0, I0 * gr / a, np.inf)
+            low = I < IN1
+            mug_over_g = np.where(low, mu / (2 * gr * gr * np.log(A / np.maximum(I, 1e-300))), mug_over_g)
     c = 4 * (pp * kp * mug_over_g / gr - k * pp / gr ** 3)
     c[(eta_raw <= eta_min) | (eta_raw >= eta_max)] = 0.0
     return eta, c
@@ -764,7 +793,7 @@ def bagnold_exact(y, h, theta_deg, yld="drucker_prager", d=D_GRAIN):
     """The steady mu(I) layer of depth h on a plane inclined at theta (u = 0 at y = 0):
     the chute study's analytic Bagnold profile (tools/studies/chute_study.py bagnold, the
     reference of tests/validate_chute.py; same Table 1 material)."""
-    return chute_study.bagnold(y, theta_deg, h, chute_study.READING[yld], d)
+    return chute_study.bagnold(y, theta_deg, h, chute_study.READING[yld], d, PARTIAL[0] if PARTIAL else None)
 
 
 def bagnold(theta_deg=23.0, h=0.005, ny=16, nx=4, yld="drucker_prager", gdot_min=1e-3, tol=1e-8, method="newton",
@@ -882,6 +911,9 @@ def main(argv=None):
     ap.add_argument("--rpm", type=float, default=RPM, help="the wall's rate, rev/min, clockwise (default 5)")
     ap.add_argument("--fill", type=float, default=FILL,
                     help="filling level R_f = (H + R) / 2R (default 0.42, the EV drum; the EN drum's is 0.591)")
+    ap.add_argument("--pr-alpha", type=float, default=None,
+                    help="Barker & Gray's (2017) partial regularisation below the well-posed window with this "
+                         "alpha (theirs: 1.9; sphseg's Material:mu_law partial, Material:pr_alpha); default off")
     ap.add_argument("--inertia", action="store_true", help="add rho u_old . grad u (Picard)")
     ap.add_argument("--pressure", choices=("lithostatic", "coupled"), default="lithostatic",
                     help="the p in eta: rho g cos(theta) (y_s - y) (default), or the FE pressure (see the docstring)")
@@ -890,6 +922,7 @@ def main(argv=None):
     ap.add_argument("--profile", default=None, help="CSV of the mid-chord profile at theta* (or the last theta)")
     ap.add_argument("--verbose", action="store_true")
     a = ap.parse_args(argv)
+    set_partial(a.pr_alpha)
     if a.theta is not None:
         angles = [a.theta]
     elif a.angles:
@@ -900,6 +933,9 @@ def main(argv=None):
     print("drum mu(I) reference: R %.4f m, y_s %.4f m, %.1f rpm clockwise, rho %.0f, rho_s %.0f, d %.3g m, "
           "yield %s, inertia %s, p in eta %s" % (R, (2 * a.fill - 1) * R, a.rpm, RHO, RHO_S, a.d, a.yld, "on" if a.inertia else "off",
                                              a.pressure))
+    if PARTIAL:
+        print("mu(I) partially regularised (Barker & Gray 2017): sqrt(%g / ln(%.1f / I)) below I_N1 = %.5f"
+              % PARTIAL)
     print("u_surf m/s, delta mm, q m^2/s, torques N m/m (ccw +), p-dev = max|p - p_lith|/p_lith max in the bed")
     summary = []
     T0 = time.time()

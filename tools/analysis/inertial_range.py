@@ -77,7 +77,8 @@ def params(outdir):
     m, g = u["Material"], u["Grains"]
     return {"mu_s": float(m["mu_s"]), "mu_d": float(m["mu_d"]), "I0": float(m["I0"]), "rho_s": float(m["rho_s"]),
             "yield": str(m.get("yield", "drucker_prager")), "d_small": float(g["d_small"]),
-            "d_large": float(g["d_large"])}
+            "d_large": float(g["d_large"]), "mu_law": str(m.get("mu_law", "regularized")),
+            "pr_alpha": float(m.get("pr_alpha", 1.9))}
 
 
 def kmu(mu):
@@ -98,8 +99,15 @@ def inertial_number(gdot, d, p, rho_s):
 
 
 def yield_ratio(P, I):
-    """k(mu(I)): the ratio sqrt(J2) / p on the yield surface of P's Material:yield at inertial number I."""
+    """k(mu(I)): the ratio sqrt(J2) / p on the yield surface of P's Material:yield at inertial number I,
+    with P's Material:mu_law (partial: Barker & Gray's law below I_N1; the solver's lambda floor on
+    the shear rate, which matters only where gdot < lambda = 1e-3 1/s, is left out)."""
+    I = np.asarray(I, float)
     mu = mu_of_I(I, P["mu_s"], P["mu_d"], P["I0"])
+    if P.get("mu_law") == "partial":
+        lo, A, _ = partial_regularisation(P["mu_s"], P["mu_d"], P["I0"], P["pr_alpha"])
+        with np.errstate(divide="ignore"):
+            mu = np.where(I < lo, np.sqrt(P["pr_alpha"] / np.log(A / np.maximum(I, 1e-300))), mu)
     return mu if P["yield"] == "mu_I" else kmu(mu)
 
 

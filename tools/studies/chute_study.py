@@ -40,6 +40,7 @@ import shutil
 import numpy as np
 
 from tools import ROOT  # noqa: E402
+from tools.analysis.inertial_range import partial_regularisation  # noqa: E402
 from tools.studies import batch  # noqa: E402
 
 SCENE = os.path.join(ROOT, "inputs", "chute_2d.yml")
@@ -62,10 +63,18 @@ def mu_of_kmu(k):
 READING = {"drucker_prager": "k_mu", "mu_I": "mu"}
 
 
-def inertial_number(theta_deg, reading="k_mu"):
-    """Steady I for the slope, or 0 (arrested) or inf (no steady flow)."""
+def inertial_number(theta_deg, reading="k_mu", pr_alpha=None):
+    """Steady I for the slope, or 0 (arrested) or inf (no steady flow). pr_alpha:
+    Barker & Gray's (2017) partially regularised law (Material:mu_law partial) with
+    this alpha: below I_N1, mu = sqrt(alpha / ln(A / I)), so I = A exp(-alpha / mu^2),
+    and no slope is arrested."""
     t = math.tan(math.radians(theta_deg))
     mu = mu_of_kmu(t) if reading == "k_mu" else t
+    if pr_alpha is not None and mu < MU_D:
+        IN1, A, _ = partial_regularisation(MU_S, MU_D, I0, pr_alpha)
+        I = A * math.exp(-pr_alpha / (mu * mu)) if mu > 0 else 0.0
+        if I < IN1:
+            return I
     if mu <= MU_S:
         return 0.0
     if mu >= MU_D:
@@ -73,9 +82,9 @@ def inertial_number(theta_deg, reading="k_mu"):
     return I0 * (mu - MU_S) / (MU_D - mu)
 
 
-def bagnold(z, theta_deg, H, reading="k_mu", d=D_GRAIN):
-    """Analytic velocity at heights z above the base (m/s)."""
-    I = inertial_number(theta_deg, reading)
+def bagnold(z, theta_deg, H, reading="k_mu", d=D_GRAIN, pr_alpha=None):
+    """Analytic velocity at heights z above the base (m/s); pr_alpha as inertial_number."""
+    I = inertial_number(theta_deg, reading, pr_alpha)
     c = math.cos(math.radians(theta_deg))
     z = np.clip(np.asarray(z, float), 0, H)
     return 2.0 / 3.0 * I * math.sqrt(RHO * G * c / RHO_S) / d * (H ** 1.5 - (H - z) ** 1.5)

@@ -13,7 +13,8 @@ panels against the depth zeta: the speed along the surface; the SPH's speed
 over the FE's less one; the SPH's inertial number I = gdot d / sqrt(p / rho_s)
 (d: the grain size, the FE's well-mixed 0.375 mm for a run without
 segregation) with the lower edge of mu(I)'s well-posed window (Barker et al.
-2015; tools/analysis/inertial_range.py) and the ill-posed band below it.
+2015; tools/analysis/inertial_range.py) and the ill-posed band below it (--partial: the band where the partially regularised
+law of Material:mu_law partial applies, well posed).
 """
 import argparse
 import warnings
@@ -43,6 +44,10 @@ def main():
     ap.add_argument("--d", type=float, default=0.000375, help="grain size in I, m (default 0.000375)")
     ap.add_argument("--rho-s", type=float, default=2500.0, help="grain density in I (default 2500)")
     ap.add_argument("--zmax", type=float, default=0.009, help="deepest zeta drawn, m (default 0.009)")
+    ap.add_argument("--partial", action="store_true",
+                    help="the runs and the FE use Material:mu_law partial: below I_N1 the partially regularised "
+                         "law, well posed (the band is labelled so)")
+    ap.add_argument("--title", default=None, help="a title over the three panels")
     a = ap.parse_args()
     import matplotlib
     matplotlib.use("Agg")
@@ -72,11 +77,14 @@ def main():
     ax[2].axvline(lo, color="r", lw=1)
     ax[2].axvspan(1e-5, lo, color="r", alpha=0.08)
     ax[2].set_xlim(1e-4, 0.3)
-    ax[2].text(lo * 0.9, 0.3, "ill-posed\nI < %.4f" % lo, color="r", ha="right", va="top", fontsize=8)
+    ax[2].text(lo * 0.9, 0.3, ("partial law\n(well posed)\nI < %.4f" if a.partial else "ill-posed\nI < %.4f") % lo,
+               color="r", ha="right", va="top", fontsize=8)
     for x in ax:
         x.grid(alpha=0.3)
         x.legend(fontsize=8)
     ax[0].invert_yaxis()
+    if a.title:
+        fig.suptitle(a.title, fontsize=10)
     fig.tight_layout()
     fig.savefig(a.png, dpi=120)
     print("wrote %s" % a.png)
