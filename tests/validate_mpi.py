@@ -109,6 +109,9 @@ CASES = [
     ("chute_metis", "column_2d.yml", 1000, CHUTE + ["Parallel:method=metis", "Geometry:height=0.07"], "wrap"),
     # the tensorial mu(I) yield (Material:yield mu_I, which inputs/chute_2d.yml uses) on the chute above
     ("chute_mu_I", "column_2d.yml", 1000, CHUTE + ["Material:yield=mu_I", "Parallel:axis=x"], "wrap"),
+    # Barker & Gray's partially regularised mu(I) (Material:mu_law partial, stress.h stress_mu) on the same
+    ("chute_partial", "column_2d.yml", 1000, CHUTE + ["Material:yield=mu_I", "Material:mu_law=partial",
+                                                      "Parallel:axis=x"], "wrap"),
     # a gate (Geometry:runout, Walls:gate_open): a column collapse, the gate's dummies leave at t = 0.01 s;
     # the slab bounds stay where the first cut put them, so that the front's migrations do not depend on
     # the measured times a load balance would move them by (3 GPU ranks on one device, 49da5d4: 1, 10, 6

@@ -243,11 +243,13 @@ def test_drum(args):
 
 # Issue 30's options, each of which keeps state or changes what a step reads:
 # the Riemann dissipation with shifting, the excluded background pressure and
-# the tensorial yield surface together; the delta-SPH pressure diffusion alone.
+# the tensorial yield surface together; the delta-SPH pressure diffusion alone;
+# the partially regularised mu(I) with the bed damping (the drum scenes').
 OPTION_CASES = [
     ("drum_riemann_shift_mu_I", ["Flow:stabilization=riemann", "Flow:shifting=fickian",
                                  "Flow:background_pressure=excluded", "Material:yield=mu_I"]),
     ("drum_delta", ["Flow:stabilization=delta"]),
+    ("drum_partial_bed", ["Flow:stabilization=riemann", "Flow:bed_damping=1", "Material:mu_law=partial"]),
 ]
 
 
