@@ -41,7 +41,8 @@ enum mat_yield { MAT_YIELD_DRUCKER_PRAGER = 0, MAT_YIELD_MU_I = 1 };
 /* Material:mu_law, mu(I) at low I: regularized, the paper's (2.14) (mu -> mu_s
  * as gdot -> 0: a static yield); partial, the partial regularisation of
  * Barker & Gray (2017): sqrt(alpha / ln(A / I)) below the well-posed window's
- * lower edge I_N1 (no static yield: mu -> 0 as I -> 0) */
+ * lower edge I_N1 (no static yield: at gdot = 0 mu is the law's at the I of
+ * gdot = lambda, physics/stress.h stress_mu) */
 enum mat_mu_law { MAT_MU_REGULARIZED = 0, MAT_MU_PARTIAL = 1 };
 /* Flow:stabilization: monaghan, the paper's artificial viscosity (3.10);
  * riemann, the low-dissipation Riemann solver of Zhang, Hu & Adams (2017);

@@ -110,7 +110,7 @@ import scipy.sparse.linalg as spla
 from scipy.optimize import brentq
 from scipy.spatial import Delaunay
 
-from tools.analysis.inertial_range import kmu, partial_regularisation  # noqa: E402
+from tools.analysis.inertial_range import kmu, mu_partial, partial_regularisation  # noqa: E402
 from tools.studies import chute_study  # noqa: E402
 
 # the drum of inputs/drum_2d_EV.yml and the Table 1 material
@@ -162,7 +162,7 @@ def mu_of(gdot, p, d=D_GRAIN, gdot_min=0.0):
     alpha, A, IN1 = PARTIAL
     with np.errstate(invalid="ignore", divide="ignore"):
         I = np.where(a > 0, I0 * np.sqrt(gdot * gdot + gdot_min * gdot_min) / a, np.inf)
-        return np.where(I < IN1, np.sqrt(alpha / np.log(A / np.maximum(I, 1e-300))), mu)
+    return mu_partial(I, IN1, A, alpha, mu)
 
 
 # ---------------------------------------------------------------- meshes

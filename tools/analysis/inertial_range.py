@@ -98,6 +98,13 @@ def inertial_number(gdot, d, p, rho_s):
     return gdot * d / np.sqrt(p / rho_s)
 
 
+def mu_partial(I, IN1, A, alpha, mu):
+    """Barker & Gray's (2017) law below IN1, sqrt(alpha / ln(A / I)), and mu (the law above) elsewhere."""
+    I = np.asarray(I, float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(I < IN1, np.sqrt(alpha / np.log(A / np.maximum(I, 1e-300))), mu)
+
+
 def yield_ratio(P, I):
     """k(mu(I)): the ratio sqrt(J2) / p on the yield surface of P's Material:yield at inertial number I,
     with P's Material:mu_law (partial: Barker & Gray's law below I_N1; the solver's lambda floor on
@@ -106,8 +113,7 @@ def yield_ratio(P, I):
     mu = mu_of_I(I, P["mu_s"], P["mu_d"], P["I0"])
     if P.get("mu_law") == "partial":
         lo, A, _ = partial_regularisation(P["mu_s"], P["mu_d"], P["I0"], P["pr_alpha"])
-        with np.errstate(divide="ignore"):
-            mu = np.where(I < lo, np.sqrt(P["pr_alpha"] / np.log(A / np.maximum(I, 1e-300))), mu)
+        mu = mu_partial(I, lo, A, P["pr_alpha"], mu)
     return mu if P["yield"] == "mu_I" else kmu(mu)
 
 
