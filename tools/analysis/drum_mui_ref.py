@@ -14,6 +14,10 @@ Equations (SI units):
   k = 3 mu / sqrt(9 + 12 mu^2) (--yield drucker_prager, the drum scenes'
       default: tau / p = k in simple shear, sqrt(J2) = eta gdot = k p) or
   k = mu (--yield mu_I),
+  and with --pr-alpha ALPHA (sphseg's Material:mu_law partial), below the lower
+  edge I_N1 of the well-posed window (tools/analysis/inertial_range.py)
+  mu = sqrt(ALPHA / ln(A / I)), A = I_N1 exp(ALPHA / mu(I_N1)^2), its I taken at
+  sqrt(gdot^2 + gdot_min^2) (as the solver takes it at sqrt(gdot^2 + lambda^2)),
 
 with rho = 1500 (momentum and pressure), rho_s = 2500 (inertial number only),
 d = 0.375 mm (the well-mixed mean of 0.25 and 0.5 mm), mu_s 0.382, mu_d
