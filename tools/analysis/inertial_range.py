@@ -105,6 +105,11 @@ def mu_partial(I, IN1, A, alpha, mu):
         return np.where(I < IN1, np.sqrt(alpha / np.log(A / np.maximum(I, 1e-300))), mu)
 
 
+def partial_inverse(mu, A, alpha):
+    """The I at which the partial law gives mu: A exp(-alpha / mu^2) (0 at mu = 0)."""
+    return A * math.exp(-alpha / (mu * mu)) if mu > 0 else 0.0
+
+
 def yield_ratio(P, I):
     """k(mu(I)): the ratio sqrt(J2) / p on the yield surface of P's Material:yield at inertial number I,
     with P's Material:mu_law (partial: Barker & Gray's law below I_N1; the solver's lambda floor on
@@ -149,14 +154,14 @@ def cmd_window(a):
         lo, A, mu_lo = partial_regularisation(a.mu_s, a.mu_d, a.I0, a.pr_alpha)
         print("partial regularisation (Barker & Gray 2017), alpha %g: mu = sqrt(alpha / ln(A / I)) below "
               "I_N1 = %.4g, A = %.4g; mu(1e-4) = %.4f, mu(1e-6) = %.4f (mu_s %g)" % (
-                  a.pr_alpha, lo, A, math.sqrt(a.pr_alpha / math.log(A / 1e-4)),
-                  math.sqrt(a.pr_alpha / math.log(A / 1e-6)), a.mu_s))
+                  a.pr_alpha, lo, A, float(mu_partial(1e-4, lo, A, a.pr_alpha, mu_lo)),
+                  float(mu_partial(1e-6, lo, A, a.pr_alpha, mu_lo)), a.mu_s))
         print("  a steady uniform layer whose shear stress ratio is mu = tan(theta) (the mu_I yield surface) "
               "flows at I = A exp(-alpha / mu^2):")
         for th in a.angles:
             m = math.tan(math.radians(th))
             if m < mu_lo:
-                print("    %5.2f deg: I = %.3g" % (th, A * math.exp(-a.pr_alpha / (m * m))))
+                print("    %5.2f deg: I = %.3g" % (th, partial_inverse(m, A, a.pr_alpha)))
 
 
 def cmd_run(a):

@@ -40,7 +40,7 @@ import shutil
 import numpy as np
 
 from tools import ROOT  # noqa: E402
-from tools.analysis.inertial_range import partial_regularisation  # noqa: E402
+from tools.analysis.inertial_range import partial_inverse, partial_regularisation  # noqa: E402
 from tools.studies import batch  # noqa: E402
 
 SCENE = os.path.join(ROOT, "inputs", "chute_2d.yml")
@@ -72,7 +72,7 @@ def inertial_number(theta_deg, reading="k_mu", pr_alpha=None):
     mu = mu_of_kmu(t) if reading == "k_mu" else t
     if pr_alpha is not None and mu < MU_D:
         IN1, A, _ = partial_regularisation(MU_S, MU_D, I0, pr_alpha)
-        I = A * math.exp(-pr_alpha / (mu * mu)) if mu > 0 else 0.0
+        I = partial_inverse(mu, A, pr_alpha)
         if I < IN1:
             return I
     if mu <= MU_S:
