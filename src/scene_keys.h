@@ -300,7 +300,7 @@ SECTION("Flow", flow, scene_flow)
     KF("Flow", flow, scene_flow, delta, OPT, "0.1", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "Flow:stabilization delta: the diffusion coefficient delta of delta-SPH; default 0.1 (Antuono et al. 2010; Marrone et al. 2011)")
     KU("Flow", flow, scene_flow, shepard_every, "30",
-      "Shepard filter (3.12) every N steps; default 30; 0 = off")
+      "Shepard filter (3.12) every N steps; default 30; 0 = off. N Run:cfl_flow bounds the interval in acoustic times h / c_s: below 3 the filter slows a drum's flow (6 % at 1.5; docs/granular.md \"The time step and the Shepard filter\")")
     KF("Flow", flow, scene_flow, damping, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "velocity damping -zeta u added to (3.9), 1/s, for settling (dynamic relaxation); default 0")
     KF("Flow", flow, scene_flow, damping_until, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,

@@ -17,8 +17,9 @@ int settings_check(const struct scene *sc, const char *backend);
 
 /* The warnings for a drum's computed flow outside the range measured to be
  * accurate (docs/gpu.md "Stiffness, artificial viscosity and CFL"):
- * settings_warn_alpha_sqrt_e, a modulus below the softest measured accurate
- * and Run:cfl_flow above 0.2. */
+ * settings_warn_alpha_sqrt_e, a modulus below the softest measured accurate,
+ * Run:cfl_flow above 0.2, and a Shepard filter less than 3 acoustic times
+ * apart (Flow:shepard_every * Run:cfl_flow). */
 void settings_warn_drum(const struct scene *sc);
 
 /* Flow:alpha_av * sqrt(Material:E) more than a factor 2 off Table 1's:

@@ -12,7 +12,9 @@ strip of width W = 0.1 R of drum_layer, so a row of the strip holds W dr of
 material, as a disordered bed does on average.
 
 - drum_analysis: the fitted angle is the surface's (1e-9 deg); the top grains'
-  speed is u(dr / 2) exactly (round-off: they are the top row); the largest
+  speed is u(dr / 2) exactly (round-off: they are the top row), and so it reads
+  (to the table's 0.01 cm/s) from the printed table through read_table and
+  filter_interval_chart.top_grains (its time window too); the largest
   Shepard-interpolated speed reads below u(0), by less at the finer dr (the
   reading's bias of docs/granular.md, which drum_fe_read measures);
 - drum_layer.layer: the squared half chord is R^2 - r_M^2 and the squared
@@ -29,6 +31,7 @@ material, as a disordered bed does on average.
 
     /usr/bin/python3 -m tests.test_drum_readers [--sphseg IGNORED --work IGNORED]
 """
+import copy
 import os
 import sys
 import tempfile
@@ -39,6 +42,7 @@ from tests.checks import check, parse_args, summary  # noqa: E402
 from tools.analysis import drum_analysis as da  # noqa: E402
 from tools.analysis import drum_fe_read as fr  # noqa: E402
 from tools.analysis import drum_layer as dl  # noqa: E402
+from tools.studies import filter_interval_chart as fic  # noqa: E402
 
 R, YS, THETA, U, DELTA, RHO, G = 0.035, 0.0056, 21.2, 0.08, 0.006, 1500.0, 9.81
 
@@ -59,6 +63,26 @@ def params_dir(work):
     return work
 
 
+def table_roundtrip(d, work, dr):
+    """drum_analysis's printed table (TABLE_HEAD, table_row at two times) read back by read_table
+    and filter_interval_chart.top_grains: the top grains' speed in cm/s, after checking that both
+    lines and only they come back."""
+    d = copy.copy(d)
+    d.C = np.full_like(d.C, 0.5)  # the lattice is laid with C = 0: its segregation index is undefined
+    path = os.path.join(work, "table_%g.ana" % dr)
+    with open(path, "w") as f:
+        f.write("preamble 1.0 dr 2.0 cm/s\n" + da.TABLE_HEAD + "\n")
+        for t in (3.0, 3.5):
+            d.t = t
+            f.write(da.table_row(d) + "\n")
+        f.write("wrote profiles.csv\nmax |relative drift of sum C_i V_i|: 0.000e+00\n")
+    rows = da.read_table(path)
+    check("dr %.1f mm printed table: snapshots read back" % (1e3 * dr), len(rows), 2,
+          [r[0] for r in rows] == [3.0, 3.5], "two lines under the header, nothing else")
+    tg = fic.top_grains(path, 3.25)
+    return float(tg[0, 1])
+
+
 def main():
     a = parse_args(__doc__, "directory for the run parameters (default: a temporary one)")
     work = params_dir(a.work or tempfile.mkdtemp(prefix="drum_readers_"))
@@ -73,6 +97,9 @@ def main():
         ug = d.surface_grain_speed()
         uh = np.interp(0.5 * dr, z, u)
         check(tag + " top grains / u(dr/2) - 1", abs(ug / uh - 1), 1e-12, abs(ug / uh - 1) < 1e-12, "the top row")
+        rt = table_roundtrip(d, work, dr)
+        check(tag + " printed table read back: top grains - u(dr/2), cm/s", abs(rt - 100 * uh), 0.005,
+              abs(rt - 100 * uh) <= 0.005, "read_table of table_row, as filter_interval_chart reads it")
         bias[dr] = d.surface_speed() / U - 1
         check(tag + " Shepard reading / u(0) - 1", bias[dr], "in (-0.1, 0)", -0.1 < bias[dr] < 0,
               "a one-sided average below the surface")

@@ -5,7 +5,9 @@
 # monaghan only, which the probes of it set: the drum scene runs riemann), and
 # Run:cfl_flow > 0.2, and E below the softest measured accurate (10 kPa); the
 # pressure diffusion's (settings_warn_stabilization); Material:mu_law partial's
-# (settings_warn_mu_law). Each probe is a 1-step CPU drum; the warning must be
+# (settings_warn_mu_law); and the Shepard filter's interval below 3 acoustic times,
+# Flow:shepard_every * Run:cfl_flow (docs/granular.md "The time step and the Shepard
+# filter"). Each probe is a 1-step CPU drum; the warning must be
 # there when the setting is off and absent when it is in range.
 set -u
 bin=${1:?usage: test_settings_warnings.sh BUILD/sphseg}
@@ -36,4 +38,9 @@ probe "Material:mu_law partial: its warning" yes "Material:mu_law partial: mu(I)
     Material:E=1e5 Material:mu_law=partial
 probe "cfl_flow 0.2: no CFL warning" no "cfl_flow" Run:cfl_flow=0.2
 probe "cfl_flow 0.3: CFL warning" yes "Run:cfl_flow = 0.3 > 0.2" Run:cfl_flow=0.3
+probe "cfl_flow 0.05, shepard_every 30 (1.5 acoustic times): filter warning" yes \
+    "Flow:shepard_every \* Run:cfl_flow = 1.5 < 3" Run:cfl_flow=0.05
+probe "cfl_flow 0.05, shepard_every 60 (3 acoustic times): no filter warning" no "shepard_every" \
+    Run:cfl_flow=0.05 Flow:shepard_every=60
+probe "cfl_flow 0.05, the filter off: no filter warning" no "shepard_every" Run:cfl_flow=0.05 Flow:shepard_every=0
 exit $fail

@@ -485,6 +485,35 @@ def plot_global(outdir, png):
     plt.close(fig)
 
 
+TABLE_HEAD = "%8s %9s %10s %12s %12s %10s %13s" % ("t (s)", "angle", "flatness", "max |u| mc", "seg index",
+                                                     "C range", "top grains u")
+
+
+def table_row(d):
+    """One snapshot's line of the printed table (under TABLE_HEAD)."""
+    return ("%8.3f %8.2f° %8.2f dr %9.2f cm/s %12.4f %5.3f-%5.3f %8.2f cm/s"
+            % (d.t, d.angle, d.flatness, 100 * d.surface_speed(), d.segregation_index(),
+               d.C.min(), d.C.max(), 100 * d.surface_grain_speed()))
+
+
+def read_table(path):
+    """The printed table back from a saved output: [(t s, angle deg, max |u| mc cm/s, seg index,
+    top grains u cm/s)], one per snapshot line under TABLE_HEAD."""
+    rows, head = [], False
+    with open(path) as f:
+        for line in f:
+            if line.rstrip("\n") == TABLE_HEAD:
+                head = True
+                continue
+            tok = line.split()
+            if not head or len(tok) != 10 or tok[3] != "dr" or tok[-1] != "cm/s":
+                if head and rows:
+                    break
+                continue
+            rows.append((float(tok[0]), float(tok[1].rstrip("°")), float(tok[4]), float(tok[6]), float(tok[8])))
+    return rows
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("outdir")
@@ -504,12 +533,9 @@ def main():
     if a.times:
         paths = list(dict.fromkeys(pick(paths, a.times)))  # a time past the last snapshot picks it once
     drums = [Drum(p, par, a.slab) for p in paths]
-    print("%8s %9s %10s %12s %12s %10s %13s" % ("t (s)", "angle", "flatness", "max |u| mc", "seg index", "C range",
-                                                  "top grains u"))
+    print(TABLE_HEAD)
     for d in drums:
-        print("%8.3f %8.2f° %8.2f dr %9.2f cm/s %12.4f %5.3f-%5.3f %8.2f cm/s"
-              % (d.t, d.angle, d.flatness, 100 * d.surface_speed(), d.segregation_index(),
-                 d.C.min(), d.C.max(), 100 * d.surface_grain_speed()))
+        print(table_row(d))
     axs = []
     if paths and int(snap.read_snapshot(paths[0]).get("Dimension", 2)) == 3:
         axs = [Axial(p, par, a.zbins, a.endslab) for p in paths]
