@@ -112,9 +112,14 @@ void report_start(sim_t *s, const outputs *o, const run_cli *c)
     tuning_log();
     char wl[1024], st[128];
     message("container: walls %s", wall_list(s, 1, wl, sizeof wl));
-    if (s->flow_on)
-        message("flow: c_s = %.4g m/s, h/c_s = %.3g s, Shepard filter every %u steps, %s", (double)s->flow.cs,
-                (double)(s->seg.k.h / s->flow.cs), sc->flow.shepard_every, stab_text(sc, st, sizeof st));
+    if (s->flow_on) {
+        char sh[96] = "Shepard filter off"; /* its interval: a step is at most cfl_flow h / c_s (3.19) */
+        if (sc->flow.shepard_every > 0)
+            snprintf(sh, sizeof sh, "Shepard filter every %u steps (at most %.3g acoustic times h/c_s)",
+                     sc->flow.shepard_every, sc->flow.shepard_every * sc->run.cfl_flow);
+        message("flow: c_s = %.4g m/s, h/c_s = %.3g s, %s, %s", (double)s->flow.cs, (double)(s->seg.k.h / s->flow.cs),
+                sh, stab_text(sc, st, sizeof st));
+    }
     if (s->flow_on) {
         settings_warn_stabilization(sc);
         settings_warn_mu_law(sc);
