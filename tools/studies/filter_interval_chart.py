@@ -47,7 +47,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--run", action="append", required=True, help="LABEL;N_CHI;RUN.ana[;TMIN[;TMAX]]")
     ap.add_argument("--png", help="write the chart here (needs matplotlib)")
-    ap.add_argument("--title", default="2D drums at 5 rpm, E 0.1 MPa: surface speed against the Shepard filter's interval")
+    ap.add_argument("--title",
+                    default="2D drums at 5 rpm, E 0.1 MPa: surface speed against the Shepard filter's interval")
     a = ap.parse_args(argv)
     runs = []
     for spec in a.run:
