@@ -14,7 +14,10 @@ material, as a disordered bed does on average.
 - drum_analysis: the fitted angle is the surface's (1e-9 deg); the top grains'
   speed is u(dr / 2) exactly (round-off: they are the top row), and so it reads
   (to the table's 0.01 cm/s) from the printed table through read_table and
-  filter_interval_chart.top_grains (its time window too); the largest
+  filter_interval_chart.top_grains (its time window too); binned along the
+  chord (surface_grains_along) every bin but the two at the wall (the corners)
+  reads u(dr / 2) at height 0 above the fitted line, and the bins hold every
+  surface grain; the largest
   Shepard-interpolated speed reads below u(0), by less at the finer dr (the
   reading's bias of docs/granular.md, which drum_fe_read measures);
 - drum_layer.layer: the squared half chord is R^2 - r_M^2 and the squared
@@ -63,6 +66,16 @@ def params_dir(work):
     return work
 
 
+def along_roundtrip(d, work, dr):
+    """drum_analysis --along's file (write_along) of the snapshot at t = 3 and 3.5 s, read back by
+    read_along over [3, 3.5]: {bin: (s/R, speed, se, height, snapshots)}."""
+    a, b = copy.copy(d), copy.copy(d)
+    a.t, b.t = 3.0, 3.5
+    path = os.path.join(work, "along_%g.csv" % dr)
+    da.write_along([a, b], path)
+    return da.read_along(path, 3.0, 3.5)
+
+
 def table_roundtrip(d, work, dr):
     """drum_analysis's printed table (TABLE_HEAD, table_row at two times) read back by read_table
     and filter_interval_chart.top_grains: the top grains' speed in cm/s, after checking that both
@@ -97,6 +110,17 @@ def main():
         ug = d.surface_grain_speed()
         uh = np.interp(0.5 * dr, z, u)
         check(tag + " top grains / u(dr/2) - 1", abs(ug / uh - 1), 1e-12, abs(ug / uh - 1) < 1e-12, "the top row")
+        al = d.surface_grains_along(np.linspace(-1, 1, 21))
+        inner = [b for b in al[1:-1] if b[3]]  # the end bins hold the corners at the wall
+        ea = max(max(abs(b[1] / uh - 1) for b in inner), max(abs(b[2]) for b in inner))
+        check(tag + " surface grains along the chord: speed / u(dr/2) - 1, height in dr", ea, 1e-9,
+              ea < 1e-9 and len(inner) == 18 and sum(b[3] for b in al) == len(d.top),
+              "the top row, on the fitted line, in every bin but the two at the wall")
+        ra = along_roundtrip(d, work, dr)
+        ei = max(abs(ra[b][1] / uh - 1) for b in range(1, 19))
+        check(tag + " --along file read back: speed / u(dr/2) - 1 in the inner bins", ei, 1e-5,
+              ei < 1e-5 and sorted(ra) == list(range(20)) and all(ra[b][4] == 2 for b in ra),
+              "write_along and read_along (6 digits), both snapshots in every bin")
         rt = table_roundtrip(d, work, dr)
         check(tag + " printed table read back: top grains - u(dr/2), cm/s", abs(rt - 100 * uh), 0.005,
               abs(rt - 100 * uh) <= 0.005, "read_table of table_row, as filter_interval_chart reads it")

@@ -191,6 +191,24 @@ class Drum:
         near = self.top[np.abs(s) <= window * self.R]
         return float(np.mean(self.speed[near])) if len(near) else float("nan")
 
+    def surface_grains_along(self, edges):
+        """The surface grains binned along the fitted line by s / R (s from M along the line, growing
+        with x): per bin of `edges` the mean s / R, their mean speed (m/s), their mean height above
+        the line in dr (the surface's shape) and their number (nan where a bin is empty). In the bins
+        at the wall the highest particle of an x bin may be a corner's, below the surface."""
+        t = np.array([1.0, self.slope]) / np.hypot(1.0, self.slope)
+        rel = self.x[self.top] - self.M
+        s = rel @ t / self.R
+        up = -(rel @ self.n) / self.dr
+        k = np.digitize(s, edges) - 1
+        out = []
+        for b in range(len(edges) - 1):
+            m = k == b
+            n = int(m.sum())
+            out.append((float(s[m].mean()) if n else np.nan, float(self.speed[self.top][m].mean()) if n else np.nan,
+                        float(up[m].mean()) if n else np.nan, n))
+        return out
+
     def segregation_index(self):
         c = np.average(self.x, axis=0, weights=self.vol)
         r = np.hypot(*(self.x - c).T)
@@ -485,6 +503,36 @@ def plot_global(outdir, png):
     plt.close(fig)
 
 
+ALONG_EDGES = np.linspace(-1.0, 1.0, 21)  # --along: bins of s / R, 0.1 R wide
+
+
+def write_along(drums, path):
+    """--along: the surface grains along the surface line (Drum.surface_grains_along), one row a
+    non-empty bin a snapshot: t, s/R, speed (m/s), height above the fitted line (dr), count."""
+    with open(path, "w") as f:
+        f.write("t,s_over_R,speed,height_dr,n\n")
+        for d in drums:
+            for sm, u, up, n in d.surface_grains_along(ALONG_EDGES):
+                if n:
+                    f.write("%.6g,%.6g,%.6g,%.6g,%d\n" % (d.t, sm, u, up, n))
+
+
+def read_along(path, tmin=-np.inf, tmax=np.inf):
+    """write_along's file back, the snapshots in [tmin, tmax] averaged per bin of ALONG_EDGES (a
+    row's mean s / R lies in its bin): {bin: (s/R, speed m/s, its standard error over the
+    snapshots, height dr, snapshots)}."""
+    a = np.genfromtxt(path, delimiter=",", names=True, ndmin=1)
+    a = a[(a["t"] >= tmin - 1e-9) & (a["t"] <= tmax + 1e-9)]
+    k = np.digitize(a["s_over_R"], ALONG_EDGES) - 1
+    out = {}
+    for b in np.unique(k):
+        m = k == b
+        u = a["speed"][m]
+        se = float(u.std(ddof=1) / np.sqrt(u.size)) if u.size > 1 else float("nan")
+        out[int(b)] = (float(a["s_over_R"][m].mean()), float(u.mean()), se, float(a["height_dr"][m].mean()), int(u.size))
+    return out
+
+
 TABLE_HEAD = "%8s %9s %10s %12s %12s %10s %13s" % ("t (s)", "angle", "flatness", "max |u| mc", "seg index",
                                                      "C range", "top grains u")
 
@@ -525,6 +573,8 @@ def main():
     ap.add_argument("--endslab", type=float, help="3D drum: width W (m) of the slabs next to the end walls and at "
                     "mid-length in the axial analysis (default 3 dr)")
     ap.add_argument("--csv", help="3D drum: write the axial analysis, one row per time, to this CSV file")
+    ap.add_argument("--along", help="write the surface grains along the surface line (t, s/R, speed m/s, height "
+                    "above the fitted line in dr, count; bins 0.1 R wide) to this CSV file")
     ap.add_argument("--profiles", help="write the mid-chord profiles (t, d_mc/R, speed m/s, shear rate 1/s, C; "
                     "120 points from the surface to the wall per time) to this CSV file")
     a = ap.parse_args()
@@ -549,6 +599,9 @@ def main():
                 w.writeheader()
                 w.writerows(rows)
             print("wrote %s" % a.csv)
+    if a.along:
+        write_along(drums, a.along)
+        print("wrote %s" % a.along)
     if a.profiles:
         write_profiles(drums, a.profiles)
         print("wrote %s" % a.profiles)
