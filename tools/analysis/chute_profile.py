@@ -55,6 +55,10 @@ def params(outdir):
     import yaml
     with open(outdir + "/used_params.yml") as f:
         par = yaml.safe_load(f)
+    ini = par.get("Initial", {})
+    if float(ini.get("C_below", 0)) != 0 or float(ini.get("C_above", 0)) != 0:
+        raise SystemExit(f"{outdir}: the small grains' fraction C is not 0 (Initial:C_below/C_above), so the "
+                         "grain size in mu(I) is not Grains:d_large alone: not read here")
     g = par["Physics"]["gravity"]
     theta = math.degrees(math.atan2(g[0], -g[1]))
     return {"theta": theta, "H": float(par["Geometry"]["height"]), "dr": float(par["Geometry"]["dr"]),
