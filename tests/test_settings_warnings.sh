@@ -43,4 +43,6 @@ probe "cfl_flow 0.05, shepard_every 30 (1.5 acoustic times): filter warning" yes
 probe "cfl_flow 0.05, shepard_every 60 (3 acoustic times): no filter warning" no "shepard_every" \
     Run:cfl_flow=0.05 Flow:shepard_every=60
 probe "cfl_flow 0.05, the filter off: no filter warning" no "shepard_every" Run:cfl_flow=0.05 Flow:shepard_every=0
+probe "cfl_flow 0.15, shepard_every 20 (3, the bound): no filter warning" no "shepard_every" \
+    Run:cfl_flow=0.15 Flow:shepard_every=20
 exit $fail
