@@ -75,6 +75,8 @@ run_one drum_readers "$PYTHON" -m tests.test_drum_readers --work "$tmp/drum_read
 run_one inertial_range "$PYTHON" -m tests.test_inertial_range
 # issue 30: how chute_profile reads a chute layer's rows against Bagnold, on a known layer (no sphseg run)
 run_one chute_profile "$PYTHON" -m tests.test_chute_profile
+# issue 30: the plane Couette layer's exact local mu(I) solution and its reading (no sphseg run)
+run_one couette_ref "$PYTHON" -m tests.test_couette_ref
 for v in tests/validate_*.py; do
     case " ${vals[*]} " in *" $v "*) ;; *) vals+=("$v") ;; esac
 done
