@@ -13,7 +13,7 @@ answers known without it (no sphseg run; a few seconds):
   above (within one grid step);
 - tau_for_lid returns the tau whose lid moves at U (1e-6 of U);
 - the partial law (Barker & Gray 2017): where the ratio is the yield ratio of
-  Material:mu_law partial at I (tools/analysis/inertial_range.yield_ratio,
+  Material:mu_law partial at I (inertial_range.yield_ratio in tools/analysis,
   above and below I_N1), the shear rate is that I's, sqrt(gdot^2 + lambda^2)
   d / sqrt(p / rho_s) = I (1e-9);
 - measure on a laid lattice: rows of spacing dr carrying the reference's own
