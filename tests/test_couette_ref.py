@@ -15,7 +15,8 @@ answers known without it (no sphseg run; a few seconds):
 - the partial law (Barker & Gray 2017): where the ratio is the yield ratio of
   Material:mu_law partial at I (inertial_range.yield_ratio in tools/analysis,
   above and below I_N1), the shear rate is that I's, sqrt(gdot^2 + lambda^2)
-  d / sqrt(p / rho_s) = I (1e-9);
+  d / sqrt(p / rho_s) = I (1e-9), and tau_for_lid finds a tau below the static
+  yield stress, where that law's bed still creeps (1e-6);
 - measure on a laid lattice: rows of spacing dr carrying the reference's own
   profile and stresses (sigma_xy = -tau, sigma_yy = -(sigma_top + rho g z))
   give back tau and sigma_top to round-off and tau / tau_ref = 1 (1e-4: the
@@ -98,6 +99,11 @@ def main():
         e = abs(I_back / I - 1)
         check("partial law at I = %g: I of the shear rate / I - 1" % I, e, 1e-9, e < 1e-9,
               "inertial_range.yield_ratio, Barker & Gray 2017")
+    t0 = 0.9 * cu.k_of_mu(Pp["mu_s"], Pp) * s_top  # under the partial law the bed creeps below the static yield
+    U0 = cu.profile(t0, s_top, Pp, 4001)[1][0]
+    e = abs(cu.tau_for_lid(U0, s_top, Pp) / t0 - 1)
+    check("partial law: tau_for_lid below the static yield stress, relative", e, 1e-6, e < 1e-6,
+          "the lid speed of tau = 0.9 k(mu_s) sigma_top")
     tau = cu.tau_for_lid(P["U"], s_top, P)
     r = cu.measure(lattice(P, tau, s_top), P)
     e = max(abs(r["tau"] / tau - 1), abs(r["s_top"] / s_top - 1))

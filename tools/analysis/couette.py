@@ -32,7 +32,7 @@ reference's integral). The last two are the drum-like, ill-conditioned
 readings (a drum fixes the flux and lets the layer's depth follow), and they
 carry the rows at the lid, which move with it.
 
-  /usr/bin/python3 -m tools.analysis.couette OUTDIR [OUTDIR ...] [--times T ...]
+  /usr/bin/python3 -m tools.analysis.couette OUTDIR [OUTDIR ...] [--times T ...] [--rows CSV]
 """
 import argparse
 import os
@@ -120,8 +120,10 @@ def yield_depth(tau, s_top, P):
 
 def tau_for_lid(U, s_top, P):
     """The shear stress at which the local rheology's lid moves at U (bisection on u(0), which rises
-    with tau)."""
-    lo, hi = k_of_mu(P["mu_s"], P) * s_top, k_of_mu(P["mu_d"], P) * s_top
+    with tau), between the static yield stress (0 under the partial law, whose bed creeps at any tau)
+    and mu_d's."""
+    lo = 0.0 if P["mu_law"] == "partial" else k_of_mu(P["mu_s"], P) * s_top
+    hi = k_of_mu(P["mu_d"], P) * s_top
     for _ in range(100):
         mid = 0.5 * (lo + hi)
         if profile(mid, s_top, P, 4001)[1][0] < U:
