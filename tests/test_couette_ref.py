@@ -7,7 +7,8 @@ answers known without it (no sphseg run; a few seconds):
   / rho_s) / d, I = I0 (mu - mu_s) / (mu_d - mu), mu the friction whose yield
   ratio (drucker_prager k_mu(mu) = 3 mu / sqrt(9 + 12 mu^2), or mu_I's mu) is
   tau / p (1e-12);
-- mu_of_ratio inverts k_of_mu on both yield surfaces (1e-12);
+- inertial_range.mu_of_yield_ratio inverts k_of_mu on both yield surfaces
+  (1e-12);
 - under gravity the shear stops at the yield depth z_y = (tau / k(mu_s) -
   sigma_top) / (rho g): the profile's shear rate is 0 below it and positive
   above (within one grid step);
@@ -39,10 +40,7 @@ BASE = {"mu_s": 0.382, "mu_d": 0.682, "I0": 0.279, "rho_s": 2500.0, "yield": "dr
 
 
 def scene(**kw):
-    P = dict(BASE, **kw)
-    if P["mu_law"] == "partial":
-        P["I_N1"], P["A"], P["mu_N1"] = ir.partial_regularisation(P["mu_s"], P["mu_d"], P["I0"], P["pr_alpha"])
-    return P
+    return dict(BASE, **kw)
 
 
 def lattice(P, tau, s_top, per_row=20):
@@ -68,8 +66,8 @@ def main():
         P = scene(g=0.0, **{"yield": y})
         mu = 0.45
         k = cu.k_of_mu(mu, P)
-        back = float(cu.mu_of_ratio(k, P))
-        check("%s: mu_of_ratio(k_of_mu(0.45)) - 0.45" % y, abs(back - mu), 1e-12, abs(back - mu) < 1e-12,
+        back = float(ir.mu_of_yield_ratio(k, P["yield"]))
+        check("%s: mu_of_yield_ratio(k_of_mu(0.45)) - 0.45" % y, abs(back - mu), 1e-12, abs(back - mu) < 1e-12,
               "the inverse of the yield ratio")
         p, tau = 100.0, k * 100.0
         I = P["I0"] * (mu - P["mu_s"]) / (P["mu_d"] - mu)
@@ -94,7 +92,8 @@ def main():
         p = 100.0
         k = float(ir.yield_ratio(Pp, I))
         g = float(cu.shear_rate(k * p, p, Pp))
-        I_back = math.sqrt(g * g + Pp["lambda"] ** 2) * Pp["d"] / math.sqrt(p / Pp["rho_s"]) if I < Pp["I_N1"] \
+        I_N1 = ir.partial_regularisation(Pp["mu_s"], Pp["mu_d"], Pp["I0"], Pp["pr_alpha"])[0]
+        I_back = math.sqrt(g * g + Pp["lambda"] ** 2) * Pp["d"] / math.sqrt(p / Pp["rho_s"]) if I < I_N1 \
             else g * Pp["d"] / math.sqrt(p / Pp["rho_s"])
         e = abs(I_back / I - 1)
         check("partial law at I = %g: I of the shear rate / I - 1" % I, e, 1e-9, e < 1e-9,

@@ -12,7 +12,10 @@ run; under a second):
 - the partially regularised law sqrt(alpha / ln(A / I)) equals mu(I) at the
   window's lower edge I_N1 (continuity, which fixes A; 1e-12), lies below mu_s
   at I = 1e-4, and the I the tool reports for a slope theta inverts it:
-  mu_PR(I) = tan theta (1e-12).
+  mu_PR(I) = tan theta (1e-12);
+- inertial_number_of_ratio inverts yield_ratio on both yield surfaces under both
+  laws (1e-9), and under the regularized law gives 0 below the static ratio
+  k(mu_s) and inf above the dynamic one k(mu_d).
 
     /usr/bin/python3 -m tests.test_inertial_range [--sphseg IGNORED --work IGNORED]
 """
@@ -47,6 +50,20 @@ def main():
         m = math.tan(math.radians(th))
         I = A * math.exp(-ALPHA / (m * m))
         check("mu_PR(I(%g deg)) - tan" % th, abs(mu_pr(I) - m), 1e-12, abs(mu_pr(I) - m) < 1e-12, "the inverse")
+    for y in ("drucker_prager", "mu_I"):
+        for law in ("regularized", "partial"):
+            P = {"mu_s": MU_S, "mu_d": MU_D, "I0": I0, "yield": y, "mu_law": law, "pr_alpha": ALPHA}
+            for I in (1e-4, 5e-3, 0.05, 0.5):
+                if law == "regularized" and I < 1e-3:
+                    continue  # its yield ratio at I -> 0 is the static one, which arrests: I = 0 (below)
+                e = abs(float(ir.inertial_number_of_ratio(ir.yield_ratio(P, I), P)) / I - 1)
+                check("%s, %s: inertial_number_of_ratio(yield_ratio(I = %g)) / I - 1" % (y, law, I), e, 1e-9,
+                      e < 1e-9, "the inverse")
+        P = {"mu_s": MU_S, "mu_d": MU_D, "I0": I0, "yield": y, "mu_law": "regularized"}
+        k_s, k_d = ir.yield_ratio(P, 0.0), ir.yield_ratio(P, 1e12)
+        ok = ir.inertial_number_of_ratio(0.99 * k_s, P) == 0 and ir.inertial_number_of_ratio(1.001 * k_d, P) == math.inf
+        check("%s, regularized: I below the static ratio, above the dynamic" % y, 0, "0 and inf", ok,
+              "arrested, no steady state")
     sys.exit(summary("test_inertial_range"))
 
 

@@ -55,8 +55,6 @@ def scene(outdir):
         u = yaml.safe_load(f)
     P = ir.params(outdir)
     P["lambda"] = float(u["Material"].get("lambda", 1e-3))
-    if P["mu_law"] == "partial":
-        P["I_N1"], P["A"], P["mu_N1"] = ir.partial_regularisation(P["mu_s"], P["mu_d"], P["I0"], P["pr_alpha"])
     regions = u["Container"]["regions"]
     if any(float(r.get("C", 0)) != 0 for r in regions):
         raise SystemExit("couette: the reference takes one grain size, d_large (C = 0 throughout)")
@@ -74,30 +72,18 @@ def k_of_mu(mu, P):
     return mu if P["yield"] == "mu_I" else float(ir.kmu(mu))
 
 
-def mu_of_ratio(r, P):
-    """The friction mu at which the yield surface of P's Material:yield has sqrt(J2) / p = r."""
-    r = np.asarray(r, float)
-    if P["yield"] == "mu_I":
-        return r
-    # drucker_prager: r = 3 mu / sqrt(9 + 12 mu^2)  <=>  mu^2 (9 - 12 r^2) = 9 r^2
-    return np.sqrt(9 * r * r / np.maximum(9 - 12 * r * r, 1e-300))
-
-
 def shear_rate(tau, p, P):
     """The local rheology's shear rate where the stress ratio is tau / p, inf at or above mu_d (no
     steady shear there). Regularized law: 0 at or below mu_s (the solver's floor lambda on the shear
     rate, 1e-3 1/s, left out). Partial law (Barker & Gray 2017, as src/physics/stress.h stress_mu):
     below mu(I_N1), I = A exp(-alpha / mu^2) of sqrt(gdot^2 + lambda^2), so the shear rate is 0 only
     where that I is below the floor's."""
-    mu = mu_of_ratio(tau / p, P)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        I = np.where(mu >= P["mu_d"], np.inf, P["I0"] * (mu - P["mu_s"]) / (P["mu_d"] - mu))
-        if P["mu_law"] != "partial":
-            return np.where(mu <= P["mu_s"], 0.0, I) * np.sqrt(p / P["rho_s"]) / P["d"]
-        low = mu < P["mu_N1"]
-        I = np.where(low, P["A"] * np.exp(-P["pr_alpha"] / np.maximum(mu, 1e-300) ** 2), I)
-        g = I * np.sqrt(p / P["rho_s"]) / P["d"]
-        return np.where(low, np.sqrt(np.maximum(g * g - P["lambda"] ** 2, 0.0)), g)
+    I = ir.inertial_number_of_ratio(tau / p, P)
+    g = I * np.sqrt(p / P["rho_s"]) / P["d"]
+    if P["mu_law"] != "partial":
+        return g
+    low = I < ir.partial_regularisation(P["mu_s"], P["mu_d"], P["I0"], P["pr_alpha"])[0]
+    return np.where(low, np.sqrt(np.maximum(g * g - P["lambda"] ** 2, 0.0)), g)
 
 
 def profile(tau, s_top, P, n=20001):

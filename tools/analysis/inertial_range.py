@@ -29,6 +29,7 @@ rotation in the layer; below 1 1/s and 0.3 mm/s off it elsewhere).
   python3 -m tools.analysis.inertial_range run OUTDIR [--from T] [--gdot-fraction 0.1]
 """
 import argparse
+import functools
 import math
 import os
 
@@ -122,6 +123,30 @@ def yield_ratio(P, I):
     return mu if P["yield"] == "mu_I" else kmu(mu)
 
 
+def mu_of_yield_ratio(r, yield_):
+    """The friction mu at which Material:yield's surface has sqrt(J2) / p = r: mu_I r itself,
+    drucker_prager the inverse of kmu, 3 r / sqrt(9 - 12 r^2) (inf where 12 r^2 >= 9)."""
+    r = np.asarray(r, float)
+    if yield_ == "mu_I":
+        return r
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(12 * r * r < 9, 3 * r / np.sqrt(np.maximum(9 - 12 * r * r, 1e-300)), np.inf)
+
+
+def inertial_number_of_ratio(r, P):
+    """The inverse of yield_ratio: the I at which P's Material:yield and Material:mu_law hold
+    sqrt(J2) / p = r; inf at or above mu_d (no steady state). Regularized: 0 at or below mu_s
+    (arrested). Partial: below mu(I_N1), A exp(-alpha / mu^2) (partial_inverse), so no ratio arrests."""
+    mu = mu_of_yield_ratio(r, P["yield"])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        I = np.where(mu >= P["mu_d"], np.inf,
+                     np.where(mu <= P["mu_s"], 0.0, P["I0"] * (mu - P["mu_s"]) / (P["mu_d"] - mu)))
+        if P.get("mu_law") == "partial":
+            _, A, mu_N1 = partial_regularisation(P["mu_s"], P["mu_d"], P["I0"], P["pr_alpha"])
+            I = np.where(mu < mu_N1, A * np.exp(-P["pr_alpha"] / np.maximum(mu, 1e-300) ** 2), I)
+    return I
+
+
 def inertial_numbers(s, P, gdot_fraction=0.1):
     """I of the flowing material particles of snapshot s (and the count of
     the material with p > 0)."""
@@ -138,6 +163,7 @@ def inertial_numbers(s, P, gdot_fraction=0.1):
     return I[flowing], int(pos.sum())
 
 
+@functools.lru_cache(maxsize=None)  # a window scan per call; the references call it per profile
 def partial_regularisation(mu_s, mu_d, I0, alpha):
     """Barker & Gray's (2017) partially regularised law below the window's lower edge I_N1:
     mu(I) = sqrt(alpha / ln(A / I)) with A = I_N1 exp(alpha / mu(I_N1)^2), continuous at I_N1 (as

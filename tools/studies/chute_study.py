@@ -40,7 +40,7 @@ import shutil
 import numpy as np
 
 from tools import ROOT  # noqa: E402
-from tools.analysis.inertial_range import partial_inverse, partial_regularisation  # noqa: E402
+from tools.analysis.inertial_range import inertial_number_of_ratio  # noqa: E402
 from tools.studies import batch  # noqa: E402
 
 SCENE = os.path.join(ROOT, "inputs", "chute_2d.yml")
@@ -68,18 +68,9 @@ def inertial_number(theta_deg, reading="k_mu", pr_alpha=None):
     Barker & Gray's (2017) partially regularised law (Material:mu_law partial) with
     this alpha: below I_N1, mu = sqrt(alpha / ln(A / I)), so I = A exp(-alpha / mu^2),
     and no slope is arrested."""
-    t = math.tan(math.radians(theta_deg))
-    mu = mu_of_kmu(t) if reading == "k_mu" else t
-    if pr_alpha is not None and mu < MU_D:
-        IN1, A, _ = partial_regularisation(MU_S, MU_D, I0, pr_alpha)
-        I = partial_inverse(mu, A, pr_alpha)
-        if I < IN1:
-            return I
-    if mu <= MU_S:
-        return 0.0
-    if mu >= MU_D:
-        return math.inf
-    return I0 * (mu - MU_S) / (MU_D - mu)
+    P = {"mu_s": MU_S, "mu_d": MU_D, "I0": I0, "yield": "drucker_prager" if reading == "k_mu" else "mu_I",
+         "mu_law": "regularized" if pr_alpha is None else "partial", "pr_alpha": pr_alpha}
+    return float(inertial_number_of_ratio(math.tan(math.radians(theta_deg)), P))
 
 
 def bagnold(z, theta_deg, H, reading="k_mu", d=D_GRAIN, pr_alpha=None):
