@@ -121,6 +121,22 @@ def main():
     check("drum, surface speed vs the fine study's 0.080 m/s", ds, "5e-2", ds < 5e-2,
           "this tool's mesh-converged value (regression guard)")
 
+
+    # --radius: the drum scaled at the scene's flux (R x 2, rpm / 4; docs/granular.md "Nearer the onset")
+    R2, hc = 0.07, 6.0e-3
+    big = m.Drum(2.0e-3, hc, R=R2, ys=(2 * m.FILL - 1) * R2, omega=m.OMEGA / 4, d1=0.018)
+    Xw = big.S.X[big.wall]
+    ew = float(np.max(np.abs(np.hypot(Xw[:, 0], Xw[:, 1]) - R2)))
+    check("scaled drum: wall nodes off the circle R 70 mm (m)", ew, "<= h^2/(8R)", ew <= 1.01 * hc * hc / (8 * R2),
+          "vertices on the circle, P2 midpoints on the chords")
+    o = m.drum_solve(big, 20.2, gdot_min=1e-2)
+    fq = abs(o["q_layer"] - o["q_bed"]) / o["q_layer"]
+    check("scaled drum: converged, mid-chord flux above vs below u_x = 0", fq, "2e-2", o["ok"] and fq < 2e-2,
+          "mass conservation")
+    ds = abs(o["speed"] / 0.058 - 1)
+    check("scaled drum: surface speed vs the fine study's 0.058 m/s", ds, "5e-2", ds < 5e-2,
+          "this tool's value on mesh 1 (regression guard)")
+
     print("%d checks failed; %.0f s" % (len(FAILS), time.time() - t0))
     return 1 if FAILS else 0
 

@@ -97,6 +97,8 @@ depth against d. The torque balance sets theta*.
   /usr/bin/python3 -m tools.analysis.drum_mui_ref --fill 0.591 --d 0.0004725 --angles 20.5 21 21.5 22   # the EN drum
   /usr/bin/python3 -m tools.analysis.drum_mui_ref --theta 21.3 --meshes 1 --gdot-min 1e-3 --profile p.csv
   /usr/bin/python3 -m tools.analysis.drum_mui_ref --yield mu_I --angles 23 24 25 26 27
+  /usr/bin/python3 -m tools.analysis.drum_mui_ref --radius 0.07 --rpm 1.25 --fine-depth 0.014 \
+      --angles 19.6 20.0 20.4 20.8 --meshes 1 --gdot-min 1e-3    # twice the radius at the scene's flux
 
 Assumptions: steady flow (the SPH's t = 3-5 s), a flat surface (the SPH's
 surface is S-shaped near the corners, where material climbs the wall), a
@@ -586,8 +588,8 @@ def solve_mui(prob, yld, gdot_min, eta_min=1e-5, eta_max=1e12, d=D_GRAIN, x0=Non
 class Drum:
     """The drum's segment mesh and its boundary sets."""
 
-    def __init__(self, h_fine, h_coarse, R=R, ys=YS, omega=OMEGA):
-        P = segment_points(h_fine, h_coarse, R, ys)
+    def __init__(self, h_fine, h_coarse, R=R, ys=YS, omega=OMEGA, d1=0.009):
+        P = segment_points(h_fine, h_coarse, R, ys, d1, 2 * d1)
         self.omega = omega  # the wall's rate, rad/s about +z (clockwise negative)
         T = triangulate(P)
         self.S = S = Space(P, T)
@@ -913,6 +915,10 @@ def main(argv=None):
     ap.add_argument("--eta-max", type=float, default=1e12, help="viscosity cap, Pa s")
     ap.add_argument("--d", type=float, default=D_GRAIN, help="grain diameter, m")
     ap.add_argument("--rpm", type=float, default=RPM, help="the wall's rate, rev/min, clockwise (default 5)")
+    ap.add_argument("--radius", type=float, default=R, help="the drum's radius, m (default 0.035, Table 1)")
+    ap.add_argument("--fine-depth", type=float, default=0.009,
+                    help="depth below the surface to which the mesh keeps its layer size h_fine, m; it grows to "
+                         "h_coarse at twice that (default 0.009: the 5-rpm layer is 7 mm deep)")
     ap.add_argument("--fill", type=float, default=FILL,
                     help="filling level R_f = (H + R) / 2R (default 0.42, the EV drum; the EN drum's is 0.591)")
     ap.add_argument("--pr-alpha", type=float, default=None,
@@ -935,7 +941,7 @@ def main(argv=None):
         angles = [20.5, 21.0, 21.3, 21.6, 22.0, 22.5] if a.yld == "drucker_prager" else [24.0, 25.0, 26.0, 27.0, 28.0]
     meshes = [(a.h_fine, a.h_coarse or 4 * a.h_fine)] if a.h_fine else [MESHES[k] for k in a.meshes]
     print("drum mu(I) reference: R %.4f m, y_s %.4f m, %.1f rpm clockwise, rho %.0f, rho_s %.0f, d %.3g m, "
-          "yield %s, inertia %s, p in eta %s" % (R, (2 * a.fill - 1) * R, a.rpm, RHO, RHO_S, a.d, a.yld, "on" if a.inertia else "off",
+          "yield %s, inertia %s, p in eta %s" % (a.radius, (2 * a.fill - 1) * a.radius, a.rpm, RHO, RHO_S, a.d, a.yld, "on" if a.inertia else "off",
                                              a.pressure))
     if PARTIAL:
         print("mu(I) partially regularised (Barker & Gray 2017): sqrt(%g / ln(%.1f / I)) below I_N1 = %.5f"
@@ -945,7 +951,8 @@ def main(argv=None):
     T0 = time.time()
     for hf, hc in meshes:
         t = time.time()
-        drum = Drum(hf, hc, ys=(2 * a.fill - 1) * R, omega=-a.rpm * 2 * np.pi / 60)
+        drum = Drum(hf, hc, R=a.radius, ys=(2 * a.fill - 1) * a.radius, omega=-a.rpm * 2 * np.pi / 60,
+                    d1=a.fine_depth)
         print("\nmesh h_fine %.2f mm h_coarse %.2f mm: %d elements, %d P2 nodes, %d dofs (%.1f s)"
               % (hf * 1e3, hc * 1e3, len(drum.S.tris), drum.nodes, drum.S.ndof, time.time() - t))
         for gm in a.gdot_min:
