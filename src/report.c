@@ -113,9 +113,10 @@ void report_start(sim_t *s, const outputs *o, const run_cli *c)
     char wl[1024], st[128];
     message("container: walls %s", wall_list(s, 1, wl, sizeof wl));
     if (s->flow_on) {
-        char sh[96] = "Shepard filter off"; /* its interval: a step is at most cfl_flow h / c_s (3.19) */
+        char sh[128] = "Shepard filter off"; /* its interval: a step is at most cfl_flow h / c_s (3.19) */
         if (sc->flow.shepard_every > 0)
-            snprintf(sh, sizeof sh, "Shepard filter every %u steps (at most %.3g acoustic times h/c_s)",
+            snprintf(sh, sizeof sh, "%s filter every %u steps (at most %.3g acoustic times h/c_s)",
+                     sc->flow.stress_filter == FLOW_FILTER_MLS ? "first-order (mls) Shepard" : "Shepard",
                      sc->flow.shepard_every, sc->flow.shepard_every * sc->run.cfl_flow);
         message("flow: c_s = %.4g m/s, h/c_s = %.3g s, %s, %s", (double)s->flow.cs, (double)(s->seg.k.h / s->flow.cs),
                 sh, stab_text(sc, st, sizeof st));

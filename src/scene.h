@@ -49,6 +49,10 @@ enum mat_mu_law { MAT_MU_REGULARIZED = 0, MAT_MU_PARTIAL = 1 };
  * delta, delta-SPH pressure diffusion alone (physics/momentum.h). The values
  * are the flow bodies' STAB_* (physics/flow.h). */
 enum flow_stab { FLOW_STAB_MONAGHAN = 0, FLOW_STAB_RIEMANN = 1, FLOW_STAB_DELTA = 2 };
+/* Flow:stress_filter: shepard, the paper's zeroth-order kernel average (3.12);
+ * mls, its first-order moving-least-squares form, exact for a linear stress
+ * field where the support is cut (physics/flow.h flow_shepard_team). */
+enum flow_filter { FLOW_FILTER_SHEPARD = 0, FLOW_FILTER_MLS = 1 };
 
 /* Multi-rank runs (mpi/halo.h): Parallel:axis and :method. */
 enum slab_axis { AXIS_X = 0, AXIS_Y = 1, AXIS_Z = 2, AXIS_AUTO = 3 };

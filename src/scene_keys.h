@@ -52,6 +52,7 @@ static const cyaml_strval_t periodic_axes[] = {
 static const cyaml_strval_t mat_models[] = {{"granular", MAT_GRANULAR}, {"newtonian", MAT_NEWTONIAN}};
 static const cyaml_strval_t flow_stabs[] = {
     {"monaghan", FLOW_STAB_MONAGHAN}, {"riemann", FLOW_STAB_RIEMANN}, {"delta", FLOW_STAB_DELTA}};
+static const cyaml_strval_t flow_filters[] = {{"shepard", FLOW_FILTER_SHEPARD}, {"mls", FLOW_FILTER_MLS}};
 static const cyaml_strval_t mat_yields[] = {{"drucker_prager", MAT_YIELD_DRUCKER_PRAGER}, {"mu_I", MAT_YIELD_MU_I}};
 static const cyaml_strval_t mat_mu_laws[] = {{"regularized", MAT_MU_REGULARIZED}, {"partial", MAT_MU_PARTIAL}};
 static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
@@ -301,6 +302,8 @@ SECTION("Flow", flow, scene_flow)
       "Flow:stabilization delta: the diffusion coefficient delta of delta-SPH; default 0.1 (Antuono et al. 2010; Marrone et al. 2011)")
     KU("Flow", flow, scene_flow, shepard_every, "30",
       "Shepard filter (3.12) every N steps; default 30; 0 = off. N Run:cfl_flow bounds the interval in acoustic times h / c_s: below 3 the filter slows a drum's flow (6 % at 1.5; docs/granular.md \"The time step and the Shepard filter\")")
+    KE("Flow", flow, scene_flow, stress_filter, enum flow_filter, flow_filters, "shepard",
+      "the stress filter run every Flow:shepard_every steps: shepard (the paper's 3.12, the kernel average of the material neighbours' stresses; where the support is cut, at a free surface or a wall, it takes the deeper neighbours' stress, about rho g h too much under a free surface) | mls (its first-order moving-least-squares form, Colagrossi & Landrini 2003: exact for a linear stress field wherever the support is cut, the kernel average elsewhere to second order); default shepard (docs/granular.md \"The free surface's crust\")")
     KF("Flow", flow, scene_flow, damping, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "velocity damping -zeta u added to (3.9), 1/s, for settling (dynamic relaxation); default 0")
     KF("Flow", flow, scene_flow, damping_until, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,

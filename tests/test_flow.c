@@ -320,6 +320,54 @@ static void test_shepard_linear(void **st)
     assert_true(fabs(f->p.dsig[1][low] - f->p.sig[1][low]) > 0.1 * gam * DR); /* the cut support biases it */
 }
 
+/* Flow:stress_filter mls (flow_shepard_team, flow_mls_solve): a stress
+ * linear in x and y in every component is returned exactly at every
+ * material particle, the cut supports included (the free top rows, the
+ * base row by its dummies, the corners), on the lattice and on a jittered
+ * set; the Shepard filter (3.12) is exact only in the bulk, and under the
+ * free top it takes the deeper rows' stress. A planted error in the moments
+ * (the xy moment summed as xx) breaks it at the cut supports. */
+static void test_shepard_mls_linear(void **st)
+{
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
+    const int n = 8;
+    const double a0[6] = {-900, -1500, -1100, 120, 0, 0};
+    const double ax[6] = {2e4, -3e4, 5e3, 1e4, 0, 0}, ay[6] = {-4e4, 9e4, 6e4, -2e4, 0, 0}; /* Pa/m */
+    tu_block2d(&f->p, n, n, DR, 3, 3);
+    for (int pass = 0; pass < 2; ++pass) {
+        if (pass == 1) /* jitter the material by up to 0.2 dr (a fixed pseudo-random pattern) */
+            for (size_t k = 0; k < f->p.n; ++k)
+                if (f->p.kind[k] == KIND_MATERIAL) {
+                    unsigned u = (unsigned)(f->p.id[k] * 2654435761u);
+                    f->p.x[0][k] += (real)(0.2 * DR * ((double)(u & 1023) / 1023.0 - 0.5) * 2);
+                    f->p.x[1][k] += (real)(0.2 * DR * ((double)((u >> 10) & 1023) / 1023.0 - 0.5) * 2);
+                }
+        for (size_t k = 0; k < f->p.n; ++k)
+            for (int q = 0; q < 6; ++q)
+                f->p.sig[q][k] = (real)(f->p.kind[k] == KIND_MATERIAL
+                                            ? a0[q] + ax[q] * f->p.x[0][k] + ay[q] * f->p.x[1][k]
+                                            : 12345);
+        fx_list(f, &c);
+        double worst_mls = 0, worst_top = 0;
+        for (size_t k = 0; k < f->p.n; ++k) {
+            if (f->p.kind[k] != KIND_MATERIAL) continue;
+            c.filter_mls = 1;
+            flow_shepard(k, &f->p, &f->g.view, &c);
+            for (int q = 0; q < 6; ++q) {
+                double e = fabs(f->p.dsig[q][k] - f->p.sig[q][k]);
+                worst_mls = e > worst_mls ? e : worst_mls;
+            }
+            c.filter_mls = 0;
+            flow_shepard(k, &f->p, &f->g.view, &c);
+            if (pass == 0 && f->p.id[k] >= (n - 1) * n) /* the top row (ids row by row from the base) */
+                worst_top = fmax(worst_top, fabs(f->p.dsig[1][k] - f->p.sig[1][k]));
+        }
+        assert_true(worst_mls < RT(1e-10) * 2e3);
+        if (pass == 0) assert_true(worst_top > 0.1 * 9e4 * DR); /* (3.12) under the free top: the deeper rows' */
+    }
+}
+
 static void test_renorm_fused(void **st)
 {
     tu_fx *f = *st;
@@ -529,6 +577,7 @@ int main(void)
         TU_FX_TEST(test_momentum_conservation), TU_FX_TEST(test_shepard_uniform),
         TU_FX_TEST(test_renorm_fused),          TU_FX_TEST(test_linear_stress),
         TU_FX_TEST(test_viscosity_closed_form), TU_FX_TEST(test_shepard_linear),
+        TU_FX_TEST(test_shepard_mls_linear),
         TU_FX_TEST(test_advance),               TU_FX_TEST(test_drum_dummy_stress),
         TU_FX_TEST(test_dummy_above_surface),   cmocka_unit_test(test_drum_wall_motion),
         cmocka_unit_test(test_box_translation),       cmocka_unit_test(test_drum3d_walls),

@@ -67,6 +67,12 @@ CASES = [
     ("drum_EV_delta", "drum_2d_EV.yml", 300, ["Flow:stabilization=delta", "Material:E=1e5",
                                               "Flow:shepard_every=20", "Segregation:every=7"]),
     ("drum_EN", "drum_2d_EN.yml", 60, ["Segregation:every=10"]),
+    # Flow:stress_filter mls (flow.h flow_shepard_team): the first-order filter, its 3x3 and 4x4 solves
+    ("drum_EV_mls", "drum_2d_EV.yml", 300, ["Flow:stress_filter=mls", "Material:E=1e5", "Flow:shepard_every=20",
+                                            "Segregation:every=7"]),
+    ("drum_3d_mls", "drum_3d.yml", 40, ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025",
+                                        "Material:E=1e5", "Walls:rpm=15", "Flow:shepard_every=20",
+                                        "Segregation:every=8", "Flow:stress_filter=mls"]),
     # the paper's path: its scheme and its Flow:stabilization monaghan (the drum scenes set riemann)
     ("drum_EV_paper", "drum_2d_EV.yml", 40, ["Segregation:scheme=paper", "Geometry:dr=0.001",
                                              "Segregation:every=1", "Flow:stabilization=monaghan"]),

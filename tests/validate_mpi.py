@@ -97,6 +97,9 @@ CASES = [
     ("drum_EV_riemann", "drum_2d_EV.yml", 800, DRUM + ["Flow:stabilization=riemann", "Flow:bed_damping=0"], "migrate"),
     # riemann's bed damping (physics/flow.h flow_bed_q): reads the ghosts' stress on both sides of the pair
     ("drum_EV_bed", "drum_2d_EV.yml", 400, DRUM + ["Flow:stabilization=riemann", "Flow:bed_damping=1"], None),
+    # the first-order stress filter (Flow:stress_filter mls, flow.h flow_shepard_team): the ghosts' stress
+    # and position in its moments
+    ("drum_EV_mls", "drum_2d_EV.yml", 400, DRUM + ["Flow:stress_filter=mls"], None),
     # delta-SPH pressure diffusion (physics/momentum.h mom_pdiff): reads the ghosts' pressure and position
     ("drum_EV_delta", "drum_2d_EV.yml", 400, DRUM + ["Flow:stabilization=delta"], None),
     # shifting of the granular material (ST_SHIFT) with the tensorial yield, on a rotating drum

@@ -20,6 +20,7 @@
 #include <math.h>
 #include "../core/particles.h"
 #include "grid.h"
+#include "linalg.h"
 #include "momentum.h"
 #include "seg.h"
 #include "seg_kern.h"
@@ -41,6 +42,7 @@ typedef struct flow_ctx {
     real bed_alpha; /* riemann: Flow:bed_damping, Monaghan's alpha on unyielded material pairs
                      * (flow_bed_q); 0 = off */
     real bed_k;     /* the static yield cone's slope k(mu_s) of Material:yield (stress_yield_k) */
+    int filter_mls; /* Flow:stress_filter mls: the first-order filter (flow_shepard_team); 0 = Shepard (3.12) */
     real pdiff;    /* the pressure diffusion's coefficient (mom_pdiff): riemann with
                     * Flow:riemann_diffusion on K / (rho c_s); delta 2 delta h c_s; 0 = none */
     real g[3];     /* gravity, m/s^2 */
@@ -275,25 +277,81 @@ HD_INLINE void flow_shepard_store(size_t i, const particles_t *p)
         for (int q = 0; q < 6; ++q) p->sig[q][i] = p->dsig[q][i];
 }
 
+/* Flow:stress_filter mls: the first-order (moving-least-squares) form of the
+ * filter (Colagrossi & Landrini 2003, their MLS density filter; Dilts 1999).
+ * With xi = x_ji / h and P = (1, xi), the weights W_ij P_j^T b, A b = e_0,
+ * A = sum_j W_ij P_j P_j^T, reproduce any linear field exactly: sum_j W P^T b
+ * = 1 and sum_j W xi P^T b = 0. So sigma_i = b_0 sum W sigma_j + sum_a b_a
+ * sum W xi_a sigma_j. In the bulk of a symmetric support b = (1/sum W, 0) and
+ * this is (3.12); where the support is cut (a free surface, a wall) (3.12)
+ * takes the deeper neighbours' stress (the top row of a layer about rho g h
+ * too much), this does not. mo: sum W xi_a (a < 3), then sum W xi_a xi_b (xx,
+ * yy, zz, xy, xz, yz); s1[6 a + q]: sum W xi_a sigma_j[q]. Returns 1 where A
+ * is singular (too few neighbours to fit a plane): the caller keeps (3.12). */
+HD_INLINE void flow_mls_add(real mo[9], real s1[18], real W, const real xij[3], real inv_h, const real sj[6])
+{
+    const real xi[3] = {-xij[0] * inv_h, -xij[1] * inv_h, -xij[2] * inv_h};
+    for (int a = 0; a < 3; ++a) {
+        mo[a] += W * xi[a];
+        for (int q = 0; q < 6; ++q) s1[6 * a + q] += W * xi[a] * sj[q];
+    }
+    mo[3] += W * xi[0] * xi[0], mo[4] += W * xi[1] * xi[1], mo[5] += W * xi[2] * xi[2];
+    mo[6] += W * xi[0] * xi[1], mo[7] += W * xi[0] * xi[2], mo[8] += W * xi[1] * xi[2];
+}
+
+HD_INLINE int flow_mls_solve(int dim, real wsum, const real mo[9], const real acc[6], const real s1[18], real out[6])
+{
+    const int n = dim + 1;
+    const int diag[3] = {3, 4, 5}, off[3][3] = {{3, 6, 7}, {6, 4, 8}, {7, 8, 5}};
+    real A[16], b[4] = {1, 0, 0, 0};
+    A[0] = wsum;
+    for (int a = 0; a < dim; ++a) {
+        A[a + 1] = A[(a + 1) * n] = mo[a];
+        for (int e = 0; e < dim; ++e) A[(a + 1) * n + e + 1] = mo[a == e ? diag[a] : off[a][e]];
+    }
+    if (linalg_solve(n, A, b, 1, R(1e-6))) return 1;
+    for (int q = 0; q < 6; ++q) {
+        real s = b[0] * acc[q];
+        for (int a = 0; a < dim; ++a) s += b[a + 1] * s1[6 * a + q];
+        out[q] = s;
+    }
+    return 0;
+}
+
 /* Shepard filter (3.12) for material particle i, over its material
- * neighbours (self included), into dsig[] (the caller copies it back).
- * Lane `lane` of a team of nlanes (hd.h); lane 0 writes. */
+ * neighbours (self included), into dsig[] (the caller copies it back); with
+ * Flow:stress_filter mls its first-order form (flow_mls_add). Lane `lane` of
+ * a team of nlanes (hd.h); lane 0 writes. */
 HD_INLINE void flow_shepard_team(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
                                  int nlanes)
 {
     const sph_ctx *k = &c->k;
     real acc[6] = {0, 0, 0, 0, 0, 0}, wsum = 0;
+    real mo[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, s1[18] = {0};
+    const int mls = c->filter_mls;
+    const real inv_h = R(1.0) / k->h;
     NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
         if (p->kind[j] != KIND_MATERIAL) continue;
         real xij[3];
         real r2 = grid_pair(k->dim, p->x, i, j, xij);
         if (r2 >= k->support2) continue;
         real sj[6] = {p->sig[0][j], p->sig[1][j], p->sig[2][j], p->sig[3][j], p->sig[4][j], p->sig[5][j]};
-        shepard_add(acc, &wsum, kernel_w((real)sqrt((double)r2), k->h, k->alpha), sj);
+        const real W = kernel_w((real)sqrt((double)r2), k->h, k->alpha);
+        shepard_add(acc, &wsum, W, sj);
+        if (mls) flow_mls_add(mo, s1, W, xij, inv_h, sj);
     NBR_END
     team_sum(acc, 6, nlanes);
     team_sum(&wsum, 1, nlanes);
+    if (mls) {
+        team_sum(mo, 9, nlanes);
+        team_sum(s1, 18, nlanes);
+    }
     if (lane != 0) return;
+    real out[6];
+    if (mls && !flow_mls_solve(k->dim, wsum, mo, acc, s1, out)) {
+        for (int q = 0; q < 6; ++q) p->dsig[q][i] = out[q];
+        return;
+    }
     for (int q = 0; q < 6; ++q) p->dsig[q][i] = acc[q] / wsum; /* wsum >= W(0) > 0 */
 }
 
