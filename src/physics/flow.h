@@ -286,8 +286,7 @@ HD_INLINE void flow_shepard_store(size_t i, const particles_t *p)
  * this is (3.12); where the support is cut (a free surface, a wall) (3.12)
  * takes the deeper neighbours' stress (the top row of a layer about rho g h
  * too much), this does not. mo: sum W xi_a (a < 3), then sum W xi_a xi_b (xx,
- * yy, zz, xy, xz, yz); s1[6 a + q]: sum W xi_a sigma_j[q]. Returns 1 where A
- * is singular (too few neighbours to fit a plane): the caller keeps (3.12). */
+ * yy, zz, xy, xz, yz); s1[6 a + q]: sum W xi_a sigma_j[q]. */
 HD_INLINE void flow_mls_add(real mo[9], real s1[18], real W, const real xij[3], real inv_h, const real sj[6])
 {
     const real xi[3] = {-xij[0] * inv_h, -xij[1] * inv_h, -xij[2] * inv_h};
@@ -299,6 +298,9 @@ HD_INLINE void flow_mls_add(real mo[9], real s1[18], real W, const real xij[3], 
     mo[6] += W * xi[0] * xi[1], mo[7] += W * xi[0] * xi[2], mo[8] += W * xi[1] * xi[2];
 }
 
+/* The filtered stress out[] from the sums of flow_shepard_team and
+ * flow_mls_add (dim + 1 unknowns). Returns 1 where A is singular (too few
+ * neighbours to fit a plane): the caller keeps (3.12). */
 HD_INLINE int flow_mls_solve(int dim, real wsum, const real mo[9], const real acc[6], const real s1[18], real out[6])
 {
     const int n = dim + 1;
