@@ -562,6 +562,15 @@ def read_table(path):
     return rows
 
 
+def read_window(path, tmin, tmax):
+    """The rows of read_table whose snapshot time lies in [tmin, tmax] (to 1e-9 s); exits naming the
+    file where there is none."""
+    rows = [r for r in read_table(path) if tmin - 1e-9 <= r[0] <= tmax + 1e-9]
+    if not rows:
+        raise SystemExit(f"{path}: no snapshots in [{tmin}, {tmax}] s")
+    return rows
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("outdir")

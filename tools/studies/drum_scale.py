@@ -18,12 +18,12 @@ import math
 
 import numpy as np
 
-from tools.analysis.drum_analysis import read_table  # noqa: E402
+from tools.analysis.drum_analysis import read_window  # noqa: E402
 
 
 def window_means(path, tmin, tmax):
     """(n, mean angle deg, mean top grains u cm/s, its standard error) over the snapshots in [tmin, tmax]."""
-    rows = np.array([(r[1], r[4]) for r in read_table(path) if tmin - 1e-9 <= r[0] <= tmax + 1e-9])
+    rows = np.array([(r[1], r[4]) for r in read_window(path, tmin, tmax)])
     if len(rows) < 2:
         raise SystemExit(f"{path}: fewer than two snapshots in [{tmin}, {tmax}] s")
     u = rows[:, 1]

@@ -23,15 +23,12 @@ import math
 
 import numpy as np
 
-from tools.analysis.drum_analysis import read_table  # noqa: E402
+from tools.analysis.drum_analysis import read_window  # noqa: E402
 
 
 def top_grains(path, tmin=2.5, tmax=math.inf):
     """(t, top grains u in cm/s) of the snapshots of a drum_analysis output in [tmin, tmax]."""
-    rows = [(r[0], r[4]) for r in read_table(path) if tmin - 1e-9 <= r[0] <= tmax + 1e-9]
-    if not rows:
-        raise SystemExit(f"{path}: no 'top grains u' snapshots in [{tmin}, {tmax}] s")
-    return np.array(rows)
+    return np.array([(r[0], r[4]) for r in read_window(path, tmin, tmax)])
 
 
 def parse_run(spec):
