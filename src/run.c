@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <unistd.h>
 #include "core/error.h"
+#include "core/tuning.h"
 #include "io.h"
 #include "mpi/comm.h"
 #include "mpi/decomp.h"
@@ -85,11 +86,13 @@ static void parallel_balance(sim_t *s, double *cost)
 {
     unsigned every = s->sc->parallel.balance_every;
     if (!s->halo || every == 0 || s->step % (long)every != 0) return;
-    double thr = s->sc->parallel.balance_threshold, imb = halo_imbalance(s->halo, *cost);
+    const tuning *tu = tuning_get(); /* SPHSEG_BALANCE_SKEW: one rank's time counted F times */
+    double c = *cost * (tu->skew_rank == comm_rank() ? tu->skew_factor : 1.0);
+    double thr = s->sc->parallel.balance_threshold, imb = halo_imbalance(s->halo, c);
     if (imb > thr) {
         double t0 = diag_wall();
         s->be->to_host(s); /* the re-cut reads positions and moves whole particles */
-        if (halo_recut(s->halo, &s->p, *cost, imb, thr)) {
+        if (halo_recut(s->halo, &s->p, c, imb, thr)) {
             s->be->from_host(s);
             s->be->prepare(s, s->t, !s->win.on);
             s->halo->recuts++;

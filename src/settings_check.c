@@ -5,6 +5,7 @@
 #include <math.h>
 #include <string.h>
 #include "core/error.h"
+#include "core/tuning.h"
 #include "sim.h"
 
 /* Snapshots, diagnostics rows and checkpoints that Run:t_end asks for: a
@@ -52,6 +53,9 @@ int settings_check(const struct scene *sc, const char *backend)
     int ndev = check_backend(backend);
     if (sc->parallel.axis == AXIS_Z && sc->geometry.dim == 2)
         input_error("Parallel:axis: z is not an axis of a 2D scene (x or y, or auto)");
+    if (tuning_get()->skew_rank == -2)
+        input_error("SPHSEG_BALANCE_SKEW=%.64s: expected RANK:FACTOR, a rank and a factor > 0 (e.g. 0:3)",
+                    tuning_get()->skew_text);
     return ndev;
 }
 

@@ -106,6 +106,9 @@ check wall_time_type "-P Run:max_wall_time=1h: Run:max_wall_time: expected a num
 check restart_missing "--restart $tmp/none.h5: cannot read it" "$good" --restart "$tmp/none.h5"
 check restart_not_sealed "--restart $good: not a sphseg checkpoint (no checksum block" "$good" --restart "$good"
 check restart_no_file "command line: --restart needs a FILE" "$good" --restart
+# a tuning setting set to something it cannot mean (src/core/tuning.c; README "Tuning and diagnostics settings")
+SPHSEG_BALANCE_SKEW=3 check skew_no_factor "SPHSEG_BALANCE_SKEW=3: expected RANK:FACTOR" "$good"
+SPHSEG_BALANCE_SKEW=0:-1 check skew_negative "SPHSEG_BALANCE_SKEW=0:-1: expected RANK:FACTOR" "$good"
 
 echo "test_badinput: $n_pass passed, $n_fail failed"
 [ "$n_fail" -eq 0 ]

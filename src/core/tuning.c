@@ -6,10 +6,10 @@
 #include "error.h"
 
 /* The settings' names, and their values as read (NULL: not set). */
-enum { T_PROFILE, T_TEAM, T_WALLSKIP, T_OVERLAP, T_HOSTX, T_IPC, T_CUDA_AWARE, T_N };
+enum { T_PROFILE, T_TEAM, T_WALLSKIP, T_OVERLAP, T_HOSTX, T_IPC, T_CUDA_AWARE, T_SKEW, T_N };
 static const char *const tuning_names[T_N] = {"SPHSEG_GPU_PROFILE", "SPHSEG_GPU_TEAM",  "SPHSEG_GPU_WALLSKIP",
                                               "SPHSEG_GPU_OVERLAP", "SPHSEG_GPU_HOSTX", "SPHSEG_GPU_IPC",
-                                              "SPHSEG_CUDA_AWARE"};
+                                              "SPHSEG_CUDA_AWARE", "SPHSEG_BALANCE_SKEW"};
 static const char *tuning_raw[T_N];
 
 /* Set and not empty. */
@@ -23,6 +23,20 @@ static int team_of(const char *e)
     char *end;
     long t = strtol(e, &end, 10);
     return *end || (t != 1 && t != 2 && t != 4 && t != 8 && t != 16) ? -1 : (int)t;
+}
+
+/* "R:F", R a rank >= 0 and F a finite factor > 0; else *rank = -2. */
+static void skew_of(const char *e, int *rank, double *factor)
+{
+    *rank = -1, *factor = 1;
+    if (!is_set(e)) return;
+    char *end, *end2;
+    long r = strtol(e, &end, 10);
+    double f = *end == ':' ? strtod(end + 1, &end2) : 0;
+    if (end == e || *end != ':' || end2 == end + 1 || *end2 || r < 0 || r > 1L << 30 || !(f > 0 && f < 1e30))
+        *rank = -2;
+    else
+        *rank = (int)r, *factor = f;
 }
 
 const tuning *tuning_get(void)
@@ -39,7 +53,9 @@ const tuning *tuning_get(void)
                  .gpu_hostx = is_set(r[T_HOSTX]) && !is_zero(r[T_HOSTX]),
                  .gpu_ipc = !is_zero(r[T_IPC]),
                  .cuda_aware = !is_zero(r[T_CUDA_AWARE]),
-                 .gpu_team_text = is_set(r[T_TEAM]) ? r[T_TEAM] : NULL};
+                 .gpu_team_text = is_set(r[T_TEAM]) ? r[T_TEAM] : NULL,
+                 .skew_text = is_set(r[T_SKEW]) ? r[T_SKEW] : NULL};
+    skew_of(r[T_SKEW], &t.skew_rank, &t.skew_factor);
     read = 1;
     return &t;
 }
