@@ -30,7 +30,7 @@ static void skew_of(const char *e, int *rank, double *factor)
 {
     *rank = -1, *factor = 1;
     if (!is_set(e)) return;
-    char *end, *end2;
+    char *end, *end2 = NULL;
     long r = strtol(e, &end, 10);
     double f = *end == ':' ? strtod(end + 1, &end2) : 0;
     if (end == e || *end != ':' || end2 == end + 1 || *end2 || r < 0 || r > 1L << 30 || !(f > 0 && f < 1e30))

@@ -1,9 +1,9 @@
 /* core/tuning.h — the tuning and diagnostics settings: the only environment
  * variables sphseg reads (README, "Tuning and diagnostics settings"). None
  * changes the answer beyond round-off; each exists to measure a saving, to
- * diagnose, or (SPHSEG_BALANCE_SKEW) to exercise a code path. They are read here, once, at the first tuning_get (nowhere
- * else: `grep -rn getenv src mpi gpu` finds this file only), and
- * tuning_log names those that are set. */
+ * diagnose, or (SPHSEG_BALANCE_SKEW) to exercise a code path. They are read
+ * here, once, at the first tuning_get (nowhere else: `grep -rn getenv src
+ * mpi gpu` finds this file only), and tuning_log names those that are set. */
 #ifndef SPHSEG_TUNING_H
 #define SPHSEG_TUNING_H
 
@@ -18,7 +18,7 @@ typedef struct tuning {
     int cuda_aware;   /* SPHSEG_CUDA_AWARE not 0: device buffers to MPI where it reports CUDA support (default 1) */
     int skew_rank;    /* SPHSEG_BALANCE_SKEW=R:F: the load balance counts rank R's compute time F times (the
                        * cut moves, the answer does not beyond round-off); -1: not set (default); -2: set to
-                       * something else (skew_text; run_steps refuses it) */
+                       * something else (skew_text; settings_check refuses it) */
     double skew_factor;
     const char *skew_text; /* SPHSEG_BALANCE_SKEW as set, or NULL */
     const char *gpu_team_text; /* SPHSEG_GPU_TEAM as set, or NULL */
