@@ -30,7 +30,10 @@ material, as a disordered bed does on average.
   interpolated mid-chord profile, which starts at the fitted line, carries less
   (it misses the top half row);
 - the lithostatic pressure of --stress (depth + dr / 2) matches the
-  interpolated p inside the bed (depth 3-5 mm, 1e-3 relative).
+  interpolated p inside the bed (depth 3-5 mm, 1e-3 relative);
+- layer_fe_chart --table's bins: the mean of a linear speed over each 1-mm
+  bin is its value at the bin's centre (to the table's 0.001 cm/s), nan
+  where a run has no value.
 
     /usr/bin/python3 -m tests.test_drum_readers [--sphseg IGNORED --work IGNORED]
 """
@@ -46,6 +49,7 @@ from tools.analysis import drum_analysis as da  # noqa: E402
 from tools.analysis import drum_fe_read as fr  # noqa: E402
 from tools.analysis import drum_layer as dl  # noqa: E402
 from tools.studies import filter_interval_chart as fic  # noqa: E402
+from tools.studies import layer_fe_chart as lfc  # noqa: E402
 
 R, YS, THETA, U, DELTA, RHO, G = 0.035, 0.0056, 21.2, 0.08, 0.006, 1500.0, 9.81
 
@@ -157,6 +161,12 @@ def main():
         check(tag + " interpolated p / lithostatic - 1 at 3-5 mm", el, 1e-3, el < 1e-3, "rho g cos(theta) (z + dr/2)")
     check("reading bias shrinks with dr", abs(bias[0.0005]) / abs(bias[0.0007]), "< 1",
           abs(bias[0.0005]) < abs(bias[0.0007]), "a support of 2 h = 3 dr")
+    g = (np.arange(400) + 0.5) * 1e-5  # 100 grid points in each 1-mm bin of zeta, none on an edge
+    ug = np.where(g < 0.003, 0.08 - 10 * g, np.nan)  # a linear speed, absent from 3 mm on
+    got = [lfc.binned(g, ug, lo, lo + 1e-3) for lo in (0.0, 1e-3, 2e-3, 3e-3)]
+    eb = max(abs(float(got[k]) - 100 * (0.08 - 10 * (1e-3 * k + 5e-4))) for k in range(3))
+    check("layer_fe_chart --table: 1-mm bin means of a linear speed - its bin centre's, cm/s", eb, 5e-4,
+          eb <= 5e-4 and got[3] == "nan", "the mean of a linear profile over a bin; nan where the run has none")
     sys.exit(summary("test_drum_readers"))
 
 

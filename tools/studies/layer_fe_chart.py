@@ -4,7 +4,7 @@ beside the finite-element mu(I) reference (docs/granular.md "The layer point by
 point").
 
   /usr/bin/python3 -m tools.studies.layer_fe_chart --fe FE_prof.csv --png OUT.png \
-      --run "LABEL=A_particles.csv,B_particles.csv" [--run ...] [--d 0.000375] [--rho-s 2500]
+      --run "LABEL=A_particles.csv,B_particles.csv" [--run ...] [--d 0.000375] [--rho-s 2500] [--table FILE]
 
 Each --run is one or more `drum_layer --stress` particle files (zeta, u_t, p,
 gdot, ...) whose profiles are averaged on a common zeta grid (several
@@ -36,6 +36,21 @@ def average(paths, grid):
         return {k: np.nanmean(v, axis=0) for k, v in cols.items()}
 
 
+def binned(grid, u, lo, hi):
+    """The mean of u over the grid points in [lo, hi), in cm/s (nan where none)."""
+    m = (grid >= lo) & (grid < hi) & ~np.isnan(u)
+    return "%.3f" % (100 * u[m].mean()) if m.any() else "nan"
+
+
+def write_table(path, rows):
+    """One line per zeta bin: the bin, then each column (the runs, the FE)."""
+    with open(path, "w") as f:
+        f.write("# speed along the surface (cm/s), the mean over each bin of mass depth zeta\n")
+        f.write(" | ".join(label for label, _ in rows) + "\n")
+        for i in range(len(rows[0][1])):
+            f.write(" | ".join(col[i] for _, col in rows) + "\n")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--fe", required=True, help="drum_mui_ref --profile CSV")
@@ -48,6 +63,8 @@ def main():
                     help="the runs and the FE use Material:mu_law partial: below I_N1 the partially regularised "
                          "law, well posed (the band is labelled so)")
     ap.add_argument("--title", default=None, help="a title over the three panels")
+    ap.add_argument("--table", default=None,
+                    help="also write each run's speed and the FE's, averaged over 1-mm bins of zeta, to this file")
     a = ap.parse_args()
     import matplotlib
     matplotlib.use("Agg")
@@ -57,12 +74,15 @@ def main():
     lo, _ = ir.window(0.382, 0.682, 0.279)
     fig, ax = plt.subplots(1, 3, figsize=(13, 4.6), sharey=True)
     ax[0].plot(100 * uf[zf <= a.zmax], 1e3 * zf[zf <= a.zmax], "k-", lw=2, label="FE mu(I)")
+    ufe = np.interp(grid, zf, uf)
+    bins = np.arange(0.0, a.zmax + 1e-9, 1e-3)
+    rows = [("zeta (mm)", ["%g-%g" % (1e3 * lo_, 1e3 * hi) for lo_, hi in zip(bins[:-1], bins[1:])])]
     for spec in a.run:
         label, files = spec.split("=", 1)
         r = average(files.split(","), grid)
+        rows.append((label, [binned(grid, r["u_t"], lo_, hi) for lo_, hi in zip(bins[:-1], bins[1:])]))
         ok = ~np.isnan(r["u_t"])
         ax[0].plot(100 * r["u_t"][ok], 1e3 * grid[ok], ".-", ms=3, label=label)
-        ufe = np.interp(grid, zf, uf)
         rel = np.where(np.abs(ufe) > 0.01 * np.abs(uf).max(), r["u_t"] / ufe - 1, np.nan)
         ax[1].plot(100 * rel[ok], 1e3 * grid[ok], ".-", ms=3, label=label)
         I = ir.inertial_number(r["gdot"], a.d, np.maximum(r["p"], 1e-9), a.rho_s)
@@ -88,6 +108,10 @@ def main():
     fig.tight_layout()
     fig.savefig(a.png, dpi=120)
     print("wrote %s" % a.png)
+    if a.table:
+        rows.append(("FE mu(I)", [binned(grid, ufe, lo_, hi) for lo_, hi in zip(bins[:-1], bins[1:])]))
+        write_table(a.table, rows)
+        print("wrote %s" % a.table)
 
 
 if __name__ == "__main__":
