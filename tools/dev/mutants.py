@@ -39,7 +39,7 @@ MUTANTS = [
      [("acc[c] += sj[c] * W;\n    *wsum += W;", "acc[c] += sj[c];\n    *wsum += R(1.0);")],
      "the Shepard filter is a plain mean of the neighbours"),
     ("av_dropped", "physics", "src/physics/flow.h",
-     [("real Pi = c->alpha_av > 0 ?", "real Pi = c->alpha_av < 0 ?")],
+     [("if (c->alpha_av > 0) Pi = mom_av(", "if (c->alpha_av < 0) Pi = mom_av(")],
      "the artificial viscosity (3.10) is dropped"),
     ("mls_moment", "physics", "src/physics/flow.h",
      [("mo[6] += W * xi[0] * xi[1]", "mo[6] += W * xi[0] * xi[0]")],
@@ -83,7 +83,7 @@ MUTANTS = [
      [("diff += w * (Di + Dj) * (Ci - Cj) * xlx;", "diff += w * (Di + Di) * (Ci - Cj) * xlx;")],
      "the conservative scheme uses 2 D_i for D_i + D_j"),
     ("cons_seg_sign", "physics", "src/physics/seg_kern.h",
-     [("seg -= w * (Qi + Qj) * gx;", "seg += w * (Qi + Qj) * gx;")],
+     [("seg -= w * q * gx;", "seg += w * q * gx;")],
      "the conservative segregation flux points up"),
     ("dFdC", "physics", "src/physics/seg.h",
      [("return sp->A * (R(3.0) * sp->kappa * C * C - R(2.0) * (R(1.0) + sp->kappa) * C + R(1.0));",
@@ -101,10 +101,10 @@ MUTANTS = [
      [("be->prepare(s, s->t + 0.5 * dt, 0);", "be->prepare(s, s->t + dt, 0);")],
      "the midpoint stage is evaluated at t + dt"),
     ("save_after_predictor", "integration", "src/integrate.c",
-     [("    be->save_start(s);\n    be->advance(s, 0.5 * dt);", "    be->advance(s, 0.5 * dt);\n    be->save_start(s);")],
+     [("    be->save_start(s);\n    be->advance(s, 0.5 * dt, 0.0);", "    be->advance(s, 0.5 * dt, 0.0);\n    be->save_start(s);")],
      "the corrector starts from the predicted state"),
     ("conc_from_current", "integration", "src/physics/step.h",
-     [("if (seg_on) p->C[i] = p->C_n[i] + a * p->dCdt[i];", "if (seg_on) p->C[i] = p->C[i] + a * p->dCdt[i];")],
+     [("if (seg_on) p->C[i] = p->C_n[i] + (creal)a * p->dCdt[i];", "if (seg_on) p->C[i] = p->C[i] + (creal)a * p->dCdt[i];")],
      "C advances from its current value, not the start of the step"),
     ("diffusion_cfl_x10", "integration", "src/integrate.c",
      [("dt = fmin(dt, sc->run.cfl_diffusion * h * h / dmax);", "dt = fmin(dt, 10 * sc->run.cfl_diffusion * h * h / dmax);")],
@@ -126,32 +126,35 @@ MUTANTS = [
      [("geff[a] = c->g[a] - aw[a];", "geff[a] = c->g[a] + aw[a];")],
      "the dummy stress uses g + a_w for g - a_w"),
     ("drum_turns_backwards", "walls", "src/physics/wall.h",
-     [("double th = w->omega * t, c = cos(th), s = sin(th);", "double th = -w->omega * t, c = cos(th), s = sin(th);")],
+     [("double th = q->omega * t, c = cos(th), s = sin(th);", "double th = -q->omega * t, c = cos(th), s = sin(th);")],
      "the drum's dummies turn against omega"),
     ("dummy_tension_kept", "walls", "src/physics/flow.h",
      [("if (stress_pressure(sd) <= 0)", "if (stress_pressure(sd) < -1e30)")],
      "the dummy stress keeps tension"),
     # ---- halo
     ("ghost_psi_stale", "halo", "src/backend_cpu.c",
-     [("cpu_refresh(s, cls, 5);", "cpu_refresh(s, cls, 4);")],
+     [("if (cpu_stage(s, id, c)) cpu_refresh(s, m->refresh[0][id]);",
+       "if (cpu_stage(s, id, c)) cpu_refresh(s, m->refresh[0][id] & ~(id == ST_CLASSIFY ? (uint32_t)FLD_PSI : 0u));")],
      "ghost psi is not refreshed after the classification"),
     ("ghost_gdot_stale", "halo", "src/backend_cpu.c",
-     [("        cpu_refresh(s, g, 1);", "        (void)g;")],
+     [("if (cpu_stage(s, id, c)) cpu_refresh(s, m->refresh[0][id]);",
+       "if (cpu_stage(s, id, c)) cpu_refresh(s, m->refresh[0][id] & ~(id == ST_FLOW ? (uint32_t)FLD_GDOT : 0u));")],
      "ghost shear rates are not refreshed before the concentration rates"),
     ("ghost_sig_stale", "halo", "src/backend_cpu.c",
-     [("cpu_refresh(s, sig, 6);", "(void)sig;")],
+     [("if (cpu_stage(s, id, c)) cpu_refresh(s, m->refresh[0][id]);",
+       "if (cpu_stage(s, id, c)) cpu_refresh(s, m->refresh[0][id] & ~(id == ST_SHEPARD_STORE ? (uint32_t)FLD_SIG : 0u));")],
      "ghost stresses are not refreshed after the Shepard filter"),
-    ("halo_inner_off_by_one", "halo", "mpi/halo.c",
-     [("if (a - h->depth >= h->bound[h->rank] && a + h->depth < h->bound[h->rank + 1]) return 0;",
-       "if (a - h->depth + 1 >= h->bound[h->rank] && a + h->depth - 1 < h->bound[h->rank + 1]) return 0;")],
+    ("halo_inner_off_by_one", "halo", "mpi/halo_geom.h",
+     [("if (code == HG_NOSHIFT && lo >= g->bound[g->rank] && hi < g->bound[g->rank + 1]) return n;",
+       "if (code == HG_NOSHIFT && lo + 1 >= g->bound[g->rank] && hi - 1 < g->bound[g->rank + 1]) return n;")],
      "cells one column from the ghost reach are taken as inner: ghosts missing"),
     # ---- checkpoints
-    ("ckpt_amax_lost", "checkpoints", "src/checkpoint.c",
-     [('s->amax = ckpt_get_double(file, g, "Amax");', 's->amax = 0 * ckpt_get_double(file, g, "Amax");')],
+    ("ckpt_amax_lost", "checkpoints", "src/checkpoint_read.c",
+     [('s->amax = ckpt_get_double(g, "Amax", 0, HUGE_VAL);', 's->amax = 0 * ckpt_get_double(g, "Amax", 0, HUGE_VAL);')],
      "a restart forgets the last |a|, so its first dt differs"),
-    ("ckpt_small0_lost", "checkpoints", "src/checkpoint.c",
-     [('r->small0 = ckpt_get_double(file, g, "SmallVolume0");',
-       'r->small0 = 1.000001 * ckpt_get_double(file, g, "SmallVolume0");')],
+    ("ckpt_small0_lost", "checkpoints", "src/checkpoint_read.c",
+     [('r->small0 = ckpt_get_double(g, "SmallVolume0", -HUGE_VAL, HUGE_VAL);',
+       'r->small0 = 1.000001 * ckpt_get_double(g, "SmallVolume0", -HUGE_VAL, HUGE_VAL);')],
      "a restart's conservation reference is off"),
     ("ckpt_rotation_moves", "checkpoints", "src/checkpoint.c",
      [("if (link(path, link_tmp) == 0) {", "if (rename(path, link_tmp) == 0) {")],
@@ -174,14 +177,14 @@ MUTANTS = [
      "the XDMF index gives each snapshot the wrong time"),
     # ---- diagnostics
     ("drift_zero", "diagnostics", "src/diag.c",
-     [("v.drift = d->small0 != 0 ? (v.small_volume - d->small0) / d->small0 : v.small_volume;", "v.drift = 0;")],
+     [("v.drift = d->small0 != 0 ? (inside_out - d->small0) / d->small0 : inside_out;", "v.drift = 0 * inside_out;")],
      "the reported drift of sum C_i V_i is forced to 0"),
     ("drift_zero_and_leak", "diagnostics", "src/diag.c",
-     [("v.drift = d->small0 != 0 ? (v.small_volume - d->small0) / d->small0 : v.small_volume;", "v.drift = 0;"),
+     [("v.drift = d->small0 != 0 ? (inside_out - d->small0) / d->small0 : inside_out;", "v.drift = 0 * inside_out;"),
       ("diff += w * (Di + Dj) * (Ci - Cj) * xlx;", "diff += w * (Di + Di) * (Ci - Cj) * xlx;")],
      "a real drift (2 D_i) hidden by a reported drift of 0"),
     ("small_volume_weighted", "diagnostics", "src/diag.c",
-     [("        small += (double)p->C[i] * p->vol[i];", "        small += (double)p->C[i] * p->vol[i] * (1 + 1e-3 * (i % 2));")],
+     [("ksum_add(&small, (double)p->C[i] * p->vol[i]);", "ksum_add(&small, (double)p->C[i] * p->vol[i] * (1 + 1e-3 * (double)(i % 2)));")],
      "sum C_i V_i is weighted wrongly"),
     ("c_min_is_max", "diagnostics", "src/diag.c",
      [("cmin = fmin(cmin, p->C[i]);", "cmin = fmax(cmin, p->C[i]);")],
@@ -220,8 +223,8 @@ def sh(cmd, cwd, env=None, timeout=None, log=None):
 
 
 def scratch_copy(work):
-    """The working tree's tracked and untracked-not-ignored files into WORK/src
-    (mtimes kept), plus a fake nvidia-smi listing no GPU."""
+    """The working tree's tracked and untracked-not-ignored files into WORK/tree
+    (mtimes kept; a fresh git index of them), plus a fake nvidia-smi listing no GPU."""
     dst = os.path.join(work, "tree")
     files = subprocess.run(["git", "ls-files", "-co", "--exclude-standard"], cwd=ROOT, capture_output=True,
                            text=True, check=True).stdout.split("\n")
@@ -231,6 +234,10 @@ def scratch_copy(work):
             continue
         os.makedirs(os.path.dirname(os.path.join(dst, f)), exist_ok=True)
         shutil.copy2(src, os.path.join(dst, f))
+    # a git index of the same files: the suite's doc_links reads `git ls-files`
+    # (outside a repository it fails, and would kill every mutant that got that far)
+    subprocess.run(["git", "init", "-q"], cwd=dst, check=True)
+    subprocess.run(["git", "add", "-A"], cwd=dst, check=True)
     fake = os.path.join(work, "nogpu")
     os.makedirs(fake, exist_ok=True)
     with open(os.path.join(fake, "nvidia-smi"), "w") as f:
