@@ -6,6 +6,7 @@
 #include <string.h>
 #include "core/error.h"
 #include "core/tuning.h"
+#include "mpi/comm.h"
 #include "sim.h"
 
 /* Snapshots, diagnostics rows and checkpoints that Run:t_end asks for: a
@@ -53,9 +54,13 @@ int settings_check(const struct scene *sc, const char *backend)
     int ndev = check_backend(backend);
     if (sc->parallel.axis == AXIS_Z && sc->geometry.dim == 2)
         input_error("Parallel:axis: z is not an axis of a 2D scene (x or y, or auto)");
-    if (tuning_get()->skew_rank == -2)
+    const tuning *tu = tuning_get();
+    if (tu->skew_rank == -2)
         input_error("SPHSEG_BALANCE_SKEW=%.64s: expected RANK:FACTOR, a rank and a factor > 0 (e.g. 0:3)",
-                    tuning_get()->skew_text);
+                    tu->skew_text);
+    if (tu->skew_rank >= comm_size()) /* a skew that would never apply */
+        input_error("SPHSEG_BALANCE_SKEW=%.64s: rank %d, but the run has %d rank(s)", tu->skew_text, tu->skew_rank,
+                    comm_size());
     return ndev;
 }
 

@@ -109,6 +109,7 @@ check restart_no_file "command line: --restart needs a FILE" "$good" --restart
 # a tuning setting set to something it cannot mean (src/core/tuning.c; README "Tuning and diagnostics settings")
 SPHSEG_BALANCE_SKEW=3 check skew_no_factor "SPHSEG_BALANCE_SKEW=3: expected RANK:FACTOR" "$good"
 SPHSEG_BALANCE_SKEW=0:-1 check skew_negative "SPHSEG_BALANCE_SKEW=0:-1: expected RANK:FACTOR" "$good"
+SPHSEG_BALANCE_SKEW=1:3 check skew_no_such_rank "SPHSEG_BALANCE_SKEW=1:3: rank 1, but the run has 1 rank(s)" "$good"
 
 echo "test_badinput: $n_pass passed, $n_fail failed"
 [ "$n_fail" -eq 0 ]

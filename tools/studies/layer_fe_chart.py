@@ -75,12 +75,13 @@ def main():
     fig, ax = plt.subplots(1, 3, figsize=(13, 4.6), sharey=True)
     ax[0].plot(100 * uf[zf <= a.zmax], 1e3 * zf[zf <= a.zmax], "k-", lw=2, label="FE mu(I)")
     ufe = np.interp(grid, zf, uf)
-    bins = np.arange(0.0, a.zmax + 1e-9, 1e-3)
-    rows = [("zeta (mm)", ["%g-%g" % (1e3 * lo_, 1e3 * hi) for lo_, hi in zip(bins[:-1], bins[1:])])]
+    edges = np.arange(0.0, a.zmax + 1e-9, 1e-3)
+    bins = list(zip(edges[:-1], edges[1:]))
+    rows = [("zeta (mm)", ["%g-%g" % (1e3 * lo_, 1e3 * hi) for lo_, hi in bins])]
     for spec in a.run:
         label, files = spec.split("=", 1)
         r = average(files.split(","), grid)
-        rows.append((label, [binned(grid, r["u_t"], lo_, hi) for lo_, hi in zip(bins[:-1], bins[1:])]))
+        rows.append((label, [binned(grid, r["u_t"], lo_, hi) for lo_, hi in bins]))
         ok = ~np.isnan(r["u_t"])
         ax[0].plot(100 * r["u_t"][ok], 1e3 * grid[ok], ".-", ms=3, label=label)
         rel = np.where(np.abs(ufe) > 0.01 * np.abs(uf).max(), r["u_t"] / ufe - 1, np.nan)
@@ -109,7 +110,7 @@ def main():
     fig.savefig(a.png, dpi=120)
     print("wrote %s" % a.png)
     if a.table:
-        rows.append(("FE mu(I)", [binned(grid, ufe, lo_, hi) for lo_, hi in zip(bins[:-1], bins[1:])]))
+        rows.append(("FE mu(I)", [binned(grid, ufe, lo_, hi) for lo_, hi in bins]))
         write_table(a.table, rows)
         print("wrote %s" % a.table)
 
