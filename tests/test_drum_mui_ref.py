@@ -36,11 +36,15 @@ checked against answers known without it (no sphseg run; about 15 s on 2 cores):
   sigma_yy) agree to 1 % of |T_g|; the surface speed
   within 5 % of the fine study's 0.080 m/s (tools/analysis/drum_mui_ref.py,
   meshes 1 and 2, this tool's own converged answer: a regression guard, not an
-  independent reference).
+  independent reference). --p-factor: the p in eta is the table's multiple of
+  the lithostatic one, and a higher p under the layer makes it shallower and
+  its surface faster.
 
     /usr/bin/python3 -m tests.test_drum_mui_ref [--sphseg IGNORED --work IGNORED]
 """
+import os
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -120,6 +124,23 @@ def main():
     ds = abs(o["speed"] / 0.080 - 1)
     check("drum, surface speed vs the fine study's 0.080 m/s", ds, "5e-2", ds < 5e-2,
           "this tool's mesh-converged value (regression guard)")
+
+    # --p-factor: the p in eta times a table of the depth (1 outside it); a higher p under the layer
+    # (the SPH's elastic bed, docs/granular.md "The bed's stress memory") stiffens its base
+    tab = os.path.join(tempfile.mkdtemp(prefix="pfac_"), "f.csv")
+    np.savetxt(tab, [[0.006, 1.0], [0.007, 1.2], [0.010, 1.2], [0.011, 1.0]], delimiter=",", header="depth_m,factor",
+               comments="")
+    m.set_p_factor(tab)
+    dep = np.array([0.003, 0.0065, 0.008, 0.0105, 0.02])
+    ef = float(np.max(np.abs(m.eta_pressure(dep, 21.3) / (m.RHO * m.G * np.cos(np.radians(21.3)) * dep)
+                             - [1.0, 1.1, 1.2, 1.1, 1.0])))
+    check("--p-factor: p in eta / lithostatic - the table's factor", ef, "1e-12", ef < 1e-12,
+          "linear between rows, 1 outside")
+    of = m.drum_solve(dr, 21.3, gdot_min=1e-2, x0=o["x"])
+    m.set_p_factor(None)
+    print("     with it: u_surf %.4f m/s, delta %.2f mm" % (of["speed"], of["delta"] * 1e3))
+    check("--p-factor 1.2 at 7-10 mm: surface speed / without - 1", of["speed"] / o["speed"] - 1, "> 0, layer shallower",
+          of["ok"] and of["delta"] < o["delta"] and of["speed"] > o["speed"], "the base's eta raised")
 
 
     # --radius: the drum scaled at the scene's flux (R x 2, rpm / 4; docs/granular.md "Nearer the onset")

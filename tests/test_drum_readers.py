@@ -31,6 +31,13 @@ material, as a disordered bed does on average.
   (it misses the top half row);
 - the lithostatic pressure of --stress (depth + dr / 2) matches the
   interpolated p inside the bed (depth 3-5 mm, 1e-3 relative);
+- drum_layer's frame_stress: the laid isotropic p reads p across, along and
+  out of the surface with no shear (1e-9), and a stress given in the tilted
+  frame and turned into x, y comes back (1e-12);
+- drum_stress_map: a uniform stress given in the surface's frame reads its
+  (s_tt - s_nn) / p in every cell and under the mid-chord (1e-12); on the laid
+  bed, whose p is the reference's, its factor tables (p and capacity, 0.5-mm
+  bins of 1-4 mm) and its components read 1 (1e-9);
 - layer_fe_chart --table's bins: the mean of a linear speed over each 1-mm
   bin is its value at the bin's centre (to the table's 0.001 cm/s), nan
   where a run has no value.
@@ -48,6 +55,7 @@ from tests.checks import check, parse_args, summary  # noqa: E402
 from tools.analysis import drum_analysis as da  # noqa: E402
 from tools.analysis import drum_fe_read as fr  # noqa: E402
 from tools.analysis import drum_layer as dl  # noqa: E402
+from tools.analysis import drum_stress_map as dsm  # noqa: E402
 from tools.studies import filter_interval_chart as fic  # noqa: E402
 from tools.studies import layer_fe_chart as lfc  # noqa: E402
 
@@ -159,6 +167,40 @@ def main():
         inb = (sp["depth"] > 0.003) & (sp["depth"] < 0.005)
         el = np.max(np.abs(sp["p"][inb] / sp["p_lith"][inb] - 1))
         check(tag + " interpolated p / lithostatic - 1 at 3-5 mm", el, 1e-3, el < 1e-3, "rho g cos(theta) (z + dr/2)")
+        # drum_stress_map factor and components on the laid bed, whose p is the reference's: 1 everywhere
+        ft = dsm.factor_table([pp], z, p, base=(1.0e-3, 4.0e-3))
+        ft += dsm.factor_table([pp], z, p, capacity=True, base=(1.0e-3, 4.0e-3))
+        cp = dsm.components([pp], z, p, [2e-3, 3e-3])
+        ec = max(max(abs(r[1] - 1) for r in ft), max(abs(v - 1) for r in cp for v in r[1:5]), max(abs(r[5]) for r in cp))
+        check(tag + " drum_stress_map factor and components of the laid p: - 1", ec, 1e-9,
+              ec < 1e-9 and len(ft) >= 2 * (2 + 4), "p over the reference's own p")
+        fs = pp["s_nn"][1:nrow] / np.interp(zr[1:], z, p) - 1, pp["s_tt"][1:nrow] / np.interp(zr[1:], z, p) - 1
+        ef = max(np.max(np.abs(fs[0])), np.max(np.abs(fs[1])), np.max(np.abs(pp["s_nt"][1:nrow])) / np.max(p))
+        check(tag + " laid isotropic p: s_nn / p - 1, s_tt / p - 1, s_nt / p", ef, 1e-9, ef < 1e-9, "frame_stress")
+    # frame_stress of a stress given in a tilted frame (n, t) and turned into x, y: the components come back
+    ang = np.radians(THETA)
+    n, t = np.array([np.sin(ang), -np.cos(ang)]), np.array([np.cos(ang), np.sin(ang)])
+    snn, stt, szz, snt = -3.0, -2.0, -1.5, 0.7
+    Q = np.c_[n, t]  # sigma = Q diag-block Q^T, columns n and t
+    Sl = Q @ np.array([[snn, snt], [snt, stt]]) @ Q.T
+    fsd = dl.frame_stress(np.array([[Sl[0, 0], Sl[1, 1], szz, Sl[0, 1], 0.0, 0.0]]), n, t)
+    ef = max(abs(fsd["s_nn"][0] + snn), abs(fsd["s_tt"][0] + stt), abs(fsd["s_zz"][0] + szz), abs(fsd["s_nt"][0] - snt))
+    check("frame_stress: a tilted stress turned back into its frame", ef, 1e-12, ef < 1e-12,
+          "-sigma_nn, -sigma_tt, -sigma_zz, sigma_nt")
+    # drum_stress_map: a block of particles under a surface at THETA, each with s_nn 3, s_tt 2.4, s_zz 2.7
+    # Pa (compression positive) turned into x, y: every cell and the mid-chord's mean read (2.4 - 3) / 2.7
+    xs = np.stack(np.meshgrid(np.arange(-0.02, 0.02, 2.5e-4), np.arange(-0.02, 0.0, 2.5e-4)), -1).reshape(-1, 2)
+    tv, nv = dsm.surface_frame(THETA)
+    xs = xs[:, :1] * tv + xs[:, 1:] * nv  # the block's top is the surface line
+    Q = np.c_[nv, tv]
+    Sl = Q @ np.diag([-3.0, -2.4]) @ Q.T
+    S6 = np.tile([Sl[0, 0], Sl[1, 1], -2.7, Sl[0, 1], 0.0, 0.0], (len(xs), 1))
+    v = dsm.tt_minus_nn(S6, THETA)
+    xc, yc, mv, cnt = dsm.grid_map(xs, v)
+    mc, nmc = dsm.under_midchord(xs, v, THETA)
+    em = max(float(np.max(np.abs(mv + 0.6 / 2.7))), abs(mc + 0.6 / 2.7))
+    check("drum_stress_map: (s_tt - s_nn) / p of a uniform tilted stress, every cell and the mid-chord", em, 1e-12,
+          em < 1e-12 and cnt.sum() == len(xs) and nmc > 0, "(2.4 - 3) / 2.7")
     check("reading bias shrinks with dr", abs(bias[0.0005]) / abs(bias[0.0007]), "< 1",
           abs(bias[0.0005]) < abs(bias[0.0007]), "a support of 2 h = 3 dr")
     g = (np.arange(400) + 0.5) * 1e-5  # 100 grid points in each 1-mm bin of zeta, none on an edge

@@ -28,7 +28,9 @@ grains runs below the material's surface (it starts the mid-chord there).
 It also writes CSV_particles.csv (CSV less .csv): the strip's particles
 against their mass depth zeta, the volume of the strip's material above them
 per width (half their own), in bins of dr: zeta, their mean depth below the
-line, u_t, p, sqrt(J2), the shear rate and their count. zeta is the depth
+line, u_t, p, sqrt(J2), the shear rate, the compressive normal stresses
+across the surface, along it and out of the plane (s_nn, s_tt, s_zz) and the
+shear s_nt (frame_stress), and their count. zeta is the depth
 below a flat surface holding the same material (the finite-element reference's
 depth, tools/analysis/drum_mui_ref.py), whatever the fitted line misses, and
 the profile's flux is the particles'.
@@ -73,7 +75,8 @@ def stress_profile(d, s, outdir, npts=400):
     """The mid-chord columns of --stress (module doc), as a dict of arrays; "particles" holds the
     strip's profile against the mass depth (strip_profile)."""
     P = ir.params(outdir)
-    p, tau = ir.pressure_tau(np.asarray(s["Stress"])[np.asarray(s["Kind"]) == snap.MATERIAL])
+    S = np.asarray(s["Stress"])[np.asarray(s["Kind"]) == snap.MATERIAL]
+    p, tau = ir.pressure_tau(S)
     frac, pts = d.midchord(npts)
     t = downslope(d, pts)
     o = {"depth": frac * d.R, "u_t": d.interp(pts, d.v @ t), "p": d.interp(pts, p), "sqrtJ2": d.interp(pts, tau),
@@ -87,17 +90,32 @@ def stress_profile(d, s, outdir, npts=400):
     g = float(np.hypot(*np.asarray(ph.get("gravity", [0, -9.81, 0]), float)[:2]))
     rho = float(ph.get("rho", 1500.0))
     o["p_lith"] = rho * g * np.cos(np.radians(d.angle)) * (o["depth"] + 0.5 * d.dr)
-    strip_profile(d, t, p, tau, o)
+    strip_profile(d, t, p, tau, o, frame_stress(S, d.n, t))
     return o
 
 
-def strip_profile(d, t, p, tau, o):
+def frame_stress(S, n, t):
+    """The compressive normal stresses of snapshot stresses S (N x 6: xx, yy, zz, xy, xz, yz) in the
+    surface's frame: -sigma_nn across the surface (n its unit normal), -sigma_tt along it (t), -sigma_zz
+    out of the plane, and the shear sigma_nt, as a dict of arrays. In a flat, uniform layer sigma_nn
+    carries the weight above, and an incompressible mu(I) layer (the FE's) has -sigma_tt = -sigma_zz
+    = p, so these locate an excess of p in the component the momentum balance does not hold."""
+    S = np.asarray(S)
+
+    def quad(a, b):
+        return S[:, 0] * a[0] * b[0] + S[:, 1] * a[1] * b[1] + S[:, 3] * (a[0] * b[1] + a[1] * b[0])
+
+    return {"s_nn": -quad(n, n), "s_tt": -quad(t, t), "s_zz": -S[:, 2], "s_nt": quad(n, t)}
+
+
+def strip_profile(d, t, p, tau, o, comp=None):
     """The particles of the strip |s| < STRIP R about the mid-chord, into o: their kernel-summed volume
     fraction phi_i = sum_j V_j W_ij (1 where they hold their nominal volumes, below 1 within 2 h of the
     surface) in depth bins of 2 dr ("phi"), the flux they carry through the mid-chord
     ("flux_particles"), and their profile against the mass depth zeta ("particles": the volume of the
     strip's material above them per width, half their own; the FE's depth below its flat surface
-    whatever the line fitted to the top grains misses), in bins of dr."""
+    whatever the line fitted to the top grains misses), in bins of dr; with comp (frame_stress's
+    components, per particle) their means too."""
     rel = d.x - d.M
     z = rel @ d.n
     strip = np.where(np.abs(rel @ t) < STRIP * d.R)[0]
@@ -114,11 +132,12 @@ def strip_profile(d, t, p, tau, o):
     order = strip[np.argsort(z[strip])]
     zeta = (np.cumsum(d.vol[order]) - 0.5 * d.vol[order]) / W
     b = np.floor(zeta / d.dr).astype(int)
-    part = {"zeta": [], "z": [], "u_t": [], "p": [], "sqrtJ2": [], "gdot": [], "n": []}
+    comp = comp or {}
+    part = {"zeta": [], "z": [], "u_t": [], "p": [], "sqrtJ2": [], "gdot": [], **{k: [] for k in comp}, "n": []}
     for k in np.unique(b):
         sel = order[b == k]
         for key, val in (("zeta", zeta[b == k]), ("z", z[sel]), ("u_t", vt[sel]), ("p", p[sel]), ("sqrtJ2", tau[sel]),
-                         ("gdot", d.gdot[sel])):
+                         ("gdot", d.gdot[sel]), *((c, v[sel]) for c, v in comp.items())):
             part[key].append(float(np.mean(val)))
         part["n"].append(len(sel))
     o["particles"] = {key: np.array(v) for key, v in part.items()}

@@ -624,6 +624,30 @@ class Drum:
         return Problem(self.S, self.ddofs, self.dvals, fq, self.gauge), g
 
 
+P_FACTOR = None  # --p-factor: (depth m, factor) arrays, or None
+
+
+def set_p_factor(path):
+    """--p-factor CSV: the table (depth_m, factor) by which the lithostatic p in eta is multiplied,
+    linear between its rows and 1 outside them (None: off)."""
+    global P_FACTOR
+    if path is None:
+        P_FACTOR = None
+        return
+    t = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    P_FACTOR = (t[:, 0], t[:, 1])
+
+
+def eta_pressure(depth, theta_deg):
+    """The p in eta at these depths below the flat surface: rho g cos(theta) depth, times the
+    --p-factor table's factor where one is set (an attribution study: the SPH's own pressure, whose
+    elastic bed carries a stress of its history, in the memoryless FE)."""
+    p = RHO * G * np.cos(np.radians(theta_deg)) * depth
+    if P_FACTOR is None:
+        return p
+    return p * np.interp(depth, P_FACTOR[0], P_FACTOR[1], left=1.0, right=1.0)
+
+
 def drum_solve(drum, theta_deg, yld="drucker_prager", gdot_min=1e-3, eta_max=1e12, d=D_GRAIN, x0=None,
                tol=1e-6, inertia=False, method="newton", pressure="lithostatic", nprof=400, verbose=False):
     """Solve the drum at theta (degrees); a dict of the outputs (see the docstring).
@@ -631,7 +655,7 @@ def drum_solve(drum, theta_deg, yld="drucker_prager", gdot_min=1e-3, eta_max=1e1
     FE pressure). Without x0, a continuation in gdot_min (1, 0.3, ... down to gdot_min)."""
     S = drum.S
     prob, g = drum.problem(theta_deg)
-    pf = RHO * G * np.cos(np.radians(theta_deg)) * (drum.ys - S.xq[..., 1]) if pressure == "lithostatic" else None
+    pf = eta_pressure(drum.ys - S.xq[..., 1], theta_deg) if pressure == "lithostatic" else None
     its = 0
     ok = False
     if x0 is not None:
@@ -927,12 +951,16 @@ def main(argv=None):
     ap.add_argument("--inertia", action="store_true", help="add rho u_old . grad u (Picard)")
     ap.add_argument("--pressure", choices=("lithostatic", "coupled"), default="lithostatic",
                     help="the p in eta: rho g cos(theta) (y_s - y) (default), or the FE pressure (see the docstring)")
+    ap.add_argument("--p-factor", default=None,
+                    help="CSV (header; depth_m, factor): multiply the lithostatic p in eta by this factor of the "
+                         "depth, linear between rows, 1 outside (to hold the SPH's own pressure in the FE)")
     ap.add_argument("--method", choices=("newton", "picard"), default="newton")
     ap.add_argument("--tol", type=float, default=1e-6)
     ap.add_argument("--profile", default=None, help="CSV of the mid-chord profile at theta* (or the last theta)")
     ap.add_argument("--verbose", action="store_true")
     a = ap.parse_args(argv)
     set_partial(a.pr_alpha)
+    set_p_factor(a.p_factor)
     if a.theta is not None:
         angles = [a.theta]
     elif a.angles:
@@ -941,8 +969,8 @@ def main(argv=None):
         angles = [20.5, 21.0, 21.3, 21.6, 22.0, 22.5] if a.yld == "drucker_prager" else [24.0, 25.0, 26.0, 27.0, 28.0]
     meshes = [(a.h_fine, a.h_coarse or 4 * a.h_fine)] if a.h_fine else [MESHES[k] for k in a.meshes]
     print("drum mu(I) reference: R %.4f m, y_s %.4f m, %.1f rpm clockwise, rho %.0f, rho_s %.0f, d %.3g m, "
-          "yield %s, inertia %s, p in eta %s" % (a.radius, (2 * a.fill - 1) * a.radius, a.rpm, RHO, RHO_S, a.d, a.yld, "on" if a.inertia else "off",
-                                             a.pressure))
+          "yield %s, inertia %s, p in eta %s%s" % (a.radius, (2 * a.fill - 1) * a.radius, a.rpm, RHO, RHO_S, a.d, a.yld, "on" if a.inertia else "off",
+                                             a.pressure, " times the factor of " + a.p_factor if a.p_factor else ""))
     if PARTIAL:
         print("mu(I) partially regularised (Barker & Gray 2017): sqrt(%g / ln(%.1f / I)) below I_N1 = %.5f"
               % PARTIAL)
