@@ -15,7 +15,9 @@ run; under a second):
   mu_PR(I) = tan theta (1e-12);
 - inertial_number_of_ratio inverts yield_ratio on both yield surfaces under both
   laws (1e-9), and under the regularized law gives 0 below the static ratio
-  k(mu_s) and inf above the dynamic one k(mu_d).
+  k(mu_s) and inf above the dynamic one k(mu_d);
+- the conditioning kappa = d ln I / d ln k is the centred difference of ln I
+  against ln yield_ratio (1e-6) on both yield surfaces, and it grows as I -> 0.
 
     /usr/bin/python3 -m tests.test_inertial_range [--sphseg IGNORED --work IGNORED]
 """
@@ -64,6 +66,18 @@ def main():
         ok = ir.inertial_number_of_ratio(0.99 * k_s, P) == 0 and ir.inertial_number_of_ratio(1.001 * k_d, P) == math.inf
         check("%s, regularized: I below the static ratio, above the dynamic" % y, 0, "0 and inf", ok,
               "arrested, no steady state")
+    for y in ("drucker_prager", "mu_I"):
+        P = {"mu_s": MU_S, "mu_d": MU_D, "I0": I0, "yield": y, "mu_law": "regularized"}
+        kaps = []
+        for I in (0.01, 0.04, 0.3):
+            h = 1e-5
+            fd = 2 * h / (math.log(float(ir.yield_ratio(P, I * math.exp(h)))) - math.log(float(ir.yield_ratio(P, I * math.exp(-h)))))
+            kap = float(ir.condition(I, MU_S, MU_D, I0, y)[1])
+            kaps.append(kap)
+            check("%s: kappa(I = %g) / centred difference - 1" % (y, I), abs(kap / fd - 1), 1e-6,
+                  abs(kap / fd - 1) < 1e-6, "d ln I / d ln k")
+        check("%s: kappa falls as I rises (0.01, 0.04, 0.3)" % y, kaps[0], "> kappa(0.04) > kappa(0.3)",
+              kaps[0] > kaps[1] > kaps[2], "nu -> 0 as I -> 0")
     sys.exit(summary("test_inertial_range"))
 
 

@@ -25,7 +25,16 @@ surface, and a drum's bed stays there as it turns, while only its surface
 layer shears (2D EV drum at 8 s: gdot 1-10 1/s and 2 cm/s off the rigid
 rotation in the layer; below 1 1/s and 0.3 mm/s off it elsewhere).
 
+Conditioning. A flow whose stress the momentum balance fixes shears at the I
+where k(mu(I)) equals its stress ratio r = sqrt(J2) / p, so a relative error e
+in r becomes a relative error kappa e in the shear rate, kappa = d ln I / d ln
+k = 1 / (nu d ln k / d ln mu), with the nu of the criterion above (d ln k / d
+ln mu = 9 / (9 + 12 mu^2) for drucker_prager, 1 for mu_I). As I -> 0, nu -> 0
+and kappa grows without bound: the same nu makes the law ill-posed and the
+rate ill-conditioned in the stress near the static yield.
+
   python3 -m tools.analysis.inertial_range window [--mu-s 0.382 --mu-d 0.682 --I0 0.279] [--pr-alpha 1.9]
+  python3 -m tools.analysis.inertial_range condition [--I 0.01 0.02 0.04 0.1] [--yield drucker_prager]
   python3 -m tools.analysis.inertial_range run OUTDIR [--from T] [--gdot-fraction 0.1]
 """
 import argparse
@@ -49,6 +58,16 @@ def criterion(I, mu_s, mu_d, I0):
     mu = mu_of_I(I, mu_s, mu_d, I0)
     nu = I * (mu_d - mu_s) * I0 / (I + I0) ** 2 / mu
     return 4 * nu * nu - 4 * nu + mu * mu * (1 - nu / 2) ** 2
+
+
+def condition(I, mu_s, mu_d, I0, yield_="drucker_prager"):
+    """(nu, kappa) at inertial number I (module doc, "Conditioning"): nu = I mu'(I) / mu and
+    kappa = d ln I / d ln k(mu(I)) for the regularized law on Material:yield's surface."""
+    I = np.asarray(I, float)
+    mu = mu_of_I(I, mu_s, mu_d, I0)
+    nu = I * (mu_d - mu_s) * I0 / (I + I0) ** 2 / mu
+    dk = 1.0 if yield_ == "mu_I" else 9 / (9 + 12 * mu * mu)
+    return nu, 1 / (nu * dk)
 
 
 def window(mu_s, mu_d, I0):
@@ -215,6 +234,15 @@ def cmd_run(a):
         100.0 * np.mean(I <= lo), 100.0 * np.mean((I > lo) & (I < hi)), 100.0 * np.mean(I >= hi)))
 
 
+def cmd_condition(a):
+    print("mu_s %g, mu_d %g, I0 %g, %s: a relative error e in the stress ratio sqrt(J2) / p makes kappa e "
+          "in the shear rate" % (a.mu_s, a.mu_d, a.I0, a.yld))
+    print("       I       nu    kappa   stress-ratio error for 3 % in the rate")
+    for I in a.I:
+        nu, kap = condition(I, a.mu_s, a.mu_d, a.I0, a.yld)
+        print("  %6.3g  %7.4f  %7.2f   %.3f %%" % (I, nu, kap, 3.0 / kap))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -226,12 +254,18 @@ def main(argv=None):
                    "regularised law with this alpha (theirs: 1.9)")
     w.add_argument("--angles", type=float, nargs="+", default=[19.0, 20.0, 20.5, 20.9],
                    help="slopes (deg) at which --pr-alpha reports the layer's I")
+    c = sub.add_parser("condition")
+    c.add_argument("--mu-s", type=float, default=0.382)
+    c.add_argument("--mu-d", type=float, default=0.682)
+    c.add_argument("--I0", type=float, default=0.279)
+    c.add_argument("--I", type=float, nargs="+", default=[0.01, 0.02, 0.04, 0.06, 0.1, 0.3])
+    c.add_argument("--yield", dest="yld", choices=("drucker_prager", "mu_I"), default="drucker_prager")
     r = sub.add_parser("run")
     r.add_argument("outdir")
     r.add_argument("--from", dest="t_from", type=float, default=0.0)
     r.add_argument("--gdot-fraction", type=float, default=0.1)
     a = ap.parse_args(argv)
-    (cmd_window if a.cmd == "window" else cmd_run)(a)
+    {"window": cmd_window, "condition": cmd_condition, "run": cmd_run}[a.cmd](a)
 
 
 if __name__ == "__main__":
