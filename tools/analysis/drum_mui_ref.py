@@ -50,7 +50,11 @@ coupled puts the FE pressure itself in eta: that iteration (Picard in p) did
 not converge on the drum (it oscillates; the Bagnold layer, where p is
 lithostatic, converges either way), so the baseline is the lithostatic
 closure: this is an assumption of the reference (it differs from the SPH,
-whose p is its own, mainly near the corners of the surface).
+whose p is its own, mainly near the corners of the surface). --p-factor CSV
+multiplies that lithostatic p by a table of the depth (depth_m, factor;
+linear between rows, 1 outside), to give the FE a run's own pressure under
+its layer (tools/analysis/drum_stress_map.py factor; docs/granular.md "The
+bed's stress under the layer"); it applies to the lithostatic closure only.
 
 The nonlinearity. Newton in the velocity (the exact tangent of eta's
 dependence on gdot: int c (D(v):D)(D:D(du)), c = (4 / gdot) d eta/d gdot),
@@ -960,6 +964,8 @@ def main(argv=None):
     ap.add_argument("--verbose", action="store_true")
     a = ap.parse_args(argv)
     set_partial(a.pr_alpha)
+    if a.p_factor and a.pressure != "lithostatic":
+        ap.error("--p-factor multiplies the lithostatic p in eta; it does not apply with --pressure coupled")
     set_p_factor(a.p_factor)
     if a.theta is not None:
         angles = [a.theta]

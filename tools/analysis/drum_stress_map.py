@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The stress a 2D drum's bed carries, mapped in the free surface's frame
-(docs/granular.md "The bed's stress memory").
+(docs/granular.md "The bed's stress under the layer").
 
 In an incompressible mu(I) fluid (the FE reference, drum_mui_ref.py) the
 normal stresses along the surface and across it are equal wherever the flow
@@ -22,8 +22,7 @@ a square grid over the material particles of one snapshot.
       for all. Prints, per run, the mean of (s_tt - s_nn) / p over the
       particles under the mid-chord (within 1.75 mm of it, the strip of
       drum_layer) at 7-10 mm below the surface (under_midchord); writes the
-      maps (one CSV: name, x, y, value, count per cell) and a chart of them.
-
+      maps (one CSV: name, x, y, value, count per cell) and a chart of them;
   components PARTICLES_CSV [...] --fe FE_PROFILE [--depths MM ...]
       from drum_layer --stress's CSV_particles.csv files (snapshots
       pooled): p and the compressive normal stresses across the surface,
@@ -48,7 +47,6 @@ Signs and frame: the EV drum turns clockwise, so its surface falls to +x; t =
 sign of t or n does not change s_tt or s_nn.
 """
 import argparse
-import glob
 import os
 
 import numpy as np
@@ -91,9 +89,10 @@ def grid_map(x, val, cell=CELL):
 def extract(outdir, npz, times):
     """extract (module doc): the material particles of the snapshots at these times into npz, keys
     't<T>_<field>'. Returns the times written."""
-    d, got = {}, []
-    for f in sorted(glob.glob(os.path.join(outdir, "snapshot_*.h5"))):
+    d, got, seen = {}, [], []
+    for f in snap.list_snapshots(outdir):
         t = float(snap.snapshot_time(f))
+        seen.append(t)
         if not any(abs(t - x) < 1e-6 for x in times):
             continue
         s = snap.read_snapshot(f)
@@ -102,14 +101,17 @@ def extract(outdir, npz, times):
             if name in s:
                 d["t%g_%s" % (t, name)] = np.asarray(s[name])[m]
         got.append(t)
+    if not got:
+        raise SystemExit("%s has no snapshot at t = %s (it has: %s)" % (
+            outdir, ", ".join("%g" % t for t in times), ", ".join("%g" % t for t in seen) or "none"))
     np.savez_compressed(npz, **d)
     return got
 
 
 def load(source, time):
     """(coordinates N x 2, stress N x 6) of the material particles at this time, from an npz of extract
-    (or of the earlier device-side extraction, which kept every particle with its Kind) or a run's
-    output directory."""
+    (one that also holds t<T>_Kind, every particle's, is cut to the material) or a run's output
+    directory (its snapshot nearest that time)."""
     if os.path.isdir(source):
         paths = snap.list_snapshots(source)
         f = min(paths, key=lambda p: abs(snap.snapshot_time(p) - time))
