@@ -26,8 +26,9 @@ a square grid over the material particles of one snapshot.
   components PARTICLES_CSV [...] --fe FE_PROFILE [--depths MM ...]
       from drum_layer --stress's CSV_particles.csv files (snapshots
       pooled): p and the compressive normal stresses across the surface,
-      along it and out of the plane over the FE profile's pressure, and the
-      shear over p, at these mass depths (the strip's rows within 0.3 mm);
+      along it and out of the plane over the FE profile's pressure, the
+      shear over p, sqrt(J2) / p and the speed along the surface, at these
+      mass depths (the strip's rows within 0.3 mm);
   factor PARTICLES_CSV [...] --fe FE_PROFILE --out CSV [--capacity]
       the table of drum_mui_ref --p-factor that puts a run's own pressure
       under its layer into the FE reference: from drum_layer --stress's
@@ -172,16 +173,17 @@ def factor_table(parts, fe_depth, fe_p, capacity=False, base=BASE, step=0.5e-3):
 
 
 def components(parts, fe_depth, fe_p, depths, half=0.3e-3):
-    """components (module doc): rows (depth, p, s_nn, s_tt, s_zz over the FE's p, s_nt / p, number of the
-    strip's rows pooled)."""
+    """components (module doc): rows (depth, p, s_nn, s_tt, s_zz over the FE's p, s_nt / p, sqrt(J2) / p,
+    u_t, number of the strip's rows pooled)."""
     z = np.concatenate([q["zeta"] for q in parts])
-    col = {k: np.concatenate([q[k] for q in parts]) for k in ("p", "s_nn", "s_tt", "s_zz", "s_nt")}
+    col = {k: np.concatenate([q[k] for q in parts]) for k in ("p", "s_nn", "s_tt", "s_zz", "s_nt", "sqrtJ2", "u_t")}
     rows = []
     for d in depths:
         m = np.abs(z - d) < half
         pf = float(np.interp(z[m].mean(), fe_depth, fe_p))  # at the pooled rows' own mean depth
         rows.append((d,) + tuple(float(col[k][m].mean()) / pf for k in ("p", "s_nn", "s_tt", "s_zz"))
-                    + (float(col["s_nt"][m].mean() / col["p"][m].mean()), int(m.sum())))
+                    + (float(col["s_nt"][m].mean() / col["p"][m].mean()),
+                       float(np.mean(col["sqrtJ2"][m] / col["p"][m])), float(col["u_t"][m].mean()), int(m.sum())))
     return rows
 
 
@@ -214,10 +216,11 @@ def main(argv=None):
     if a.cmd == "components":
         fe = np.loadtxt(a.fe, delimiter=",", skiprows=1)
         parts = [np.genfromtxt(p, delimiter=",", names=True) for p in a.particles]
-        print("zeta (mm)   p/p_FE  s_nn/p_FE s_tt/p_FE s_zz/p_FE  s_nt/p   rows")
+        print("zeta (mm)   p/p_FE  s_nn/p_FE s_tt/p_FE s_zz/p_FE  s_nt/p  J2^.5/p  u_t cm/s  rows")
         for r in components([{k: q[k] for k in q.dtype.names} for q in parts], fe[:, 0], fe[:, 2],
                             [1e-3 * d for d in a.depths]):
-            print("%8.1f   %7.3f %9.3f %9.3f %9.3f %+8.3f %6d" % ((1e3 * r[0],) + r[1:]))
+            print("%8.1f   %7.3f %9.3f %9.3f %9.3f %+8.3f %8.4f %+9.2f %5d"
+                  % ((1e3 * r[0],) + r[1:7] + (100 * r[7], r[8])))
         return
     if a.cmd == "factor":
         fe = np.loadtxt(a.fe, delimiter=",", skiprows=1)
