@@ -52,6 +52,7 @@ import os
 
 import numpy as np
 
+from tools.analysis import inertial_range as ir  # noqa: E402
 from tools.analysis import snap  # noqa: E402
 from tools.analysis.drum_layer import frame_stress  # noqa: E402
 
@@ -72,7 +73,7 @@ def tt_minus_nn(S, angle_deg):
     S = np.asarray(S)
     t, n = surface_frame(angle_deg)
     c = frame_stress(S, n, t)
-    p = -(S[:, 0] + S[:, 1] + S[:, 2]) / 3
+    p = ir.pressure_tau(S)[0]
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(p > 0, (c["s_tt"] - c["s_nn"]) / p, np.nan)
 
@@ -146,7 +147,7 @@ def under_midchord(x, val, angle_deg, depth=(7e-3, 10e-3), half_width=1.75e-3):
     return float(np.mean(val[m])), int(m.sum())
 
 
-K_MU_S = 0.3495  # k(mu_s) of Table 1's drucker_prager cone (tools/analysis/inertial_range.py kmu)
+K_MU_S = float(ir.kmu(0.382))  # k(mu_s) of Table 1's drucker_prager cone, 0.3495
 BASE = (6.0e-3, 11.0e-3)  # factor: the depths of the layer's base and the bed's top, m
 
 

@@ -52,20 +52,23 @@ def mu_of_I(I, mu_s, mu_d, I0):
     return mu_s + (mu_d - mu_s) * I / (I + I0)
 
 
-def criterion(I, mu_s, mu_d, I0):
-    """C(I) above: < 0 well posed."""
+def nu_of_I(I, mu_s, mu_d, I0):
+    """(nu, mu) at I: nu = I mu'(I) / mu of the regularized law."""
     I = np.asarray(I, float)
     mu = mu_of_I(I, mu_s, mu_d, I0)
-    nu = I * (mu_d - mu_s) * I0 / (I + I0) ** 2 / mu
+    return I * (mu_d - mu_s) * I0 / (I + I0) ** 2 / mu, mu
+
+
+def criterion(I, mu_s, mu_d, I0):
+    """C(I) above: < 0 well posed."""
+    nu, mu = nu_of_I(I, mu_s, mu_d, I0)
     return 4 * nu * nu - 4 * nu + mu * mu * (1 - nu / 2) ** 2
 
 
 def condition(I, mu_s, mu_d, I0, yield_="drucker_prager"):
     """(nu, kappa) at inertial number I (module doc, "Conditioning"): nu = I mu'(I) / mu and
     kappa = d ln I / d ln k(mu(I)) for the regularized law on Material:yield's surface."""
-    I = np.asarray(I, float)
-    mu = mu_of_I(I, mu_s, mu_d, I0)
-    nu = I * (mu_d - mu_s) * I0 / (I + I0) ** 2 / mu
+    nu, mu = nu_of_I(I, mu_s, mu_d, I0)
     dk = 1.0 if yield_ == "mu_I" else 9 / (9 + 12 * mu * mu)
     return nu, 1 / (nu * dk)
 
