@@ -36,7 +36,7 @@ extern "C" {
                        #call);                                                                       \
     } while (0)
 
-enum { PERM_MAX = 64, BLOCK = 128 };
+enum { PERM_MAX = 96, BLOCK = 128 }; /* core/fields.h: 68 arrays; perm_tab, a kernel parameter, 1.6 kB */
 #define GPU_TEAM_MAX_2D 4 /* threads per particle in the neighbour loops (gpu_team_size) */
 #define GPU_TEAM_MAX_3D 8
 #define GPU_TEAM_THREADS 2097152.0
@@ -88,7 +88,7 @@ struct dhalo {
     int cuda_aware;
     int overlap;                 /* SPHSEG_GPU_OVERLAP=0 turns the overlap off (for measuring it) */
     int pending;                 /* a refresh is in flight (gpu_settle completes it) */
-    int pend_walls, pend_renorm; /* boundary passes to run when it lands */
+    int pend_walls, pend_renorm, pend_kgc; /* boundary passes to run when it lands */
     ftab pend;
     cudaEvent_t ev[HX_EV];       /* pairs (start, end) of GPU time spent on the halo */
     int nev;
@@ -229,7 +229,7 @@ const step_ctx *gpu_step_ctx(sim_t *s, gpu_t *g);
 void gpu_permute(gpu_t *g, const unsigned *perm, size_t n);
 void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, const real *origin);
 void gpu_classify(gpu_t *g, const sph_ctx *kc);
-void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl);
+void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, int kgc, sel sl);
 void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl);
 void gpu_dcdt(sim_t *s, gpu_t *g, particles_t p, sel sl);
 void gpu_shift_pass(sim_t *s, gpu_t *g);

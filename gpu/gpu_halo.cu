@@ -265,8 +265,8 @@ void gpu_settle(sim_t *s, gpu_t *g)
     dhalo *x = g->hx;
     if (!x || !x->pending) return;
     gpu_refresh_finish(s, g);
-    gpu_walls_renorm(s, g, x->pend_walls, x->pend_renorm, sel_bd(g, 2));
-    x->pend_renorm = x->pend_walls = 0;
+    gpu_walls_renorm(s, g, x->pend_walls, x->pend_renorm, x->pend_kgc, sel_bd(g, 2));
+    x->pend_renorm = x->pend_walls = x->pend_kgc = 0;
 }
 
 /* Every array of the owned particles into the host copy s->p (its ghosts

@@ -51,7 +51,7 @@ __device__ __forceinline__ void wall_one(size_t i, particles_t *q, const grid_vi
     else if (lane == 0) flow_wall_none(i, q, c);
 }
 
-void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl)
+void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, int kgc, sel sl)
 {
     particles_t p = g->d;
     grid_view v = g->view;
@@ -61,8 +61,12 @@ void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl)
     const size_t rlo = s->renorm_due ? g->n : 0; /* the owned L due in the flow rates: the ghosts' here */
     const uint8_t *wa = g->wact;
     if (rlo >= n) renorm = 0;
-    if (!walls && !renorm) return;
+    if (!walls && !renorm && !kgc) return;
     prof_begin(g->st);
+    if (kgc) /* ST_KGC: B of the material, owned and ghosts (reads positions only) */
+        team(g, n, [=] __device__(size_t i, int lane, int T) {
+            if (p.kind[i] == KIND_MATERIAL && sel_on(sl, i)) flow_kgc_team(i, &p, &v, &c, lane, T);
+        });
     if (walls && renorm && g->team > 1) {
         team(g, n, [=] __device__(size_t i, int lane, int T) {
             if (!sel_on(sl, i)) return;
@@ -88,7 +92,7 @@ void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, sel sl)
 /* The flow rates of the owned particles in sl, and with segregation their
  * concentration coefficients (seg_coeffs reads only i's C and the shear
  * rate just computed). */
-template <int RENORM> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
+template <int RENORM, int KGC> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
 {
     particles_t p = g->d;
     grid_view v = g->view;
@@ -100,7 +104,7 @@ template <int RENORM> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
         if (!sel_on(sl, i)) return;
         particles_t q = p;
         const int mat = q.kind[i] == KIND_MATERIAL;
-        real a = mat ? flow_rates_team(i, &q, &v, &c, lane, T, RENORM) : R(0.0);
+        real a = mat ? flow_rates_team(i, &q, &v, &c, lane, T, RENORM, KGC) : R(0.0);
         if (lane != 0) return;
         amag[i] = a;
         if (seg && mat) seg_coeffs(i, &q, &sc);
@@ -108,12 +112,14 @@ template <int RENORM> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
 }
 
 /* (and the owned particles' L when prepare left them due: a kernel of its
- * own, so that the other passes keep the smaller register count) */
+ * own, so that the other passes keep the smaller register count; the
+ * corrected gradient likewise) */
 void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl)
 {
     prof_begin(g->st);
-    if (s->renorm_due) gpu_flow_pass<1>(s, g, sl);
-    else gpu_flow_pass<0>(s, g, sl);
+    const int kgc = s->flow.kgc; /* its own kernels: the others keep their register count */
+    if (s->renorm_due) kgc ? gpu_flow_pass<1, 1>(s, g, sl) : gpu_flow_pass<1, 0>(s, g, sl);
+    else kgc ? gpu_flow_pass<0, 1>(s, g, sl) : gpu_flow_pass<0, 0>(s, g, sl);
     g->acc_pending = 1;
     prof_end(g->st, P_FLOW);
 }

@@ -59,7 +59,7 @@ void gpu_prepare(sim_t *s, double t, int classify)
     gpu_settle(s, g);
     const stage_sched *m = gpu_sched(s);
     const int exact = classify == 2 || (s->hcsr && classify);
-    int build = 0, walls = 0, renorm = 0;
+    int build = 0, walls = 0, renorm = 0, kgc = 0;
     for (int k = 0; k < m->n[HOOK_PREPARE]; ++k) switch (m->ids[HOOK_PREPARE][k]) {
         case ST_PLACE: gpu_step_kernel(s, g, 1, t); break; /* with the held-back save and advance */
         case ST_EXCHANGE: build = gpu_exchange(s, g, exact); break;
@@ -73,17 +73,19 @@ void gpu_prepare(sim_t *s, double t, int classify)
             renorm = classify != 0;
             if (renorm) s->renorm_due = s->flow_on;
             break;
+        case ST_KGC: kgc = 1; break; /* with ST_WALLS' pass */
         case ST_WALLS: walls = 1; break;
         default: error_exit(1, "backend_gpu: stage %d has no body in prepare", m->ids[HOOK_PREPARE][k]);
         }
-    /* ST_WALLS and ST_RENORM: one pass, its boundary after the refresh in flight */
+    /* ST_WALLS, ST_RENORM and ST_KGC: one pass, its boundary after the refresh in flight */
     if (!build && s->halo && g->hx->overlap) {
         g->hx->pend_renorm = renorm;
         g->hx->pend_walls = walls;
-        gpu_walls_renorm(s, g, walls, renorm, sel_in(g, 2));
+        g->hx->pend_kgc = kgc;
+        gpu_walls_renorm(s, g, walls, renorm, kgc, sel_in(g, 2));
         return;
     }
-    gpu_walls_renorm(s, g, walls, renorm, sel_all());
+    gpu_walls_renorm(s, g, walls, renorm, kgc, sel_all());
 }
 
 /* Whether hook h runs stage id in this run. */
@@ -292,7 +294,7 @@ void gpu_filter(sim_t *s)
             prof_end(g->st, P_FILTER);
             if (s->halo) gpu_refresh(s, g, fields_tab(g, m->refresh[1][ST_SHEPARD_STORE], 1));
             break;
-        case ST_WALLS: gpu_walls_renorm(s, g, 1, 0, sel_all()); break;
+        case ST_WALLS: gpu_walls_renorm(s, g, 1, 0, 0, sel_all()); break;
         default: error_exit(1, "backend_gpu: stage %d has no body in filter", m->ids[HOOK_FILTER][k]);
         }
 }

@@ -72,7 +72,7 @@ static void cpu_flow_rates(sim_t *s)
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK) reduction(max : amax)
     for (long i = 0; i < n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
-        double a = flow_rates_team((size_t)i, p, &s->grid.view, &s->flow, 0, 1, renorm);
+        double a = flow_rates_team((size_t)i, p, &s->grid.view, &s->flow, 0, 1, renorm, s->flow.kgc);
         amax = a > amax ? a : amax;
     }
     s->amax = amax;
@@ -147,6 +147,11 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         if (!c->classify) return 0;
         s->renorm_due = s->flow_on;
         cpu_renorm(s, s->flow_on ? n : 0);
+        return 1;
+    case ST_KGC: /* ghosts included: a ghost within 2h of the slab has its whole support here */
+#pragma omp parallel for schedule(dynamic, CPU_CHUNK)
+        for (long i = 0; i < ng; ++i)
+            if (p->kind[i] == KIND_MATERIAL) flow_kgc_team((size_t)i, p, &s->grid.view, &s->flow, 0, 1);
         return 1;
     case ST_WALLS: /* ghosts included: a ghost dummy next to the slab has its whole support here */
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK)

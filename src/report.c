@@ -118,8 +118,12 @@ void report_start(sim_t *s, const outputs *o, const run_cli *c)
             snprintf(sh, sizeof sh, "%s filter every %u steps (at most %.3g acoustic times h/c_s)",
                      sc->flow.stress_filter == FLOW_FILTER_MLS ? "first-order (mls) Shepard" : "Shepard",
                      sc->flow.shepard_every, sc->flow.shepard_every * sc->run.cfl_flow);
-        message("flow: c_s = %.4g m/s, h/c_s = %.3g s, %s, %s", (double)s->flow.cs, (double)(s->seg.k.h / s->flow.cs),
-                sh, stab_text(sc, st, sizeof st));
+        char kg[96] = "";
+        if (s->flow.kgc)
+            snprintf(kg, sizeof kg, ", corrected kernel gradient (blended to I below det M = %.3g)",
+                     (double)s->flow.kgc_det);
+        message("flow: c_s = %.4g m/s, h/c_s = %.3g s, %s, %s%s", (double)s->flow.cs,
+                (double)(s->seg.k.h / s->flow.cs), sh, stab_text(sc, st, sizeof st), kg);
     }
     if (s->flow_on) {
         settings_warn_stabilization(sc);

@@ -571,6 +571,8 @@ static void flow_ctx_of(const struct scene *sc, const sph_ctx *k, const seg_para
     f->eta_r = (real)sc->flow.riemann_eta;
     f->bed_alpha = f->stab == STAB_RIEMANN && f->m.G > 0 ? (real)sc->flow.bed_damping : R(0.0);
     f->filter_mls = sc->flow.stress_filter == FLOW_FILTER_MLS;
+    f->kgc = (int)sc->flow.gradient_correction;
+    f->kgc_det = (real)sc->flow.gradient_correction_det;
     f->pdiff = flow_pdiff_coef(f->stab, (int)sc->flow.riemann_diffusion, (real)sc->flow.delta, f->m.K, f->rho,
                                f->cs, k->h);
     for (int d = 0; d < 3; ++d) f->g[d] = (real)sc->physics.gravity[d];

@@ -22,6 +22,8 @@ const stage stage_table[] = {
     /* classes are decisions: the owners' bits, whatever a ghost's summation order */
     {ST_CLASSIFY, H(HOOK_PREPARE), "bound_classify", 0, 0, RANGE_ALL, NB_GEOM, FLD_BCLASS | FLD_NRM | FLD_PSI, 1},
     {ST_RENORM, H(HOOK_PREPARE), "seg_renorm", SF_SEG | SF_RENORM, 0, RANGE_ALL, NB_GEOM, FLD_L, 0},
+    /* each prepare: B follows the positions; the ghosts' from their own support (ghost depth 4h) */
+    {ST_KGC, H(HOOK_PREPARE), "flow_kgc_team", SF_FLOW | SF_KGC, 0, RANGE_ALL, NB_GEOM, FLD_B, 0},
     {ST_SHEPARD, H(HOOK_FILTER), "flow_shepard", SF_FLOW, 0, RANGE_OWNED, FLD_X | FLD_KIND | FLD_SIG, FLD_DSIG, 0},
     {ST_SHEPARD_STORE, H(HOOK_FILTER), "flow_shepard_store", SF_FLOW, 0, RANGE_OWNED, 0, FLD_SIG, 0},
     /* a dummy's own wall id gives a box wall's normal */
@@ -29,6 +31,7 @@ const stage stage_table[] = {
      FLD_V | FLD_SIG, 0},
     /* with SF_RENORM the owned L come with it when prepare classified: ST_RENORM's, fused */
     {ST_FLOW, H(HOOK_RATES), "flow_rates_team", SF_FLOW, 0, RANGE_OWNED, NB_FLOW, FLD_ACC | FLD_DSIG | FLD_GDOT, 0},
+    {ST_FLOW, H(HOOK_RATES), "flow_rates_team", SF_FLOW | SF_KGC, 0, RANGE_OWNED, FLD_B, 0, 0},
     {ST_SEG_COEFFS, H(HOOK_RATES), "seg_coeffs", SF_SEG, SF_WIN, RANGE_ALL, FLD_C | FLD_GDOT, FLD_SEGC, 0},
     {ST_DCDT, H(HOOK_RATES), "seg_dCdt", SF_SEG, SF_WIN, RANGE_OWNED, NB_CONC, FLD_DCDT, 0},
     {ST_DCDT, H(HOOK_RATES), "seg_dCdt", SF_SEG | SF_RENORM, SF_WIN, RANGE_OWNED, FLD_L, 0, 0},
@@ -69,6 +72,7 @@ unsigned stage_flags(const struct sim *s)
     if (s->seg_on && s->seg.scheme == SEG_SCHEME_CONSERVATIVE && s->seg.renorm) f |= SF_RENORM;
     if (s->hcsr) f |= SF_HCSR;
     if (s->shift.kind != SHIFT_OFF) f |= SF_SHIFT;
+    if (s->flow_on && s->flow.kgc) f |= SF_KGC;
     return f;
 }
 
@@ -179,7 +183,7 @@ uint32_t stage_moving_fields(unsigned flags)
 
 const stage_sched *stage_schedule(unsigned flags)
 {
-    enum { NF = 64 }; /* six flags */
+    enum { NF = 128 }; /* seven flags */
     static stage_sched memo[NF];
     static int done[NF];
     flags &= NF - 1;

@@ -35,7 +35,8 @@ enum stage_flag {
     SF_WIN = 1u << 2,    /* concentration windows (Segregation:every > 1 or auto) */
     SF_RENORM = 1u << 3, /* the conservative scheme with renormalisation */
     SF_HCSR = 1u << 4,   /* a scheme that classifies every step (paper, direct) */
-    SF_SHIFT = 1u << 5   /* particle shifting (Flow:shifting fickian) */
+    SF_SHIFT = 1u << 5,  /* particle shifting (Flow:shifting fickian) */
+    SF_KGC = 1u << 6     /* the corrected kernel gradient (Flow:gradient_correction on) */
 };
 
 enum stage_hook { HOOK_PREPARE, HOOK_RATES, HOOK_SAVE, HOOK_ADVANCE, HOOK_CONC_BEGIN, HOOK_CONC_STEP, HOOK_FILTER,
@@ -67,6 +68,7 @@ enum stage_id {
     ST_SHEPARD,      /* flow_shepard: the filtered stress into dsig */
     ST_SHEPARD_STORE, /* flow_shepard_store */
     ST_SHIFT,        /* shift_team: the shift into x_n, with v_n and sig_n carried (physics/shift.h) */
+    ST_KGC,          /* flow_kgc_team: the gradient correction B of the material (physics/flow.h) */
     ST_N
 };
 

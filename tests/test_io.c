@@ -369,11 +369,11 @@ static void test_part_alloc(void **state)
     part_alloc(&p, 3, 0); /* empty store is valid */
     assert_non_null(p.id);
     part_free(&p);
-    /* 52 real arrays (x, X0, v, nrm, xr, v_n, acc: 3 each; vol, gdot, gsum,
-     * psi, segV, segQ, segD; L, sig, sig_n, dsig: 6 each), 3 creal (C, C_n,
+    /* 58 real arrays (x, X0, v, nrm, xr, v_n, acc: 3 each; vol, gdot, gsum,
+     * psi, segV, segQ, segD; L, sig, sig_n, dsig, B: 6 each), 3 creal (C, C_n,
      * dCdt) and 3 preal (x_n): double in both precisions, id (8 B), kind,
      * bclass and wall (1 B each). */
-    assert_int_equal(part_bytes_per_particle(), 52 * sizeof(real) + 3 * sizeof(creal) + 3 * sizeof(preal) + 8 + 3);
+    assert_int_equal(part_bytes_per_particle(), 58 * sizeof(real) + 3 * sizeof(creal) + 3 * sizeof(preal) + 8 + 3);
 }
 
 /* Value of array a (0..56) for a particle originally at index k. */

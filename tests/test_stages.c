@@ -73,6 +73,14 @@ static void test_plans(void **st)
     assert_int_equal(stage_refresh_after(ST_SHIFT, DRUM | SF_SHIFT, 0), 0);
     assert_int_equal(stage_refresh_after(ST_SHIFT, DRUM | SF_SHIFT, 1), 0);
     assert_int_equal(stage_moving_fields(DRUM | SF_SHIFT | SF_WIN), stage_moving_fields(DRUM | SF_WIN));
+    /* Flow:gradient_correction: B in every prepare, before the walls, owned and ghosts from their own
+     * support (no refresh); the flow rates read the neighbours' B, so a ghost carries it */
+    int prep_kgc[] = {ST_PLACE, ST_EXCHANGE, ST_CLASSIFY, ST_RENORM, ST_KGC, ST_WALLS};
+    expect_plan(HOOK_PREPARE, DRUM | SF_KGC, prep_kgc, 6);
+    expect_plan(HOOK_PREPARE, SHEARBOX | SF_KGC, prep_box, 3); /* prescribed flow: none */
+    for (int keep = 0; keep < 2; ++keep) assert_int_equal(stage_refresh_after(ST_KGC, DRUM | SF_KGC, keep), 0);
+    assert_int_equal(stage_ghost_fields(DRUM | SF_KGC), stage_ghost_fields(DRUM) | FLD_B);
+    assert_int_equal(stage_moving_fields(DRUM | SF_KGC), stage_moving_fields(DRUM));
 }
 
 static void test_ghost_fields(void **st)

@@ -73,6 +73,13 @@ CASES = [
     ("drum_3d_mls", "drum_3d.yml", 40, ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025",
                                         "Material:E=1e5", "Walls:rpm=15", "Flow:shepard_every=20",
                                         "Segregation:every=8", "Flow:stress_filter=mls"]),
+    # Flow:gradient_correction (flow.h flow_kgc_team, flow_rates_team): B of the owned and the ghosts in
+    # prepare, and the corrected velocity gradient and stress divergence, in 2D and 3D
+    ("drum_EV_kgc", "drum_2d_EV.yml", 300, ["Flow:gradient_correction=on", "Material:E=1e5", "Flow:shepard_every=20",
+                                            "Segregation:every=7"]),
+    ("drum_3d_kgc", "drum_3d.yml", 40, ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025",
+                                        "Material:E=1e5", "Walls:rpm=15", "Flow:shepard_every=20",
+                                        "Segregation:every=8", "Flow:gradient_correction=on"]),
     # the paper's path: its scheme and its Flow:stabilization monaghan (the drum scenes set riemann)
     ("drum_EV_paper", "drum_2d_EV.yml", 40, ["Segregation:scheme=paper", "Geometry:dr=0.001",
                                              "Segregation:every=1", "Flow:stabilization=monaghan"]),

@@ -104,6 +104,9 @@ CASES = [
     # the first-order stress filter (Flow:stress_filter mls, flow.h flow_shepard_team): the ghosts' stress
     # and position in its moments
     ("drum_EV_mls", "drum_2d_EV.yml", 400, DRUM + ["Flow:stress_filter=mls"], None),
+    # the corrected kernel gradient (Flow:gradient_correction, flow.h flow_kgc_team): the ghosts' B, each
+    # from its own support, in the owned particles' pair terms
+    ("drum_EV_kgc", "drum_2d_EV.yml", 400, DRUM + ["Flow:gradient_correction=on"], None),
     # delta-SPH pressure diffusion (physics/momentum.h mom_pdiff): reads the ghosts' pressure and position
     ("drum_EV_delta", "drum_2d_EV.yml", 400, DRUM + ["Flow:stabilization=delta"], None),
     # shifting of the granular material (ST_SHIFT) with the tensorial yield, on a rotating drum

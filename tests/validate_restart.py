@@ -244,12 +244,15 @@ def test_drum(args):
 # Issue 30's options, each of which keeps state or changes what a step reads:
 # the Riemann dissipation with shifting, the excluded background pressure and
 # the tensorial yield surface together; the delta-SPH pressure diffusion alone;
-# the partially regularised mu(I) with the bed damping (the drum scenes').
+# the partially regularised mu(I) with the bed damping (the drum scenes');
+# the corrected kernel gradient (B made afresh in every prepare, none in the
+# checkpoint's state that a restart could miss).
 OPTION_CASES = [
     ("drum_riemann_shift_mu_I", ["Flow:stabilization=riemann", "Flow:shifting=fickian",
                                  "Flow:background_pressure=excluded", "Material:yield=mu_I"]),
     ("drum_delta", ["Flow:stabilization=delta"]),
     ("drum_partial_bed", ["Flow:stabilization=riemann", "Flow:bed_damping=1", "Material:mu_law=partial"]),
+    ("drum_kgc", ["Flow:stabilization=riemann", "Flow:gradient_correction=on"]),
 ]
 
 

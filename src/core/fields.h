@@ -61,7 +61,9 @@
     F(kind,   KIND,   uint8_t, 1, ALL) /* enum part_kind */                                                 \
     F(bclass, BCLASS, uint8_t, 1, ALL) /* enum part_bclass */                                               \
     F(wall,   WALL,   uint8_t, 1, ALL) /* a dummy's wall (enum wall_id, src/physics/wall.h), set by     \
-                                        * setup; 0 for material */
+                                        * setup; 0 for material */                                       \
+    F(B,      B,      real,    6, ALL) /* Flow:gradient_correction: the kernel gradient's correction     \
+                                        * B_i (flow_kgc_store), symmetric; unused when off */
 /* clang-format on */
 
 /* The member's declarator for n components: type *member PART_FIELD_DIMS(n). */

@@ -43,6 +43,9 @@ typedef struct flow_ctx {
                      * (flow_bed_q); 0 = off */
     real bed_k;     /* the static yield cone's slope k(mu_s) of Material:yield (stress_yield_k) */
     int filter_mls; /* Flow:stress_filter mls: the first-order filter (flow_shepard_team); 0 = Shepard (3.12) */
+    int kgc;        /* Flow:gradient_correction on: B_i grad W in the velocity gradient and the stress
+                     * divergence (flow_kgc_team, flow_rates_team); 0 = the paper's grad W */
+    real kgc_det;   /* Flow:gradient_correction_det: below it B blends toward I (flow_kgc_store) */
     real pdiff;    /* the pressure diffusion's coefficient (mom_pdiff): riemann with
                     * Flow:riemann_diffusion on K / (rho c_s); delta 2 delta h c_s; 0 = none */
     real g[3];     /* gravity, m/s^2 */
@@ -158,6 +161,62 @@ HD_INLINE void flow_wall(size_t d, particles_t *p, const grid_view *g, const flo
     flow_wall_team(d, p, g, c, 0, 1);
 }
 
+/* Flow:gradient_correction: B_i from the summed moment m (xx, yy, zz, xy,
+ * xz, yz) of M_i = sum_j V_j x_ji (x) grad_i W_ij, into p->B. Where det M_i
+ * >= det0, B_i = M_i^-1; below it B_i = w M_i^-1 + (1 - w) I, w = det M_i /
+ * det0, which stays bounded as det M_i -> 0 (w M^-1 = adj(M) / det0), the
+ * blend SPHinXsys uses; det M_i <= 0 (no neighbours) gives I. */
+HD_INLINE void flow_kgc_store(size_t i, const particles_t *p, int dim, const real m[6], real det0)
+{
+    real b[6] = {1, 1, 1, 0, 0, 0}, adj[6] = {0, 0, 0, 0, 0, 0}, det;
+    if (dim == 2) {
+        det = m[0] * m[1] - m[3] * m[3];
+        adj[0] = m[1], adj[1] = m[0], adj[3] = -m[3];
+    } else {
+        adj[0] = m[1] * m[2] - m[5] * m[5], adj[1] = m[0] * m[2] - m[4] * m[4], adj[2] = m[0] * m[1] - m[3] * m[3];
+        adj[3] = m[4] * m[5] - m[3] * m[2], adj[4] = m[3] * m[5] - m[4] * m[1], adj[5] = m[3] * m[4] - m[0] * m[5];
+        det = m[0] * adj[0] + m[3] * adj[3] + m[4] * adj[4];
+    }
+    if (det > 0) {
+        const real w = det >= det0 ? R(1.0) : det / det0; /* w M^-1 = (w / det) adj */
+        const real a = det >= det0 ? R(1.0) / det : R(1.0) / det0;
+        for (int q = 0; q < 6; ++q) b[q] = a * adj[q] + (R(1.0) - w) * (q < dim ? R(1.0) : R(0.0));
+        if (dim == 2) b[2] = 1, b[4] = b[5] = 0;
+    }
+    for (int q = 0; q < 6; ++q) p->B[q][i] = b[q];
+}
+
+/* Flow:gradient_correction: B_i of material particle i (flow_kgc_store) over
+ * the neighbours the flow rates sum, material and dummy; grad W = f x_ij, so
+ * M_i = -sum_j V_j f_ij x_ij (x) x_ij, the moment seg_renorm_team sums over
+ * the material only (= I in the bulk of a regular lattice, tests/test_kernel.c;
+ * tests/test_flow.c test_kgc_*). Lane `lane` of a team of nlanes (hd.h); lane
+ * 0 writes. */
+HD_INLINE void flow_kgc_team(size_t i, const particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
+                             int nlanes)
+{
+    const sph_ctx *k = &c->k;
+    real m[6] = {0, 0, 0, 0, 0, 0};
+    NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
+        if (j == i) continue;
+        real xij[3];
+        real r2 = grid_pair(k->dim, p->x, i, j, xij);
+        if (r2 >= k->support2) continue;
+        seg_renorm_add(m, k->dim, -kernel_f((real)sqrt((double)r2), k->h, k->alpha) * p->vol[j], xij);
+    NBR_END
+    team_sum(m, 6, nlanes);
+    if (lane != 0) return;
+    flow_kgc_store(i, p, k->dim, m, c->kgc_det);
+}
+
+/* b = B v, B symmetric as (xx, yy, zz, xy, xz, yz). */
+HD_INLINE void flow_sym_apply(const real B[6], const real v[3], real b[3])
+{
+    b[0] = B[0] * v[0] + B[3] * v[1] + B[4] * v[2];
+    b[1] = B[3] * v[0] + B[1] * v[1] + B[5] * v[2];
+    b[2] = B[4] * v[0] + B[5] * v[1] + B[2] * v[2];
+}
+
 /* What flow_rates reads of neighbour j besides its position. */
 HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6], real *volj)
 {
@@ -171,9 +230,13 @@ HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6
  * dummy). Returns |acc|. Lane `lane` of a team of nlanes (hd.h): lane 0
  * writes and returns |acc|, the others return 0. With renorm set, also the
  * conservative scheme's L_i (seg_renorm_team: the same pairs, the same sums
- * in the same order), which then costs no neighbour pass of its own. */
+ * in the same order), which then costs no neighbour pass of its own. With
+ * kgc set (Flow:gradient_correction; p->B made by flow_kgc_team for i and its
+ * material neighbours), the velocity gradient is L B_i and the stress
+ * divergence its work conjugate, m_j (sigma_i B_i + sigma_j B_j) grad W / rho^2,
+ * a dummy j taking B_i; the GPU passes kgc as a template constant. */
 HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
-                               int nlanes, int renorm)
+                               int nlanes, int renorm, int kgc)
 {
     const sph_ctx *k = &c->k;
     real L[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, a[3] = {0, 0, 0}, m[6] = {0, 0, 0, 0, 0, 0};
@@ -185,6 +248,9 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
     const real pi = stress_pressure(si);
     const real qi = c->bed_alpha > 0 ? flow_bed_q(si, c->bed_k) : R(1.0);
     real pd = R(0.0); /* the pressure diffusion, Pa/s (riemann, delta) */
+    real Bi[6] = {1, 1, 1, 0, 0, 0}; /* Flow:gradient_correction (kgc: the caller's c->kgc) */
+    if (kgc)
+        for (int q = 0; q < 6; ++q) Bi[q] = p->B[q][i];
     NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
         if (j == i) continue;
         real uj[3], sj[6], volj = 0;
@@ -216,7 +282,15 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
             }
         }
         if (c->p_back != 0) Pi += c->p_back;
-        mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
+        if (kgc) { /* V_j (sigma_i B_i + sigma_j B_j) grad W / rho, the dissipation on grad W */
+            real Bj[6], gi[3], gj[3];
+            for (int q = 0; q < 6; ++q) Bj[q] = p->kind[j] == KIND_MATERIAL ? p->B[q][j] : Bi[q];
+            flow_sym_apply(Bi, gradW, gi);
+            flow_sym_apply(Bj, gradW, gj);
+            mom_accel_add_kgc(a, c->rho * volj, si, sj, c->rho, Pi, gradW, gi, gj);
+        } else {
+            mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
+        }
         if (c->nu > 0) mom_visc_add(a, volj, c->nu * c->visc_norm, f, uij);
     NBR_END
     team_sum(L, 9, nlanes);
@@ -226,6 +300,11 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
     if (lane != 0) return R(0.0);
     if (renorm) seg_renorm_store(i, p, k->dim, m);
     real eps[6], w[3], ds[6];
+    if (kgc) { /* L B_i: (u_ij (x) grad W) B_i = u_ij (x) B_i grad W, B_i symmetric */
+        real LB[9];
+        for (int a2 = 0; a2 < 3; ++a2) flow_sym_apply(Bi, &L[3 * a2], &LB[3 * a2]);
+        for (int q = 0; q < 9; ++q) L[q] = LB[q];
+    }
     mom_strain_spin(L, eps, w);
     stress_rate_elastic(si, eps, w, c->m.G, c->m.K, ds);
     if (c->pdiff > 0) {
@@ -241,7 +320,7 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
 
 HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)
 {
-    return flow_rates_team(i, p, g, c, 0, 1, 0);
+    return flow_rates_team(i, p, g, c, 0, 1, 0, c->kgc);
 }
 
 /* Material particle i, a in seconds: x = x_n + a u (in double, x + xr in

@@ -135,4 +135,20 @@ HD_INLINE void mom_accel_add(real a[3], real m_j, const real si[6], real rho_i, 
     a[2] += m_j * (T[4] * gradW[0] + T[5] * gradW[1] + T[2] * gradW[2]);
 }
 
+/* Flow:gradient_correction: a += m_j (sigma_i gi + sigma_j gj) / rho^2 +
+ * m_j Pi gradW, gi = B_i grad W_ij, gj = B_j grad W_ij (flow_rates_team):
+ * the work conjugate of the corrected velocity gradient, its pair forces
+ * still equal and opposite (grad W_ji = -grad W_ij). */
+HD_INLINE void mom_accel_add_kgc(real a[3], real m_j, const real si[6], const real sj[6], real rho, real Pi,
+                                 const real gradW[3], const real gi[3], const real gj[3])
+{
+    const real c = m_j / (rho * rho), mp = m_j * Pi;
+    a[0] += c * (si[0] * gi[0] + si[3] * gi[1] + si[4] * gi[2] + sj[0] * gj[0] + sj[3] * gj[1] + sj[4] * gj[2]) +
+            mp * gradW[0];
+    a[1] += c * (si[3] * gi[0] + si[1] * gi[1] + si[5] * gi[2] + sj[3] * gj[0] + sj[1] * gj[1] + sj[5] * gj[2]) +
+            mp * gradW[1];
+    a[2] += c * (si[4] * gi[0] + si[5] * gi[1] + si[2] * gi[2] + sj[4] * gj[0] + sj[5] * gj[1] + sj[2] * gj[2]) +
+            mp * gradW[2];
+}
+
 #endif
