@@ -318,15 +318,23 @@ static void ckpt_seal_file(const char *tmp, const sim_t *s)
  * a device: the type is looked at before the open (stat), the open is
  * non-blocking and its fstat is checked again (the name may have been
  * replaced in between). 0, or why it cannot be read (1: errno says, 2: not
- * a regular file, 3: no seal). */
+ * a regular file, 3: no seal, 5: the user block past the seal is not zero,
+ * as the writer leaves it: neither the seal's check nor the checksum covers
+ * those bytes, so a flip there is caught here). */
 static int ckpt_read_seal(const char *path, unsigned char *b, struct stat *st)
 {
     if (stat(path, st) != 0) return 1;
     if (!S_ISREG(st->st_mode)) return 2;
     int fd = open(path, O_RDONLY | O_NONBLOCK), bad = 0;
+    unsigned char ub[CKPT_USERBLOCK];
+    ssize_t got = 0;
     if (fd < 0 || fstat(fd, st) != 0) bad = 1;
     else if (!S_ISREG(st->st_mode)) bad = 2;
-    else if (pread(fd, b, 64, 0) != 64 || memcmp(b, "SPHSEGCK", 8) != 0) bad = 3;
+    else if ((got = pread(fd, ub, sizeof ub, 0)) < 64 || memcmp(ub, "SPHSEGCK", 8) != 0) bad = 3;
+    else {
+        memcpy(b, ub, 64);
+        for (ssize_t k = 64; k < got && !bad; ++k) bad = ub[k] != 0 ? 5 : 0;
+    }
     int err = errno;
     if (fd >= 0) close(fd);
     errno = err;
@@ -362,6 +370,8 @@ int ckpt_verify(const char *path, ckpt_seal *seal, char *why, size_t n)
         if (bad == 2) snprintf(why, n, "not a regular file");
         if (bad == 3) snprintf(why, n, "not a sphseg checkpoint (no checksum block; a snapshot, a damaged file, "
                                "or a checkpoint of sphseg 0.1)");
+        if (bad == 5) snprintf(why, n, "damaged: its user block past the checksum block is not blank (bytes 64 to "
+                               "%d are written as zero)", CKPT_USERBLOCK - 1);
         if (!bad) bad = 4 * ckpt_check_seal(b, &st, why, n);
     }
     MPICHECK(MPI_Bcast(&bad, 1, MPI_INT, 0, MPI_COMM_WORLD));

@@ -19,8 +19,9 @@
  *                 itself: h = 0, then h = mix(h ^ (v_k + (k + 1) * G)) for the
  *                 words v_0..v_5 at bytes 0..47 (mod 2^64), and 1 where that
  *                 gives 0. A reader refuses a changed, cut or extended file,
- *                 or a changed seal (a flipped step would choose the wrong
- *                 checkpoint), before HDF5 reads any of it; a seal whose check
+ *                 a changed seal (a flipped step would choose the wrong
+ *                 checkpoint) or a nonzero byte in the rest of the user block
+ *                 (which neither covers), before HDF5 reads any of it; a seal whose check
  *                 is 0 was written before the check existed (format 3
  *                 all the same) and is taken as a legacy seal, its step and
  *                 time then checked against /Header's by ckpt_read;
