@@ -128,6 +128,7 @@ void report_start(sim_t *s, const outputs *o, const run_cli *c)
     if (s->flow_on) {
         settings_warn_stabilization(sc);
         settings_warn_mu_law(sc);
+        settings_warn_gradient_correction(sc);
     }
     if (s->flow_on && sc->geometry.type == GEOM_DRUM) settings_warn_drum(sc); /* measured on drums */
     if (s->win.on && sc->segregation.every_k)

@@ -33,6 +33,11 @@ void settings_warn_alpha_sqrt_e(const struct scene *sc);
  * is the drum and chute scenes' setting and says nothing. */
 void settings_warn_stabilization(const struct scene *sc);
 
+/* Flow:gradient_correction on with Flow:shifting off: the corrected
+ * velocity gradient does not hold grains off a wall (docs/granular.md "The
+ * corrected gradient"), once at start-up of a computed flow. */
+void settings_warn_gradient_correction(const struct scene *sc);
+
 /* Material:mu_law partial: no static yield, and no better convergence in
  * the drum (docs/granular.md "Well-posedness"), once at start-up of a
  * computed granular flow. */

@@ -5,7 +5,8 @@
 # monaghan only, which the probes of it set: the drum scene runs riemann), and
 # Run:cfl_flow > 0.2, and E below the softest measured accurate (10 kPa); the
 # pressure diffusion's (settings_warn_stabilization); Material:mu_law partial's
-# (settings_warn_mu_law); and the Shepard filter's interval below 3 acoustic times,
+# (settings_warn_mu_law); Flow:gradient_correction on without Flow:shifting
+# (settings_warn_gradient_correction); and the Shepard filter's interval below 3 acoustic times,
 # Flow:shepard_every * Run:cfl_flow (docs/granular.md "The time step and the Shepard
 # filter"). Each probe is a 1-step CPU drum; the warning must be
 # there when the setting is off and absent when it is in range.
@@ -36,6 +37,10 @@ probe "riemann's pressure diffusion: its warning" yes "Flow:riemann_diffusion on
     Flow:riemann_diffusion=on
 probe "Material:mu_law partial: its warning" yes "Material:mu_law partial: mu(I) has no static yield" \
     Material:E=1e5 Material:mu_law=partial
+probe "Flow:gradient_correction on, no shifting: its warning" yes \
+    "Flow:gradient_correction on without Flow:shifting" Material:E=1e5 Flow:gradient_correction=on
+probe "Flow:gradient_correction on with fickian shifting: no warning at all" no "" \
+    Material:E=1e5 Flow:gradient_correction=on Flow:shifting=fickian
 probe "cfl_flow 0.2: no CFL warning" no "cfl_flow" Run:cfl_flow=0.2
 probe "cfl_flow 0.3: CFL warning" yes "Run:cfl_flow = 0.3 > 0.2" Run:cfl_flow=0.3
 probe "cfl_flow 0.05, shepard_every 30 (1.5 acoustic times): filter warning" yes \
