@@ -188,33 +188,17 @@ HD_INLINE void flow_kgc_store(size_t i, const particles_t *p, int dim, const rea
 
 /* Flow:gradient_correction: B_i of material particle i (flow_kgc_store) over
  * the neighbours the flow rates sum, material and dummy; grad W = f x_ij, so
- * M_i = -sum_j V_j f_ij x_ij (x) x_ij, the moment seg_renorm_team sums over
- * the material only (= I in the bulk of a regular lattice, tests/test_kernel.c;
- * tests/test_flow.c test_kgc_*). Lane `lane` of a team of nlanes (hd.h); lane
- * 0 writes. */
+ * M_i = -sum_j V_j f_ij x_ij (x) x_ij, seg_moment_team's moment over every
+ * neighbour (seg_renorm_team sums the material only; = I in the bulk of a
+ * regular lattice, tests/test_kernel.c; tests/test_flow.c test_kgc_*). Lane
+ * `lane` of a team of nlanes (hd.h); lane 0 writes. */
 HD_INLINE void flow_kgc_team(size_t i, const particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
                              int nlanes)
 {
-    const sph_ctx *k = &c->k;
     real m[6] = {0, 0, 0, 0, 0, 0};
-    NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
-        if (j == i) continue;
-        real xij[3];
-        real r2 = grid_pair(k->dim, p->x, i, j, xij);
-        if (r2 >= k->support2) continue;
-        seg_renorm_add(m, k->dim, -kernel_f((real)sqrt((double)r2), k->h, k->alpha) * p->vol[j], xij);
-    NBR_END
-    team_sum(m, 6, nlanes);
+    seg_moment_team(i, p, g, &c->k, 0, lane, nlanes, m);
     if (lane != 0) return;
-    flow_kgc_store(i, p, k->dim, m, c->kgc_det);
-}
-
-/* b = B v, B symmetric as (xx, yy, zz, xy, xz, yz). */
-HD_INLINE void flow_sym_apply(const real B[6], const real v[3], real b[3])
-{
-    b[0] = B[0] * v[0] + B[3] * v[1] + B[4] * v[2];
-    b[1] = B[3] * v[0] + B[1] * v[1] + B[5] * v[2];
-    b[2] = B[4] * v[0] + B[5] * v[1] + B[2] * v[2];
+    flow_kgc_store(i, p, c->k.dim, m, c->kgc_det);
 }
 
 /* What flow_rates reads of neighbour j besides its position. */
@@ -285,8 +269,8 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
         if (kgc) { /* V_j (sigma_i B_i + sigma_j B_j) grad W / rho, the dissipation on grad W */
             real Bj[6], gi[3], gj[3];
             for (int q = 0; q < 6; ++q) Bj[q] = p->kind[j] == KIND_MATERIAL ? p->B[q][j] : Bi[q];
-            flow_sym_apply(Bi, gradW, gi);
-            flow_sym_apply(Bj, gradW, gj);
+            linalg_sym_apply(Bi, gradW, gi);
+            linalg_sym_apply(Bj, gradW, gj);
             mom_accel_add_kgc(a, c->rho * volj, si, sj, c->rho, Pi, gradW, gi, gj);
         } else {
             mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
@@ -302,7 +286,7 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
     real eps[6], w[3], ds[6];
     if (kgc) { /* L B_i: (u_ij (x) grad W) B_i = u_ij (x) B_i grad W, B_i symmetric */
         real LB[9];
-        for (int a2 = 0; a2 < 3; ++a2) flow_sym_apply(Bi, &L[3 * a2], &LB[3 * a2]);
+        for (int a2 = 0; a2 < 3; ++a2) linalg_sym_apply(Bi, &L[3 * a2], &LB[3 * a2]);
         for (int q = 0; q < 9; ++q) L[q] = LB[q];
     }
     mom_strain_spin(L, eps, w);

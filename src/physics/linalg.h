@@ -1,7 +1,18 @@
-/* linalg.h — tiny dense solves for the C1-consistent gradients (App. E). */
+/* linalg.h — tiny dense solves for the C1-consistent gradients (App. E), and the
+ * product of a symmetric 3x3 tensor with a vector. */
 #ifndef SPHSEG_LINALG_H
 #define SPHSEG_LINALG_H
 #include "hd.h"
+
+/* b = S v, S symmetric stored as (xx, yy, zz, xy, xz, yz): the
+ * renormalised pair gradients of the conservative scheme (seg_Lbar) and the
+ * corrected kernel gradient (Flow:gradient_correction, flow_rates_team). */
+HD_INLINE void linalg_sym_apply(const real S[6], const real v[3], real b[3])
+{
+    b[0] = S[0] * v[0] + S[3] * v[1] + S[4] * v[2];
+    b[1] = S[3] * v[0] + S[1] * v[1] + S[5] * v[2];
+    b[2] = S[4] * v[0] + S[5] * v[1] + S[2] * v[2];
+}
 
 /* Solve A X = B in place for n <= 4 unknowns and nrhs <= 4 right-hand sides
  * (A row-major n x n, B row-major n x nrhs), Gaussian elimination with partial

@@ -158,6 +158,26 @@ HD_INLINE void seg_renorm_add(real m[6], int dim, real w, const real xij[3])
     }
 }
 
+/* The moment M_i = -sum_j V_j w_ij x_ij (x) x_ij (seg_renorm_add) of i over
+ * its neighbours in support, the material only (material_only: the
+ * conservative scheme's renormalisation, seg_renorm_team) or every one,
+ * dummies too (the corrected kernel gradient, flow.h flow_kgc_team), added
+ * to m (xx, yy, zz, xy, xz, yz; the caller zeroes it), summed over the team
+ * of nlanes (hd.h). */
+HD_INLINE void seg_moment_team(size_t i, const particles_t *p, const grid_view *g, const sph_ctx *k,
+                               int material_only, int lane, int nlanes, real m[6])
+{
+    NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
+        if (j == i || (material_only && p->kind[j] != KIND_MATERIAL)) continue;
+        real xij[3];
+        real r2 = grid_pair(k->dim, p->x, i, j, xij);
+        if (r2 >= k->support2) continue;
+        real w = -kernel_f((real)sqrt((double)r2), k->h, k->alpha) * p->vol[j];
+        seg_renorm_add(m, k->dim, w, xij);
+    NBR_END
+    team_sum(m, 6, nlanes);
+}
+
 /* L_i = M_i^-1 (or I) from the summed moment m, into p->L. */
 HD_INLINE void seg_renorm_store(size_t i, const particles_t *p, int dim, const real m[6])
 {
@@ -184,19 +204,10 @@ HD_INLINE void seg_renorm_store(size_t i, const particles_t *p, int dim, const r
 HD_INLINE void seg_renorm_team(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c, int lane,
                                int nlanes)
 {
-    const sph_ctx *k = &c->k;
     real m[6] = {0, 0, 0, 0, 0, 0}; /* xx, yy, zz, xy, xz, yz */
-    NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
-        if (j == i || p->kind[j] != KIND_MATERIAL) continue;
-        real xij[3];
-        real r2 = grid_pair(k->dim, p->x, i, j, xij);
-        if (r2 >= k->support2) continue;
-        real w = -kernel_f((real)sqrt((double)r2), k->h, k->alpha) * p->vol[j];
-        seg_renorm_add(m, k->dim, w, xij);
-    NBR_END
-    team_sum(m, 6, nlanes);
+    seg_moment_team(i, p, g, &c->k, 1, lane, nlanes, m);
     if (lane != 0) return;
-    seg_renorm_store(i, p, k->dim, m);
+    seg_renorm_store(i, p, c->k.dim, m);
 }
 
 HD_INLINE void seg_renorm(size_t i, const particles_t *p, const grid_view *g, const seg_ctx *c)
@@ -209,9 +220,7 @@ HD_INLINE void seg_Lbar(const real Li[6], const real Lj[6], const real v[3], rea
 {
     real l[6];
     for (int m = 0; m < 6; ++m) l[m] = R(0.5) * (Li[m] + Lj[m]);
-    out[0] = l[0] * v[0] + l[3] * v[1] + l[4] * v[2];
-    out[1] = l[3] * v[0] + l[1] * v[1] + l[5] * v[2];
-    out[2] = l[4] * v[0] + l[5] * v[1] + l[2] * v[2];
+    linalg_sym_apply(l, v, out);
 }
 
 /* What seg_rate_conservative reads of neighbour j besides its position

@@ -49,7 +49,7 @@ MUTANTS = [
        "const real cw = (p->kind[j] == KIND_MATERIAL) * V * (R(1.0) + c->R * t2 * t2) * f, vf = V * f;")],
      "Flow:shifting fickian's concentration sum leaves out the dummies (a grain crowding a wall is not pushed off)"),
     ("kgc_neighbour_B", "physics", "src/physics/flow.h",
-     [("flow_sym_apply(Bj, gradW, gj);", "flow_sym_apply(Bi, gradW, gj);")],
+     [("linalg_sym_apply(Bj, gradW, gj);", "linalg_sym_apply(Bi, gradW, gj);")],
      "Flow:gradient_correction takes i's correction for j's stress (the pair forces no longer opposite)"),
     ("kgc_adjugate", "physics", "src/physics/flow.h",
      [("adj[0] = m[1], adj[1] = m[0], adj[3] = -m[3];", "adj[0] = m[1], adj[1] = m[0], adj[3] = m[3];")],
