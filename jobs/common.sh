@@ -121,14 +121,15 @@ sphseg_rank_list() {
 SCALING_COLUMNS=mode,ranks,particles,steps,wall_s,particle_steps_per_s,halo_s,io_s,scene,dr,scaled_key,scaled_value,max_steps,job,settings
 
 # The keys of a named set of settings (SETTINGS of the sweeps): "scene", the
-# scene's own (Table 1's in the drums, with their Flow:stabilization riemann);
+# scene's own (Table 1's in the drums, with their Flow:stabilization riemann,
+# corrected gradient and shifting);
 # "fast", the settings recommended for large 3D drums (docs/gpu.md,
 # "Stiffness, artificial viscosity and CFL": monaghan at E 10 kPa, alpha
 # 3.162, chi_CFL 0.2, as measured there).
 sphseg_settings_args() {
     case $1 in
     scene) ;;
-    fast) echo "-P Flow:stabilization=monaghan -P Material:E=1e4 -P Flow:alpha_av=3.162 -P Run:cfl_flow=0.2" ;;
+    fast) echo "-P Flow:stabilization=monaghan -P Flow:gradient_correction=off -P Flow:shifting=off -P Material:E=1e4 -P Flow:alpha_av=3.162 -P Run:cfl_flow=0.2" ;;
     *) echo "unknown SETTINGS entry '$1' (scene | fast)" >&2; return 1 ;;
     esac
 }

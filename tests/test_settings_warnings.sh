@@ -2,7 +2,8 @@
 # The warnings for flow settings outside the measured range (src/settings_check.c,
 # settings_warn_drum; docs/gpu.md "Stiffness, artificial viscosity and CFL"):
 # alpha_av sqrt(E) more than 2x off Table 1's (0.1 at 10 MPa; Flow:stabilization
-# monaghan only, which the probes of it set: the drum scene runs riemann), and
+# monaghan only, which the probes of it set: the drum scene runs riemann with the
+# corrected gradient and fickian shifting), and
 # Run:cfl_flow > 0.2, and E below the softest measured accurate (10 kPa); the
 # pressure diffusion's (settings_warn_stabilization); Material:mu_law partial's
 # (settings_warn_mu_law); Flow:gradient_correction on without Flow:shifting
@@ -26,7 +27,8 @@ probe() { # name, expect (yes|no), pattern, -P overrides...
     if [ "$got" = "$want" ]; then echo "ok   $name"; else echo "FAIL $name: warning '$pat' $got, expected $want"; fail=1; fi
 }
 M=Flow:stabilization=monaghan # the paper's (3.10), whose alpha_av the AV warning is about
-probe "the scene (riemann) at E 0.1 MPa, alpha 0.1: no warning at all" no "" Material:E=1e5
+probe "the scene (riemann, the corrected gradient, fickian shifting) at E 0.1 MPa: no warning at all" no "" \
+    Material:E=1e5
 probe "Table 1 settings, monaghan: no AV warning" no "alpha_av" $M
 probe "E 0.1 MPa, alpha 0.1: AV warning" yes "alpha_av \* sqrt(Material:E) is 0.1 times" $M Material:E=1e5
 probe "E 0.1 MPa, alpha 1.0: no AV warning" no "alpha_av" $M Material:E=1e5 Flow:alpha_av=1.0
@@ -38,9 +40,11 @@ probe "riemann's pressure diffusion: its warning" yes "Flow:riemann_diffusion on
 probe "Material:mu_law partial: its warning" yes "Material:mu_law partial: mu(I) has no static yield" \
     Material:E=1e5 Material:mu_law=partial
 probe "Flow:gradient_correction on, no shifting: its warning" yes \
-    "Flow:gradient_correction on without Flow:shifting" Material:E=1e5 Flow:gradient_correction=on
+    "Flow:gradient_correction on without Flow:shifting" Material:E=1e5 Flow:gradient_correction=on Flow:shifting=off
 probe "Flow:gradient_correction on with fickian shifting: no warning at all" no "" \
     Material:E=1e5 Flow:gradient_correction=on Flow:shifting=fickian
+probe "Flow:gradient_correction off, no shifting (the paper's): no warning at all" no "" \
+    Material:E=1e5 Flow:gradient_correction=off Flow:shifting=off
 probe "cfl_flow 0.2: no CFL warning" no "cfl_flow" Run:cfl_flow=0.2
 probe "cfl_flow 0.3: CFL warning" yes "Run:cfl_flow = 0.3 > 0.2" Run:cfl_flow=0.3
 probe "cfl_flow 0.05, shepard_every 30 (1.5 acoustic times): filter warning" yes \

@@ -57,7 +57,7 @@ FRICTION_FRAC = 0.1
 def main():
     a = sphseg_work_args()
     out = os.path.join(a.work, "drum")
-    over = ["Flow:stabilization=monaghan", "Geometry:dr=0.0025", "Material:E=1e5", "Run:t_end=2", "Output:dt=0.5",
+    over = ["Flow:stabilization=monaghan", "Flow:gradient_correction=off", "Flow:shifting=off", "Geometry:dr=0.0025", "Material:E=1e5", "Run:t_end=2", "Output:dt=0.5",
             "Output:diag_dt=0.05", "Run:progress_s=1e9"]
     cmd = [a.sphseg, SCENE, "-o", out] + sum([["-P", o] for o in over], [])
     r = subprocess.run(cmd, capture_output=True, text=True)

@@ -57,7 +57,7 @@ from tests.drum_invariants import Checks, diagnostics_columns, mass_bounds_conse
 from tests.containers import run_scene, sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 SCENE = os.path.join(HERE, "..", "inputs", "drum_3d.yml")
-BASE = ["Flow:stabilization=monaghan", "Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025",
+BASE = ["Flow:stabilization=monaghan", "Flow:gradient_correction=off", "Flow:shifting=off", "Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025",
         "Material:E=1e5", "Run:cfl_flow=0.2", "Run:progress_s=1e9"]
 
 

@@ -38,7 +38,7 @@ from tools.studies import batch
 R_DRUM, T_END = 0.035, 1.5
 BASE = {"Geometry:dr": 0.001, "Material:E": 1e4, "Run:cfl_flow": 0.2, "Output:dt": 0.25,
         "Run:t_end": T_END, "Segregation:enabled": "off", "Flow:gradient_correction": "on",
-        "Flow:gradient_correction_det": 0.1}
+        "Flow:gradient_correction_det": 0.1, "Flow:shifting": "off"}
 
 
 def deepest(folder):

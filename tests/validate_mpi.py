@@ -70,6 +70,9 @@ TOL = 1e-10     # CPU, any scheme, across rank counts
 TOL_GPU = 1e-8  # GPU runs, and the GPU against the CPU
 TOL_C1 = 1e-4   # GPU runs of the paper scheme
 DRUM = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:shepard_every=20"]
+# the drum scenes' flow without the corrected gradient and the shifting they set: the cases that test one
+# other option alone
+PLAIN = ["Flow:gradient_correction=off", "Flow:shifting=off"]
 # the "balance" case's ranks: rank 0's measured time counted three times, so that a re-cut must move the
 # bounds. Measured times alone need not: ranks sharing one GPU measure about the same time (one H100,
 # c37a184: no re-cut in one run, where an earlier H100 run at 299898b re-cut)
@@ -78,15 +81,17 @@ from tests.containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLL
                         SILO, pick_cases)
 
 # name, scene, steps, overrides, what must happen on several ranks. The drums
-# run their scenes' Flow:stabilization riemann but for the paper's path,
-# drum_EV and drum_EN_paper, which set the paper's monaghan (3.10).
+# run their scenes' flow (riemann, bed damping, the corrected gradient and
+# fickian shifting) but for the paper's path, drum_EV and drum_EN_paper, which
+# set the paper's monaghan (3.10) without the other two, and the cases of one
+# option alone (PLAIN).
 CASES = [
     ("shearbox", "shearbox_2d.yml", 40, [], None),
     ("shearbox_paper", "shearbox_2d.yml", 40, ["Segregation:scheme=paper"], None),
     ("column_3d", "column_2d.yml", 30, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.05",
                                         "Geometry:depth=0.05", "Geometry:height=0.1"], None),
-    ("drum_EV", "drum_2d_EV.yml", 1500, DRUM + ["Flow:stabilization=monaghan"], "migrate"),
-    ("drum_EN_paper", "drum_2d_EN.yml", 300, DRUM + ["Segregation:scheme=paper", "Flow:stabilization=monaghan"],
+    ("drum_EV", "drum_2d_EV.yml", 1500, DRUM + PLAIN + ["Flow:stabilization=monaghan"], "migrate"),
+    ("drum_EN_paper", "drum_2d_EN.yml", 300, DRUM + PLAIN + ["Segregation:scheme=paper", "Flow:stabilization=monaghan"],
      None),
     ("drum_balance", "drum_2d_EV.yml", 400, DRUM + ["Geometry:dr=0.0015", "Parallel:axis=y",
                                                     "Parallel:balance_every=50",
@@ -98,19 +103,19 @@ CASES = [
     # Flow:stabilization riemann (physics/momentum.h; the drum scenes' own): its pair terms read the ghosts'
     # stress and kind
     # (plain: without the bed damping the scene sets, which drum_EV_bed covers)
-    ("drum_EV_riemann", "drum_2d_EV.yml", 800, DRUM + ["Flow:stabilization=riemann", "Flow:bed_damping=0"], "migrate"),
+    ("drum_EV_riemann", "drum_2d_EV.yml", 800, DRUM + PLAIN + ["Flow:stabilization=riemann", "Flow:bed_damping=0"], "migrate"),
     # riemann's bed damping (physics/flow.h flow_bed_q): reads the ghosts' stress on both sides of the pair
-    ("drum_EV_bed", "drum_2d_EV.yml", 400, DRUM + ["Flow:stabilization=riemann", "Flow:bed_damping=1"], None),
+    ("drum_EV_bed", "drum_2d_EV.yml", 400, DRUM + PLAIN + ["Flow:stabilization=riemann", "Flow:bed_damping=1"], None),
     # the first-order stress filter (Flow:stress_filter mls, flow.h flow_shepard_team): the ghosts' stress
     # and position in its moments
-    ("drum_EV_mls", "drum_2d_EV.yml", 400, DRUM + ["Flow:stress_filter=mls"], None),
+    ("drum_EV_mls", "drum_2d_EV.yml", 400, DRUM + PLAIN + ["Flow:stress_filter=mls"], None),
     # the corrected kernel gradient (Flow:gradient_correction, flow.h flow_kgc_team): the ghosts' B, each
     # from its own support, in the owned particles' pair terms
-    ("drum_EV_kgc", "drum_2d_EV.yml", 400, DRUM + ["Flow:gradient_correction=on"], None),
+    ("drum_EV_kgc", "drum_2d_EV.yml", 400, DRUM + ["Flow:gradient_correction=on", "Flow:shifting=off"], None),
     # delta-SPH pressure diffusion (physics/momentum.h mom_pdiff): reads the ghosts' pressure and position
-    ("drum_EV_delta", "drum_2d_EV.yml", 400, DRUM + ["Flow:stabilization=delta"], None),
+    ("drum_EV_delta", "drum_2d_EV.yml", 400, DRUM + PLAIN + ["Flow:stabilization=delta"], None),
     # shifting of the granular material (ST_SHIFT) with the tensorial yield, on a rotating drum
-    ("drum_EV_shift", "drum_2d_EV.yml", 400, DRUM + ["Flow:shifting=fickian", "Material:yield=mu_I"], None),
+    ("drum_EV_shift", "drum_2d_EV.yml", 400, DRUM + ["Flow:shifting=fickian", "Flow:gradient_correction=off", "Material:yield=mu_I"], None),
     # periodic axes (Geometry:periodic, mpi/halo.h): a layer sliding down a
     # 40-degree incline, periodic along x; slabs cut across the period (x) and
     # along it (y), and a 3D layer periodic along x and z

@@ -77,8 +77,10 @@ def run_case(args, case):
     name, over, threads, kind = case
     out = os.path.join(args.out, name)
     binary = args.sphseg if kind == "double" else args.sphseg_single
-    # the study's runs are monaghan's (its noise cases vary Flow:alpha_av); the scene sets riemann since issue 30
-    cmd = [binary, SCENE, "-o", out, "--overwrite", "-P", "Run:progress_s=1e9", "-P", "Flow:stabilization=monaghan"] + sum(
+    # the study's runs are monaghan's (its noise cases vary Flow:alpha_av), without the corrected gradient and the
+    # shifting: the scene sets riemann and both since issue 30
+    cmd = [binary, SCENE, "-o", out, "--overwrite", "-P", "Run:progress_s=1e9", "-P", "Flow:stabilization=monaghan",
+           "-P", "Flow:gradient_correction=off", "-P", "Flow:shifting=off"] + sum(
         [["-P", "%s=%s" % kv] for kv in over.items()], [])
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
     t0 = time.time()

@@ -1,9 +1,8 @@
 #!/usr/bin/env python3
-"""Where the drums' default stabilisation fails (issue 30): the 2D EV drum
-with Flow:stabilization riemann over the elastic modulus E and the time-step
-factor chi_CFL, at two resolutions.
+"""Where the drums' stabilisation fails (issue 30): the 2D EV drum over the
+elastic modulus E and the time-step factor chi_CFL, at three resolutions.
 
-  python3 -m tools.studies.stab_map run --sphseg build/sphseg --out DIR [--set riemann,fine,gpu,monaghan] [--jobs 2] [--backend gpu]
+  python3 -m tools.studies.stab_map run --sphseg build/sphseg --out DIR [--set riemann,fine,gpu,monaghan,pair,pair_gpu] [--jobs 2] [--backend gpu]
   python3 -m tools.studies.stab_map report --out DIR [--docs docs/data/granular] [--table FILE]
 
 Cases: inputs/drum_2d_EV.yml to t = 1.5 s (the bed starts to avalanche at
@@ -14,6 +13,13 @@ about 0.75 s), snapshots every 0.25 s.
             (the finer and stiffer corners, for --backend gpu)
   monaghan  dr 1.4 mm, E = 10 kPa, 0.1 MPa, monaghan with alpha = 0.1 sqrt(1e7/E)
             (the alpha sqrt(E) rule), for comparison
+  pair      dr 1.4 mm, E = 10 kPa, 0.1 MPa, 1 MPa, the drum scenes' setting since
+            issue 30's last step: riemann with Flow:gradient_correction on and
+            Flow:shifting fickian (stabilisation "pair")
+  pair_gpu  the pair at dr 0.7 and 0.35 mm, E = 10 kPa, 0.1 MPa, 1 MPa (for --backend gpu)
+Every case names its stabilisation's keys in full (riemann: the correction and
+the shifting off; pair: both on), so a case means the same whatever the scene
+sets.
 Each run: ran or not, and how it failed (the error line of its log: a
 particle moved more than h in one step, left its container, ...; or the
 wall-clock limit). Accuracy of a run that ran: the rms difference of its
@@ -21,7 +27,8 @@ mid-chord speed profile at 1.5 s from the chi_CFL = 0.2 run of the same E,
 dr and stabilisation, over that run's surface speed (0.2 is what the drums
 use; 0.1 against 0.2 differed by 1 % under monaghan, docs/granular.md).
 The chart (report): chi_CFL against E, one panel per (stabilisation, dr),
-dots coloured by that error, crosses where a run failed.
+dots coloured by that error, crosses where a run failed, written as
+stability_map_STABS.png (STABS: the stabilisations of the rows, joined by _).
 """
 import math
 import os
@@ -34,12 +41,17 @@ from tools.studies import batch
 SCENE = os.path.join(ROOT, "inputs", "drum_2d_EV.yml")
 CFLS = (0.2, 0.4, 0.7, 1.0, 1.3, 1.6, 2.0)
 REF_CFL = 0.2
+SETS = ("riemann", "fine", "gpu", "monaghan", "pair", "pair_gpu")
+PAIR = {"Flow:gradient_correction": "on", "Flow:shifting": "fickian"}
+LABEL = {"pair": "riemann + correction + shifting"}
+PLAIN = {"Flow:gradient_correction": "off", "Flow:shifting": "off"}
 
 
 def case(stab, dr, E, cfl):
     name = "%s_dr%g_E%g_c%g" % (stab, dr * 1e3, E, cfl)
     over = {"Geometry:dr": dr, "Material:E": E, "Run:cfl_flow": cfl, "Run:t_end": 1.5, "Output:dt": 0.25,
-            "Run:progress_s": 1e9, "Flow:stabilization": stab}
+            "Run:progress_s": 1e9, "Flow:stabilization": "riemann" if stab == "pair" else stab}
+    over.update(PAIR if stab == "pair" else PLAIN)
     if stab == "monaghan":
         over["Flow:alpha_av"] = round(0.1 * math.sqrt(1e7 / E), 4)
     return batch.Case(name, SCENE, over, stab=stab, dr=dr, E=E, cfl=cfl)
@@ -56,6 +68,10 @@ def cases(which):
               if not (dr == 0.0007 and E == 1e4 and which == "full")]  # "full" has that row from "fine"
     if which in ("full", "monaghan"):
         c += [case("monaghan", 0.0014, E, x) for E in (1e4, 1e5) for x in CFLS]
+    if which in ("full", "pair"):
+        c += [case("pair", 0.0014, E, x) for E in (1e4, 1e5, 1e6) for x in CFLS]
+    if which in ("full", "pair_gpu"):
+        c += [case("pair", dr, E, x) for dr in (0.0007, 0.00035) for E in (1e4, 1e5, 1e6) for x in CFLS]
     return c
 
 
@@ -90,7 +106,7 @@ def read_or_rebuild(out):
     run that was stopped: "stopped")."""
     if os.path.exists(os.path.join(out, "runs.csv")):
         return batch.read_runs(out)
-    meta = {c.name: c.meta for w in ("riemann", "fine", "gpu", "monaghan") for c in cases(w)}
+    meta = {c.name: c.meta for w in SETS for c in cases(w)}
     rows = {}
     for n, m in meta.items():
         log = os.path.join(out, n + ".log")
@@ -204,7 +220,7 @@ def cmd_report(a):
         a_.set_yscale("log")
         a_.set_xlabel(r"$\chi_{CFL}$ (Run:cfl_flow)")
         a_.set_ylabel("E (Pa)")
-        a_.set_title("%s, dr %g mm" % (stab, dr * 1e3), fontsize=9)
+        a_.set_title("%s, dr %g mm" % (LABEL.get(stab, stab), dr * 1e3), fontsize=9)
         a_.grid(alpha=0.3)
     if sc is not None:
         fig.colorbar(sc, ax=ax[0][-1], label=r"speed-profile error against $\chi$ 0.2")
@@ -212,12 +228,12 @@ def cmd_report(a):
                  "in the time allowed", fontsize=8)
     fig.tight_layout()
     os.makedirs(a.docs, exist_ok=True)
-    fig.savefig(os.path.join(a.docs, "stability_map_riemann.png"), dpi=110)
+    fig.savefig(os.path.join(a.docs, "stability_map_%s.png" % "_".join(sorted({p[0] for p in panels}))), dpi=110)
     batch.report_tables(a, lines)
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("riemann", "fine", "gpu", "monaghan"), cases, on_done, cmd_report, "granular", jobs=2,
+    batch.study_main(__doc__, SETS, cases, on_done, cmd_report, "granular", jobs=2,
                      argv=argv)
 
 
