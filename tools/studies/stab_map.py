@@ -209,15 +209,20 @@ def cmd_report(a):
             a_.plot(float(r["cfl"]), float(r["E"]), "o", color="0.6", mec="k", ms=10)
             a_.annotate("ran (no χ 0.2 run)", (float(r["cfl"]), float(r["E"])), fontsize=6, xytext=(4, -10),
                         textcoords="offset points")
-        a_.set_xlim(0.1, 2.1)
-        for r in bad:
+        a_.set_xlim(0.1, 2.3)
+        said = set()  # (E, how): a failure mode is named once per row, at its smallest chi
+        for r in sorted(bad, key=lambda r: float(r["cfl"])):
             if r["how"].startswith("not finished"):  # no verdict: drawn apart from a failure
                 a_.plot(float(r["cfl"]), float(r["E"]), "o", mfc="none", color="0.5", ms=10)
                 continue
             a_.plot(float(r["cfl"]), float(r["E"]), "x", color="C3", ms=11, mew=2)
-            a_.annotate(r["how"].replace(" in a step", ""), (float(r["cfl"]), float(r["E"])), fontsize=6,
-                        rotation=35, xytext=(4, 4), textcoords="offset points", color="C3")
+            if (r["E"], r["how"]) not in said:
+                said.add((r["E"], r["how"]))
+                a_.annotate(r["how"].replace(" in a step", ""), (float(r["cfl"]), float(r["E"])), fontsize=6,
+                            xytext=(0, -13), ha="center", textcoords="offset points", color="C3")
         a_.set_yscale("log")
+        Es = [float(r["E"]) for r in rows]
+        a_.set_ylim(min(Es) / 2.5, max(Es) * 2.5)
         a_.set_xlabel(r"$\chi_{CFL}$ (Run:cfl_flow)")
         a_.set_ylabel("E (Pa)")
         a_.set_title("%s, dr %g mm" % (LABEL.get(stab, stab), dr * 1e3), fontsize=9)
