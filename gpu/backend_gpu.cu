@@ -97,16 +97,17 @@ static void gpu_finish(sim_t *s)
     gpu_settle(s, g);
     CK(cudaStreamSynchronize(g->st));
     if (s->halo) hx_resolve(g, s->halo);
+    const long steps = s->step - g->step0; /* this run's, from its checkpoint on a restart */
     message("gpu: %ld neighbour-list builds in %ld steps (Run:list_skin %.3g h: one build in %.1f steps)", g->builds,
-            s->step, (double)(g->skin / s->seg.k.h), g->builds ? (double)s->step / (double)g->builds : 0.0);
+            steps, (double)(g->skin / s->seg.k.h), g->builds ? (double)steps / (double)g->builds : 0.0);
     if (prof.on) {
         double tot = 0;
         for (int k = 0; k < P_NPROF; ++k) tot += prof.ms[k];
-        message("gpu profile (SPHSEG_GPU_PROFILE, synchronised stages), %ld steps, %zu particles:", s->step, g->n);
+        message("gpu profile (SPHSEG_GPU_PROFILE, synchronised stages), %ld steps, %zu particles:", steps, g->n);
         for (int k = 0; k < P_NPROF; ++k)
             if (prof.calls[k])
                 message("  %-34s %10.2f ms %5.1f %%  %9.4f ms/step", prof_name[k], prof.ms[k],
-                        tot > 0 ? 100 * prof.ms[k] / tot : 0.0, s->step ? prof.ms[k] / (double)s->step : 0.0);
+                        tot > 0 ? 100 * prof.ms[k] / tot : 0.0, steps ? prof.ms[k] / (double)steps : 0.0);
         message("  %-34s %10.2f ms; %ld neighbour-list builds", "total", tot, g->builds);
     }
     if (g->hx) {

@@ -150,6 +150,7 @@ typedef struct gpu {
     real skin;          /* m */
     int built, stale, every; /* the list: exists; must be rebuilt; rebuild every stage */
     long builds;
+    long step0;         /* s->step when this backend started: a restart counts its own steps */
     real *amag;         /* |acc| of the last flow rate evaluation */
     int acc_pending;    /* amag not yet reduced into dres[STEP_ACC] (gpu_acc_reduce, gpu_check) */
     int pend_save, pend_adv; /* save_start and advance held back for the next kernel (gpu_step_kernel) */

@@ -144,6 +144,7 @@ gpu_t *gpu_get(sim_t *s)
     if (s->be_data) return (gpu_t *)s->be_data;
     gpu_t *g = (gpu_t *)calloc(1, sizeof *g);
     if (!g) error_exit(1, "out of memory");
+    g->step0 = s->step;
     int ndev = gpu_devices();
     g->dev = g_local_rank % (ndev > 0 ? ndev : 1);
     CK(cudaSetDevice(g->dev));
