@@ -71,6 +71,7 @@ backend or no GPU is visible.
 """
 import argparse
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -226,7 +227,11 @@ def stop_restart(args, name, scene, over, stop, end):
     sphseg(args, scene, b, over + ["Run:max_steps=%d" % stop, "Run:max_wall_time=1e6"])
     h = ckpt_header(os.path.join(b, "checkpoint.h5"))
     check("%s checkpoint at stop" % name, h["Step"] == stop, "step %d" % h["Step"])
-    sphseg(args, scene, b, over + ["Run:max_steps=%d" % end], ["--restart", os.path.join(b, "checkpoint.h5")])
+    r = sphseg(args, scene, b, over + ["Run:max_steps=%d" % end], ["--restart", os.path.join(b, "checkpoint.h5")])
+    if args.backend == "gpu":  # the list builds are the restarted run's, and so must be the steps they are counted in
+        m = re.search(r"gpu: (\d+) neighbour-list builds in (\d+) steps", r.stdout + r.stderr)
+        check("%s restart's list-build report counts its own %d steps" % (name, end - stop),
+              bool(m) and int(m.group(2)) == end - stop and int(m.group(1)) > 0, m.group(0) if m else "no report")
     good, how = restart_agrees(args, snap.list_snapshots(a)[-1], snap.list_snapshots(b)[-1])
     check("%s final snapshot %s (step %d)" % (name, AGREE[args.backend], end), good, how)
     ra, _ = rows(a)
