@@ -45,12 +45,14 @@ TOL_MEAN, TOL_ROWS, TOL_REST, MIN_GROWTH, TOL_SEG = 0.06, 0.09, 0.02, 0.10, 0.02
 def main():
     a = sphseg_work_args()
     layer = dict(H=0.005, dr=0.00025, alpha=0.0, E=2.5e4)
-    cases = [cs.case("steady", theta=25, t_end=1.2, **layer), cs.case("rest", theta=18, t_end=0.4, **layer),
-             cs.case("running", theta=30, t_end=0.4, **layer), cs.case("seg", dr=0.002, seg=cs.SEG),
-             cs.case("steady_riemann", theta=25, t_end=1.2, stab="riemann", **layer)]
+    # the two long runs first: side by side on two cores the short three then fill in after them
+    cases = [cs.case("steady", theta=25, t_end=1.2, **layer),
+             cs.case("steady_riemann", theta=25, t_end=1.2, stab="riemann", **layer),
+             cs.case("rest", theta=18, t_end=0.4, **layer), cs.case("running", theta=30, t_end=0.4, **layer),
+             cs.case("seg", dr=0.002, seg=cs.SEG)]
     for c in cases:
         c.over["Output:dt"] = 0.1
-    batch.run_cases_or_exit(cases, a.sphseg, a.work, limit_s=900)
+    batch.run_cases_or_exit(cases, a.sphseg, a.work, limit_s=900, side_by_side=True)
     ok = True
     for c in cases:
         cs.reduce_run(os.path.join(a.work, c.name), float(c.over["Geometry:dr"]))

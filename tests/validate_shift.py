@@ -45,7 +45,7 @@ def main():
     off = cs.case("noshift", rows=20, t_end=T_END)
     for c in (on, off):
         c.over["Output:dt"] = 0.05
-    batch.run_cases_or_exit([on, off], a.sphseg, a.work, limit_s=600)
+    batch.run_cases_or_exit([on, off], a.sphseg, a.work, limit_s=600, side_by_side=True)
     ok = True
     R = on.meta["a"]
     enter = 0

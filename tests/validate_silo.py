@@ -36,7 +36,7 @@ def main():
     cases = [ss.case("W%g" % (W * 1e3), W, H=0.05, t_end=0.4) for W in (0.008, 0.016)]
     for c in cases:
         c.over["Output:dt"] = 0.4
-    recs = batch.run_cases_or_exit(cases, a.sphseg, a.work, limit_s=600)
+    recs = batch.run_cases_or_exit(cases, a.sphseg, a.work, limit_s=600, side_by_side=True)
     ok, Q = True, {}
     for c in cases:
         d = ss.outflow(a.work, c.name)
