@@ -13,7 +13,12 @@ validate_restart and the single-case validations run the same cases).
   HOPPER_3D the same extruded 2.4 cm along z (dr 4 mm)
   COLUMN_AS_CONTAINER, DRUM_AS_CONTAINER  inputs/column_2d.yml and
             inputs/drum_2d_EN.yml written as containers (validate_container.py)
+  PLAIN     the drum scenes' flow without the corrected gradient and the
+            shifting they set: for the cases that test one other option alone
+  PAPER_FLOW  the paper's flow in the drum scenes: monaghan, and PLAIN
 """
+PLAIN = ["Flow:gradient_correction=off", "Flow:shifting=off"]
+PAPER_FLOW = ["Flow:stabilization=monaghan"] + PLAIN
 CHUTE = ["Geometry:dr=0.0025", "Geometry:height=0.03", "Geometry:periodic=x", "Material:E=1e5",
          "Flow:damping_until=0", "Physics:gravity=[6.306,-7.515,0]"]
 CHUTE_3D = ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.09", "Geometry:depth=0.09",

@@ -51,7 +51,7 @@ from tools.analysis import drum_analysis  # noqa: E402
 from tools.analysis import snap  # noqa: E402
 from tests.drum_invariants import (Checks, diagnostics_columns, drum_omega, kmu, mass_bounds_conservation,  # noqa: E402
                              omega_of, stress_ratio)
-from tests.containers import sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tests.containers import PAPER_FLOW, sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 SCENE = os.path.join(HERE, "..", "inputs", "drum_2d_EV.yml")
 FRICTION_FRAC = 0.1
@@ -60,7 +60,7 @@ FRICTION_FRAC = 0.1
 BASE = ["Geometry:dr=0.0025", "Material:E=1e5", "Run:t_end=2", "Output:dt=0.5", "Output:diag_dt=0.05",
         "Run:progress_s=1e9"]
 # the paper's scheme, and the scene as it ships (its own Flow keys)
-FLOWS = (("paper", ["Flow:stabilization=monaghan", "Flow:gradient_correction=off", "Flow:shifting=off"]),
+FLOWS = (("paper", PAPER_FLOW),
          ("scene", []))
 
 

@@ -54,11 +54,11 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 from tools.analysis import drum_analysis  # noqa: E402
 from tools.analysis import snap  # noqa: E402
 from tests.drum_invariants import Checks, diagnostics_columns, mass_bounds_conservation, omega_of  # noqa: E402
-from tests.containers import run_scene, sphseg_work_args  # noqa: E402  (tests/containers.py)
+from tests.containers import PAPER_FLOW, run_scene, sphseg_work_args  # noqa: E402  (tests/containers.py)
 
 SCENE = os.path.join(HERE, "..", "inputs", "drum_3d.yml")
-BASE = ["Flow:stabilization=monaghan", "Flow:gradient_correction=off", "Flow:shifting=off", "Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025",
-        "Material:E=1e5", "Run:cfl_flow=0.2", "Run:progress_s=1e9"]
+BASE = PAPER_FLOW + ["Geometry:dr=0.0025", "Geometry:radius=0.02", "Geometry:length=0.025", "Material:E=1e5",
+                     "Run:cfl_flow=0.2", "Run:progress_s=1e9"]
 
 
 def run(sphseg, out, over):

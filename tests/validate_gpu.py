@@ -37,11 +37,7 @@ TOL_C1 = 1e-4
 
 # name, scene, steps, overrides
 from tests.containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
-                        SILO, pick_cases)
-
-# the drum scenes' flow without the corrected gradient and the shifting they set: the cases that test one
-# other option alone
-PLAIN = ["Flow:gradient_correction=off", "Flow:shifting=off"]
+                        PLAIN, SILO, pick_cases)
 
 CASES = [
     ("shearbox", "shearbox_2d.yml", 40, []),

@@ -70,15 +70,12 @@ TOL = 1e-10     # CPU, any scheme, across rank counts
 TOL_GPU = 1e-8  # GPU runs, and the GPU against the CPU
 TOL_C1 = 1e-4   # GPU runs of the paper scheme
 DRUM = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:shepard_every=20"]
-# the drum scenes' flow without the corrected gradient and the shifting they set: the cases that test one
-# other option alone
-PLAIN = ["Flow:gradient_correction=off", "Flow:shifting=off"]
 # the "balance" case's ranks: rank 0's measured time counted three times, so that a re-cut must move the
 # bounds. Measured times alone need not: ranks sharing one GPU measure about the same time (one H100,
 # c37a184: no re-cut in one run, where an earlier H100 run at 299898b re-cut)
 SKEW = {"SPHSEG_BALANCE_SKEW": "0:3"}
 from tests.containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
-                        SILO, pick_cases)
+                        PLAIN, SILO, pick_cases)
 
 # name, scene, steps, overrides, what must happen on several ranks. The drums
 # run their scenes' flow (riemann, bed damping, the corrected gradient and

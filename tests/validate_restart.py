@@ -90,7 +90,7 @@ BOX_P = ["Geometry:dr=0.00348", "Run:t_end=13", "Output:dt=3.25", "Run:progress_
 DRUM_P = ["Geometry:dr=0.0025", "Material:E=1e5", "Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.001",
           "Run:progress_s=1e9"]
 COLUMN = os.path.join(HERE, "..", "inputs", "column_2d.yml")
-from tests.containers import CHUTE, SILO  # noqa: E402  (tests/containers.py)
+from tests.containers import CHUTE, PAPER_FLOW, SILO  # noqa: E402  (tests/containers.py)
 CHUTE_P = CHUTE + ["Parallel:axis=x", "Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.001", "Run:progress_s=1e9"]
 SILO_P = SILO + ["Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.002", "Run:progress_s=1e9"]
 OK = True
@@ -243,7 +243,7 @@ def stop_restart(args, name, scene, over, stop, end):
 
 
 def test_drum(args):
-    stop_restart(args, "drum", DRUM, DRUM_P + ["Flow:stabilization=monaghan", "Flow:gradient_correction=off", "Flow:shifting=off"], 73, 160)
+    stop_restart(args, "drum", DRUM, DRUM_P + PAPER_FLOW, 73, 160)
 
 
 # Issue 30's options, each of which keeps state or changes what a step reads:
