@@ -87,14 +87,14 @@ endif
 override CFLAGS += $(HDF5_CFLAGS) $(CYAML_CFLAGS) $(METIS_CFLAGS)
 LIBS   := $(HDF5_LIBS) $(CYAML_LIBS) $(METIS_LIBS) $(LDLIBS)
 
-CORE_SRC := src/core/error.c src/core/tuning.c src/scene.c src/scene_yaml.c src/scene_walk.c src/scene_check.c src/scene_write.c src/scene_doc.c src/core/particles.c src/nbr.c src/bound.c src/setup.c src/setup_container.c \
-            src/backend_cpu.c src/integrate.c src/diag.c src/io.c src/checkpoint.c \
-            src/checkpoint_read.c src/checkpoint_keys.c src/outdir.c src/stages.c mpi/comm.c mpi/halo.c mpi/decomp.c
+CORE_SRC := src/core/error.c src/core/tuning.c src/scene/scene.c src/scene/scene_yaml.c src/scene/scene_walk.c src/scene/scene_check.c src/scene/scene_write.c src/scene/scene_doc.c src/core/particles.c src/cpu/nbr.c src/cpu/bound.c src/run/setup.c src/run/setup_container.c \
+            src/cpu/backend_cpu.c src/run/integrate.c src/output/diag.c src/output/io.c src/output/checkpoint.c \
+            src/output/checkpoint_read.c src/output/checkpoint_keys.c src/output/outdir.c src/run/stages.c mpi/comm.c mpi/halo.c mpi/decomp.c
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
 # the driver: the command line, the settings' checks, the run loop and its log (not in the unit tests)
 DRIVER_SRC := src/main.c src/settings_check.c src/run.c src/run_guard.c src/report.c
 DRIVER_OBJ := $(DRIVER_SRC:%.c=$(BUILD)/obj/%.o)
-HEADERS  := $(wildcard src/*.h src/core/*.h src/physics/*.h mpi/*.h)
+HEADERS  := $(wildcard src/*.h src/*/*.h mpi/*.h)
 
 UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_stab test_halo test_checkpoint test_stages test_position test_shift test_ksum
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
@@ -146,7 +146,7 @@ bench: all
 	else echo "(no GPU visible: GPU benchmark skipped)"; fi
 
 format:
-	clang-format -i src/*.c src/*.h src/core/*.c src/core/*.h src/physics/*.h mpi/*.c mpi/*.h tests/*.c
+	clang-format -i src/*.c src/*.h src/*/*.c src/*/*.h mpi/*.c mpi/*.h tests/*.c
 
 clean:
 	rm -rf $(BUILD)

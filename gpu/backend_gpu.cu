@@ -1,4 +1,4 @@
-/* gpu/backend_gpu.cu — the CUDA backend (struct backend, src/sim.h): its
+/* gpu/backend_gpu.cu — the CUDA backend (struct backend, src/run/sim.h): its
  * registration, the copies to and from the host, the end of a run; the
  * design of the whole backend (gpu/README.md lists its units).
  *
@@ -15,7 +15,7 @@
  * step's one host synchronisation. save_start and advance are held back and
  * run in the next prepare's motion kernel (gpu_step_kernel).
  *
- * The neighbour build mirrors src/nbr.c: the same grid (grid_fit on the same
+ * The neighbour build mirrors src/cpu/nbr.c: the same grid (grid_fit on the same
  * bounding box), cell keys sorted by a stable CUB radix sort (the order of a
  * stable counting sort: CPU and GPU hold particles in the same order), cell
  * start/end from key changes, then every array gathered into a spare set of

@@ -24,8 +24,9 @@ extern "C" {
 #include "core/error.h"
 #include "core/tuning.h"
 #include "mpi/comm.h"
-#include "sim.h"
-#include "stages.h"
+#include "physics/bound_kern.h"
+#include "run/sim.h"
+#include "run/stages.h"
 }
 
 #define CK(call)                                                                                     \
@@ -36,7 +37,9 @@ extern "C" {
                        #call);                                                                       \
     } while (0)
 
-enum { PERM_MAX = 96, BLOCK = 128 }; /* core/fields.h: 68 arrays; perm_tab, a kernel parameter, 1.6 kB */
+/* The permutation and migration tables hold every per-particle array of the
+ * field table (core/fields.h): sized from it, so a new field needs no edit here. */
+enum { PERM_MAX = PART_NARRAYS, BLOCK = 128 };
 #define GPU_TEAM_MAX_2D 4 /* threads per particle in the neighbour loops (gpu_team_size) */
 #define GPU_TEAM_MAX_3D 8
 #define GPU_TEAM_THREADS 2097152.0
@@ -47,6 +50,9 @@ struct perm_tab {
     unsigned char es[PERM_MAX];
     void *src[PERM_MAX], *dst[PERM_MAX];
 };
+
+/* perm_tab travels as a kernel parameter: it must fit CUDA's 4 kB limit. */
+static_assert(sizeof(struct perm_tab) <= 4096, "perm_tab over the 4 kB kernel-parameter limit: too many particle arrays");
 
 struct box {
     real lo[3], hi[3];

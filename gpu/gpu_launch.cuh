@@ -34,7 +34,7 @@ template <class F> static void each(const gpu_t *g, size_t n, F f)
 #else
 #define TEAM_LB
 #endif
-/* Teams (src/physics/hd.h): T consecutive threads per particle, f(i, lane,
+/* Teams (src/core/hd.h): T consecutive threads per particle, f(i, lane,
  * T), T a power of two dividing the warp, so that a team never straddles a
  * warp and a team past n is out as a whole. */
 template <int T, class F> __global__ void TEAM_LB k_team(size_t n, F f)

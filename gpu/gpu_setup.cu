@@ -158,8 +158,7 @@ gpu_t *gpu_get(sim_t *s)
     cudaDeviceProp prop;
     CK(cudaGetDeviceProperties(&prop, g->dev));
     const particles_t *h = &s->p;
-    size_t n = h->n, na = part_narrays();
-    if (na > PERM_MAX) error_exit(1, "backend_gpu: %zu particle arrays > PERM_MAX", na);
+    size_t n = h->n;
     const double skin = s->sc->run.list_skin; /* Run:list_skin, in units of h */
     g->nl_cap = grid_list_cap(h->dim, (1 + 0.5 * skin) * (double)(s->seg.k.h / s->seg.k.dr));
     if (s->halo) {

@@ -24,7 +24,7 @@
  * arrays the scene's stages read), the cell sort, halo_sorted (follow the
  * ghosts and the send lists through the sort); then halo_refresh of a few
  * arrays after the stages that change what neighbours read
- * (src/backend_cpu.c). The GPU backend exchanges only at its list builds and
+ * (src/cpu/backend_cpu.c). The GPU backend exchanges only at its list builds and
  * refreshes with device-packed byte segments (halo_post_bytes) in between.
  * One rank uses none of this (sim_t.halo is NULL), unless an axis is
  * periodic: the images across a period are ghosts of the rank itself

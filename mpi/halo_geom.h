@@ -16,7 +16,7 @@
 #define SPHSEG_HALO_GEOM_H
 #include <math.h>
 #include <stddef.h>
-#include "../src/physics/hd.h"
+#include "../src/core/hd.h"
 
 enum { HG_NOSHIFT = 13, HG_NCODES = 27, HG_MAX_TARGETS = 256 };
 

@@ -4,7 +4,7 @@
  * Reads the command line, loads and validates the scene (exit 2 on bad
  * input, before anything is written; src/settings_check.h), builds the
  * particles (or loads them and the run state from a checkpoint,
- * src/checkpoint.h), decomposes the domain and steps to Run:t_end
+ * src/output/checkpoint.h), decomposes the domain and steps to Run:t_end
  * (src/run.h), writing snapshots every Output:dt, a diagnostics row every
  * Output:diag_dt and a checkpoint every Output:checkpoint_dt. */
 #include <errno.h>
@@ -12,14 +12,14 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include "checkpoint.h"
+#include "output/checkpoint.h"
 #include "core/error.h"
 #include "mpi/comm.h"
-#include "outdir.h"
+#include "output/outdir.h"
 #include "run.h"
 #include "settings_check.h"
-#include "sim.h"
-#include "version.h"
+#include "run/sim.h"
+#include "core/version.h"
 
 static void usage(void)
 {

@@ -8,7 +8,7 @@
 #include "mpi/comm.h"
 #include "run.h"
 #include "settings_check.h"
-#include "version.h"
+#include "core/version.h"
 
 /* arg, single-quoted for a POSIX shell when it holds anything but plain
  * characters, appended to b. */
@@ -90,9 +90,9 @@ void report_end(sim_t *s, diag *d, double io)
 static const char *stab_text(const struct scene *sc, char *b, size_t n)
 {
     const struct scene_flow *f = &sc->flow;
-    if (f->stabilization == FLOW_STAB_RIEMANN)
+    if (f->stabilization == STAB_RIEMANN)
         snprintf(b, n, "stabilization riemann (eta %g)", f->riemann_eta);
-    else if (f->stabilization == FLOW_STAB_DELTA)
+    else if (f->stabilization == STAB_DELTA)
         snprintf(b, n, "stabilization delta (delta %g)", f->delta);
     else
         snprintf(b, n, "alpha_av = %g", f->alpha_av);

@@ -8,15 +8,15 @@
 #include <unistd.h>
 #include "core/error.h"
 #include "core/tuning.h"
-#include "io.h"
+#include "output/io.h"
 #include "mpi/comm.h"
 #include "mpi/decomp.h"
 #include "run.h"
-#include "stages.h"
-#include "version.h"
+#include "run/stages.h"
+#include "core/version.h"
 
 /* The arrays a ghost carries: what the run's stages read of ghosts
- * (src/stages.h). */
+ * (src/run/stages.h). */
 static int parallel_ghost_arrays(const sim_t *s, int *arr)
 {
     void *a[PART_NARRAYS];
@@ -103,7 +103,7 @@ static void parallel_balance(sim_t *s, double *cost)
     *cost = 0;
 }
 
-/* A checkpoint of the state after the step (src/checkpoint.h); its write
+/* A checkpoint of the state after the step (src/output/checkpoint.h); its write
  * time is the margin Run:max_wall_time keeps. */
 static void write_checkpoint(outputs *o, sim_t *s, const diag *d, ckpt_clock *ck)
 {

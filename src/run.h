@@ -7,9 +7,9 @@
  * command line and calls these in order. */
 #ifndef SPHSEG_RUN_H
 #define SPHSEG_RUN_H
-#include "checkpoint.h"
-#include "diag.h"
-#include "sim.h"
+#include "output/checkpoint.h"
+#include "output/diag.h"
+#include "run/sim.h"
 
 /* The command line (src/main.c). */
 typedef struct run_cli {

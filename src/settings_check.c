@@ -7,7 +7,7 @@
 #include "core/error.h"
 #include "core/tuning.h"
 #include "mpi/comm.h"
-#include "sim.h"
+#include "run/sim.h"
 
 /* Snapshots, diagnostics rows and checkpoints that Run:t_end asks for: a
  * count beyond a sane bound (Output:dt = 1e-300 with t_end = 1e300) is bad
@@ -78,7 +78,7 @@ int settings_check(const struct scene *sc, const char *backend)
 
 void settings_warn_alpha_sqrt_e(const struct scene *sc)
 {
-    if (sc->flow.stabilization != FLOW_STAB_MONAGHAN) return; /* alpha_av is monaghan's alone */
+    if (sc->flow.stabilization != STAB_MONAGHAN) return; /* alpha_av is monaghan's alone */
     double r = sc->flow.alpha_av * sqrt(sc->material.E) / (FLOW_ALPHA_REF * sqrt(FLOW_E_REF));
     if (r < 0.5 || r > 2)
         warning("Flow:alpha_av * sqrt(Material:E) is %.3g times Table 1's (alpha 0.1 at E = 10 MPa): the artificial "
@@ -91,16 +91,16 @@ void settings_warn_alpha_sqrt_e(const struct scene *sc)
 void settings_warn_stabilization(const struct scene *sc)
 {
     const struct scene_flow *f = &sc->flow;
-    if (f->stabilization == FLOW_STAB_DELTA || (f->stabilization == FLOW_STAB_RIEMANN && f->riemann_diffusion))
+    if (f->stabilization == STAB_DELTA || (f->stabilization == STAB_RIEMANN && f->riemann_diffusion))
         warning("%s: the pressure diffusion compacts a free surface at a constant rate (a 1 cm chute layer at 25 "
                 "degrees sinks 0.23 mm/s with riemann's, 0.075 mm/s with delta's, at dr 0.5 mm), and in the 2D drum "
                 "at 10 kPa particles left through the wall within 3-8 s (docs/granular.md \"Stabilisation\")",
-                f->stabilization == FLOW_STAB_DELTA ? "Flow:stabilization delta" : "Flow:riemann_diffusion on");
+                f->stabilization == STAB_DELTA ? "Flow:stabilization delta" : "Flow:riemann_diffusion on");
 }
 
 void settings_warn_gradient_correction(const struct scene *sc)
 {
-    if (sc->flow.gradient_correction && sc->flow.shifting == FLOW_SHIFT_OFF)
+    if (sc->flow.gradient_correction && sc->flow.shifting == SHIFT_OFF)
         warning("Flow:gradient_correction on without Flow:shifting: the corrected velocity gradient lets grains laid "
                 "against a wall creep into it, about 2 mm/s in the 2D drum, until one leaves (at 1.8-3.4 s with "
                 "Flow:gradient_correction_det 0.1-0.45, 38 s at 0.6); Flow:shifting fickian keeps them out "

@@ -3,10 +3,10 @@
  * more than one key or the machine (exit 2, DESIGN.md "Errors") and the
  * warnings for settings outside the measured range. The checks of single
  * keys and of keys against each other are the scene loader's
- * (src/scene_check.c). */
+ * (src/scene/scene_check.c). */
 #ifndef SPHSEG_SETTINGS_CHECK_H
 #define SPHSEG_SETTINGS_CHECK_H
-#include "scene.h"
+#include "scene/scene.h"
 
 /* Collective. Refuses (exit 2) output counts beyond a sane bound, a backend
  * name other than auto, cpu, gpu, --backend gpu without a usable device

@@ -1,4 +1,4 @@
-"""The seal of a sphseg checkpoint (src/checkpoint.h), for tests that change
+"""The seal of a sphseg checkpoint (src/output/checkpoint.h), for tests that change
 a checkpoint on purpose with h5py and must seal it again so that sphseg's
 reader, not its checksum, meets the change: the sum over the little-endian
 8-byte words w_i past the 512-byte user block (i from 1, the last word

@@ -7,7 +7,7 @@
  *
  * SHIM_KILL=/checkpoint.h5:2 kills the run in rotation 2, after
  * checkpoint.h5 was hard-linked to checkpoint_prev.h5 and before the new
- * checkpoint is renamed over checkpoint.h5 (src/checkpoint.c, ckpt_commit).
+ * checkpoint is renamed over checkpoint.h5 (src/output/checkpoint.c, ckpt_commit).
  * Renames onto other paths, and those after the N-th, go through untouched.
  * sphseg calls rename(3) (nm -D: rename@GLIBC); a product that moved to
  * renameat would not be killed and the test's exit-status check fails. */

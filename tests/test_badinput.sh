@@ -97,7 +97,7 @@ check drum3d_length_small "-P Geometry:length=0.001: Geometry:length: must be >=
     "$drum3d" -P Geometry:length=0.001
 check nothing_to_solve "-P Segregation:enabled=off: Segregation:enabled: off with prescribed velocity leaves nothing to solve" \
     "$good" -P Segregation:enabled=off
-# checkpoint keys and bad restart files (src/checkpoint.c; the restart cases
+# checkpoint keys and bad restart files (src/output/checkpoint.c; the restart cases
 # that need a checkpoint written first are in tests/validate_restart.py)
 check ckpt_dt_range "-P Output:checkpoint_dt=-1: Output:checkpoint_dt: must be >= 0, got -1" \
     "$good" -P Output:checkpoint_dt=-1

@@ -4,7 +4,7 @@
  * radial), and a box with dummy walls at the base and sides (wall classes,
  * wall normals from the colour function 4.10). Reference: the geometry. */
 #include <stdlib.h>
-#include "bound.h"
+#include "cpu/bound.h"
 #include "testutil.h"
 
 static const double DR = 1.0, HF = 1.5;

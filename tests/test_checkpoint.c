@@ -1,4 +1,4 @@
-/* test_checkpoint.c — checkpoint round trip (src/checkpoint.c): every array of
+/* test_checkpoint.c — checkpoint round trip (src/output/checkpoint.c): every array of
  * the particle store, filled with bytes that are a function of (array, rank,
  * index) only, and every scalar and list of the run state are written with
  * ckpt_write and must come back bit-identical from ckpt_read, each rank its
@@ -26,7 +26,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "checkpoint.h"
+#include "output/checkpoint.h"
 #include "mpi/comm.h"
 
 static char g_dir[64];
@@ -75,7 +75,7 @@ static int is_checked(const particles_t *p, size_t k)
     return 0;
 }
 
-/* The seal of a sphseg checkpoint (src/checkpoint.h): sum of
+/* The seal of a sphseg checkpoint (src/output/checkpoint.h): sum of
  * mix(w_i + i * golden) over the little-endian words past the user block,
  * and the check of the seal's first six words, written again after the file
  * was changed on purpose. */

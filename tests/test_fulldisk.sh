@@ -54,7 +54,7 @@ done
 # each size. Before, two ranks hung inside H5Fclose at some sizes (one rank
 # in an Allreduce, the other in a Barrier), and at others printed two
 # sphseg lines, Open MPI's own (mca_fbtl_posix_pwritev) and source text
-# (H5Dwrite(...) at src/io.c:413). Every rank must agree and end within
+# (H5Dwrite(...) at src/output/io.c:413). Every rank must agree and end within
 # seconds: exit 4, one sphseg line, no temporary left, and the checkpoint
 # left (if one was written) continues.
 sweep=$tmp/sweep

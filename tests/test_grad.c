@@ -2,7 +2,7 @@
  * exact for linear fields at boundary particles (corners, edges, walls),
  * where the standard SPH difference gradient (3.13) is not. Reference: the
  * exact gradient of the linear field. */
-#include "bound.h"
+#include "cpu/bound.h"
 #include "physics/seg_kern.h"
 #include "testutil.h"
 

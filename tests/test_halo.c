@@ -34,7 +34,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "mpi/halo.h"
-#include "nbr.h"
+#include "cpu/nbr.h"
 #include "core/particles.h"
 
 static int fails;

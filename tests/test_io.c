@@ -22,7 +22,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "io.h"
+#include "output/io.h"
 #include "core/particles.h"
 
 static char g_dir[256];

@@ -29,7 +29,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "io.h"
+#include "output/io.h"
 #include "core/particles.h"
 
 enum { N = 1001 };

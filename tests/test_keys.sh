@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # test_keys.sh BINARY — the key documentation is current and complete:
 # docs/keys.md equals `sphseg --keys` (written from the key table,
-# src/scene_keys.h), every key has a meaning, and every key that
+# src/scene/scene_keys.h), every key has a meaning, and every key that
 # used_params.yml echoes for inputs/hopper_2d.yml is documented.
 set -u
 bin=${1:?usage: $0 BINARY}

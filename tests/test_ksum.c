@@ -1,5 +1,5 @@
 /* test_ksum.c — the compensated sum behind the conservation check
- * (src/core/ksum.h, src/diag.c, mpi/comm.c comm_sum_compensated).
+ * (src/core/ksum.h, src/output/diag.c, mpi/comm.c comm_sum_compensated).
  *
  * 400 000 terms C_i V_i as a drum's particles give them (C in (0, 1), V near
  * 1e-9 m^3), summed in three orders (as built, reversed, shuffled: a list

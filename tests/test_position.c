@@ -1,5 +1,5 @@
 /* test_position.c — positions held to double precision in the single build
- * (src/physics/hd.h: x_n double, x + xr the position). This file compiles
+ * (src/core/hd.h: x_n double, x + xr the position). This file compiles
  * the physics bodies as the single build does (SPHSEG_SINGLE), on a store
  * of its own arrays:
  *  - a particle 0.05-0.09 m from the origin creeping at 1e-5 to 3e-5 m/s,

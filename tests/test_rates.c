@@ -17,7 +17,7 @@
  *    C leaves [0, 1] by more than 1e-3 without the limiter and stays in it
  *    with it, sum V_i dC_i/dt still zero to round-off. */
 #include <stdlib.h>
-#include "bound.h"
+#include "cpu/bound.h"
 #include "physics/seg_kern.h"
 #include "testutil.h"
 

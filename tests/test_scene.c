@@ -19,7 +19,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "scene.h"
+#include "scene/scene.h"
 
 #ifndef SPHSEG_ROOT
 #define SPHSEG_ROOT "."

@@ -8,8 +8,8 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <cmocka.h>
-#include "bound.h"
-#include "nbr.h"
+#include "cpu/bound.h"
+#include "cpu/nbr.h"
 #include "core/particles.h"
 
 /* Tolerances for both precisions. RT(x): a check that holds to round-off,

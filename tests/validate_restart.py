@@ -1,4 +1,4 @@
-"""Checkpoints and restarts (src/checkpoint.c, README "Checkpoints and
+"""Checkpoints and restarts (src/output/checkpoint.c, README "Checkpoints and
 restarts"): a run stopped midway and restarted from its checkpoint must end
 bit-identical to the same run done straight through (DESIGN.md: checkpoints
 "restart bit-for-bit on the same rank count").

@@ -4,7 +4,7 @@ monaghan with alpha_av 1.0, 0.6 s, as tests/validate_conc_window.py: the
 tolerances below were measured with monaghan).
 
 The concentration, its start-of-step copy and its rate are double in both
-builds (creal, src/physics/hd.h), and the conservative scheme sums its pair
+builds (creal, src/core/hd.h), and the conservative scheme sums its pair
 terms in double: a float C rounds at every update, which made sum C_i V_i
 drift by 1.3e-5 in these 15 169 steps (and 1.5e-8 with concentration
 windows), measured on the dev machine before the change. Checked:

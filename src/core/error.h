@@ -33,7 +33,7 @@ void input_error_agree(const char *why);
  * collective call, it never leaves one rank waiting for another. */
 void error_agree(int code, const char *why);
 /* A function error_exit runs (once) before it ends the process, e.g. to
- * close an open HDF5 file and remove a half-written temporary (src/io.c);
+ * close an open HDF5 file and remove a half-written temporary (src/output/io.c);
  * it returns nonzero when MPI_Finalize must be skipped (a file HDF5 could
  * not close, which HDF5's shutdown inside MPI_Finalize would crash on). */
 void error_on_exit(int (*fn)(void));
@@ -42,7 +42,7 @@ enum { ERROR_AGREE_S = 10 };
 /* Check an HDF5 call (negative = failure). hdf5.h defines an H5CHECK of
  * its own (a version check inside the H5F_ACC_* flags) and #undefs any
  * earlier one: a file using both includes <hdf5.h> first, reads the flags it
- * needs before this header (see src/io.c), and this definition wins. */
+ * needs before this header (see src/output/io.c), and this definition wins. */
 #undef H5CHECK
 #define H5CHECK(call)                                                              \
     do {                                                                           \

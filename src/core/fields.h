@@ -5,8 +5,8 @@
  *
  *   member  the particles_t member (src/core/particles.h); also the field's name
  *           in messages (stage_fields_str);
- *   FLD     its stage-field bit, FLD_<FLD> (src/stages.h);
- *   type    element type: real, creal, preal (src/physics/hd.h, which the
+ *   FLD     its stage-field bit, FLD_<FLD> (src/run/stages.h);
+ *   type    element type: real, creal, preal (src/core/hd.h, which the
  *           includer brings), int64_t, uint8_t;
  *   n       components: 1 (`type *member`), 3 (`type *member[3]`: x, y, z)
  *           or 6 (`type *member[6]`: xx, yy, zz, xy, xz, yz);
@@ -18,7 +18,7 @@
  * part_arrays[] (one array per component, in row order: alloc, free,
  * permute, pack, the GPU's copies and the checkpoints, which hold array k as
  * dataset k: the order is the checkpoints' format; do not reorder), the
- * FLD_ bits, and stage_arrays() and stage_fields_str() (src/stages.c). A
+ * FLD_ bits, and stage_arrays() and stage_fields_str() (src/run/stages.c). A
  * new field is one row here (best at the end); a stage that reads or writes
  * it names FLD_<FLD> in stage_table[], a snapshot field its io_fields[] row.
  *

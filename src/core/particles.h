@@ -5,7 +5,7 @@
 #define SPHSEG_PARTICLES_H
 #include <stddef.h>
 #include <stdint.h>
-#include "../physics/hd.h"
+#include "hd.h"
 #include "fields.h"
 
 enum part_kind { KIND_MATERIAL = 0, KIND_DUMMY = 1 };

@@ -2,7 +2,7 @@
  * stage 1 cell types, stage 2 umbrella test (4.19) and vicinity (4.20–4.21),
  * normals (4.10, 4.17) and the smoothed degenerate function (4.14, 4.18).
  * Every normal points into the material. Neighbour-loop bodies shared by the
- * CPU driver (src/bound.c) and the GPU driver. */
+ * CPU driver (src/cpu/bound.c) and the GPU driver. */
 #ifndef SPHSEG_BOUND_KERN_H
 #define SPHSEG_BOUND_KERN_H
 #include <math.h>

@@ -1,4 +1,4 @@
-/* flow.h — the granular-flow bodies shared by the CPU (src/backend_cpu.c)
+/* flow.h — the granular-flow bodies shared by the CPU (src/cpu/backend_cpu.c)
  * and GPU drivers, one particle per call, gather style (a particle sums over
  * its neighbours and writes only its own entries):
  *   flow_wall     dummy velocity (4.1/4.2) and stress (4.3) from the
@@ -22,14 +22,14 @@
 #include "grid.h"
 #include "linalg.h"
 #include "momentum.h"
+#include "options.h"
 #include "seg.h"
 #include "seg_kern.h"
 #include "sph.h"
 #include "stress.h"
 #include "wall.h"
 
-/* Flow:stabilization (src/scene_keys.h): what damps the acoustic noise. */
-enum { STAB_MONAGHAN = 0, STAB_RIEMANN = 1, STAB_DELTA = 2 };
+/* Flow:stabilization (src/scene/scene_keys.h): what damps the acoustic noise. */
 
 typedef struct flow_ctx {
     sph_ctx k;

@@ -4,7 +4,7 @@
 #ifndef SPHSEG_GRID_H
 #define SPHSEG_GRID_H
 #include <stddef.h>
-#include "hd.h"
+#include "../core/hd.h"
 
 typedef struct grid_view {
     int dim;

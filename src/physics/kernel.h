@@ -3,7 +3,7 @@
  * alpha_2 = 7/(4 pi h^2), alpha_3 = 21/(16 pi h^3). Units: 1/m^d. */
 #ifndef SPHSEG_KERNEL_H
 #define SPHSEG_KERNEL_H
-#include "hd.h"
+#include "../core/hd.h"
 
 /* Normalisation constant alpha_d of eq. (3.3) for dimension dim (2 or 3). */
 HD_INLINE real kernel_alpha(int dim, real h)

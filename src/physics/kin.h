@@ -8,10 +8,11 @@
 #ifndef SPHSEG_KIN_H
 #define SPHSEG_KIN_H
 #include <math.h>
-#include "hd.h"
+#include "../core/hd.h"
+#include "options.h"
 
 typedef struct kin_params {
-    int type;      /* enum kin_type (scene.h): 0 rest, 1 oscillatory shear */
+    int type;      /* enum kin_type (options.h): KIN_REST, KIN_OSCILLATORY_SHEAR */
     double gamma0; /* shear amplitude */
     double omega;  /* 2 pi / T, 1/s */
 } kin_params;

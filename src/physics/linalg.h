@@ -2,7 +2,7 @@
  * product of a symmetric 3x3 tensor with a vector. */
 #ifndef SPHSEG_LINALG_H
 #define SPHSEG_LINALG_H
-#include "hd.h"
+#include "../core/hd.h"
 
 /* b = S v, S symmetric stored as (xx, yy, zz, xy, xz, yz): the
  * renormalised pair gradients of the conservative scheme (seg_Lbar) and the

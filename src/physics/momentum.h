@@ -6,7 +6,7 @@
 #ifndef SPHSEG_MOMENTUM_H
 #define SPHSEG_MOMENTUM_H
 #include <math.h>
-#include "hd.h"
+#include "../core/hd.h"
 #include "kernel.h"
 
 /* Adds the pair j to the velocity gradient L_ab = du_a/dx_b of particle i:

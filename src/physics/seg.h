@@ -2,7 +2,7 @@
  * (paper §2.2). Concentration C is the small-grain volume fraction, in [0,1]. */
 #ifndef SPHSEG_PHYS_SEG_H
 #define SPHSEG_PHYS_SEG_H
-#include "hd.h"
+#include "../core/hd.h"
 
 /* Parameters of the flux function and of V, D (SI units). */
 typedef struct seg_params {

@@ -1,5 +1,5 @@
 /* seg_kern.h — the concentration rate dC_i/dt of one material particle, the
- * neighbour-loop body shared by the CPU (src/backend_cpu.c) and GPU drivers.
+ * neighbour-loop body shared by the CPU (src/cpu/backend_cpu.c) and GPU drivers.
  * Gravity-aligned derivative: grad_g X = ghat . grad X (eq. E15). */
 #ifndef SPHSEG_SEG_KERN_H
 #define SPHSEG_SEG_KERN_H
@@ -7,15 +7,16 @@
 #include "../core/particles.h"
 #include "grid.h"
 #include "linalg.h"
+#include "options.h"
 #include "seg.h"
 #include "sph.h"
 
 typedef struct seg_ctx {
     sph_ctx k;
     seg_params sp;
-    int scheme; /* enum seg_scheme (scene.h): 0 paper, 1 direct, 2 conservative */
+    int scheme; /* enum seg_scheme (options.h) */
     int renorm; /* conservative scheme: symmetric renormalisation on/off */
-    int limiter; /* conservative scheme: enum seg_limiter (scene.h): 0 none, 1 donor */
+    int limiter; /* conservative scheme: enum seg_limiter (options.h) */
 } seg_ctx;
 
 /* The three contributions to dC/dt, 1/s: segregation, diffusion, CSR source. */

@@ -1,7 +1,7 @@
 /* sph.h — the discretisation constants every neighbour loop needs. */
 #ifndef SPHSEG_SPH_H
 #define SPHSEG_SPH_H
-#include "hd.h"
+#include "../core/hd.h"
 #include "kernel.h"
 
 typedef struct sph_ctx {

@@ -13,7 +13,8 @@
 #ifndef SPHSEG_STRESS_H
 #define SPHSEG_STRESS_H
 #include <math.h>
-#include "hd.h"
+#include "../core/hd.h"
+#include "options.h"
 
 typedef struct mat_params {
     real G, K;         /* shear and bulk moduli, Pa */
@@ -191,7 +192,6 @@ HD_INLINE int stress_return_map(real s[6], real kmu)
  * sqrt(J2) is the full 3x3 deviator's, so in 2D plane strain s_zz counts; in
  * steady isochoric simple shear the flow rule drives s_zz and s_xx - s_yy to
  * O(tau^2 / G) and sqrt(J2) = |tau_xy| (tests/test_stress.c). */
-enum stress_yield { YIELD_DRUCKER_PRAGER = 0, YIELD_MU_I = 1 };
 
 /* The slope k of the yield cone sqrt(J2) = k p for friction mu (above). */
 HD_INLINE real stress_yield_k(int yield, real mu) { return yield == YIELD_MU_I ? mu : stress_kmu(mu); }

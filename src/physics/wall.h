@@ -6,7 +6,7 @@
 #ifndef SPHSEG_WALL_H
 #define SPHSEG_WALL_H
 #include <math.h>
-#include "hd.h"
+#include "../core/hd.h"
 
 /* The container as data: a list of wall primitives (wall_geom.prim), each
  * with its own shape, slip and motion. Every dummy carries the 1-based

@@ -1,4 +1,4 @@
-/* scene_keys_none.h — every row macro of the key table (src/scene_keys.h)
+/* scene_keys_none.h — every row macro of the key table (src/scene/scene_keys.h)
  * defined to expand to nothing. No include guard: a file that expands the
  * table includes this before each expansion, then redefines (#undef,
  * #define) only the rows that expansion reads. */

@@ -53,7 +53,7 @@
  * must then route to the ranks that own the positions. */
 #ifndef SPHSEG_CHECKPOINT_H
 #define SPHSEG_CHECKPOINT_H
-#include "sim.h"
+#include "run/sim.h"
 
 /* 3: a dummy's Wall is the 1-based index of its wall primitive (wall.h), no
  * longer a fixed wall id. */
@@ -98,7 +98,7 @@ typedef struct ckpt_seal {
  * rank). */
 int ckpt_verify(const char *path, ckpt_seal *seal, char *why, size_t n);
 
-/* Collective (src/checkpoint_read.c): load the particles (s->p, allocated
+/* Collective (src/output/checkpoint_read.c): load the particles (s->p, allocated
  * here) and s->t, step, dt, amax, n_material from file, and r. file may be
  * a directory: its newest valid checkpoint (checkpoint.h5 or
  * checkpoint_prev.h5) is taken, and its name written to chosen (a warning
@@ -111,7 +111,7 @@ int ckpt_verify(const char *path, ckpt_seal *seal, char *why, size_t n);
  * listed. */
 void ckpt_read(const char *file, sim_t *s, ckpt_run *r, char *chosen, size_t n);
 /* Compare the checkpoint's used-parameters text (stored) with this run's
- * scene, key by key (src/checkpoint_keys.c). Keys that define the state
+ * scene, key by key (src/output/checkpoint_keys.c). Keys that define the state
  * (Geometry, Material, Physics, Initial, Kinematics, Walls, and the modules
  * Segregation:enabled, scheme and renormalize) must match: otherwise exit
  * 2 naming each one that differs. Model keys (the other Segregation keys,

@@ -1,5 +1,5 @@
 /* scene_doc.c — the documentation of every scene key (sphseg --keys,
- * docs/keys.md), from the key table src/scene_keys.h. */
+ * docs/keys.md), from the key table src/scene/scene_keys.h. */
 #include <cyaml/cyaml.h>
 #include <math.h>
 #include <stdint.h>
@@ -62,7 +62,7 @@ static const struct scene_doc scene_docs[] = {
 void scene_keys_markdown(FILE *f)
 {
     fprintf(f, "# sphseg scene keys\n\n"
-               "Every key of a scene file, from the key table `src/scene_keys.h` (`sphseg --keys` writes this\n"
+               "Every key of a scene file, from the key table `src/scene/scene_keys.h` (`sphseg --keys` writes this\n"
                "file; `tests/test_keys.sh` checks it is current). Units are SI. Any key may be set on the\n"
                "command line with `-P Section:key=value`; a list is given whole. The scenes in `inputs/`\n"
                "show them in use, with comments.\n");

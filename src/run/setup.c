@@ -231,22 +231,6 @@ static void setup_drum(sim_t *s)
         warning("Geometry:length %.6g m is not a multiple of dr; the drum is %.6g m long", sc->geometry.length, L);
 }
 
-/* Flow:stabilization as the flow bodies' constant (flow.h). */
-static int flow_stab_of(const struct scene *sc)
-{
-    switch (sc->flow.stabilization) {
-    case FLOW_STAB_RIEMANN: return STAB_RIEMANN;
-    case FLOW_STAB_DELTA: return STAB_DELTA;
-    default: return STAB_MONAGHAN;
-    }
-}
-
-/* Material:yield as the flow bodies' constant (stress.h). */
-static int flow_yield_of(const struct scene *sc)
-{
-    return sc->material.yield == MAT_YIELD_MU_I ? YIELD_MU_I : YIELD_DRUCKER_PRAGER;
-}
-
 /* Geostatic initial stress of a material at rest under a flat surface at
  * y = surface_y (gravity along -y): sigma_yy = -rho |g| depth, sigma_xx =
  * sigma_zz = K0 sigma_yy with K0 = nu / (1 - nu) (uniaxial strain), returned
@@ -263,7 +247,7 @@ static void setup_stress(sim_t *s)
     const double *gv = sc->physics.gravity;
     int fluid = sc->material.model == MAT_NEWTONIAN; /* hydrostatic: K0 = 1, no shear stress */
     double gn = sqrt(gv[0] * gv[0] + gv[1] * gv[1]), K0 = fluid ? 1.0 : sc->material.nu / (1 - sc->material.nu);
-    real kmu = fluid ? R(0.0) : stress_yield_k(flow_yield_of(sc), (real)sc->material.mu_s);
+    real kmu = fluid ? R(0.0) : stress_yield_k((int)sc->material.yield, (real)sc->material.mu_s);
     for (size_t i = 0; i < p->n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
         real sg[6] = {0, 0, 0, 0, 0, 0};
@@ -562,12 +546,12 @@ static void flow_ctx_of(const struct scene *sc, const sph_ctx *k, const seg_para
                         scene_key_where(sc, "Material", "mu_law", where, sizeof where), m->mu_s, m->mu_d, m->I0);
         f->m.pr_alpha = (real)m->pr_alpha, f->m.pr_A = (real)A, f->m.pr_IN1 = (real)IN1;
     }
-    f->yield = flow_yield_of(sc);
+    f->yield = (int)sc->material.yield;
     f->bed_k = stress_yield_k(f->yield, f->m.mu_s);
     f->rho = (real)sc->physics.rho;
     f->cs = stress_sound_speed(f->m.G, f->m.K, f->rho);
     f->alpha_av = (real)sc->flow.alpha_av;
-    f->stab = flow_stab_of(sc);
+    f->stab = (int)sc->flow.stabilization;
     f->eta_r = (real)sc->flow.riemann_eta;
     f->bed_alpha = f->stab == STAB_RIEMANN && f->m.G > 0 ? (real)sc->flow.bed_damping : R(0.0);
     f->filter_mls = sc->flow.stress_filter == FLOW_FILTER_MLS;

@@ -6,15 +6,34 @@
  * slice of the 3D block is a slab whose end slabs hold the walls (16 threads:
  * the busiest slice had 1.32 times the mean material and 2.7 times the mean
  * dummies). Each index's result is its own, so any schedule gives the same bits. */
+#include <stdlib.h>
+#include "bound.h"
 #include "core/error.h"
-#include "sim.h"
-#include "stages.h"
+#include "nbr.h"
+#include "run/sim.h"
+#include "run/stages.h"
 
 /* Indices per dynamic chunk: a 3D material particle's flow rates cost about
  * 10 us, so a chunk is far above the cost of taking it. */
 #define CPU_CHUNK 32
 
-/* Copy the fields (src/stages.h) from their owners into the ghosts
+/* The CPU backend's own state (s->be_data): the sorted cell list and the
+ * boundary classification's work arrays, allocated at the first call. */
+typedef struct cpu_state {
+    nbr_grid grid;
+    bound_work bw;
+} cpu_state;
+
+static cpu_state *cpu_of(sim_t *s)
+{
+    if (!s->be_data) {
+        s->be_data = calloc(1, sizeof(cpu_state));
+        if (!s->be_data) error_exit(1, "cpu backend: out of memory for its cell list");
+    }
+    return (cpu_state *)s->be_data;
+}
+
+/* Copy the fields (src/run/stages.h) from their owners into the ghosts
  * (multi-rank runs; nothing on one rank). */
 static void cpu_refresh(sim_t *s, uint32_t fields)
 {
@@ -48,7 +67,7 @@ static void cpu_dcdt(sim_t *s, particles_t *q)
 {
     const long n = (long)q->n;
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK)
-    for (long i = 0; i < n; ++i) seg_dCdt((size_t)i, q, &s->grid.view, &s->seg);
+    for (long i = 0; i < n; ++i) seg_dCdt((size_t)i, q, &cpu_of(s)->grid.view, &s->seg);
 }
 
 /* L of material particles [lo, n + ng). */
@@ -58,7 +77,7 @@ static void cpu_renorm(sim_t *s, long lo)
     const long n = (long)(p->n + p->ng);
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK)
     for (long i = lo; i < n; ++i)
-        if (p->kind[i] == KIND_MATERIAL) seg_renorm((size_t)i, p, &s->grid.view, &s->seg);
+        if (p->kind[i] == KIND_MATERIAL) seg_renorm((size_t)i, p, &cpu_of(s)->grid.view, &s->seg);
 }
 
 /* The flow rates of the material (and, when due, its L) and the largest
@@ -72,7 +91,7 @@ static void cpu_flow_rates(sim_t *s)
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK) reduction(max : amax)
     for (long i = 0; i < n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
-        double a = flow_rates_team((size_t)i, p, &s->grid.view, &s->flow, 0, 1, renorm, s->flow.kgc);
+        double a = flow_rates_team((size_t)i, p, &cpu_of(s)->grid.view, &s->flow, 0, 1, renorm, s->flow.kgc);
         amax = a > amax ? a : amax;
     }
     s->amax = amax;
@@ -103,7 +122,7 @@ static void cpu_shift(sim_t *s)
     const long n = (long)p->n;
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK)
     for (long i = 0; i < n; ++i)
-        if (p->kind[i] == KIND_MATERIAL) shift_team((size_t)i, p, &s->grid.view, &s->shift, (real)s->dt, 0, 1);
+        if (p->kind[i] == KIND_MATERIAL) shift_team((size_t)i, p, &cpu_of(s)->grid.view, &s->shift, (real)s->dt, 0, 1);
 }
 
 /* The Shepard filter (3.12) of the owned material particles, into dsig. */
@@ -113,10 +132,10 @@ static void cpu_shepard(sim_t *s)
     const long n = (long)p->n;
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK)
     for (long i = 0; i < n; ++i)
-        if (p->kind[i] == KIND_MATERIAL) flow_shepard((size_t)i, p, &s->grid.view, &s->flow);
+        if (p->kind[i] == KIND_MATERIAL) flow_shepard((size_t)i, p, &cpu_of(s)->grid.view, &s->flow);
 }
 
-/* Run stage id of the table (src/stages.h) for call c; returns 0 when the
+/* Run stage id of the table (src/run/stages.h) for call c; returns 0 when the
  * call leaves it out (prepare without classification, say). The loops:
  * streaming ones schedule(static), neighbour loops dynamic (top). */
 static int cpu_stage(sim_t *s, int id, cpu_call *c)
@@ -131,8 +150,8 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         return 1;
     case ST_EXCHANGE:
         if (s->halo) halo_exchange(s->halo, p);
-        nbr_build(&s->grid, p, R(2.0) * s->seg.k.h, s->halo ? s->halo->origin : NULL);
-        if (s->halo) halo_sorted(s->halo, s->grid.perm, p->n + p->ng);
+        nbr_build(&cpu_of(s)->grid, p, R(2.0) * s->seg.k.h, s->halo ? s->halo->origin : NULL);
+        if (s->halo) halo_sorted(s->halo, cpu_of(s)->grid.perm, p->n + p->ng);
         return 1;
     case ST_CLASSIFY: /* the ghosts an owned particle reads hold their whole support here and
                        * classify themselves alike; the refresh (from_owner) makes them the
@@ -140,7 +159,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
                        * it the paper-scheme shear box and EN drum on 2 and 3 ranks were
                        * bit-identical (issue 20, tools/dev/mutants.py ghost_psi_stale) */
         if (!((s->hcsr && c->classify) || c->classify == 2)) return 0;
-        bound_classify(&s->bw, p, &s->grid, &s->seg.k);
+        bound_classify(&cpu_of(s)->bw, p, &cpu_of(s)->grid, &s->seg.k);
         return 1;
     case ST_RENORM: /* with computed flow the owned L come with the next flow rates (same
                      * pairs, no pass of their own); here the ghosts' */
@@ -151,12 +170,12 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
     case ST_KGC: /* ghosts included: a ghost within 2h of the slab has its whole support here */
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK)
         for (long i = 0; i < ng; ++i)
-            if (p->kind[i] == KIND_MATERIAL) flow_kgc_team((size_t)i, p, &s->grid.view, &s->flow, 0, 1);
+            if (p->kind[i] == KIND_MATERIAL) flow_kgc_team((size_t)i, p, &cpu_of(s)->grid.view, &s->flow, 0, 1);
         return 1;
     case ST_WALLS: /* ghosts included: a ghost dummy next to the slab has its whole support here */
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK)
         for (long i = 0; i < ng; ++i)
-            if (p->kind[i] == KIND_DUMMY) flow_wall((size_t)i, p, &s->grid.view, &s->flow);
+            if (p->kind[i] == KIND_DUMMY) flow_wall((size_t)i, p, &cpu_of(s)->grid.view, &s->flow);
         return 1;
     case ST_FLOW: cpu_flow_rates(s); return 1;
     case ST_SEG_COEFFS: cpu_seg_coeffs(s, p); return 1;
@@ -167,7 +186,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         return 1;
     case ST_SHIFT: cpu_shift(s); return 1;
     case ST_ADVANCE: { /* step_advance does x, u, sigma, C and gsum in one pass: ST_ADVANCE_C, _GSUM */
-        const int seg = s->seg_on && !s->win.on;
+        const int seg = stage_runs(stage_flags(s), ST_ADVANCE_C);
 #pragma omp parallel for schedule(static)
         for (long i = 0; i < n; ++i)
             step_advance((size_t)i, p, (real)c->a, &s->flow, s->flow_on, seg, (real)c->w);
@@ -304,8 +323,12 @@ static void cpu_from_host(sim_t *s) { (void)s; }
 
 static void cpu_finish(sim_t *s)
 {
-    nbr_free(&s->grid);
-    bound_free(&s->bw);
+    cpu_state *c = (cpu_state *)s->be_data;
+    if (!c) return;
+    nbr_free(&c->grid);
+    bound_free(&c->bw);
+    free(c);
+    s->be_data = NULL;
 }
 
 const struct backend *backend_cpu(void)

@@ -67,7 +67,7 @@ int io_write_snapshot(const char *outdir, int index, const particles_t *p, doubl
 int io_write_xdmf(const char *outdir, int nsnap, const double *times, const long long *npart,
                   const unsigned char *present, int dim);
 
-/* HDF5 helpers shared with the checkpoint writer (src/checkpoint.c); every
+/* HDF5 helpers shared with the checkpoint writer (src/output/checkpoint.c); every
  * call is checked (H5CHECK). Variable-length UTF-8 string attribute (value
  * NULL is stored as ""); scalar attribute of file type ftype from a value of
  * memory type mtype; collective create (truncate) of path with the MPI-IO

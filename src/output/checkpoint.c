@@ -15,10 +15,10 @@
 #include "core/error.h"
 #include "io.h"
 #include "mpi/comm.h"
-#include "version.h"
+#include "core/version.h"
 
 /* Every HDF5 call here writes the checkpoint: a failure is a failed write
- * (exit status 4, src/io.h), checkpoint.h5 stays the last complete one. */
+ * (exit status 4, src/output/io.h), checkpoint.h5 stays the last complete one. */
 #undef H5CHECK
 #define H5CHECK(call)                                                                                        \
     do {                                                                                                     \

@@ -5,18 +5,10 @@
 #ifndef SPHSEG_SCENE_H
 #define SPHSEG_SCENE_H
 #include <stddef.h>
+#include "physics/options.h" /* the physics' choices: Flow:stabilization, Material:yield, ... */
 
 enum seg_flux { SEG_FLUX_SYMMETRIC = 0, SEG_FLUX_ASYMMETRIC = 1 };
 enum seg_model { SEG_MODEL_CONSTANT = 0, SEG_MODEL_SHEAR_RATE = 1 };
-/* paper: eq. (2.10)/(3.13) with HCSR boundaries (§4.2) and C1 boundary
- * gradients (App. E); direct: eq. (2.5) with the same boundaries (App. A);
- * conservative: pairwise antisymmetric fluxes, no source terms. */
-enum seg_scheme { SEG_SCHEME_PAPER = 0, SEG_SCHEME_DIRECT = 1, SEG_SCHEME_CONSERVATIVE = 2 };
-/* none: the conservative scheme's central pair flux Q_i + Q_j as it is; donor:
- * capped by the donor's C and the receiver's room (seg_kern.h
- * seg_flux_donor), which keeps C in [0, 1]. */
-enum seg_limiter { SEG_LIMITER_NONE = 0, SEG_LIMITER_DONOR = 1 };
-enum flow_shifting { FLOW_SHIFT_OFF = 0, FLOW_SHIFT_FICKIAN = 1 }; /* = enum shift_kind, physics/shift.h */
 enum flow_background { FLOW_BACKGROUND_MOMENTUM = 0, FLOW_BACKGROUND_EXCLUDED = 1 };
 enum geom_type { GEOM_SHEARBOX = 0, GEOM_COLUMN = 1, GEOM_DRUM = 2, GEOM_CONTAINER = 3 };
 /* Geometry:periodic, one bit per axis (bit d: axis d). */
@@ -24,9 +16,6 @@ enum periodic_axes {
     PERIODIC_NONE = 0, PERIODIC_X = 1, PERIODIC_Y = 2, PERIODIC_XY = 3, PERIODIC_Z = 4, PERIODIC_XZ = 5,
     PERIODIC_YZ = 6, PERIODIC_XYZ = 7
 };
-/* rest and oscillatory_shear prescribe the velocity (no momentum or stress
- * solved); computed solves the granular flow (momentum 3.9, stress 2.16). */
-enum kin_type { KIN_REST = 0, KIN_OSCILLATORY_SHEAR = 1, KIN_COMPUTED = 2 };
 enum wall_slip { SLIP_NO = 0, SLIP_FREE = 1 };
 enum rot_dir { ROT_CLOCKWISE = 0, ROT_COUNTERCLOCKWISE = 1 };
 enum init_stress { INIT_STRESS_ZERO = 0, INIT_STRESS_GEOSTATIC = 1 };
@@ -34,21 +23,12 @@ enum init_stress { INIT_STRESS_ZERO = 0, INIT_STRESS_GEOSTATIC = 1 };
  * compressible Newtonian fluid (pressure from the bulk modulus, viscous
  * momentum of Morris et al. 1997). */
 enum mat_model { MAT_GRANULAR = 0, MAT_NEWTONIAN = 1 };
-/* the granular material's yield surface: drucker_prager, the paper's cone
- * sqrt(J2) = k_mu(mu(I)) p (2.11-2.12); mu_I, the tensorial law |tau| =
- * sqrt(J2) = mu(I) p of Jop, Forterre & Pouliquen (2006) (physics/stress.h) */
-enum mat_yield { MAT_YIELD_DRUCKER_PRAGER = 0, MAT_YIELD_MU_I = 1 };
 /* Material:mu_law, mu(I) at low I: regularized, the paper's (2.14) (mu -> mu_s
  * as gdot -> 0: a static yield); partial, the partial regularisation of
  * Barker & Gray (2017): sqrt(alpha / ln(A / I)) below the well-posed window's
  * lower edge I_N1 (no static yield: at gdot = 0 mu is the law's at the I of
  * gdot = lambda, physics/stress.h stress_mu) */
 enum mat_mu_law { MAT_MU_REGULARIZED = 0, MAT_MU_PARTIAL = 1 };
-/* Flow:stabilization: monaghan, the paper's artificial viscosity (3.10);
- * riemann, the low-dissipation Riemann solver of Zhang, Hu & Adams (2017);
- * delta, delta-SPH pressure diffusion alone (physics/momentum.h). The values
- * are the flow bodies' STAB_* (physics/flow.h). */
-enum flow_stab { FLOW_STAB_MONAGHAN = 0, FLOW_STAB_RIEMANN = 1, FLOW_STAB_DELTA = 2 };
 /* Flow:stress_filter: shepard, the paper's zeroth-order kernel average (3.12);
  * mls, its first-order moving-least-squares form, exact for a linear stress
  * field where the support is cut (physics/flow.h flow_shepard_team). */
@@ -74,14 +54,14 @@ enum { SCENE_WALLS_MAX = 10, SCENE_REGIONS_MAX = 32 };
 
 /* The struct of each section (struct scene_run, scene_geometry, ...,
  * scene_container) and of each list entry (struct scene_wall, scene_region)
- * comes from the rows of src/scene_keys.h: one member per key, named as the
+ * comes from the rows of src/scene/scene_keys.h: one member per key, named as the
  * key, in the rows' order, of the type libcyaml's schema (scene.c) fills:
  *   KF, EKF  double               KE, EKE  its row's type (an enum above, int, unsigned)
  *   KU, EKU  unsigned             KS, EKS  char * (malloc'd by libcyaml)
  *   KV, EKV  double key[n]        KL       struct entry *key and unsigned key_count
  * Units, default and meaning: the row's doc (sphseg --keys, docs/keys.md).
  *
- * The members that are not keys, set by the checks (src/scene_check.c) after
+ * The members that are not keys, set by the checks (src/scene/scene_check.c) after
  * loading, end their struct: SCENE_NOT_KEYS_<section's member or entry's
  * name>, empty where there are none. */
 #define SCENE_NOT_KEYS_segregation unsigned every_k; /* Segregation:every as a number: K, or 0 for auto */
@@ -166,7 +146,7 @@ int scene_write_used(const struct scene *s, const char *file);
 char *scene_used_text(const struct scene *s);
 
 /* The default of "Section:key" as the YAML text of its row in the key table
- * (src/scene_keys.h), or NULL (no default, or no such key). */
+ * (src/scene/scene_keys.h), or NULL (no default, or no such key). */
 const char *scene_key_default(const char *name);
 
 /* For errors found after loading (DESIGN.md "Errors"): the 1-based line of
@@ -181,7 +161,7 @@ const char *scene_key_where(const struct scene *s, const char *section, const ch
                             size_t n);
 
 /* Every key of the scene file, documented from the key table
- * (src/scene_keys.h), as Markdown to f (sphseg --keys, docs/keys.md). */
+ * (src/scene/scene_keys.h), as Markdown to f (sphseg --keys, docs/keys.md). */
 #include <stdio.h>
 void scene_keys_markdown(FILE *f);
 

@@ -1,6 +1,6 @@
 /* scene_keys.h — every key of the scene file, declared once (no include
- * guard: src/scene.h, src/scene.c and src/scene_doc.c include it once per
- * use, after src/scene_keys_none.h, defining the row macros they read):
+ * guard: src/scene/scene.h, src/scene/scene.c and src/scene/scene_doc.c include it once per
+ * use, after src/scene/scene_keys_none.h, defining the row macros they read):
  * the members of the section structs (scene.h), the libcyaml schema, the
  * defaults, the ranges of the numbers, the documentation (sphseg --keys,
  * docs/keys.md) and so the echo (used_params.yml) all come from these rows.
@@ -41,7 +41,7 @@ static const cyaml_strval_t seg_models[] = {{"constant", SEG_MODEL_CONSTANT},
 static const cyaml_strval_t seg_schemes[] = {
     {"paper", SEG_SCHEME_PAPER}, {"direct", SEG_SCHEME_DIRECT}, {"conservative", SEG_SCHEME_CONSERVATIVE}};
 static const cyaml_strval_t seg_limiters[] = {{"none", SEG_LIMITER_NONE}, {"donor", SEG_LIMITER_DONOR}};
-static const cyaml_strval_t flow_shiftings[] = {{"off", FLOW_SHIFT_OFF}, {"fickian", FLOW_SHIFT_FICKIAN}};
+static const cyaml_strval_t flow_shiftings[] = {{"off", SHIFT_OFF}, {"fickian", SHIFT_FICKIAN}};
 static const cyaml_strval_t flow_backgrounds[] = {{"momentum", FLOW_BACKGROUND_MOMENTUM},
                                                    {"excluded", FLOW_BACKGROUND_EXCLUDED}};
 static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
@@ -51,9 +51,9 @@ static const cyaml_strval_t periodic_axes[] = {
     {"xz", PERIODIC_XZ}, {"yz", PERIODIC_YZ}, {"xyz", PERIODIC_XYZ}};
 static const cyaml_strval_t mat_models[] = {{"granular", MAT_GRANULAR}, {"newtonian", MAT_NEWTONIAN}};
 static const cyaml_strval_t flow_stabs[] = {
-    {"monaghan", FLOW_STAB_MONAGHAN}, {"riemann", FLOW_STAB_RIEMANN}, {"delta", FLOW_STAB_DELTA}};
+    {"monaghan", STAB_MONAGHAN}, {"riemann", STAB_RIEMANN}, {"delta", STAB_DELTA}};
 static const cyaml_strval_t flow_filters[] = {{"shepard", FLOW_FILTER_SHEPARD}, {"mls", FLOW_FILTER_MLS}};
-static const cyaml_strval_t mat_yields[] = {{"drucker_prager", MAT_YIELD_DRUCKER_PRAGER}, {"mu_I", MAT_YIELD_MU_I}};
+static const cyaml_strval_t mat_yields[] = {{"drucker_prager", YIELD_DRUCKER_PRAGER}, {"mu_I", YIELD_MU_I}};
 static const cyaml_strval_t mat_mu_laws[] = {{"regularized", MAT_MU_REGULARIZED}, {"partial", MAT_MU_PARTIAL}};
 static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
 
@@ -142,7 +142,7 @@ SECTION("Run", run, scene_run)
     KU("Run", run, scene_run, max_steps, "0",
       "stop after this many steps (writing a last snapshot); 0 = no limit (default)")
     KF("Run", run, scene_run, max_wall_time, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
-      "wall s: write a checkpoint and stop (exit 0) before the next step would pass it (src/checkpoint.h); default 0 = no limit")
+      "wall s: write a checkpoint and stop (exit 0) before the next step would pass it (src/output/checkpoint.h); default 0 = no limit")
     KF("Run", run, scene_run, list_skin, OPT, "0.1", 0, 1, LO_OPEN, ALWAYS,
       "Verlet skin of the GPU backend's neighbour lists, in units of h: a list reaches 2h + skin and is rebuilt "
       "once a particle may have moved skin/2; a larger skin means fewer rebuilds (each an exchange on several "
@@ -263,7 +263,7 @@ END_SECTION(physics)
 SECTION("Material", material, scene_material)
     KE("Material", material, scene_material, model, enum mat_model, mat_models, "granular",
       "granular | newtonian; default granular")
-    KE("Material", material, scene_material, yield, enum mat_yield, mat_yields, "drucker_prager",
+    KE("Material", material, scene_material, yield, enum stress_yield, mat_yields, "drucker_prager",
       "granular: the yield surface sqrt(J2) = k p, drucker_prager (the paper's k = k_mu(mu(I)) = 3 mu / sqrt(9 + 12 mu^2), eq. 2.12: in simple shear tau / p = k_mu, onset at atan k_mu(mu_s)) | mu_I (k = mu(I): |tau| = mu(I) p, Jop, Forterre & Pouliquen 2006: onset at atan mu_s); default drucker_prager")
     KF("Material", material, scene_material, eta, OPT, "0.001", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "newtonian: dynamic viscosity, Pa s; default 1e-3")
@@ -312,7 +312,7 @@ SECTION("Flow", flow, scene_flow)
       "velocity damping -zeta u added to (3.9), 1/s, for settling (dynamic relaxation); default 0")
     KF("Flow", flow, scene_flow, damping_until, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "damping acts while t < damping_until, s; default 0")
-    KE("Flow", flow, scene_flow, shifting, enum flow_shifting, flow_shiftings, "off",
+    KE("Flow", flow, scene_flow, shifting, enum shift_kind, flow_shiftings, "off",
       "particle shifting: off (the paper's) | fickian: each step a material particle moves by -A h |u| dt sum_j V_j (1 + 0.2 (W_ij/W(dr))^4) grad W_ij (Lind et al. 2012), along a free surface only there, its velocity and stress carried by a first-order Taylor step, its C and volume unchanged; default off")
     KF("Flow", flow, scene_flow, shift_coeff, OPT, "2", 0, INFINITY, HI_OPEN, ALWAYS,
       "A of Flow:shifting fickian (D = A h |u| dt), -; Lind et al. (2012) take 2; default 2")

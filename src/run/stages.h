@@ -94,6 +94,10 @@ unsigned stage_flags(const struct sim *s);
 /* The stages hook h runs under flags, in order, one row per stage (the
  * first), into rows[] (at most ST_N); returns how many. */
 int stage_plan(int hook, unsigned flags, const stage **rows);
+/* Whether stage id runs under flags (a row of it is on): how a backend that
+ * fuses stages into one pass (ST_ADVANCE with ST_ADVANCE_C) learns what the
+ * pass does, instead of deciding it from the run's state. */
+int stage_runs(unsigned flags, int id);
 
 /* The fields a ghost carries: those some running stage reads of a ghost,
  * those refreshed from the owners, and x, id, kind (the halo's own). */

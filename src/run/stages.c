@@ -81,6 +81,13 @@ static int row_on(const stage *r, unsigned flags)
     return (r->when & flags) == r->when && !(r->unless & flags);
 }
 
+int stage_runs(unsigned flags, int id)
+{
+    for (int k = 0; k < stage_table_n; ++k)
+        if (stage_table[k].id == id && row_on(&stage_table[k], flags)) return 1;
+    return 0;
+}
+
 int stage_plan(int hook, unsigned flags, const stage **rows)
 {
     int n = 0;
