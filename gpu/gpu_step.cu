@@ -204,6 +204,14 @@ void gpu_save_start(sim_t *s)
 void gpu_advance(sim_t *s, double a, double w)
 {
     gpu_t *g = gpu_get(s); /* a save_start just before stays held */
+    const stage_sched *m = gpu_sched(s);
+    for (int k = 0; k < m->n[HOOK_ADVANCE]; ++k) switch (m->ids[HOOK_ADVANCE][k]) {
+        case ST_ADVANCE:      /* x, u, sigma; */
+        case ST_ADVANCE_C:    /* C, unless it advances in windows; */
+        case ST_ADVANCE_GSUM: /* gsum, in windows: all in one held-back pass, gpu_step_kernel */
+            break;
+        default: error_exit(1, "backend_gpu: stage %d has no body in advance", m->ids[HOOK_ADVANCE][k]);
+        }
     if (g->pend_adv) gpu_step_kernel(s, g, 0, 0.0);
     g->bnd_fresh = 0;
     g->pend_adv = 1;

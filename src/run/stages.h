@@ -9,7 +9,8 @@
  *  - the halo refresh after a stage (stage_refresh_after), and the fields a
  *    backend that keeps its ghosts between list builds refreshes when the
  *    particles move (stage_moving_fields: the GPU's).
- * A new term in the step is one row here, and its body in each backend. */
+ * A new term in the step is an id and a row in src/run/stage_table.h, its
+ * body in src/physics/, and its case in each backend (docs/architecture.md). */
 #ifndef SPHSEG_STAGES_H
 #define SPHSEG_STAGES_H
 #include <stdint.h>
@@ -46,34 +47,9 @@ enum stage_hook { HOOK_PREPARE, HOOK_RATES, HOOK_SAVE, HOOK_ADVANCE, HOOK_CONC_B
  * ghosts (each ghost from its own support here). */
 enum stage_range { RANGE_OWNED, RANGE_ALL };
 
-enum stage_id {
-    ST_PLACE,        /* step_place: dummies by wall_motion / prescribed x, u, shear rate */
-    ST_EXCHANGE,     /* migration, ghosts, sort (a CPU prepare; a GPU list build) */
-    ST_CLASSIFY,     /* bound_classify: HCSR classes, normals, psi~ */
-    ST_RENORM,       /* seg_renorm: L (the ghosts'; the owned come with the flow rates) */
-    ST_WALLS,        /* flow_wall: dummy velocity and stress from the material */
-    ST_FLOW,         /* flow_rates_team: acc, dsig, shear rate (+ the owned L when due) */
-    ST_SEG_COEFFS,   /* seg_coeffs: V, Q, D */
-    ST_DCDT,         /* seg_dCdt: dC/dt */
-    ST_SAVE,         /* step_save */
-    ST_ADVANCE,      /* step_advance: x, u, sigma (flow_advance) */
-    ST_ADVANCE_C,    /* step_advance: C = C_n + a dC/dt */
-    ST_ADVANCE_GSUM, /* step_advance: gsum += w gdot (windows) */
-    ST_SHEAR_MEAN,   /* step_shear_mean: gsum / T */
-    ST_WIN_RENORM,   /* seg_renorm of every material particle at the window's close */
-    ST_WIN_BOUNDS,   /* step_bounds_of at the window's mean shear rate */
-    ST_WIN_COEFFS,   /* seg_coeffs at the mean shear rate */
-    ST_WIN_DCDT,     /* seg_dCdt at the mean shear rate */
-    ST_WIN_ADVANCE,  /* step_conc_advance */
-    ST_SHEPARD,      /* flow_shepard: the filtered stress into dsig */
-    ST_SHEPARD_STORE, /* flow_shepard_store */
-    ST_SHIFT,        /* shift_team: the shift into x_n, with v_n and sig_n carried (physics/shift.h) */
-    ST_KGC,          /* flow_kgc_team: the gradient correction B of the material (physics/flow.h) */
-    ST_N
-};
 
 typedef struct stage {
-    int id;
+    int id;                /* enum stage_id (stage_table.h) */
     unsigned hooks;        /* bits 1 << enum stage_hook */
     const char *body;
     unsigned when, unless; /* enum stage_flag */
@@ -82,6 +58,9 @@ typedef struct stage {
     uint32_t writes; /* what it writes */
     int from_owner;  /* the ghosts' results are replaced by their owners' (a refresh after it) */
 } stage;
+
+/* The stage ids and the table's rows: src/run/stage_table.h, one file. */
+#include "stage_table.h"
 
 /* The table, in step order within each hook. */
 extern const stage stage_table[];
