@@ -146,7 +146,7 @@ SECTION("Run", run, scene_run)
     KF("Run", run, scene_run, list_skin, OPT, "0.1", 0, 1, LO_OPEN, ALWAYS,
       "Verlet skin of the GPU backend's neighbour lists, in units of h: a list reaches 2h + skin and is rebuilt "
       "once a particle may have moved skin/2; a larger skin means fewer rebuilds (each an exchange on several "
-      "ranks) and longer lists (docs/parallel.md, \"Verlet skin\": 0.1 is the fastest on one GPU and on two); at "
+      "ranks) and longer lists (0.1 was the fastest on one GPU and on two: docs/performance.md); at "
       "most 1 (ghosts are 3 cells of 2h "
       "deep); results differ at round-off only; the CPU backend builds its lists every stage; default 0.1")
     KS("Run", run, scene_run, backend, 0, CYAML_UNLIMITED, "auto",
@@ -174,11 +174,14 @@ SECTION("Geometry", geometry, scene_geometry)
     KF("Geometry", geometry, scene_geometry, fill, OPT, "0.42", 0, 1, LO_OPEN | HI_OPEN, ALWAYS,
       "drum: filling level R_f = (H + R)/2R (paper §6), in (0,1); default 0.42")
     KE("Geometry", geometry, scene_geometry, periodic, unsigned, periodic_axes, "none",
-      "column or container: the axes without walls, where the material continues periodically (none | x | y | xy | z | xz | yz | xyz; y and the z ones need a container, z needs dim 3; the period is Geometry:width along x, Geometry:height along y, Geometry:depth along z, from 0, at least 6 supports 2h; a container's walls and regions must lie within it, and a 3D container periodic in z has no end walls); default none")
+       "column or container: the axes without walls, where the material continues periodically: none | x | y | xy | z | xz | yz | xyz"
+       " (y and z need a container, z needs dim 3); the period is Geometry:width along x, :height along y, :depth along z, from 0,"
+       " at least 6 supports 2h; walls and regions must lie within it; a 3D container periodic in z has no end walls; default none")
     KE("Geometry", geometry, scene_geometry, lid, int, on_off, "off",
       "column: on | off: a rigid wall over the material at y = height (a channel between the base and the lid, with the base's slip); default off")
     KF("Geometry", geometry, scene_geometry, runout, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
-      "column: the floor continues this far past the material (x from width to width + runout), closed by a side wall there; the material is held at x = width by a gate until Walls:gate_open; default 0 (no runout, no gate)")
+       "column, m: the floor continues this far past the material (x from width to width + runout), closed by a side wall there;"
+       " the material is held at x = width by a gate until Walls:gate_open; default 0 (no runout, no gate)")
     KF("Geometry", geometry, scene_geometry, outlet_width, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "column: an opening of this width (m) in the base, centred on x = width/2 (3D: a square opening, also centred on z = depth/2), through which material falls; default 0 (none)")
 END_SECTION(geometry)
@@ -224,7 +227,9 @@ SECTION("Segregation", segregation, scene_segregation)
     KE("Segregation", segregation, scene_segregation, renormalize, int, on_off, "on",
       "on | off: conservative scheme's symmetric kernel renormalisation (restores consistency where the support is cut); default on")
     KE("Segregation", segregation, scene_segregation, limiter, enum seg_limiter, seg_limiters, "donor",
-      "none | donor: conservative scheme only (paper and direct ignore it). donor caps each pair's segregation flux Q_i + Q_j at 2 A (V_i + V_j) min(C_u, 1 - C_d), u the particle it takes small grains from and d the one it gives them to, and bounds the time step with a wave speed of at least A V: C stays in [0, 1] (docs/numerics.md, Bounded C); none: the flux uncapped, as before issue 30 (C may leave [0, 1]); default donor")
+       "none | donor: conservative scheme only. donor caps each pair's segregation flux Q_i + Q_j at 2 A (V_i + V_j) min(C_u, 1 - C_d)"
+       " (u gives small grains, d takes them) and bounds dt with a wave speed of at least A V, so C stays in [0, 1];"
+       " none leaves the flux uncapped (C may leave [0, 1]); default donor (docs/method.md, \"Bounded C\")")
     KF("Segregation", segregation, scene_segregation, drift_tol, OPT, "1e-3", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "relative drift of sum C_i V_i that triggers a warning; default 1e-3")
     KS("Segregation", segregation, scene_segregation, every, 0, CYAML_UNLIMITED, "auto",
@@ -240,7 +245,8 @@ SECTION("Initial", initial, scene_initial)
     KE("Initial", initial, scene_initial, stress, enum init_stress, init_stresses, "geostatic",
       "zero | geostatic (sigma_yy = -rho g depth, sigma_xx = sigma_zz = K0 sigma_yy, K0 = nu/(1-nu), then returned to the yield cone); default geostatic")
     KF("Initial", initial, scene_initial, pressure, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
-      "Pa, >= 0: a uniform pressure added to that initial stress of the material (a Newtonian fluid's background pressure, which keeps its pressure above the tension cut-off where the flow lowers it); default 0")
+       "Pa, >= 0: a uniform pressure added to the material's initial stress (a Newtonian fluid's background pressure, which keeps"
+       " its pressure above the tension cut-off); default 0")
 END_SECTION(initial)
 SECTION("Output", output, scene_output)
     KF("Output", output, scene_output, dt, REQ, NULL, 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
@@ -264,7 +270,8 @@ SECTION("Material", material, scene_material)
     KE("Material", material, scene_material, model, enum mat_model, mat_models, "granular",
       "granular | newtonian; default granular")
     KE("Material", material, scene_material, yield, enum stress_yield, mat_yields, "drucker_prager",
-      "granular: the yield surface sqrt(J2) = k p, drucker_prager (the paper's k = k_mu(mu(I)) = 3 mu / sqrt(9 + 12 mu^2), eq. 2.12: in simple shear tau / p = k_mu, onset at atan k_mu(mu_s)) | mu_I (k = mu(I): |tau| = mu(I) p, Jop, Forterre & Pouliquen 2006: onset at atan mu_s); default drucker_prager")
+       "granular: the yield surface sqrt(J2) = k p: drucker_prager (the paper's k = k_mu(mu(I)) = 3 mu / sqrt(9 + 12 mu^2), eq. 2.12)"
+       " | mu_I (k = mu(I), Jop, Forterre & Pouliquen 2006); default drucker_prager (docs/method.md)")
     KF("Material", material, scene_material, eta, OPT, "0.001", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "newtonian: dynamic viscosity, Pa s; default 1e-3")
     KF("Material", material, scene_material, E, OPT, "1e7", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
@@ -282,42 +289,57 @@ SECTION("Material", material, scene_material)
     KF("Material", material, scene_material, lambda, OPT, "0.001", 0, INFINITY, HI_OPEN, ALWAYS,
       "regularization of (2.14), 1/s; default 0.001")
     KE("Material", material, scene_material, mu_law, enum mat_mu_law, mat_mu_laws, "regularized",
-      "granular: mu(I) at low I, regularized (the paper's eq. 2.14: mu -> mu_s as gdot -> 0, a static yield) | partial (Barker & Gray 2017: below the lower edge I_N1 of the window where incompressible mu(I) is well posed, mu = sqrt(Material:pr_alpha / ln(A / I)), A = I_N1 exp(alpha / mu(I_N1)^2) for continuity, I = sqrt(gdot^2 + Material:lambda^2) d / sqrt(p / rho_s); no static yield: a layer below atan mu_s flows slowly, at 20 deg and mu_I at I = 1.5e-3); default regularized (docs/granular.md \"Well-posedness\")")
+       "granular: mu(I) at low I: regularized (the paper's eq. 2.14, a static yield) | partial (Barker & Gray 2017: below the lower"
+       " edge I_N1 of the well-posed window, mu = sqrt(Material:pr_alpha / ln(A / I)), continuous at I_N1; no static yield);"
+       " default regularized (docs/method.md, \"The yield surface and the friction law\")")
     KF("Material", material, scene_material, pr_alpha, OPT, "1.9", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "Material:mu_law partial: alpha; default 1.9 (Barker & Gray 2017)")
 END_SECTION(material)
 /* Momentum and stress solver options; computed flow only. */
 SECTION("Flow", flow, scene_flow)
     KE("Flow", flow, scene_flow, stabilization, enum flow_stab, flow_stabs, "monaghan",
-      "what damps the acoustic noise of the momentum and stress equations: monaghan (the paper's artificial viscosity 3.10, Flow:alpha_av; it also acts as a shear viscosity alpha c_s h / 8 that follows E and h) | riemann (the low-dissipation Riemann solver of Zhang, Hu & Adams 2017: a pair pressure rho beta dU / 2 on the closing speed dU along the pair, beta = min(Flow:riemann_eta dU, c_s), beta = c_s against a wall; with Flow:riemann_diffusion on also its pressure diffusion) | delta (delta-SPH pressure diffusion 2 Flow:delta h c_s, Antuono et al. 2010, with no momentum dissipation); the pressure diffusions act on the pressure less its hydrostatic part (Fourtakas et al. 2019); default monaghan (docs/granular.md \"Stabilisation\")")
+       "what damps the acoustic noise: monaghan (the paper's artificial viscosity 3.10, Flow:alpha_av) | riemann (the"
+       " low-dissipation Riemann solver of Zhang, Hu & Adams 2017, Flow:riemann_eta) | delta (delta-SPH pressure diffusion"
+       " 2 Flow:delta h c_s, Antuono et al. 2010); default monaghan (docs/method.md, \"Stabilisation and the drum scenes' flow\")")
     KF("Flow", flow, scene_flow, alpha_av, OPT, "0.1", 0, INFINITY, HI_OPEN, ALWAYS,
       "artificial viscosity coefficient (3.10), Flow:stabilization monaghan; default 0.1; 0 = off")
     KF("Flow", flow, scene_flow, riemann_eta, OPT, "3", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "Flow:stabilization riemann: the limiter's eta in beta = min(eta dU, c_s); default 3 (Zhang, Hu & Adams 2017)")
     KF("Flow", flow, scene_flow, bed_damping, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
-      "Flow:stabilization riemann: Monaghan's (3.10) with this alpha on the pairs of material below the yield surface only, weighted by 1 - max(q_i, q_j), q = sqrt(J2) / (k(mu_s) p) (1 at p <= 0): damps the quasi-static bed's elastic noise, none in the yielded flow; it vanishes on a rigid rotation; default 0 = off (docs/granular.md \"The bed's noise drives the segregation\")")
+       "Flow:stabilization riemann, -: Monaghan's (3.10) with this alpha on material pairs below the yield surface only, weighted by"
+       " 1 - max(q_i, q_j), q = sqrt(J2) / (k(mu_s) p); damps the quasi-static bed's elastic noise; default 0 = off (docs/method.md)")
     KE("Flow", flow, scene_flow, riemann_diffusion, unsigned, on_off, "off",
-      "Flow:stabilization riemann: on | off: also diffuse the pressure at the Riemann solver's rate K / (rho c_s) (its continuity dissipation, less the hydrostatic part); default off: measured to compact a free surface at a constant rate (docs/granular.md \"Stabilisation\")")
+       "Flow:stabilization riemann: on | off: also diffuse the pressure at the Riemann solver's rate K / (rho c_s), less the"
+       " hydrostatic part; default off (it compacts a free surface: docs/method.md)")
     KF("Flow", flow, scene_flow, delta, OPT, "0.1", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "Flow:stabilization delta: the diffusion coefficient delta of delta-SPH; default 0.1 (Antuono et al. 2010; Marrone et al. 2011)")
     KU("Flow", flow, scene_flow, shepard_every, "30",
-      "Shepard filter (3.12) every N steps; default 30; 0 = off. N Run:cfl_flow bounds the interval in acoustic times h / c_s: below 3 the filter slows a drum's flow (6 % at 1.5; docs/granular.md \"The time step and the Shepard filter\")")
+       "Shepard filter (3.12) every N steps; default 30; 0 = off; keep N Run:cfl_flow >= 3 acoustic times h / c_s"
+       " (docs/performance.md, \"Stiffness, step and filter\")")
     KE("Flow", flow, scene_flow, stress_filter, enum flow_filter, flow_filters, "shepard",
-      "the stress filter run every Flow:shepard_every steps: shepard (the paper's 3.12, the kernel average of the material neighbours' stresses; where the support is cut, at a free surface or a wall, it takes the deeper neighbours' stress, about rho g h too much under a free surface) | mls (its first-order moving-least-squares form, Colagrossi & Landrini 2003: exact for a linear stress field wherever the support is cut, the kernel average elsewhere to second order); default shepard (docs/granular.md \"The free surface's crust\")")
+       "the stress filter of Flow:shepard_every: shepard (the paper's 3.12, the kernel average of the material neighbours' stresses)"
+       " | mls (its first-order moving-least-squares form, Colagrossi & Landrini 2003, exact for a linear stress where the support"
+       " is cut); default shepard (docs/method.md)")
     KE("Flow", flow, scene_flow, gradient_correction, unsigned, on_off, "off",
-      "on | off: the corrected kernel gradient B_i grad W_ij, B_i = M_i^-1, M_i = sum_j V_j x_ji (x) grad_i W_ij over every neighbour, material and dummy (Randles & Libersky 1996; Bonet & Lok 1999), in the velocity gradient (3.14) and, as its work conjugate, in the stress divergence (3.9): V_j (sigma_i B_i + sigma_j B_j) grad W_ij, which keeps the pair forces equal and opposite; exact for a linear velocity field wherever the support is cut (a free surface); where det M_i < Flow:gradient_correction_det, B_i = w M_i^-1 + (1 - w) I with w = det M_i / Flow:gradient_correction_det (as SPHinXsys blends it); the dissipation terms keep grad W; use it with Flow:shifting fickian, without which grains laid against a wall creep into it (the 2D drums with both converge within 0.3 % from dr 0.5 to 0.25 mm); default off, the paper's (docs/granular.md \"The corrected gradient\")")
+       "on | off: the corrected kernel gradient B_i grad W_ij, B_i = M_i^-1, M_i = sum_j V_j x_ji (x) grad_i W_ij (Randles &"
+       " Libersky 1996; Bonet & Lok 1999), in the velocity gradient (3.14) and the stress divergence (3.9); blended toward I where"
+       " det M_i < Flow:gradient_correction_det; use with Flow:shifting fickian; default off, the paper's (docs/method.md)")
     KF("Flow", flow, scene_flow, gradient_correction_det, OPT, "0.6", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
-      "Flow:gradient_correction on: below this det M_i the correction is blended toward the identity (w = det M_i / this), so that a particle with few neighbours (a splash, a sparse free surface) is not amplified; in the bulk det M = 1, under a flat free surface about 0.25 in 2D; default 0.6: without Flow:shifting the 2D EV drum lost a particle through its wall within 3.4 s at 0.45 and below, at 38 s at 0.6 (docs/granular.md \"The corrected gradient\")")
+       "Flow:gradient_correction on, -: below this det M_i the correction is blended toward the identity (w = det M_i / this);"
+       " det M = 1 in the bulk, about 0.25 under a flat 2D free surface; default 0.6 (docs/method.md)")
     KF("Flow", flow, scene_flow, damping, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "velocity damping -zeta u added to (3.9), 1/s, for settling (dynamic relaxation); default 0")
     KF("Flow", flow, scene_flow, damping_until, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "damping acts while t < damping_until, s; default 0")
     KE("Flow", flow, scene_flow, shifting, enum shift_kind, flow_shiftings, "off",
-      "particle shifting: off (the paper's) | fickian: each step a material particle moves by -A h |u| dt sum_j V_j (1 + 0.2 (W_ij/W(dr))^4) grad W_ij (Lind et al. 2012), along a free surface only there, its velocity and stress carried by a first-order Taylor step, its C and volume unchanged; default off")
+       "particle shifting: off (the paper's) | fickian (Lind et al. 2012): each step a material particle moves by"
+       " -A h |u| dt sum_j V_j (1 + 0.2 (W_ij/W(dr))^4) grad W_ij, tangentially at a free surface, u and sigma carried by a"
+       " Taylor step, C and volume unchanged; default off")
     KF("Flow", flow, scene_flow, shift_coeff, OPT, "2", 0, INFINITY, HI_OPEN, ALWAYS,
       "A of Flow:shifting fickian (D = A h |u| dt), -; Lind et al. (2012) take 2; default 2")
     KE("Flow", flow, scene_flow, background_pressure, enum flow_background, flow_backgrounds, "momentum",
-      "Newtonian fluid: its background pressure Initial:pressure acts in the momentum pair term (3.9) like any pressure (momentum) | is left out of it, keeping the pressure above the tension cut-off only (excluded; Adami, Hu & Adams 2013, where it drives only the particles' regularisation); the granular material ignores it; default momentum")
+       "Newtonian fluid: its background pressure Initial:pressure acts in the momentum pair term (3.9) (momentum) | is left out"
+       " of it (excluded; Adami, Hu & Adams 2013); the granular material ignores it; default momentum")
 END_SECTION(flow)
 /* Rigid walls by dummy particles (paper §4.1). */
 SECTION("Walls", walls, scene_walls)
