@@ -17,7 +17,10 @@ binary under the same overrides and compare what the runs wrote:
     group's attributes but Version.
 
 One line per scene, IDENTICAL or DIFFERS: what (or FAILED: a run's exit
-status); exit status 1 on any difference or failure, 0 when all agree.
+status); exit status 1 on any difference or failure, 0 when all agree. Where
+the last snapshot's /Particles/Concentration differs, the first DIFFERS line
+is its size: max |dC| over the particles (matched by ParticleIDs) and that
+relative to the range of C, as issue 54 measured it.
 
 Each scene is sized to seconds: a probe run of the --before binary (1 step)
 gives its particle count, and a scene above --max-particles (the 3D ones)
@@ -28,12 +31,44 @@ Output:checkpoint_dt = t_N/2, so that they write three or four snapshots
 (t = 0, two in between, the last step's), about ten diagnostics rows and
 two checkpoints (checkpoints never shorten a step: the run is the run
 without them). The probes only choose the overrides; both compared
-runs take the same ones. --before-args / --after-args give one side extra
-arguments, e.g. to see that a difference is caught:
+runs take the same ones.
+
+After the scenes, the longer CASES (a scene, its overrides and a length;
+--no-cases leaves them out, --only matches their names as well), each
+compared as the scenes are:
+
+  - shearbox_paper: the paper's shear box as issue 54 ran it (dr/H = 0.04,
+    Geometry:dr = 0.00348 m, 275 grains; two periods, Run:t_end = 26 s, 120
+    steps; a snapshot and a checkpoint each period; Segregation:every = 1 as
+    the issue gave it, which prescribed flow takes anyway). Where its two
+    pure layers meet, the front's tails hold pairs whose upper particle has
+    fewer small grains than the lower one, both within 1.2e-3 of 0 or 1:
+    the pairs the donor limiter caps (Segregation:limiter donor,
+    seg_flux_donor in src/physics/seg_kern.h, the default since ddf2649,
+    which moved this run's final C by 4.8e-9 of its range). The cap first
+    binds after 1.2-1.5 s of flow (in step 7 here, C 5e-23 off after it;
+    in step 11 at the scene's own dr, whose 40 steps reach t = 4.1 s and
+    2.2e-8), and never in the drums, which start well mixed (C0 = 0.5).
+    Under a second a run.
+  - drum_2d_EV_300: the 2D drum (sized as the scenes are) for 300 steps with
+    C advanced in every flow step (Segregation:every = 1), the segregation
+    path under computed flow, which Segregation:every auto visits once in
+    up to 100 steps; 6-12 s a run on one core (ddf2649's drum, b6d4235's
+    with the corrected gradient and shifting), three runs with the probe.
+
+A binary older than a key that the scene files name refuses them (exit 2,
+'unknown key'; issue 54's 8fd0bc8 and inputs/ naming Segregation:limiter):
+give --inputs that binary's own tree's inputs/, which both sides then read
+(the newer one takes its defaults for the keys they leave out). A binary
+whose snapshots hold other groups (8fd0bc8's have no /Topology) DIFFERS on
+those as well, after the data. --before-args / --after-args give one side
+extra arguments, e.g. to see that a difference is caught:
 
   /usr/bin/python3 -m tools.dev.identical --before /tmp/orig/build/sphseg --after build/sphseg
   /usr/bin/python3 -m tools.dev.identical --before B --after A --ranks 2 --only 'drum_2d_EV|silo'
   /usr/bin/python3 -m tools.dev.identical --before B --after B --only column --after-args='-P Flow:alpha_av=0.11'
+  /usr/bin/python3 -m tools.dev.identical --before /tmp/old/build/sphseg --after build/sphseg \
+      --inputs /tmp/old/inputs --only shearbox
 """
 import argparse
 import csv
@@ -45,6 +80,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 
 import h5py
 import numpy as np
@@ -57,6 +93,16 @@ SKIP_HEADER = {"Version"}
 SKIP_DIAG = {"wall_s"}
 CHECKPOINTS = ("checkpoint_prev.h5", "checkpoint.h5")  # full state, the store's arrays by index
 MAX_OUTPUTS = 1e5  # Output:dt may ask for at most this many snapshots up to Run:t_end (src/settings_check.c)
+# The longer cases (see the docstring): (name, scene file in --inputs, -P
+# overrides, steps). steps None: the run as the scene and the overrides give
+# it (its own t_end and Output:dt); a number: sized as the scenes are
+# (overrides()) for that many steps. --set overrides come after a case's own.
+CASES = (
+    ("shearbox_paper", "shearbox_2d.yml",
+     {"Geometry:dr": "0.00348", "Run:t_end": "26", "Output:dt": "13", "Output:checkpoint_dt": "13",
+      "Segregation:every": "1"}, None),
+    ("drum_2d_EV_300", "drum_2d_EV.yml", {"Segregation:every": "1"}, 300),
+)
 
 
 class RunFailed(Exception):
@@ -92,7 +138,9 @@ def run(args, binary, scene, outdir, over, extra=(), ranks=None):
         raise RunFailed("%s timed out after %g s" % (os.path.basename(binary), args.timeout))
     if p.returncode != 0:
         tail = [l for l in p.stdout.splitlines() if l.strip()][-1:] or ["(no output)"]
-        raise RunFailed("%s exited %d: %s" % (" ".join(cmd[len(launcher(ranks)):][:2]), p.returncode, tail[0]))
+        old = "unknown key" in tail[0]
+        hint = " (a binary older than the scene's keys: --inputs its own tree's inputs/)" if old else ""
+        raise RunFailed("%s exited %d: %s%s" % (" ".join(cmd[len(launcher(ranks)):][:2]), p.returncode, tail[0], hint))
     return p.stdout
 
 
@@ -109,9 +157,17 @@ def last_time(outdir):
     return float(rows[-1]["time"])
 
 
-def overrides(args, scene, work):
-    """The -P overrides both sides take for this scene (see the docstring)."""
+def last_step(outdir):
+    with open(os.path.join(outdir, "diagnostics.csv")) as f:
+        rows = list(csv.DictReader(f))
+    return int(rows[-1]["step"])
+
+
+def overrides(args, scene, work, steps, own=None):
+    """The -P overrides both sides take for this scene run for `steps` steps,
+    `own` (a case's) before --set (see the docstring)."""
     over = {"Run:max_steps": 1, "Output:snapshots": "on"}  # the first probe: the particle count
+    over.update(own or {})
     over.update(args.set)
     probe = os.path.join(work, "probe")
     for _ in range(4):  # coarsen until the scene holds at most about max_particles
@@ -123,14 +179,14 @@ def overrides(args, scene, work):
             break
         dr = float(sig(dr * (count / args.max_particles) ** (1.0 / dim), 4))
         over["Geometry:dr"] = dr
-    over.update({"Run:max_steps": args.steps, "Output:snapshots": "off"})
+    over.update({"Run:max_steps": steps, "Output:snapshots": "off"})
     run(args, args.before, scene, probe, over)
     t_n = last_time(probe)
     with open(os.path.join(probe, "used_params.yml")) as f:
         t_end = float(yaml.safe_load(f)["Run"]["t_end"])
     shutil.rmtree(probe, ignore_errors=True)
     if t_n <= 0:
-        raise RunFailed("the probe's %d steps reached t = %g" % (args.steps, t_n))
+        raise RunFailed("the probe's %d steps reached t = %g" % (steps, t_n))
     over.update({"Output:snapshots": "on", "Output:dt": sig(t_n / 3), "Output:diag_dt": sig(t_n / 8),
                  "Output:checkpoint_dt": sig(t_n / 2)})
     if t_end / float(over["Output:dt"]) > MAX_OUTPUTS:  # the run stops at max_steps long before
@@ -265,6 +321,33 @@ def compare_diagnostics(pa, pb):
     return diffs
 
 
+def final_c(da, db):
+    """The last common snapshot's /Particles/Concentration in two runs, matched
+    by ParticleIDs: a line giving max |dC| and that relative to the range of
+    C, or None where they agree or cannot be matched."""
+    common = sorted(set(os.path.basename(p) for p in glob.glob(os.path.join(da, "snapshot_*.h5")))
+                    & set(os.path.basename(p) for p in glob.glob(os.path.join(db, "snapshot_*.h5"))))
+    if not common:
+        return None
+    cs = []
+    for d in (da, db):
+        with h5py.File(os.path.join(d, common[-1]), "r") as f:
+            if "Particles/Concentration" not in f or "Particles/ParticleIDs" not in f:
+                return None
+            ids, c = f["Particles/ParticleIDs"][()], f["Particles/Concentration"][()]
+            t = f["Header"].attrs.get("Time") if "Header" in f else None
+        order = np.argsort(ids, kind="stable")
+        cs.append((ids[order], np.asarray(c[order], dtype=np.float64), t))
+    (ia, ca, t), (ib, cb, _) = cs
+    if ia.shape != ib.shape or (ia != ib).any() or ca.shape != cb.shape or ca.tobytes() == cb.tobytes():
+        return None
+    d = np.abs(ca - cb)
+    span = float(np.nanmax(ca) - np.nanmin(ca)) if ca.size else 0.0
+    return "final C (%s%s): max |dC| %.3g, %s of its range %.6g (%d of %d particles differ)" % (
+        common[-1], ", t = %s" % sig(float(np.ravel(t)[0])) if t is not None else "", float(np.nanmax(d)),
+        "%.3g" % (float(np.nanmax(d)) / span) if span > 0 else "-", span, int(np.count_nonzero(ca != cb)), ca.size)
+
+
 def compare_runs(da, db, skip_header=SKIP_HEADER):
     """(differences, summary) of two output folders."""
     sa = sorted(os.path.basename(p) for p in glob.glob(os.path.join(da, "snapshot_*.h5")))
@@ -274,6 +357,9 @@ def compare_runs(da, db, skip_header=SKIP_HEADER):
         diffs.append("snapshots %s against %s" % (sa, sb))
     if len(sa) < 2:
         diffs.append("only %d snapshot(s) written" % len(sa))
+    c = final_c(da, db)
+    if c:
+        diffs.append(c)
     nds = 0
     for name in sorted(set(sa) & set(sb)):
         diffs += ["%s %s" % (name, d) for d in compare_snapshot(os.path.join(da, name), os.path.join(db, name), skip_header)]
@@ -291,16 +377,29 @@ def compare_runs(da, db, skip_header=SKIP_HEADER):
     return diffs, "%d snapshots x %d datasets, %d diagnostics rows, %d checkpoints" % (len(sa), nds, nrows, len(ck))
 
 
-def one_scene(args, scene):
-    name = os.path.splitext(os.path.basename(scene))[0]
+def one_scene(args, scene, name=None, own=None, steps=0):
+    """Run a scene with both binaries and compare: sized for `steps` steps
+    (0: --steps) with a case's own overrides `own`, or, steps None, with
+    `own` and --set alone (the scene's own length). (differences, summary)."""
+    name = name or os.path.splitext(os.path.basename(scene))[0]
     work = os.path.join(args.work, name)
     os.makedirs(work, exist_ok=True)
-    over, size = overrides(args, scene, work)
+    if steps is None:
+        over, size = dict(own or {}), None
+        over.update(args.set)
+    else:
+        over, size = overrides(args, scene, work, steps or args.steps, own)
     da, db = os.path.join(work, "before"), os.path.join(work, "after")
-    run(args, args.before, scene, da, over, args.before_args, args.ranks)
+    t0 = time.time()
+    out = run(args, args.before, scene, da, over, args.before_args, args.ranks)
     run(args, args.after, scene, db, over, args.after_args, args.ranks)
+    wall = time.time() - t0
+    if size is None:
+        m = HEAD.search(out)
+        size = "%d particles" % (int(m.group(1)) + int(m.group(2))) if m else "? particles"
     diffs, summary = compare_runs(da, db, SKIP_HEADER | set(args.skip_header))
-    return diffs, "%s; %s; %s" % (summary, size, " ".join("%s=%s" % kv for kv in over.items()))
+    return diffs, "%s; %s, %d steps; both runs %.1f s; %s" % (
+        summary, size, last_step(da), wall, " ".join("%s=%s" % kv for kv in over.items()))
 
 
 def main():
@@ -313,7 +412,9 @@ def main():
                     help="steps per run (Run:max_steps); default 40 (past the first Shepard filter, every 30)")
     ap.add_argument("--ranks", type=int, help="run both under mpirun -np RANKS (default: one rank, no mpirun)")
     ap.add_argument("--backend", choices=["cpu", "gpu"], default="cpu", help="default cpu")
-    ap.add_argument("--only", help="only the scenes whose file name matches this regular expression")
+    ap.add_argument("--only", help="only the scenes whose file name, and the CASES whose name, matches this regular "
+                    "expression")
+    ap.add_argument("--no-cases", action="store_true", help="leave out the longer CASES (the scenes' short runs only)")
     ap.add_argument("--max-particles", type=float, default=30000,
                     help="coarsen Geometry:dr of a bigger scene to about this many particles; default 30000")
     ap.add_argument("--threads", type=int, default=1, help="OMP_NUM_THREADS of each rank; default 1")
@@ -336,8 +437,12 @@ def main():
     scenes = sorted(glob.glob(os.path.join(args.inputs, "*.yml")))
     if args.only:
         scenes = [s for s in scenes if re.search(args.only, os.path.basename(s))]
-    if not scenes:
+    cases = [] if args.no_cases else [c for c in CASES if not args.only or re.search(args.only, c[0])]
+    if not scenes and not cases:
         sys.exit("identical.py: no scene in %s%s" % (args.inputs, " matches " + args.only if args.only else ""))
+    # (name, scene, own overrides, steps): the scenes' short runs, then the cases
+    jobs = [(os.path.splitext(os.path.basename(s))[0], s, None, 0) for s in scenes]
+    jobs += [(n, os.path.join(args.inputs, f), own, steps) for n, f, own, steps in cases]
     tmp = None
     if not args.work:
         tmp = args.work = tempfile.mkdtemp(prefix="identical_")
@@ -345,17 +450,19 @@ def main():
     print("before %s\nafter  %s\n%d steps, %s, %s" % (args.before, args.after, args.steps,
           "%d ranks" % args.ranks if args.ranks else "1 rank", args.backend), flush=True)
     bad = 0
-    for scene in scenes:
-        name = os.path.splitext(os.path.basename(scene))[0]
+    for name, scene, own, steps in jobs:
         try:
-            diffs, summary = one_scene(args, scene)
+            if not os.path.exists(scene):
+                raise RunFailed("no scene %s" % scene)
+            diffs, summary = one_scene(args, scene, name, own, steps)
         except RunFailed as e:
             print("%-16s FAILED: %s" % (name, e), flush=True)
             bad += 1
             continue
         if diffs:
             bad += 1
-            diffs.sort(key=lambda d: "/Header" in d)  # the data first, then the headers
+            # C's size, then the data, then the headers
+            diffs.sort(key=lambda d: 0 if d.startswith("final C") else 1 + ("/Header" in d))
             print("%-16s DIFFERS: %s%s" % (name, diffs[0], " (and %d more)" % (len(diffs) - 1) if len(diffs) > 1 else ""))
             for d in diffs[1:6]:
                 print("%-16s          %s" % ("", d))
@@ -363,7 +470,7 @@ def main():
             print("%-16s IDENTICAL (%s)" % (name, summary), flush=True)
     if tmp:
         shutil.rmtree(tmp, ignore_errors=True)
-    print("%d of %d scenes identical" % (len(scenes) - bad, len(scenes)))
+    print("%d of %d identical (%d scenes, %d cases)" % (len(jobs) - bad, len(jobs), len(scenes), len(cases)))
     return 1 if bad else 0
 
 
