@@ -46,6 +46,7 @@ for name in $UNIT_TESTS; do
 done
 run_one badinput bash tests/test_badinput.sh "$BUILD/sphseg"
 run_one inputs bash tests/test_inputs.sh "$BUILD/sphseg"
+run_one own_scene bash tests/test_own_scene.sh "$BUILD/sphseg"
 run_one keys bash tests/test_keys.sh "$BUILD/sphseg"
 run_one layers "$PYTHON" -m tests.test_layers
 run_one counterparts "$PYTHON" -m tests.test_counterparts

@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
-# test_inputs.sh BINARY — every scene in inputs/ loads and steps: 5 steps of
-# each, no snapshots, exit 0 and a done: line. The scenes are the documented
+# test_inputs.sh BINARY — every scene in inputs/ and inputs/examples/ loads and
+# steps: 5 steps of each, no snapshots, exit 0 and a done: line. The scenes are the documented
 # starting points users copy; a key renamed or a check tightened must not
 # leave one of them broken. Prints PASS/FAIL per scene; exits 1 on any FAIL.
 set -u
 bin=${1:?usage: $0 BINARY}
 here=$(cd "$(dirname "$0")" && pwd)
 . "$(dirname "$0")/testlib.sh" # $tmp (removed at exit), $fail, check NAME CONDITION
-for scene in "$here"/../inputs/*.yml; do
+for scene in "$here"/../inputs/*.yml "$here"/../inputs/examples/*.yml; do
     name=$(basename "$scene" .yml)
+    [ "$(basename "$(dirname "$scene")")" = examples ] && name=examples_$name
     # the 3D drum at its default resolution holds 1.7e5 particles: coarser here
     extra=()
     [ "$name" = drum_3d ] && extra=(-P Geometry:dr=0.002 -P Geometry:length=0.01)
