@@ -66,7 +66,8 @@ static const char *prof_name[P_NPROF] = {"save start, advance, motion", "boundin
                                           "cell keys, radix sort, start/end", "permute arrays", "neighbour list",
                                           "HCSR classification", "dummy walls, renormalisation L",
                                           "flow rates (+seg. coefficients)", "concentration rates", "Shepard filter",
-                                          "dt bounds, blow-up check (+sync)"};
+                                          "dt bounds, blow-up check (+sync)", "particle shifting (a neighbour pass)",
+                                          "corrected gradient's moment matrix B"};
 
 static void gpu_to_host(sim_t *s)
 {
@@ -106,9 +107,9 @@ static void gpu_finish(sim_t *s)
         message("gpu profile (SPHSEG_GPU_PROFILE, synchronised stages), %ld steps, %zu particles:", steps, g->n);
         for (int k = 0; k < P_NPROF; ++k)
             if (prof.calls[k])
-                message("  %-34s %10.2f ms %5.1f %%  %9.4f ms/step", prof_name[k], prof.ms[k],
+                message("  %-38s %10.2f ms %5.1f %%  %9.4f ms/step", prof_name[k], prof.ms[k],
                         tot > 0 ? 100 * prof.ms[k] / tot : 0.0, steps ? prof.ms[k] / (double)steps : 0.0);
-        message("  %-34s %10.2f ms; %ld neighbour-list builds", "total", tot, g->builds);
+        message("  %-38s %10.2f ms; %ld neighbour-list builds", "total", tot, g->builds);
     }
     if (g->hx) {
         dhalo *x = g->hx;

@@ -63,10 +63,13 @@ void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, int kgc, sel sl
     if (rlo >= n) renorm = 0;
     if (!walls && !renorm && !kgc) return;
     prof_begin(g->st);
-    if (kgc) /* ST_KGC: B of the material, owned and ghosts (reads positions only) */
+    if (kgc) { /* ST_KGC: B of the material, owned and ghosts (reads positions only) */
         team(g, n, [=] __device__(size_t i, int lane, int T) {
             if (p.kind[i] == KIND_MATERIAL && sel_on(sl, i)) flow_kgc_team(i, &p, &v, &c, lane, T);
         });
+        prof_end(g->st, P_KGC);
+        prof_begin(g->st);
+    }
     if (walls && renorm && g->team > 1) {
         team(g, n, [=] __device__(size_t i, int lane, int T) {
             if (!sel_on(sl, i)) return;

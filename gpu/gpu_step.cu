@@ -195,7 +195,7 @@ void gpu_save_start(sim_t *s)
             gpu_step_kernel(s, g, 0, 0.0);
             prof_begin(g->st);
             gpu_shift_pass(s, g);
-            prof_end(g->st, P_MOTION);
+            prof_end(g->st, P_SHIFT);
             break;
         default: error_exit(1, "backend_gpu: stage %d has no body in save_start", m->ids[HOOK_SAVE][k]);
         }

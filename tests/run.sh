@@ -51,6 +51,7 @@ run_one keys bash tests/test_keys.sh "$BUILD/sphseg"
 run_one layers "$PYTHON" -m tests.test_layers
 run_one counterparts "$PYTHON" -m tests.test_counterparts
 run_one house "$PYTHON" -m tests.test_house
+run_one plan "$PYTHON" -m tests.test_plan
 run_one doc_links "$PYTHON" -m tools.dev.doc_links
 run_one mpi_launch bash tests/test_launch.sh "$BUILD/sphseg"
 run_one mpi_halo_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUILD/tests/test_halo"

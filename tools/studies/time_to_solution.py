@@ -4,6 +4,15 @@
   python3 -m tools.studies.time_to_solution run [--sphseg build/sphseg] [--backend gpu] [--steps 200]
                                 [--scene inputs/drum_3d.yml] [-P Section:key=value ...]
   python3 -m tools.studies.time_to_solution chart [--data docs/data/gpu/time_to_solution.csv] [--png docs/data/gpu/time_to_solution.png]
+  python3 -m tools.studies.time_to_solution plan --tolerance PCT (--dr DR | --particles N) [--length L]
+
+plan: the cheapest of the measured settings of the drum scenes' flow
+(docs/data/gpu/time_to_solution_pair.csv) whose surface speed and
+segregation index both lie within PCT per cent of the converged answer, at the
+measured spacing nearest above or at DR (errors fall as dr does), with its
+keys (and the Run:preset that sets them), the accuracy it rests on and its
+source row, and the GPU-hours per revolution scaled from the measured ones as
+dr^-4 (particles as dr^-3, steps as dr^-1).
 
 run: the drum (by default inputs/drum_3d.yml at dr = 0.25 mm and length 0.1 m,
 1.1e7 particles, the issue's drum, with Flow:stabilization monaghan and
@@ -129,6 +138,75 @@ def cmd_chart(a):
     print("wrote %s" % a.png)
 
 
+# The drum scenes' flow (the pair: the corrected gradient with Fickian shifting, on riemann with bed damping),
+# whose rows of time_to_solution_pair.csv the planner reads; the keys each row adds to it are E and chi.
+SCENE_FLOW = ["Flow:stabilization=riemann", "Flow:bed_damping=1", "Flow:gradient_correction=on",
+              "Flow:shifting=fickian", "Segregation:every=auto"]
+# Run:preset's sets that are rows of the planner (src/scene/scene_keys.h holds them; keep the two alike)
+PRESETS = {"fast": {"Material:E": 3e4, "Run:cfl_flow": 0.2}, "converged": {"Material:E": 1e5, "Run:cfl_flow": 0.2}}
+TTS_DRUM = {"dr": 0.00025, "length": 0.1, "particles": 1.12e7}  # the drum the hours were measured on at dr 0.25 mm
+
+
+def plan_rows(path):
+    """The measured rows of the scenes' flow: dr (m), E, chi, hours per revolution, errors, label, source."""
+    rows = []
+    for r in csv.DictReader(open(path)):
+        m = re.search(r"dr ([\d.]+) mm", r["label"])
+        if not r["label"].startswith("the pair") or not m or not r["speed_err"].strip() or not r["seg_err"].strip():
+            continue
+        rows.append({"dr": float(m.group(1)) * 1e-3, "E": float(r["E_Pa"]), "chi": float(r["cfl_flow"]),
+                     "hours": float(r["gpu_hours_per_rev"]), "speed_err": float(r["speed_err"]),
+                     "seg_err": float(r["seg_err"]), "label": r["label"], "source": r["source"]})
+    return rows
+
+
+def plan(rows, tol, dr):
+    """The cheapest measured setting within tol (fraction) on both errors at the measured dr nearest above or at
+    dr (errors fall with dr: a finer run is at least as accurate); returns (row, hours at dr) or (None, why)."""
+    drs = sorted({r["dr"] for r in rows})
+    at = [d for d in drs if d >= dr * (1 - 1e-9)]
+    if not at:
+        return None, "dr %.3g mm is coarser than every measured spacing (%s mm): no measured accuracy" % (
+            dr * 1e3, ", ".join("%g" % (d * 1e3) for d in drs))
+    base = min(at)
+    ok = [r for r in rows if r["dr"] == base and abs(r["speed_err"]) <= tol and abs(r["seg_err"]) <= tol]
+    if not ok:
+        best = min((r for r in rows if r["dr"] == base), key=lambda r: max(abs(r["speed_err"]), abs(r["seg_err"])))
+        return None, "no measured setting at dr %g mm is within %g %% (the closest: %s, %+.1f %% speed, %+.1f %% " \
+            "index)" % (base * 1e3, tol * 100, best["label"], 100 * best["speed_err"], 100 * best["seg_err"])
+    r = min(ok, key=lambda r: r["hours"])
+    return r, r["hours"] * (r["dr"] / dr) ** 4  # particles ~ dr^-3 (3D), steps ~ dr^-1 (the acoustic step)
+
+
+def cmd_plan(a):
+    if (a.dr is None) == (a.particles is None):
+        sys.exit("time_to_solution plan: give one of --dr and --particles")
+    ref = TTS_DRUM
+    dr = a.dr if a.dr is not None else ref["dr"] * (ref["particles"] * a.length / ref["length"] / a.particles) ** (1 / 3)
+    n = ref["particles"] * (a.length / ref["length"]) * (ref["dr"] / dr) ** 3
+    rows = plan_rows(a.data)
+    r, h = plan(rows, a.tolerance / 100, dr)
+    print("3D drum (inputs/drum_3d.yml), length %g m, dr %.4g mm: about %.3g particles" % (a.length, dr * 1e3, n))
+    if r is None:
+        print("no plan: " + h)
+        return 1
+    keys = SCENE_FLOW + ["Material:E=%g" % r["E"], "Run:cfl_flow=%g" % r["chi"]]
+    preset = [k for k, v in PRESETS.items() if v["Material:E"] == r["E"] and v["Run:cfl_flow"] == r["chi"]]
+    print("settings: " + " ".join("-P " + k for k in keys) + ("  (= -P Run:preset=%s)" % preset[0] if preset else ""))
+    print("accuracy: surface speed %+.1f %%, segregation index %+.1f %% at dr %g mm, against the scenes' flow at "
+          "dr 0.25 mm, E 0.1 MPa, chi 0.2 (2D EV drum, means of t = 3-5 s)"
+          % (100 * r["speed_err"], 100 * r["seg_err"], r["dr"] * 1e3))
+    if "reference" in r["label"]:  # the row the errors are measured against: its own error is 0 by definition
+        coarse = [q for q in rows if q["E"] == r["E"] and q["chi"] == r["chi"] and q["dr"] > r["dr"]]
+        print("  (this is the reference setting itself: its error is 0 by definition; from dr %s mm it moved the speed "
+              "by %s)" % (", ".join("%g" % (q["dr"] * 1e3) for q in coarse) or "-",
+                          ", ".join("%+.1f %%" % (-100 * q["speed_err"]) for q in coarse) or "-"))
+    print("cost: %.3g GPU-hours per revolution (one H100, single build; measured %.4g h at dr %g mm, scaled by "
+          "(dr_measured / dr)^4)" % (h * a.length / ref["length"], r["hours"], r["dr"] * 1e3))
+    print("source row: %s\n  %s" % (r["label"], r["source"]))
+    return 0
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="what", required=True)
@@ -145,7 +223,15 @@ def main():
     c.add_argument("--error-note", default="2D EV drum, Table 1 resolution, t = 5 s (o) or 10 s (s)",
                    help="where the errors come from (axis label)")
     c.add_argument("--band", type=float, help="draw this relative error as a line (e.g. 0.02)")
+    p = sub.add_parser("plan", help="the cheapest measured settings within a tolerance, and their GPU-hours")
+    p.add_argument("--tolerance", type=float, required=True, help="PCT: largest error of speed and index, per cent")
+    p.add_argument("--dr", type=float, help="particle spacing, m")
+    p.add_argument("--particles", type=float, help="particle count of the 3D drum (instead of --dr)")
+    p.add_argument("--length", type=float, default=0.1, help="drum length, m (default 0.1)")
+    p.add_argument("--data", default=os.path.join(ROOT, "docs", "data", "gpu", "time_to_solution_pair.csv"))
     a = ap.parse_args()
+    if a.what == "plan":
+        sys.exit(cmd_plan(a))
     cmd_run(a) if a.what == "run" else cmd_chart(a)
 
 
