@@ -369,11 +369,13 @@ static void test_part_alloc(void **state)
     part_alloc(&p, 3, 0); /* empty store is valid */
     assert_non_null(p.id);
     part_free(&p);
-    /* 58 real arrays (x, X0, v, nrm, xr, v_n, acc: 3 each; vol, gdot, gsum,
-     * psi, segV, segQ, segD; L, sig, sig_n, dsig, B: 6 each), 3 creal (C, C_n,
-     * dCdt) and 3 preal (x_n): double in both precisions, id (8 B), kind,
-     * bclass and wall (1 B each). */
-    assert_int_equal(part_bytes_per_particle(), 58 * sizeof(real) + 3 * sizeof(creal) + 3 * sizeof(preal) + 8 + 3);
+    /* Every row of the field table (core/fields.h), components times element
+     * size, summed here from the rows themselves: a new field needs no edit. */
+#define ROW_BYTES(member, fld, type, n, trim) +(size_t)(n) * sizeof(type)
+    const size_t want = 0 PART_FIELDS(ROW_BYTES);
+#undef ROW_BYTES
+    assert_int_equal(part_bytes_per_particle(), want);
+    assert_true(want >= 58 * sizeof(real)); /* the table as it was at issue 54 is a floor */
 }
 
 /* Value of array a (0..56) for a particle originally at index k. */
