@@ -64,6 +64,8 @@ vals=()
 for n in restart column steady drum drum3d mpi; do [ -f "tests/validate_$n.py" ] && vals+=("tests/validate_$n.py"); done
 # issue 19: what a cluster does to a job
 run_one signals bash tests/test_signals.sh "$BUILD/sphseg"
+# issue 55: the printed continuation command runs as printed (1 and 2 ranks); --restart DIR continues in DIR
+run_one continue bash tests/test_continue.sh "$BUILD/sphseg"
 run_one fulldisk bash tests/test_fulldisk.sh "$BUILD/sphseg"
 run_one paraview bash tests/test_paraview.sh "$BUILD/sphseg"
 run_one outdir bash tests/test_outdir.sh "$BUILD/sphseg"
