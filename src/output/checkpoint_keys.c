@@ -23,7 +23,8 @@ enum ckpt_key_class { KEY_RUN = 0, KEY_MODEL = 1, KEY_STATE = 2 };
 static enum ckpt_key_class ckpt_key_class(const char *name)
 {
     static const char *const run[] = {"Run:", "Output:", "Parallel:"};
-    static const char *const modules[] = {"Segregation:enabled", "Segregation:scheme", "Segregation:renormalize"};
+    static const char *const modules[] = {"Segregation:enabled", "Segregation:scheme",
+                                          "Segregation:renormalize"};
     for (size_t k = 0; k < 3; ++k)
         if (!strncmp(name, run[k], strlen(run[k]))) return KEY_RUN;
     for (size_t k = 0; k < 3; ++k)
@@ -72,12 +73,18 @@ static size_t ckpt_item_len(const char *p, size_t n)
     for (size_t i = 0; i < n; ++i) {
         char c = p[i];
         if (quoted) {
-            if (c == '\\' && i + 1 < n) ++i;
-            else if (c == '"') quoted = 0;
-        } else if (c == '"') quoted = 1;
-        else if (c == '[' || c == '{') ++depth;
-        else if (c == ']' || c == '}') --depth;
-        else if (c == ',' && depth <= 0 && i + 1 < n && p[i + 1] == ' ') return i;
+            if (c == '\\' && i + 1 < n)
+                ++i;
+            else if (c == '"')
+                quoted = 0;
+        } else if (c == '"')
+            quoted = 1;
+        else if (c == '[' || c == '{')
+            ++depth;
+        else if (c == ']' || c == '}')
+            --depth;
+        else if (c == ',' && depth <= 0 && i + 1 < n && p[i + 1] == ' ')
+            return i;
     }
     return n;
 }
@@ -100,7 +107,8 @@ static void ckpt_keys_entry(struct ckpt_keys *t, size_t list, int K, const char 
         size_t len = ckpt_item_len(p, (size_t)(end - p)), lk = strcspn(p, ":");
         if (lk > len) lk = len;
         const char *v = p + lk + (lk < len) + (lk + 1 < len && p[lk + 1] == ' ');
-        int nl = snprintf(name, sizeof name, "%.120s:%d:%.*s", t->k[list].name, K, (int)(lk < 30 ? lk : 30), p);
+        int nl =
+            snprintf(name, sizeof name, "%.120s:%d:%.*s", t->k[list].name, K, (int)(lk < 30 ? lk : 30), p);
         struct ckpt_key *k = ckpt_keys_add(t, name, nl, v, (int)(p + len - v));
         k->entry = K, k->list = list;
         if (lk == 4 && !strncmp(p, "name", 4)) /* the name without its quotes (letters, digits, _) */
@@ -108,7 +116,8 @@ static void ckpt_keys_entry(struct ckpt_keys *t, size_t list, int K, const char 
                      k->value + (k->value[0] == '"'));
         p += len + 2;
     }
-    for (size_t i = first; i < t->n; ++i) snprintf(t->k[i].label, sizeof t->k[i].label, "%s", label);
+    for (size_t i = first; i < t->n; ++i)
+        snprintf(t->k[i].label, sizeof t->k[i].label, "%s", label);
 }
 
 /* The used-parameters text flattened into t (see the top of this file). */
@@ -119,7 +128,8 @@ static void ckpt_keys_read(const char *text, struct ckpt_keys *t)
     int count = 0;
     for (const char *l = text; *l; l += strcspn(l, "\n") + (l[strcspn(l, "\n")] != 0)) {
         size_t len = strcspn(l, "\n");
-        while (len && l[len - 1] == ' ') --len; /* "  walls: " before its entries */
+        while (len && l[len - 1] == ' ')
+            --len; /* "  walls: " before its entries */
         if (l[0] != ' ' && l[0] != '#' && len > 1 && len < sizeof sec && l[len - 1] == ':') {
             snprintf(sec, sizeof sec, "%.*s", (int)(len - 1), l);
             list = (size_t)-1;
@@ -150,7 +160,8 @@ static const struct ckpt_key *ckpt_keys_find(const struct ckpt_keys *t, const ch
 
 /* A key of an entry that the other side's list does not have (a shorter
  * list, or none): its list's length says it (one line, not one per key). */
-static int ckpt_key_past_list(const struct ckpt_keys *mine, const struct ckpt_key *k, const struct ckpt_keys *other)
+static int ckpt_key_past_list(const struct ckpt_keys *mine, const struct ckpt_key *k,
+                              const struct ckpt_keys *other)
 {
     if (!k->entry) return 0;
     const struct ckpt_key *l = ckpt_keys_find(other, mine->k[k->list].name);
@@ -165,8 +176,8 @@ struct ckpt_key_diff {
 
 /* Append "name (A in the checkpoint, B now)" to list c, or count it as
  * left out when the list is full. */
-static void ckpt_key_note(struct ckpt_key_diff *d, enum ckpt_key_class c, const struct ckpt_key *k, const char *was,
-                          const char *now)
+static void ckpt_key_note(struct ckpt_key_diff *d, enum ckpt_key_class c, const struct ckpt_key *k,
+                          const char *was, const char *now)
 {
     char shown[256], note[800];
     const char *colon = strrchr(k->name, ':');
@@ -174,8 +185,8 @@ static void ckpt_key_note(struct ckpt_key_diff *d, enum ckpt_key_class c, const 
         snprintf(shown, sizeof shown, "%.*s (%s)%s", (int)(colon - k->name), k->name, k->label, colon);
     else
         snprintf(shown, sizeof shown, "%s", k->name);
-    int len = snprintf(note, sizeof note, "%s%s (%s in the checkpoint, %s now)", d->count[c] ? ", " : "", shown, was,
-                       now);
+    int len = snprintf(note, sizeof note, "%s%s (%s in the checkpoint, %s now)", d->count[c] ? ", " : "",
+                       shown, was, now);
     size_t used = strlen(d->lists[c]);
     d->count[c]++;
     if (d->left_out[c] || used + (size_t)len + 1 > sizeof d->lists[c] - 40)
@@ -235,16 +246,22 @@ void ckpt_check_scene(const char *file, const char *stored, const struct scene *
     ckpt_keys_read(stored, &d.was);
     ckpt_keys_read(now, &d.now);
     free(now);
-    for (size_t i = 0; i < d.now.n; ++i) ckpt_key_compare(&d, &d.now.k[i]);
-    for (size_t i = 0; i < d.was.n; ++i) ckpt_key_gone(&d, &d.was.k[i]);
+    for (size_t i = 0; i < d.now.n; ++i)
+        ckpt_key_compare(&d, &d.now.k[i]);
+    for (size_t i = 0; i < d.was.n; ++i)
+        ckpt_key_gone(&d, &d.was.k[i]);
     free(d.was.k), free(d.now.k);
     if (d.count[KEY_STATE])
-        input_error("--restart %s: the scene %s describes another state than the checkpoint's: %d state-defining "
-                    "key(s) differ: %s%s (restart with the scene and -P options the run was started with)",
-                    file, sc->path, d.count[KEY_STATE], d.lists[KEY_STATE], ckpt_key_more(&d, KEY_STATE, more, sizeof more));
+        input_error(
+            "--restart %s: the scene %s describes another state than the checkpoint's: %d state-defining "
+            "key(s) differ: %s%s (restart with the scene and -P options the run was started with)",
+            file, sc->path, d.count[KEY_STATE], d.lists[KEY_STATE],
+            ckpt_key_more(&d, KEY_STATE, more, sizeof more));
     if (d.count[KEY_MODEL])
-        warning("--restart %s: %d model key(s) differ from the checkpoint's, continuing with the values now: %s%s",
-                file, d.count[KEY_MODEL], d.lists[KEY_MODEL], ckpt_key_more(&d, KEY_MODEL, more, sizeof more));
+        warning("--restart %s: %d model key(s) differ from the checkpoint's, continuing with the values now: "
+                "%s%s",
+                file, d.count[KEY_MODEL], d.lists[KEY_MODEL],
+                ckpt_key_more(&d, KEY_MODEL, more, sizeof more));
     if (d.count[KEY_RUN])
         message("restart: %d run-control key(s) differ from the checkpoint's: %s%s", d.count[KEY_RUN],
                 d.lists[KEY_RUN], ckpt_key_more(&d, KEY_RUN, more, sizeof more));
