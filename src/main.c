@@ -25,7 +25,7 @@ static void usage(void)
 {
     message("usage: sphseg SCENE.yml [-o OUTDIR] [-P Section:key=value ...] [--backend auto|cpu|gpu]\n"
             "              [--restart FILE|DIR] [--overwrite]\n"
-            "  -o OUTDIR   output folder (default out/<scene name>)\n"
+            "  -o OUTDIR   output folder (default out/<scene name>; with --restart, the checkpoint's folder)\n"
             "  -P ...      override one scene parameter, e.g. -P Geometry:dr=0.00087\n"
             "  --backend   auto (default: gpu when built with CUDA and a device is present), cpu or gpu;\n"
             "              overrides Run:backend\n"
@@ -33,6 +33,7 @@ static void usage(void)
             "              (checkpoint.h5 or checkpoint_prev.h5): the particles and run state come from it, the\n"
             "              parameters from SCENE.yml and -P, whose state-defining keys must match the checkpoint's\n"
             "              (a longer Run:t_end extends a run); snapshots and diagnostics.csv continue in OUTDIR\n"
+            "              (without -o: the folder of the checkpoint)\n"
             "  --overwrite a fresh run may replace the files of an earlier run in OUTDIR (else: exit 2)\n"
             "  SIGTERM, SIGUSR1, SIGINT: finish the step, write a checkpoint, exit 0; a second SIGTERM ends at once\n"
             "  --keys      print every scene key with its type, default, range and meaning (Markdown, docs/keys.md)\n"
@@ -41,7 +42,7 @@ static void usage(void)
 
 static run_cli parse_cli(int argc, char **argv)
 {
-    run_cli c = {NULL, NULL, NULL, 0, calloc((size_t)argc, sizeof(char *)), NULL, diag_wall(), 0};
+    run_cli c = {NULL, NULL, NULL, 0, calloc((size_t)argc, sizeof(char *)), NULL, diag_wall(), 0, argc, argv};
     for (int a = 1; a < argc; ++a) {
         if (!strcmp(argv[a], "-h") || !strcmp(argv[a], "--help")) {
             usage();
@@ -78,8 +79,17 @@ static run_cli parse_cli(int argc, char **argv)
     return c;
 }
 
-static char *default_outdir(const char *scene)
+/* Without -o: a restart continues in the folder of its checkpoint (chosen:
+ * the file taken), a fresh run writes to out/<scene name>. */
+static char *default_outdir(const char *scene, const char *chosen)
 {
+    if (chosen) {
+        const char *slash = strrchr(chosen, '/');
+        size_t n = slash ? (size_t)(slash - chosen) + (slash == chosen) : 1;
+        char *o = malloc(n + 1);
+        if (o) snprintf(o, n + 1, "%.*s", (int)n, slash ? chosen : ".");
+        return o;
+    }
     const char *b = strrchr(scene, '/');
     b = b ? b + 1 : scene;
     size_t n = strlen(b);
@@ -106,8 +116,8 @@ static void make_dirs(const char *path)
  * used_params.yml written; o is what the run writes there. */
 static void outputs_open(outputs *o, const sim_t *s, const run_cli *c, const char *chosen)
 {
-    *o = (outputs){0, NULL, NULL, NULL, c->outdir ? c->outdir : default_outdir(c->scene), c->wall0,
-                   c->restart ? chosen : NULL, c->scene, c, NULL, ""};
+    const char *dir = c->outdir ? c->outdir : default_outdir(c->scene, c->restart ? chosen : NULL);
+    *o = (outputs){0, NULL, NULL, NULL, dir, c->wall0, c->restart ? chosen : NULL, c->scene, c, NULL, ""};
     make_dirs(o->dir);
     outdir_claim(o->dir, c->overwrite, o->restart);
     char used[4200];

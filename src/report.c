@@ -28,23 +28,38 @@ static void shell_word(char *b, size_t n, const char *arg)
 }
 
 /* Stopped early by a signal, Run:max_wall_time or OUTDIR/STOP, the
- * checkpoint written: the command that continues, with this run's -P
- * options (a different Run:t_end is allowed). */
+ * checkpoint written: the command that continues. It is the command line
+ * this run was given (the binary as argv[0] named it, the scene, -o, -P,
+ * --backend), with any --restart (and --overwrite, a fresh run's option)
+ * taken out and --restart OUTDIR added; on several ranks with the launcher
+ * "mpirun -np N" before it (N this run's rank count: a job's own launcher,
+ * srun or mpiexec with its flags, is not known here and may differ). */
 void report_stopped(const outputs *o, const sim_t *s, const ckpt_clock *ck, enum ckpt_stop why)
 {
     if (why == CKPT_STOPFILE) ckpt_clear_stop(ck);
-    char cmd[8192] = "sphseg", cause[64];
-    shell_word(cmd, sizeof cmd, o->scene);
-    shell_word(cmd, sizeof cmd, "-o"), shell_word(cmd, sizeof cmd, o->dir);
+    char cmd[8192] = "", cause[64], np[32];
+    if (comm_size() > 1) {
+        snprintf(np, sizeof np, "%d", comm_size());
+        shell_word(cmd, sizeof cmd, "mpirun"), shell_word(cmd, sizeof cmd, "-np"), shell_word(cmd, sizeof cmd, np);
+    }
+    for (int a = 0; a < o->c->argc; ++a) {
+        const char *arg = o->c->argv[a];
+        if (a > 0 && !strcmp(arg, "--overwrite")) continue;
+        if (a > 0 && !strcmp(arg, "--restart") && a + 1 < o->c->argc) {
+            ++a;
+            continue;
+        }
+        shell_word(cmd, sizeof cmd, arg);
+        if (a > 0 && (!strcmp(arg, "-o") || !strcmp(arg, "-P") || !strcmp(arg, "--backend")) && a + 1 < o->c->argc)
+            shell_word(cmd, sizeof cmd, o->c->argv[++a]); /* its value, whatever it looks like */
+    }
     shell_word(cmd, sizeof cmd, "--restart"), shell_word(cmd, sizeof cmd, o->dir);
-    for (int k = 0; k < o->c->n_over; ++k) shell_word(cmd, sizeof cmd, "-P"), shell_word(cmd, sizeof cmd, o->c->over[k]);
-    if (o->c->backend) shell_word(cmd, sizeof cmd, "--backend"), shell_word(cmd, sizeof cmd, o->c->backend);
     int sig = ck->signal;
     snprintf(cause, sizeof cause, "received %s", sig == SIGTERM ? "SIGTERM" : sig == SIGUSR1 ? "SIGUSR1"
                                                  : sig == SIGINT ? "SIGINT" : sig == SIGHUP ? "SIGHUP" : "a signal");
     message("stopping at step %ld, t = %.9g s: %s; wrote %s/checkpoint.h5. Continue with\n  %s", s->step, s->t,
             why == CKPT_WALL ? "the next step would pass Run:max_wall_time"
-            : why == CKPT_SIGNAL ? cause : "found the STOP file", o->dir, cmd);
+            : why == CKPT_SIGNAL ? cause : "found the STOP file", o->dir, cmd + 1);
 }
 
 /* The end of a run: the last progress line, the halo's and the run's totals

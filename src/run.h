@@ -19,6 +19,8 @@ typedef struct run_cli {
     const char *restart; /* --restart FILE|DIR, or NULL */
     double wall0;        /* wall clock at start-up, for Run:max_wall_time */
     int overwrite;       /* --overwrite: a fresh run may replace another run's files in OUTDIR */
+    int argc;            /* the command line as given, for the how-to-continue message */
+    char **argv;
 } run_cli;
 
 /* What a run has written and where. */

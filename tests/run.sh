@@ -68,11 +68,15 @@ vals=()
 for n in restart column steady drum drum3d mpi; do [ -f "tests/validate_$n.py" ] && vals+=("tests/validate_$n.py"); done
 # issue 19: what a cluster does to a job
 run_one signals bash tests/test_signals.sh "$BUILD/sphseg"
+# issue 55: the printed continuation command runs as printed (1 and 2 ranks); --restart DIR continues in DIR
+run_one continue bash tests/test_continue.sh "$BUILD/sphseg"
 run_one fulldisk bash tests/test_fulldisk.sh "$BUILD/sphseg"
 run_one paraview bash tests/test_paraview.sh "$BUILD/sphseg"
 run_one outdir bash tests/test_outdir.sh "$BUILD/sphseg"
 run_one extremes bash tests/test_extremes.sh "$BUILD/sphseg"
 run_one restart_guard "$PYTHON" -m tests.test_restart_guard --sphseg "$BUILD/sphseg" --work "$tmp/restart_guard"
+# issue 55: a restart's scene compared key by key, every key of the key table and of each wall and region
+run_one restart_keys "$PYTHON" -m tests.test_restart_keys --sphseg "$BUILD/sphseg" --work "$tmp/restart_keys"
 # issue 30: the finite-element mu(I) drum reference against exact and analytic answers (no sphseg run)
 run_one drum_mui_ref "$PYTHON" -m tests.test_drum_mui_ref
 # issue 30: how the drum tools read a mid-chord (surface speeds, mass depth, the layer's fluxes) on known beds

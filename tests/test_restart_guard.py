@@ -28,6 +28,10 @@ line, in bounded time, on 1, 2 and 3 ranks; never exit 0 on a damaged file,
   refused alone and passed over beside a good checkpoint.h5; legacy seals
   (check word 0) are taken, but one whose step disagrees with /Header is
   refused, and a legacy checkpoint.h5 older than checkpoint_prev.h5 says so;
+- files without a seal (issue 55, defect 3): a snapshot is refused as a
+  snapshot of sphseg VERSION (the version written whole), a checkpoint's HDF5
+  part alone as a checkpoint without its checksum block, one whose seal is
+  overwritten as damaged, a text file as no HDF5 file;
 - FIFOs (issue 33, defect 4): --restart FIFO, and a DIR whose checkpoint.h5
   is a FIFO, exit 2 with one line at once on 1 and 3 ranks, not blocked in
   open() (a run past 60 s is a failure; the test then opens the FIFO for
@@ -386,6 +390,41 @@ def test_fifos(sp, work, src, run_ok):
           ok and len(warns) == 1 and "checkpoint_prev.h5: not a regular file" in warns[0], why)
 
 
+def test_not_checkpoints(sp, work, src, run_ok):
+    """Issue 55, defect 3: a file without a seal is said for what it is, with the
+    version that wrote it as written (a snapshot was 'a checkpoint of sphseg 0.1'
+    from sphseg 0.1.0): a snapshot; a checkpoint's HDF5 part alone (as before the
+    seal: its version and format); a checkpoint whose seal is overwritten
+    (damaged: HDF5 reads none of it); not HDF5 at all."""
+    version = run([sp, "--version"])[1].split()[-1]
+    snap = os.path.join(src, "snapshot_00001.h5")
+    with h5py.File(snap, "r") as h:
+        step, t = int(h["Header"].attrs["Step"]), float(h["Header"].attrs["Time"])
+    ok, why = refused(restart(sp, work, snap, extra=run_ok), "snapshot")
+    check(f"a snapshot: refused as a snapshot of sphseg {version} (step {step}), not a checkpoint",
+          ok and f"not a sphseg checkpoint: a snapshot of sphseg {version} (step {step}, t = {t:.9g} s)" in why
+          and "holds no run state" in why and "sphseg 0.1)" not in why, why)
+    bare = os.path.join(work, "unsealed.h5")
+    with h5py.File(src + "/checkpoint.h5", "r") as a, h5py.File(bare, "w") as b:
+        for k in a:
+            a.copy(k, b)
+        fmt = int(a["Header"].attrs["Checkpoint"])
+    ok, why = refused(restart(sp, work, bare, extra=run_ok), "unsealed")
+    check(f"a checkpoint's HDF5 part without its seal: a checkpoint of sphseg {version} (format {fmt}) without "
+          "its checksum block", ok and f"a checkpoint of sphseg {version} (format {fmt}, step" in why
+          and "without its checksum block" in why, why)
+    over = os.path.join(work, "seal_overwritten.h5")
+    shutil.copy(src + "/checkpoint.h5", over)
+    with open(over, "r+b") as f:
+        f.write(b"\0" * 64)
+    ok, why = refused(restart(sp, work, over, extra=run_ok), "seal zeroed")
+    check("a checkpoint whose seal is overwritten: damaged, checksum block missing",
+          ok and "damaged: its checksum block is missing or overwritten" in why, why)
+    ok, why = refused(restart(sp, work, os.path.join(src, "used_params.yml"), extra=run_ok), "yml")
+    check("a text file: not a sphseg checkpoint, not an HDF5 file",
+          ok and "not a sphseg checkpoint (no checksum block, and not an HDF5 file)" in why, why)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--sphseg", required=True)
@@ -466,6 +505,7 @@ def main():
     test_seal_legacy(sp, work, src, run_ok)
     test_seal_words(sp, work, src, run_ok)
     test_fifos(sp, work, src, run_ok)
+    test_not_checkpoints(sp, work, src, run_ok)
     print(f"{len(FAILS)} failed")
     return 1 if FAILS else 0
 

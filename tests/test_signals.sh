@@ -41,7 +41,7 @@ check "2 ranks under mpirun, SIGUSR1: exit 0, checkpoint" \
 d=$tmp/one_TERM
 t_stop=$(sed -n 's/^stopping at step [0-9]*, t = \([0-9.e+-]*\) s.*/\1/p' "$d.log")
 t_end=$("$PY" -c "import math; print(13 * (math.floor(float('$t_stop') / 13) + 2))")
-cmd=$(grep -A1 '^stopping at' "$d.log" | tail -1 | sed "s|^  sphseg|$bin|; s|Run:t_end=2000|Run:t_end=$t_end|")
+cmd=$(grep -A1 '^stopping at' "$d.log" | tail -1 | sed "s|^  ||; s|Run:t_end=2000|Run:t_end=$t_end|") # the command as printed (its binary the one run), t_end changed
 eval "$cmd" >"$d.restart.log" 2>&1
 check "the printed command continues the run to t_end = $t_end" "[ $? -eq 0 ] && grep -q '^done:' '$d.restart.log'" || tail -5 "$d.restart.log"
 "$bin" $scene -o "$tmp/straight" -P Run:t_end=$t_end -P Output:dt=13 >"$tmp/straight.log" 2>&1

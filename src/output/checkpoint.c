@@ -3,6 +3,9 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <hdf5.h>
+/* hdf5.h's H5F_ACC_* flags use its own H5CHECK, which error.h and this file
+ * take over: read the flag first (as checkpoint_read.c does). */
+static unsigned ckpt_acc_rdonly(void) { return H5F_ACC_RDONLY; }
 #include <mpi.h>
 #include <signal.h>
 #include <stdarg.h>
@@ -359,6 +362,94 @@ static int ckpt_check_seal(const unsigned char *b, const struct stat *st, char *
     return 0;
 }
 
+/* A string attribute of loc (variable or fixed length) into v; 0 if absent
+ * or not a string. */
+static int ckpt_peek_string(hid_t loc, const char *name, char *v, size_t n)
+{
+    if (H5Aexists(loc, name) <= 0) return 0;
+    hid_t a = H5Aopen(loc, name, H5P_DEFAULT), ft = a < 0 ? -1 : H5Aget_type(a), mt = H5Tcopy(H5T_C_S1);
+    int ok = ft >= 0 && H5Tget_class(ft) == H5T_STRING;
+    if (ok) H5Tset_cset(mt, H5Tget_cset(ft)); /* sphseg writes UTF-8: HDF5 converts no other way */
+    if (ok && H5Tis_variable_str(ft) > 0) {
+        char *str = NULL;
+        H5Tset_size(mt, H5T_VARIABLE);
+        ok = H5Aread(a, mt, &str) >= 0 && str;
+        if (ok) snprintf(v, n, "%.40s", str);
+        if (str) H5free_memory(str);
+    } else if (ok) {
+        char buf[64] = "";
+        size_t size = H5Tget_size(ft);
+        H5Tset_size(mt, sizeof buf);
+        ok = size < sizeof buf && H5Aread(a, mt, buf) >= 0;
+        if (ok) snprintf(v, n, "%.40s", buf);
+    }
+    if (ft >= 0) H5Tclose(ft);
+    H5Tclose(mt);
+    if (a >= 0) H5Aclose(a);
+    return ok;
+}
+
+/* A numeric attribute of loc as a double into v; 0 if absent or not a number. */
+static int ckpt_peek_number(hid_t loc, const char *name, double *v)
+{
+    if (H5Aexists(loc, name) <= 0) return 0;
+    hid_t a = H5Aopen(loc, name, H5P_DEFAULT), ft = a < 0 ? -1 : H5Aget_type(a);
+    H5T_class_t c = ft < 0 ? H5T_NO_CLASS : H5Tget_class(ft);
+    int ok = (c == H5T_FLOAT || c == H5T_INTEGER) && H5Aread(a, H5T_NATIVE_DOUBLE, v) >= 0;
+    if (ft >= 0) H5Tclose(ft);
+    if (a >= 0) H5Aclose(a);
+    return ok;
+}
+
+/* Rank 0: what a regular file without a seal is, into why: a snapshot (its
+ * /Header has Code sphseg, no Checkpoint attribute), a checkpoint written
+ * before checkpoints were sealed, another HDF5 file, a checkpoint whose seal
+ * is overwritten, or no HDF5 file at all. Opened with HDF5 only when its
+ * first bytes are HDF5's signature (a file without a user block: snapshots,
+ * unsealed checkpoints); one with its HDF5 part after a user block, as a
+ * sealed checkpoint has, is damaged, and HDF5 reads none of it. */
+static void ckpt_unsealed_why(const char *path, char *why, size_t n)
+{
+    static const unsigned char sig[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+    unsigned char b[8] = {0}, ub[8] = {0};
+    FILE *f = fopen(path, "rb");
+    int hdf5 = f && fread(b, 1, 8, f) == 8 && !memcmp(b, sig, 8);
+    int after_ub = f && !hdf5 && fseek(f, CKPT_USERBLOCK, SEEK_SET) == 0 && fread(ub, 1, 8, f) == 8 &&
+                   !memcmp(ub, sig, 8);
+    if (f) fclose(f);
+    snprintf(why, n, after_ub ? "damaged: its checksum block is missing or overwritten (an HDF5 file after a "
+                                "user block, as a checkpoint is, but its first bytes are not the seal's)"
+                              : "not a sphseg checkpoint (no checksum block, and not an HDF5 file)");
+    if (!hdf5) return;
+    H5E_auto2_t fn;
+    void *data;
+    H5Eget_auto2(H5E_DEFAULT, &fn, &data);
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* our message, not HDF5's stack */
+    hid_t file = H5Fopen(path, ckpt_acc_rdonly(), H5P_DEFAULT), g = -1;
+    char code[48] = "", version[48] = "?";
+    double t = 0, step = 0, format = 0;
+    snprintf(why, n, "not a sphseg checkpoint (no checksum block; an HDF5 file%s)",
+             file < 0 ? " HDF5 cannot open" : " without a sphseg /Header");
+    if (file >= 0 && H5Lexists(file, "Header", H5P_DEFAULT) > 0 && (g = H5Gopen2(file, "Header", H5P_DEFAULT)) >= 0 &&
+        ckpt_peek_string(g, "Code", code, sizeof code) && !strcmp(code, "sphseg")) {
+        ckpt_peek_string(g, "Version", version, sizeof version);
+        int is_ckpt = ckpt_peek_number(g, "Checkpoint", &format);
+        ckpt_peek_number(g, "Time", &t), ckpt_peek_number(g, "Step", &step);
+        if (is_ckpt)
+            snprintf(why, n, "not a sealed sphseg checkpoint: a checkpoint of sphseg %s (format %.0f, step %.0f, "
+                     "t = %.9g s) without its checksum block (written before checkpoints were sealed, or copied "
+                     "without its first %d bytes); sphseg %s reads sealed checkpoints only", version, format, step,
+                     t, CKPT_USERBLOCK, SPHSEG_VERSION);
+        else
+            snprintf(why, n, "not a sphseg checkpoint: a snapshot of sphseg %s (step %.0f, t = %.9g s), which holds "
+                     "no run state; restart from a checkpoint (OUTDIR/checkpoint.h5: written every "
+                     "Output:checkpoint_dt, at Run:max_wall_time and on a stop signal)", version, step, t);
+    }
+    if (g >= 0) H5Gclose(g);
+    if (file >= 0) H5Fclose(file);
+    H5Eset_auto2(H5E_DEFAULT, fn, data);
+}
+
 int ckpt_verify(const char *path, ckpt_seal *seal, char *why, size_t n)
 {
     unsigned char b[64] = {0};
@@ -368,8 +459,7 @@ int ckpt_verify(const char *path, ckpt_seal *seal, char *why, size_t n)
         bad = ckpt_read_seal(path, b, &st);
         if (bad == 1) snprintf(why, n, "cannot read it: %s", strerror(errno));
         if (bad == 2) snprintf(why, n, "not a regular file");
-        if (bad == 3) snprintf(why, n, "not a sphseg checkpoint (no checksum block; a snapshot, a damaged file, "
-                               "or a checkpoint of sphseg 0.1)");
+        if (bad == 3) ckpt_unsealed_why(path, why, n);
         if (bad == 5) snprintf(why, n, "damaged: its user block past the checksum block is not blank (bytes 64 to "
                                "%d are written as zero)", CKPT_USERBLOCK - 1);
         if (!bad) bad = 4 * ckpt_check_seal(b, &st, why, n);

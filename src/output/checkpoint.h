@@ -111,12 +111,16 @@ int ckpt_verify(const char *path, ckpt_seal *seal, char *why, size_t n);
  * listed. */
 void ckpt_read(const char *file, sim_t *s, ckpt_run *r, char *chosen, size_t n);
 /* Compare the checkpoint's used-parameters text (stored) with this run's
- * scene, key by key (src/output/checkpoint_keys.c). Keys that define the state
- * (Geometry, Material, Physics, Initial, Kinematics, Walls, and the modules
- * Segregation:enabled, scheme and renormalize) must match: otherwise exit
- * 2 naming each one that differs. Model keys (the other Segregation keys,
- * Flow) that differ are a warning naming each; run-control keys (Run,
- * Output, Parallel) may differ and are listed. */
+ * scene, key by key (src/output/checkpoint_keys.c), each key of each entry
+ * of a list (Container:walls, Container:regions) on its own and the list's
+ * length. Keys that define the state (Geometry, Material, Physics, Initial,
+ * Kinematics, Walls, Container, and the modules Segregation:enabled, scheme
+ * and renormalize) must match: otherwise exit 2, one line from rank 0 naming
+ * each one that differs once with both values ("Container:walls:4
+ * (hopper_right):to ([0.06, 0] in the checkpoint, [0.061, 0] now)"). Model
+ * keys (the other Segregation keys, Grains, Flow, Outlet) that differ are a
+ * warning naming each; run-control keys (Run, Output, Parallel) may differ
+ * and are listed. */
 void ckpt_check_scene(const char *file, const char *stored, const struct scene *sc);
 void ckpt_run_free(ckpt_run *r);
 

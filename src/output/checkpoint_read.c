@@ -281,7 +281,8 @@ static void ckpt_check_header(hid_t g, const sim_t *s)
     free(prec);
     long long dim = ckpt_get_int(g, "Dimension", 2, 3);
     if (dim != (long long)s->sc->geometry.dim)
-        ckpt_bad("holds a %lldD run; the scene %s is %uD", dim, s->sc->path, s->sc->geometry.dim);
+        ckpt_bad("holds a %lldD run; the scene %s is %uD: Geometry:dim (%lld in the checkpoint, %u now)", dim,
+                 s->sc->path, s->sc->geometry.dim, dim, s->sc->geometry.dim);
     long long na = ckpt_get_int(g, "NumArrays", 1, 1000);
     if (na != (long long)part_narrays())
         ckpt_bad("its particle store has %lld arrays, this build's %zu: written by another version of sphseg",
