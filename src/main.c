@@ -135,6 +135,13 @@ int main(int argc, char **argv)
     run_cli c = parse_cli(argc, argv);
     struct scene sc;
     scene_load(&sc, c.scene, c.n_over, c.over);
+    if (sc.run.preset != PRESET_NONE) { /* what it set: the keys not given with -P (used_params.yml has all) */
+        char line[1024];
+        size_t n = 0;
+        for (const char *const *k = scene_preset_keys((int)sc.run.preset); *k && n < sizeof line; ++k)
+            n += (size_t)snprintf(line + n, sizeof line - n, " %s", *k);
+        message("preset %s:%s (a -P of the same key wins over it)", scene_preset_name((int)sc.run.preset), line);
+    }
     int ndev = settings_check(&sc, c.backend ? c.backend : sc.run.backend);
     (void)ndev;
     sim_t s = {0};

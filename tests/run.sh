@@ -52,6 +52,7 @@ run_one layers "$PYTHON" -m tests.test_layers
 run_one counterparts "$PYTHON" -m tests.test_counterparts
 run_one house "$PYTHON" -m tests.test_house
 run_one plan "$PYTHON" -m tests.test_plan
+run_one preset bash tests/test_preset.sh "$BUILD/sphseg"
 run_one doc_links "$PYTHON" -m tools.dev.doc_links
 run_one mpi_launch bash tests/test_launch.sh "$BUILD/sphseg"
 run_one mpi_halo_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUILD/tests/test_halo"

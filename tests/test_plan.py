@@ -6,12 +6,11 @@ within the tolerance on both errors at the measured spacing nearest above or at
 the asked one, scale its hours as dr^-4, refuse a spacing coarser than every
 measured one, and say so when no row is within the tolerance. Then the real
 table (docs/data/gpu/time_to_solution_pair.csv) must give a plan at 3 % for
-dr 0.5 mm whose keys are Run:preset fast's (the key table and the planner
-must agree on the preset).
+dr 0.5 mm whose keys are Run:preset fast's (tests/test_preset.sh holds the
+planner's presets to the C table).
 """
 import csv
 import os
-import re
 import sys
 import tempfile
 
@@ -56,13 +55,9 @@ def main():
             fails.append("0.1 %%: expected no plan, got %s" % (why,))
     real = tts.plan_rows(os.path.join(ROOT, "docs", "data", "gpu", "time_to_solution_pair.csv"))
     r, h = tts.plan(real, 0.03, 0.0005)
-    keys = open(os.path.join(ROOT, "src", "scene", "scene_keys.h"), encoding="utf-8").read()
     fast = tts.PRESETS["fast"]
     if r is None or (r["E"], r["chi"]) != (fast["Material:E"], fast["Run:cfl_flow"]):
         fails.append("the real table at 3 %%, dr 0.5 mm: not the fast preset's E and chi (%s)" % (r,))
-    m = re.search(r'"fast",[^\n]*\n?[^\n]*Material:E=([0-9.e+]+)', keys)
-    if m and float(m.group(1)) != fast["Material:E"]:
-        fails.append("Run:preset fast sets Material:E=%s in the key table, the planner %g" % (m.group(1), fast["Material:E"]))
     for f in fails:
         print("FAIL", f)
     if fails:

@@ -68,6 +68,8 @@ def check(name, ok, detail=""):
 
 
 def key_class(name):
+    if name == "Run:preset":  # it sets other keys (src/scene/scene_preset.c): theirs decide
+        return "preset"
     if name.startswith(RUN):
         return "run"
     if name not in STATE_MODULES and name.startswith(MODEL):
@@ -220,6 +222,10 @@ def verdict(res, shown, cls, was, now):
     said = out + err
     if rc == 2 and len(errors) == 1 and "--restart" not in errors[0]:
         return "scene", errors[0]
+    if cls == "preset":  # another preset changes state keys (Material:E) of the checkpoint's: refused naming them
+        ok = rc == 2 and len(errors) == 1 and errors[0].startswith("sphseg: error: --restart") and \
+            "state-defining key(s) differ" in errors[0] and "Material:E (" in errors[0]
+        return ("ok", "") if ok else ("bad", f"rc {rc}; expected a refusal naming Material:E (preset)\n{err[-1200:]}")
     if cls == "state":  # the scene key check's line, or the header's (Geometry:dim: a 2D checkpoint, a 3D scene)
         ok = (rc == 2 and len(errors) == 1 and errors[0].startswith("sphseg: error: --restart") and note in errors[0]
               and said.count(shown) == 1 and ("state-defining key(s) differ" not in errors[0] or

@@ -125,7 +125,7 @@ const cyaml_schema_value_t *const scene_wall_entry = &cwall_entry, *const scene_
 /* What struct scene keeps of the walk: scene_key_line, scene_key_where. */
 struct scene_keys {
     int n_over, n_leaf;
-    char **over; /* copies of the -P arguments */
+    char **over; /* where each override came from: "-P ARG", or "Run:preset NAME (ARG)" */
     struct scene_leaf leaf[];
 };
 
@@ -156,7 +156,9 @@ static int vfail(struct scene_ctx *c, int over, int line, const char *name, cons
     char *e = c->err;
     size_t cap = c->errlen, n = 0;
     if (!e || cap == 0) return -1;
-    if (over >= 0)
+    if (over >= 0 && over < c->n_preset)
+        n = scene_cat(e, cap, n, "Run:preset %s (%s): ", c->preset, c->over[over]);
+    else if (over >= 0)
         n = scene_cat(e, cap, n, "-P %s: ", c->over[over]);
     else if (line > 0)
         n = scene_cat(e, cap, n, "%s:%d: ", c->path, line);
@@ -357,15 +359,22 @@ static int keys_keep(struct scene_ctx *c, struct scene *s)
     memcpy(k->leaf, c->leaf, (size_t)c->n_leaf * sizeof k->leaf[0]);
     k->over = calloc((size_t)c->n_over + 1, sizeof *k->over);
     if (!k->over) return -1;
-    for (; k->n_over < c->n_over; ++k->n_over)
-        if (!(k->over[k->n_over] = strdup(c->over[k->n_over]))) return -1;
+    for (; k->n_over < c->n_over; ++k->n_over) { /* where each was set, as messages name it */
+        char w[320];
+        if (k->n_over < c->n_preset)
+            snprintf(w, sizeof w, "Run:preset %s (%s)", c->preset, c->over[k->n_over]);
+        else
+            snprintf(w, sizeof w, "-P %s", c->over[k->n_over]);
+        if (!(k->over[k->n_over] = strdup(w))) return -1;
+    }
     return 0;
 }
 
 /* The steps of a load, in order; the first that fails ends it. */
 static int parse_steps(struct scene_ctx *c, struct scene *s)
 {
-    if (scene_read_text(c) || scene_load_doc(c) || scene_apply_overrides(c) || scene_move_grain_keys(c) ||
+    if (scene_read_text(c) || scene_load_doc(c) || scene_expand_preset(c) || scene_apply_overrides(c) ||
+        scene_move_grain_keys(c) ||
         scene_walk(c) || scene_require_model_keys(c) || add_defaults(c) || load_struct(c, s))
         return -1;
     if (!scene_leaf_find(c, "Output:diag_dt")) s->output.diag_dt = s->output.dt / 20;
@@ -395,6 +404,7 @@ int scene_parse(struct scene *s, const char *path, int n_over, char **over, char
     if (c->have_doc) yaml_document_delete(&c->doc);
     free(c->first_node);
     free(c->text);
+    if (c->over_owned) free(c->over);
     free(c);
     if (rc) scene_free(s);
     return rc ? -1 : 0;
@@ -424,7 +434,7 @@ const char *scene_key_where(const struct scene *s, const char *section, const ch
     snprintf(name, sizeof name, "%s:%s", section, key);
     leaf_resolve(k ? k->leaf : NULL, k ? k->n_leaf : 0, name, &over, &line);
     if (k && over >= 0 && over < k->n_over)
-        snprintf(buf, n, "-P %s", k->over[over]);
+        snprintf(buf, n, "%s", k->over[over]);
     else
         snprintf(buf, n, "%s:%d", s->path ? s->path : "(no scene file)", line);
     return buf;

@@ -19,6 +19,8 @@ enum periodic_axes {
 enum wall_slip { SLIP_NO = 0, SLIP_FREE = 1 };
 enum rot_dir { ROT_CLOCKWISE = 0, ROT_COUNTERCLOCKWISE = 1 };
 enum init_stress { INIT_STRESS_ZERO = 0, INIT_STRESS_GEOSTATIC = 1 };
+/* Run:preset: a named group of keys (scene_preset.c) */
+enum run_preset { PRESET_NONE = 0, PRESET_PAPER = 1, PRESET_CONVERGED = 2, PRESET_FAST = 3 };
 /* granular: the mu(I) elastoplastic material of the paper; newtonian: a weakly
  * compressible Newtonian fluid (pressure from the bulk modulus, viscous
  * momentum of Morris et al. 1997). */
@@ -136,6 +138,9 @@ int scene_parse(struct scene *s, const char *path, int n_over, char **over, char
  * (on rank 0) and exits with status 2, before anything is written.
  * Returns 0 on success. */
 int scene_load(struct scene *s, const char *path, int n_over, char **over);
+/* The keys ("Section:key=value", NULL-ended) that Run:preset p sets, or NULL (none). */
+const char *const *scene_preset_keys(int p);
+const char *scene_preset_name(int p);
 
 /* Write every parameter with the value used (defaults included) as YAML, with
  * the same section and key names; numbers read back exactly. Writes

@@ -42,6 +42,9 @@ struct scene_ctx {
     size_t len;
     yaml_document_t doc;
     int have_doc;
+    int n_preset;       /* over[0..n_preset): Run:preset's keys (scene_preset.c), then the user's -P */
+    const char *preset; /* the preset's name, or NULL */
+    int over_owned;     /* over is an array of scene_expand_preset's (the strings are not) */
     int n_file_nodes; /* nodes 1..n_file_nodes came from the file */
     int *first_node;  /* first node of override i; [n_over]: first default node */
     struct scene_leaf leaf[SCENE_MAX_LEAVES];
@@ -116,6 +119,11 @@ int scene_doc_emit(yaml_document_t *doc, struct scene_buf *b);
 int scene_read_text(struct scene_ctx *c);
 int scene_load_doc(struct scene_ctx *c);
 int scene_apply_overrides(struct scene_ctx *c);
+/* scene_preset.c: Run:preset (from the last -P that sets it, else the file)
+ * put before the user's overrides as overrides of its own keys, less those the
+ * user sets (c->n_preset of them); nothing for none or an unknown name (the
+ * walk refuses that). */
+int scene_expand_preset(struct scene_ctx *c);
 int scene_move_grain_keys(struct scene_ctx *c);
 
 /* ---- scene_walk.c: the document against the schema --------------------------------- */

@@ -45,6 +45,8 @@ static const cyaml_strval_t flow_shiftings[] = {{"off", SHIFT_OFF}, {"fickian", 
 static const cyaml_strval_t flow_backgrounds[] = {{"momentum", FLOW_BACKGROUND_MOMENTUM},
                                                    {"excluded", FLOW_BACKGROUND_EXCLUDED}};
 static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
+static const cyaml_strval_t run_presets[] = {
+    {"none", PRESET_NONE}, {"paper", PRESET_PAPER}, {"converged", PRESET_CONVERGED}, {"fast", PRESET_FAST}};
 static const cyaml_strval_t part_methods[] = {{"slabs", PART_SLABS}, {"metis", PART_METIS}};
 static const cyaml_strval_t periodic_axes[] = {
     {"none", PERIODIC_NONE}, {"x", PERIODIC_X}, {"y", PERIODIC_Y}, {"xy", PERIODIC_XY}, {"z", PERIODIC_Z},
@@ -151,6 +153,10 @@ SECTION("Run", run, scene_run)
       "deep); results differ at round-off only; the CPU backend builds its lists every stage; default 0.1")
     KS("Run", run, scene_run, backend, 0, CYAML_UNLIMITED, "auto",
       "\"auto\" (default: gpu when built with CUDA and a device is present) | \"cpu\" | \"gpu\"")
+    KE("Run", run, scene_run, preset, enum run_preset, run_presets, "none",
+      "a named group of keys, set as if given with -P before the user's own -P (which win over it):"
+      " none (default) | paper (the paper's method, docs/method.md) | converged (the drum scenes' flow at"
+      " Material:E=1e5, Run:cfl_flow=0.2) | fast (the same at Material:E=3e4); docs/guide.md \"Presets\"")
 END_SECTION(run)
 SECTION("Geometry", geometry, scene_geometry)
     KE("Geometry", geometry, scene_geometry, type, enum geom_type, geom_types, "shearbox",
