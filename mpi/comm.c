@@ -57,3 +57,36 @@ int comm_local_rank(void)
     MPICHECK(MPI_Comm_free(&node));
     return r;
 }
+
+/* This node's communicator (free it with MPI_Comm_free). */
+static MPI_Comm comm_node(void)
+{
+    MPI_Comm node;
+    MPICHECK(MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node));
+    return node;
+}
+
+int comm_local_size(void)
+{
+    MPI_Comm node = comm_node();
+    int n;
+    MPICHECK(MPI_Comm_size(node, &n));
+    MPICHECK(MPI_Comm_free(&node));
+    return n;
+}
+
+long long comm_node_sum_ll(long long x)
+{
+    MPI_Comm node = comm_node();
+    long long y;
+    MPICHECK(MPI_Allreduce(&x, &y, 1, MPI_LONG_LONG, MPI_SUM, node));
+    MPICHECK(MPI_Comm_free(&node));
+    return y;
+}
+
+void comm_node_bor(unsigned char *bytes, int n)
+{
+    MPI_Comm node = comm_node();
+    MPICHECK(MPI_Allreduce(MPI_IN_PLACE, bytes, n, MPI_BYTE, MPI_BOR, node));
+    MPICHECK(MPI_Comm_free(&node));
+}

@@ -7,6 +7,11 @@ int comm_rank(void);
 int comm_size(void);
 /* Rank among the ranks of this node (picks the GPU). */
 int comm_local_rank(void);
+/* The ranks of this node, and over them: the sum of x, and the bitwise OR
+ * of bytes[0..n-1] in place (collective over all ranks). */
+int comm_local_size(void);
+long long comm_node_sum_ll(long long x);
+void comm_node_bor(unsigned char *bytes, int n);
 double comm_sum(double x);
 /* The sum over ranks of a compensated per-rank sum (hi, lo), itself summed
  * compensated in rank order: the same on every rank and, to round-off of the

@@ -66,8 +66,10 @@ void report_stopped(const outputs *o, const sim_t *s, const ckpt_clock *ck, enum
  * (the done: line; io is the wall time in output), the windows of C. */
 void report_end(sim_t *s, diag *d, double io)
 {
-    diag_progress(d, s, 1);
-    double wall = diag_wall() - d->wall0, stepping = wall - io, ntot = (double)comm_sum_ll((long long)s->p.n);
+    double ntot = (double)comm_sum_ll((long long)s->p.n);
+    d->ntot = ntot; /* the last progress line and the done: line count the same particles */
+    diag_progress(d, s, 1, io);
+    double wall = diag_wall() - d->wall0, stepping = wall - io;
     /* the halo time of the done: line is the time the computation stood
      * still for it: all of it on the CPU; on the GPU, which overlaps the
      * refreshes with interior work, what the device timeline shows */
@@ -88,9 +90,11 @@ void report_end(sim_t *s, diag *d, double io)
         message("load balance: %ld checks past the threshold, %ld re-cuts, %.3f s on the slowest rank (the state "
                 "to the host, the re-cut, back and prepared again)", s->halo->recut_checks, s->halo->recuts,
                 comm_max(s->halo->recut_s));
-    message("done: %ld steps, %.3f s wall, %.4e particle-steps/s, max |drift of sum C V| %.3e, %.3f s of the "
-            "wall in output and diagnostics (not in the rate), %.3f s in halo exchange", s->step, wall,
-            stepping > 0 ? (double)(s->step - d->step0) * ntot / stepping : 0.0, d->max_drift, io, halo);
+    double rate = stepping > 0 ? (double)(s->step - d->step0) * ntot / stepping : 0.0;
+    message("done: %ld steps, %.3f s wall, %.4e particle-steps/s (the particles of all %d rank(s), %.4e per rank, per "
+            "second of the wall less output), max |drift of sum C V| %.3e, %.3f s of the wall in output and "
+            "diagnostics (not in the rate), %.3f s in halo exchange", s->step, wall, rate, comm_size(),
+            rate / comm_size(), d->max_drift, io, halo);
     if (s->win.on && s->win.windows > 0)
         message("concentration: %ld windows of %.1f flow steps on average, %ld midpoint steps of C", s->win.windows,
                 (double)(s->step - d->step0 - s->win.k) / (double)s->win.windows, s->win.substeps);
@@ -114,16 +118,39 @@ static const char *stab_text(const struct scene *sc, char *b, size_t n)
     return b;
 }
 
+/* The threads line: OpenMP threads per rank and where the count comes
+ * from, the ranks and threads on rank 0's node against its cores, the load;
+ * then the oversubscription warnings. */
+static void threads_log(const run_threads *t)
+{
+    char load[128] = "";
+    if (t->load >= 0)
+        snprintf(load, sizeof load, "; load average %.2f over the last minute%s", t->load,
+                 t->load >= t->cores ? ", as many as its cores: other processes share them" : "");
+    if (!t->openmp)
+        message("threads: this build has no OpenMP (one thread per rank); %d rank(s) on rank 0's node, %d core(s) "
+                "there%s", t->node_ranks, t->cores, load);
+    else
+        message("threads: %d OpenMP thread(s) per rank (%s%s%s); rank 0's node runs %d rank(s), %lld thread(s), on "
+                "%d core(s)%s%s", t->threads, t->env[0] ? "OMP_NUM_THREADS=" : "OMP_NUM_THREADS unset: the OpenMP "
+                "default, one per core", t->env, "", t->node_ranks, t->node_threads, t->cores,
+                t->quota ? " (its CPU quota)" : "", load);
+    settings_warn_threads(t);
+}
+
 void report_start(sim_t *s, const outputs *o, const run_cli *c)
 {
     const struct scene *sc = s->sc;
     const char *scheme = !s->seg_on ? "off"
                          : sc->segregation.scheme == SEG_SCHEME_CONSERVATIVE ? "conservative"
                          : sc->segregation.scheme == SEG_SCHEME_DIRECT       ? "direct" : "paper";
+    run_threads th;
+    settings_threads(&th);
     message("sphseg %s: %s, %zu material + %zu dummy particles, h = %.4g m, flow %s, segregation %s, "
-            "%d rank(s), backend %s, output %s", SPHSEG_VERSION, sc->path, s->n_material,
-            (size_t)comm_sum_ll((long long)s->p.n) - s->n_material,
-            (double)s->seg.k.h, s->flow_on ? "computed" : "prescribed", scheme, comm_size(), s->be->name, o->dir);
+            "%d rank(s) x %d OpenMP thread(s), backend %s, output %s", SPHSEG_VERSION, sc->path, s->n_material,
+            (size_t)comm_sum_ll((long long)s->p.n) - s->n_material, (double)s->seg.k.h,
+            s->flow_on ? "computed" : "prescribed", scheme, comm_size(), th.threads, s->be->name, o->dir);
+    threads_log(&th);
     tuning_log();
     char wl[1024], st[128];
     message("container: walls %s", wall_list(s, 1, wl, sizeof wl));
@@ -146,6 +173,7 @@ void report_start(sim_t *s, const outputs *o, const run_cli *c)
         settings_warn_gradient_correction(sc);
     }
     if (s->flow_on && sc->geometry.type == GEOM_DRUM) settings_warn_drum(sc); /* measured on drums */
+    settings_warn_scales(sc, s->flow_on, s->seg_on);
     if (s->win.on && sc->segregation.every_k)
         message("concentration: one midpoint step every %u flow steps (Segregation:every), at the window's mean "
                 "shear rate", sc->segregation.every_k);

@@ -225,7 +225,7 @@ void run_steps(sim_t *s, outputs *o, ckpt_run *rs)
             t_ck = ck_every > 0 ? next_event(s->t, ck_every, INFINITY) : INFINITY;
         }
         io += diag_wall() - t_io;
-        diag_progress(&d, s, 0);
+        diag_progress(&d, s, 0, io);
         if (stop) {
             report_stopped(o, s, &ck, stop);
             break;

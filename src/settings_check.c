@@ -1,9 +1,15 @@
 /* settings_check.c — the run's settings against what the build and the
  * machine can do (exit 2) and against the range measured accurate
  * (warnings); src/settings_check.h. */
+#define _GNU_SOURCE /* sched_getaffinity, CPU_COUNT, getloadavg */
 #include "settings_check.h"
 #include <math.h>
+#include <sched.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+#include "core/omp_shim.h"
 #include "core/error.h"
 #include "core/tuning.h"
 #include "mpi/comm.h"
@@ -135,4 +141,155 @@ void settings_warn_drum(const struct scene *sc)
                 "grains 6 %% slower at 1.5; at 6 the same as unfiltered, whatever cfl_flow, within 0.7 %%; "
                 "docs/granular.md \"The time step and the Shepard filter\"); with a shorter step raise "
                 "Flow:shepard_every in proportion", every_ac, FLOW_SHEPARD_AC_MIN, FLOW_SHEPARD_AC_MIN);
+}
+
+/* Grain sizes against the container and dr. The continuum (mu(I), eq.
+ * 2.13; the segregation's V and D, eq. 2.7) averages over many grains: the
+ * coarsest scene it was checked on, the paper's shear box (van der Vaart et
+ * al. 2015: 37 mm wide, 8 mm beads), holds 4.6 large grains across, the
+ * shipped chute layer 5; fewer than 4 is outside what the model is meant
+ * for. An SPH particle stands for a piece of that continuum: the shipped
+ * scenes put at most 6.4 particle spacings in a large grain
+ * (inputs/column_2d.yml; the paper's Table 1: 1), and at 50 a kernel
+ * support (2h = 3 dr) spans a seventeenth of a grain, detail the model does
+ * not have. Either is most often a size in mm typed as m. */
+#define SCALE_GRAINS_ACROSS_MIN 4.0
+#define SCALE_GRAIN_DR_MAX 50.0
+/* A drum's Froude number omega^2 R / g: rolling 1e-4 to 1e-2, cascading
+ * 1e-3 to 1e-1, cataracting 0.1 to 1, centrifuging from 1 (Mellmann 2001,
+ * Powder Technol. 118, 251; the paper's drum runs 9.8e-4 at 5 rpm). From
+ * 0.1 grains leave the bed in free flight, which the dense continuum does
+ * not model. */
+#define SCALE_FROUDE_MAX 0.1
+
+static void warn_grains(const struct scene *sc)
+{
+    const struct scene_geometry *g = &sc->geometry;
+    double d = sc->grains.d_large, ext[3], L = INFINITY;
+    scene_extent(sc, ext);
+    for (int a = 0; a < 3; ++a)
+        if (ext[a] > 0) L = fmin(L, ext[a]);
+    const char *what = g->type == GEOM_DRUM ? (g->dim == 3 && g->length < 2 * g->radius ? "the drum's length"
+                                                                                         : "the drum's diameter")
+                       : g->type == GEOM_CONTAINER ? "the container's walls and regions, at their narrowest"
+                                                   : "the box's smallest side";
+    char where[512];
+    if (isfinite(L) && d * SCALE_GRAINS_ACROSS_MIN > L)
+        warning("%s: Grains:d_large = %.3g m: %s, %.3g m, holds %.2g large grains across, fewer than %g: the continuum "
+                "(mu(I), eq. 2.13; the segregation's V and D, eq. 2.7) averages over many grains, and the coarsest "
+                "scene it was checked on, the paper's shear box (37 mm wide, 8 mm beads), holds 4.6; grain sizes are "
+                "in m (mm typed as m?)", scene_key_where(sc, "Grains", "d_large", where, sizeof where), d, what, L,
+                L / d, SCALE_GRAINS_ACROSS_MIN);
+    if (d > SCALE_GRAIN_DR_MAX * g->dr)
+        warning("%s: Grains:d_large = %.3g m is %.3g particle spacings Geometry:dr = %.3g m, more than %g: an SPH "
+                "particle stands for a piece of the continuum holding many grains (the shipped scenes put at most "
+                "6.4 dr in a large grain, the paper's Table 1 one), and a kernel support 2h = %.3g m resolves a "
+                "small part of one grain; grain sizes are in m (mm typed as m?)", scene_key_where(sc, "Grains",
+                "d_large", where, sizeof where), d, d / g->dr, g->dr, SCALE_GRAIN_DR_MAX, 2 * g->h_factor * g->dr);
+}
+
+/* One turning drum's Froude number against SCALE_FROUDE_MAX. */
+static void warn_froude(const struct scene *sc, const char *where, const char *key, double rpm, double R)
+{
+    const double *gv = sc->physics.gravity;
+    double omega = rpm * 2 * M_PI / 60, gn = sqrt(gv[0] * gv[0] + gv[1] * gv[1] + gv[2] * gv[2]);
+    double fr = omega * omega * R / gn;
+    if (fr >= SCALE_FROUDE_MAX)
+        warning("%s: %s = %g rev/min on a drum of radius %.3g m gives a Froude number omega^2 R / g = %.3g, at least "
+                "%g: from 0.1 grains are thrown off the bed (cataracting), from 1 the material centrifuges with the "
+                "wall, and the dense continuum models neither; rolling and cascading run at Fr 1e-4 to 1e-1 "
+                "(Mellmann 2001; the paper's drum 9.8e-4 at 5 rpm); Fr = %g is %.3g rev/min here", where, key, rpm,
+                R, fr, SCALE_FROUDE_MAX, SCALE_FROUDE_MAX, 60 / (2 * M_PI) * sqrt(SCALE_FROUDE_MAX * gn / R));
+}
+
+void settings_warn_scales(const struct scene *sc, int flow_on, int seg_on)
+{
+    int grains_used = (flow_on && sc->material.model == MAT_GRANULAR) ||
+                      (seg_on && sc->segregation.model == SEG_MODEL_SHEAR_RATE);
+    if (grains_used) warn_grains(sc);
+    if (!flow_on) return;
+    char where[512], key[96];
+    if (sc->geometry.type == GEOM_DRUM)
+        warn_froude(sc, scene_key_where(sc, "Walls", "rpm", where, sizeof where), "Walls:rpm", sc->walls.rpm,
+                    sc->geometry.radius);
+    if (sc->geometry.type != GEOM_CONTAINER) return;
+    for (unsigned i = 0; i < sc->container.walls_count; ++i) {
+        const struct scene_wall *w = &sc->container.walls[i];
+        if (w->shape != CWALL_CYLINDER || w->motion != CWALL_TURNING || w->material != CWALL_INSIDE) continue;
+        char k[48];
+        snprintf(k, sizeof k, "walls:%u:rpm", i + 1);
+        snprintf(key, sizeof key, "Container:walls:%u:rpm", i + 1);
+        warn_froude(sc, scene_key_where(sc, "Container", k, where, sizeof where), key, w->rpm, w->radius);
+    }
+}
+
+/* The cores a cgroup's CPU quota allows (cgroup v2 cpu.max, v1
+ * cpu.cfs_quota_us / cpu.cfs_period_us), rounded up; 0 without a quota. */
+static int cgroup_cores(void)
+{
+    double quota = -1, period = 0;
+    FILE *f = fopen("/sys/fs/cgroup/cpu.max", "r");
+    if (f) {
+        char q[32] = "";
+        if (fscanf(f, "%31s %lf", q, &period) == 2 && strcmp(q, "max") != 0) quota = atof(q);
+        fclose(f);
+    } else if ((f = fopen("/sys/fs/cgroup/cpu/cpu.cfs_quota_us", "r"))) {
+        if (fscanf(f, "%lf", &quota) != 1) quota = -1;
+        fclose(f);
+        if ((f = fopen("/sys/fs/cgroup/cpu/cpu.cfs_period_us", "r"))) {
+            if (fscanf(f, "%lf", &period) != 1) period = 0;
+            fclose(f);
+        }
+    }
+    return quota > 0 && period > 0 ? (int)ceil(quota / period - 1e-9) : 0;
+}
+
+void settings_threads(run_threads *t)
+{
+    memset(t, 0, sizeof *t);
+    t->threads = omp_get_max_threads();
+    t->ranks = comm_size();
+    t->node_ranks = comm_local_size();
+    t->node_threads = comm_node_sum_ll(t->threads);
+    /* the cores of this node the run may use: the union of its ranks'
+     * affinity masks (the whole node when a rank cannot tell), at most the
+     * cgroup's quota */
+    cpu_set_t mine;
+    CPU_ZERO(&mine);
+    int known = sched_getaffinity(0, sizeof mine, &mine) == 0;
+    t->rank_cores = known ? CPU_COUNT(&mine) : (int)sysconf(_SC_NPROCESSORS_ONLN);
+    if (!known)
+        for (int c = 0; c < t->rank_cores && c < CPU_SETSIZE; ++c) CPU_SET(c, &mine);
+    comm_node_bor((unsigned char *)&mine, (int)sizeof mine);
+    t->cores = CPU_COUNT(&mine);
+    int quota = cgroup_cores();
+    if (quota > 0 && quota < t->cores) t->cores = quota, t->quota = 1;
+    if (quota > 0 && quota < t->rank_cores) t->rank_cores = quota;
+    /* the worst node and rank, for rank 0's warning */
+    t->over_nodes = (int)comm_sum_ll(comm_local_rank() == 0 && t->node_threads > t->cores);
+    t->over_ranks = (int)comm_sum_ll(t->threads > t->rank_cores);
+    double la[1];
+    t->load = getloadavg(la, 1) == 1 ? la[0] : -1;
+    const char *env = getenv("OMP_NUM_THREADS");
+    snprintf(t->env, sizeof t->env, "%.40s", env ? env : "");
+#ifdef _OPENMP
+    t->openmp = 1;
+#endif
+}
+
+void settings_warn_threads(const run_threads *t)
+{
+    if (t->over_nodes)
+        warning("%lld OpenMP threads on %s node (%d rank(s) x %d) share %d core(s)%s: oversubscribed threads wait for "
+                "each other at every parallel loop, and the run goes several times slower (issue 55: the shear box on "
+                "a loaded 2-core machine took 136 s with the default threads, 26 s with one); set OMP_NUM_THREADS to "
+                "at most the cores over the ranks per node, %d here (OMP_NUM_THREADS=%d mpirun -np ... sphseg ...)",
+                t->node_threads, t->over_nodes > 1 ? "each such" : "rank 0's", t->node_ranks, t->threads, t->cores,
+                t->quota ? " (its CPU quota)" : "", t->cores / t->node_ranks > 0 ? t->cores / t->node_ranks : 1,
+                t->cores / t->node_ranks > 0 ? t->cores / t->node_ranks : 1);
+    else if (t->over_ranks)
+        warning("%d rank(s) run more OpenMP threads (%d) than the cores they are bound to (%d on rank 0): the threads "
+                "of a rank share its cores and wait for each other at every parallel loop; set OMP_NUM_THREADS to "
+                "the cores per rank, or bind each rank to as many cores as it has threads (mpirun --map-by "
+                "slot:PE=N, srun --cpus-per-task=N)", t->over_ranks, t->threads, t->rank_cores);
 }

@@ -43,4 +43,30 @@ void settings_warn_gradient_correction(const struct scene *sc);
  * computed granular flow. */
 void settings_warn_mu_law(const struct scene *sc);
 
+/* Scales outside what the model is meant for, once at start-up: the large
+ * grains against the container (fewer than 4 across) and against
+ * Geometry:dr (more than 50 dr), where the grain sizes are read (a granular
+ * flow's mu(I), the shear_rate segregation model); a turning drum's (or a
+ * container's turning cylinder's) Froude number omega^2 R / g from 0.1,
+ * cataracting towards centrifuging (Mellmann 2001). */
+void settings_warn_scales(const struct scene *sc, int flow_on, int seg_on);
+
+/* The run's threads and the cores it has (collective, at start-up): OpenMP
+ * threads per rank (omp_get_max_threads), ranks, ranks and threads on this
+ * node, the node's cores the run may use (the union of its ranks' affinity
+ * masks, at most a cgroup CPU quota), this rank's own; the nodes whose
+ * threads outnumber their cores and the ranks bound to fewer cores than
+ * they have threads (all ranks together), the load average, and
+ * OMP_NUM_THREADS as set (empty: unset). */
+typedef struct run_threads {
+    int threads, ranks, node_ranks, cores, rank_cores, quota, over_nodes, over_ranks, openmp;
+    long long node_threads;
+    double load; /* 1-minute load average of this node, < 0 if unknown */
+    char env[48];
+} run_threads;
+void settings_threads(run_threads *t);
+/* Oversubscription: more threads on a node than its cores, or a rank with
+ * more threads than the cores it is bound to (warnings, rank 0). */
+void settings_warn_threads(const run_threads *t);
+
 #endif

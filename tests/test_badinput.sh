@@ -6,7 +6,9 @@
 #
 # Cases: each tests/scenes_bad/*.yml and setup/*.yml, whose first line "# expect: NAME:LINE: ..."
 # gives the start of the message after the directory; a missing file; a
-# directory; bad -P overrides on inputs/shearbox_2d.yml.
+# directory; an empty file and one of comments only; bad -P overrides on
+# inputs/shearbox_2d.yml; too many particles blamed on the key set by -P (a
+# drum's radius, a box's width, a container's walls) rather than on dr.
 # Prints PASS name / FAIL name lines; exits 1 if any case fails.
 #   tests/test_badinput.sh build/sphseg
 set -u
@@ -68,6 +70,19 @@ check override_unknown_section "-P Foo:dr=1: Foo: unknown section" "$good" -P Fo
 check override_malformed "-P Geometry:dr: malformed override" "$good" -P Geometry:dr
 check override_range "-P Geometry:dr=-1: Geometry:dr: must be > 0" "$good" -P Geometry:dr=-1
 check memory_need "-P Geometry:dr=1e-7: Geometry:dr: 1e-07 m gives" "$good" -P Geometry:dr=1e-7
+# issue 55: the key most likely mistyped is the one named (a size set by -P, not dr)
+drum2d=$(dirname "$here")/inputs/drum_2d_EV.yml
+check memory_need_radius "-P Geometry:radius=50: Geometry:radius: 50 m with Geometry:dr 0.0005 m gives about" \
+    "$drum2d" -P Geometry:radius=50
+check memory_need_width "-P Geometry:width=1e5: Geometry:width: 1e+05 m with Geometry:dr 0.00174 m gives about" \
+    "$good" -P Geometry:width=1e5
+check memory_need_walls "-P Container:walls=[{from: [0, 1000], to: [0, 0]}, {from: [0, 0], to: [1000, 0]}]: Container:walls: walls and regions spanning 1e+03 x 1e+03 m with Geometry:dr 0.001 m give about" \
+    "$(dirname "$here")/inputs/hopper_2d.yml" -P "Container:walls=[{from: [0, 1000], to: [0, 0]}, {from: [0, 0], to: [1000, 0]}]"
+# issue 55: an empty scene file is said to be empty, not missing Run:t_end
+: >"$tmp/empty.yml"
+printf '# a scene to come\n\n' >"$tmp/comments.yml"
+check empty_file "$tmp/empty.yml: the file is empty (0 bytes)" "$tmp/empty.yml"
+check empty_file_comments "$tmp/comments.yml: the file is empty (no YAML content" "$tmp/comments.yml"
 check override_type "-P Run:t_end=abc: Run:t_end: expected a number" "$good" -P Run:t_end=abc
 check override_nan "-P Segregation:D=.nan: Segregation:D: not a finite number" \
     "$good" -P Segregation:D=.nan

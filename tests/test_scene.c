@@ -411,7 +411,12 @@ static void test_unreadable(void **state)
                 BAD_DIR "/does_not_exist.yml: cannot read: No such file or directory", 1);
     expect_fail(BAD_DIR, 0, NULL, BAD_DIR ": cannot read: Is a directory", 1);
     write_text(tmp_path("empty.yml"), "");
-    expect_fail(tmp_path("empty.yml"), 0, NULL, "empty.yml:1: Run:t_end: required key missing", 0);
+    expect_fail(tmp_path("empty.yml"), 0, NULL, "empty.yml: the file is empty (0 bytes)", 0);
+    /* comments alone, or with -P overrides: still an empty file, not a missing key (issue 55) */
+    write_text(tmp_path("empty.yml"), "# a comment\n\n");
+    expect_fail(tmp_path("empty.yml"), 0, NULL, "empty.yml: the file is empty (no YAML content", 0);
+    const char *over[] = {"Run:t_end=1"};
+    expect_fail(tmp_path("empty.yml"), 1, over, "empty.yml: the file is empty (no YAML content", 0);
 }
 
 static void test_bad_overrides(void **state)

@@ -101,6 +101,7 @@ static void diag_start(diag *d, const char *outdir, const sim_t *s, double small
     d->wall0 = d->wall_last_progress = diag_wall();
     d->t0 = s->t;
     d->step0 = s->step;
+    d->ntot = (double)comm_sum_ll((long long)s->p.n);
     d->f = NULL;
     snprintf(d->path, sizeof d->path, "%s/diagnostics.csv", outdir);
     if (comm_rank() != 0) return;
@@ -134,6 +135,7 @@ void diag_reopen(diag *d, const char *outdir, const sim_t *s, double small0, dou
 void diag_row(diag *d, const sim_t *s)
 {
     diag_values v = diag_measure(s);
+    d->ntot = (double)comm_sum_ll((long long)s->p.n); /* an outlet removes particles */
     double inside_out = v.small_volume + v.small_outflow; /* an outlet's outflow still counts */
     v.drift = d->small0 != 0 ? (inside_out - d->small0) / d->small0 : inside_out;
     d->max_drift = fmax(d->max_drift, fabs(v.drift));
@@ -162,17 +164,17 @@ static void diag_hms(double sec, char *buf, size_t n)
     snprintf(buf, n, "%02ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
 }
 
-void diag_progress(diag *d, const sim_t *s, int force)
+void diag_progress(diag *d, const sim_t *s, int force, double io)
 {
     double now = diag_wall();
     if (!force && now - d->wall_last_progress < s->sc->run.progress_s) return;
     d->wall_last_progress = now;
-    double el = now - d->wall0, frac = s->t / s->sc->run.t_end, done = s->t - d->t0;
-    double rate = el > 0 ? (double)(s->step - d->step0) * (double)s->p.n / el : 0;
+    double el = now - d->wall0, frac = s->t / s->sc->run.t_end, done = s->t - d->t0, stepping = el - io;
+    double rate = stepping > 0 ? (double)(s->step - d->step0) * d->ntot / stepping : 0;
     char eta[32];
     diag_hms(done > 0 ? el * (s->sc->run.t_end - s->t) / done : 0, eta, sizeof eta);
-    message("step %8ld  t = %10.4f s (%5.1f%%)  dt = %.3e s  %.3e particle-steps/s  ETA %s",
-            s->step, s->t, 100 * frac, s->dt, rate, eta);
+    message("step %8ld  t = %10.4f s (%5.1f%%)  dt = %.3e s  %.3e particle-steps/s (all ranks, output excluded)  "
+            "ETA %s", s->step, s->t, 100 * frac, s->dt, rate, eta);
 }
 
 void diag_close(diag *d)

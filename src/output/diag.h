@@ -13,6 +13,7 @@ typedef struct diag {
     int warned;
     double wall0, wall_last_progress;
     double t0;        /* simulated time at the start of this session (restarts) */
+    double ntot;      /* particles of all ranks, at the start and at the last diagnostics row */
     long step0;       /* step at the start of this session */
 } diag;
 
@@ -34,8 +35,11 @@ void diag_open(diag *d, const char *outdir, const sim_t *s);
 void diag_reopen(diag *d, const char *outdir, const sim_t *s, double small0, double max_drift, int warned);
 /* Append one row (collective: reduces over ranks), warn on drift. */
 void diag_row(diag *d, const sim_t *s);
-/* Progress line on rank 0 if progress_s wall seconds have passed (or force). */
-void diag_progress(diag *d, const sim_t *s, int force);
+/* Progress line on rank 0 if progress_s wall seconds have passed (or force;
+ * rank-local: no collective). Its rate counts the particles of all ranks
+ * (d->ntot) per second of this session's wall time less io, the seconds
+ * spent in output and diagnostics: the done: line's rate, so far. */
+void diag_progress(diag *d, const sim_t *s, int force, double io);
 /* Rename diagnostics.csv.part to diagnostics.csv. */
 void diag_close(diag *d);
 

@@ -458,20 +458,52 @@ void setup_particles(sim_t *s)
     if (s->flow_on) setup_stress(s);
 }
 
+/* The size key of the scene that sets its particle count with dr, for the
+ * too-many-particles error: the drum's radius (and a 3D drum's length), a
+ * box's width, height, depth or runout, a container's walls; the one of
+ * these most off a lab-sized container (about 5 cm, the shipped scenes
+ * 1-16 cm) in log. */
+static const char *setup_size_key(const struct scene *sc, double *value)
+{
+    const struct scene_geometry *g = &sc->geometry;
+    const struct {
+        const char *key;
+        double v;
+        int on;
+    } k[] = {{"radius", g->radius, g->type == GEOM_DRUM},
+             {"length", g->length, g->type == GEOM_DRUM && g->dim == 3},
+             {"width", g->width, g->type == GEOM_SHEARBOX || g->type == GEOM_COLUMN},
+             {"height", g->height, g->type == GEOM_SHEARBOX || g->type == GEOM_COLUMN},
+             {"depth", g->depth, (g->type == GEOM_COLUMN || g->type == GEOM_CONTAINER) && g->dim == 3},
+             {"runout", g->runout, g->type == GEOM_COLUMN && g->runout > 0}};
+    const char *best = NULL;
+    double off = -1;
+    for (size_t i = 0; i < sizeof k / sizeof k[0]; ++i) {
+        double o = fabs(log10(k[i].v / 0.05)) + 100.0 * scene_key_overridden(sc, "Geometry", k[i].key);
+        if (k[i].on && o > off) best = k[i].key, off = o, *value = k[i].v;
+    }
+    return best;
+}
+
 /* The particle count of the scene in O(1), from areas and volumes (within a
  * few per cent), before any lattice index is computed: a tiny dr is refused
  * in no time, and no lround overflows. Exit 2 when it would clearly not fit
- * (setup_alloc checks the exact count later). */
+ * (setup_alloc checks the exact count later), naming the key the user most
+ * likely mistyped: the one a -P override set (dr or a size), else the one
+ * further off its usual scale (dr about 1 mm, a container about 5 cm). */
 static void setup_check_size(const struct scene *sc)
 {
     const struct scene_geometry *g = &sc->geometry;
-    double dr = g->dr, nl = ceil(2.0 * g->h_factor - 1e-9), n;
+    double dr = g->dr, nl = ceil(2.0 * g->h_factor - 1e-9), n, ext[3];
+    scene_extent(sc, ext);
     if (g->type == GEOM_DRUM) {
         double r = g->radius - 0.5 * dr, H = (2 * g->fill - 1) * g->radius, hr = fmax(-1.0, fmin(1.0, H / r));
         double plane = r * r * (M_PI - acos(hr)) + H * sqrt(fmax(0.0, r * r - H * H)); /* material area */
         double rings = 2 * M_PI * nl * (g->radius + 0.5 * nl * dr) * dr, disc = M_PI * pow(g->radius + nl * dr, 2);
         double nz = g->dim == 3 ? g->length / dr : 1;
         n = nz * (plane + rings) / (dr * dr) + (g->dim == 3 ? 2 * nl * disc / (dr * dr) : 0);
+    } else if (g->type == GEOM_CONTAINER) { /* the box around its walls and regions, at most */
+        n = (ext[0] / dr + 2 * nl) * (ext[1] / dr + 2 * nl) * (g->dim == 3 ? ext[2] / dr + 2 * nl : 1);
     } else if (g->dim == 3) {
         n = (g->width / dr + 2 * nl) * (g->height / dr + 2 * nl) * (g->depth / dr + 2 * nl);
     } else {
@@ -479,11 +511,29 @@ static void setup_check_size(const struct scene *sc)
     }
     double need = n / comm_size() * (double)(part_bytes_per_particle() + 64);
     double have = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
-    char where[512];
-    if (!(need <= 0.9 * have) || !(n < 1e15))
-        input_error("%s: Geometry:dr: %.3g m gives about %.3g particles, %.3g GiB on each of %d rank(s); this "
-                    "machine has %.1f GiB", scene_key_where(sc, "Geometry", "dr", where, sizeof where), dr, n,
-                    need / 1073741824.0, comm_size(), have / 1073741824.0);
+    if (need <= 0.9 * have && n < 1e15) return;
+    char where[512], mem[160];
+    snprintf(mem, sizeof mem, "%.3g GiB on each of %d rank(s); this machine has %.1f GiB", need / 1073741824.0,
+             comm_size(), have / 1073741824.0);
+    double size = 0;
+    const char *key = setup_size_key(sc, &size);
+    int wall_key = g->type == GEOM_CONTAINER && !(key && scene_key_overridden(sc, "Geometry", key));
+    /* how far off its usual scale each is, in decades; a -P override first */
+    double off_dr = fabs(log10(dr / 1e-3)) + 100.0 * scene_key_overridden(sc, "Geometry", "dr"), off_size = -1;
+    if (wall_key)
+        off_size = fabs(log10(fmax(ext[0], ext[1]) / 0.05)) + 100.0 * scene_key_overridden(sc, "Container", "walls");
+    else if (key)
+        off_size = fabs(log10(size / 0.05)) + 100.0 * scene_key_overridden(sc, "Geometry", key);
+    char box[96];
+    snprintf(box, sizeof box, g->dim == 3 ? "%.3g x %.3g x %.3g m" : "%.3g x %.3g m", ext[0], ext[1], ext[2]);
+    if (off_dr >= off_size) /* dr, as before: "Geometry:dr: X m gives about ..." */
+        input_error("%s: Geometry:dr: %.3g m gives about %.3g particles in a container %s, %s",
+                    scene_key_where(sc, "Geometry", "dr", where, sizeof where), dr, n, box, mem);
+    if (wall_key) /* the walls (and regions) span more than they should */
+        input_error("%s: Container:walls: walls and regions spanning %s with Geometry:dr %.3g m give about %.3g "
+                    "particles, %s", scene_key_where(sc, "Container", "walls", where, sizeof where), box, dr, n, mem);
+    input_error("%s: Geometry:%s: %.3g m with Geometry:dr %.3g m gives about %.3g particles, %s",
+                scene_key_where(sc, "Geometry", key, where, sizeof where), key, size, dr, n, mem);
 }
 
 /* Each module's context from its own keys; setup_contexts puts them

@@ -293,6 +293,202 @@ static void ctr_check_near(const sim_t *s, const ctr_lattice *L, const ctr_seg *
     free(near);
 }
 
+/* The signed area (m^2) that the scene's segments sweep around the mean of
+ * their ends, sum (a - c) x (b - c) / 2: > 0 when they go counter-clockwise
+ * (the material on the left of each from -> to, inside them), < 0 when
+ * clockwise. The names of the segments with that mean on their right go
+ * into names (comma separated); *first is the entry of the first one. */
+static double ctr_signed_area(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg, char *names, size_t n,
+                              unsigned *first)
+{
+    double cx = 0, cy = 0, area = 0;
+    int m = 0;
+    names[0] = 0;
+    *first = 0;
+    for (int k = 0; k < L->nw; ++k)
+        if (s->flow.w.prim[k].shape == WALL_PLANE) cx += seg[k].ax + seg[k].bx, cy += seg[k].ay + seg[k].by, m += 2;
+    if (m < 4) return 0; /* one segment sweeps no area */
+    cx /= m, cy /= m;
+    size_t used = 0;
+    for (int k = 0; k < L->nw; ++k) {
+        if (s->flow.w.prim[k].shape != WALL_PLANE) continue;
+        double c = (seg[k].ax - cx) * (seg[k].by - cy) - (seg[k].bx - cx) * (seg[k].ay - cy);
+        area += 0.5 * c;
+        if (c < 0 && used < n) {
+            if (!used) *first = L->ent[k];
+            used += (size_t)snprintf(names + used, n - used, "%s%s", used ? ", " : "", s->wall_name[k]);
+        }
+    }
+    return area;
+}
+
+/* A region site behind the walls: when the segments go clockwise (the
+ * material on the right of each from -> to), the order is the mistake, not
+ * the region, and the error says so, naming the walls. When they go
+ * counter-clockwise but some turn their right to the middle of the walls'
+ * ends, hint (into hint[n], else empty) that those may be reversed. */
+static void ctr_check_order(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg, char *hint, size_t n)
+{
+    char names[400], where[512];
+    unsigned first;
+    double area = ctr_signed_area(s, L, seg, names, sizeof names, &first);
+    hint[0] = 0;
+    if (area < -1e-6 * L->dr * L->dr)
+        input_error("%s: Container:walls: the walls go clockwise, with the material on their right (%s): a wall "
+                    "keeps the material on its left going from -> to, so a container lists its walls "
+                    "counter-clockwise; swap each one's from and to", ctr_where(s->sc, "walls", first, where,
+                    sizeof where), names);
+    if (area > 1e-6 * L->dr * L->dr && names[0])
+        snprintf(hint, n, " (wall(s) %s go against the others, with the middle of the walls on their right: a "
+                 "wall keeps the material on its left going from -> to; swap from and to where it belongs on the "
+                 "other side)", names);
+}
+
+/* The first wall that the ray from (px, py) along the unit vector (rx, ry)
+ * meets (its 1-based primitive id, 0 if none), its distance, and whether it
+ * meets the wall's front (the material's side: r . n < 0, n into the
+ * material) or its back. Segments within their ends (a shared end meets
+ * either), cylinders at their first crossing; gates count (at t = 0). */
+static int ctr_ray(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg, double px, double py, double rx,
+                   double ry, int *front)
+{
+    int hit = 0;
+    double best = INFINITY;
+    *front = 0;
+    for (int k = 0; k < L->nw; ++k) {
+        const wall_prim *q = &s->flow.w.prim[k];
+        double t = INFINITY, nx, ny;
+        if (q->shape == WALL_CYLINDER) {
+            double dx = px - q->p[0], dy = py - q->p[1], b = dx * rx + dy * ry;
+            double disc = b * b - (dx * dx + dy * dy - (double)q->radius * q->radius);
+            if (disc < 0) continue;
+            double t0 = -b - sqrt(disc), t1 = -b + sqrt(disc);
+            t = t0 > 0 ? t0 : t1 > 0 ? t1 : INFINITY;
+            nx = (px + t * rx - q->p[0]) / q->radius, ny = (py + t * ry - q->p[1]) / q->radius; /* radially out */
+            if (!q->outside) nx = -nx, ny = -ny; /* a drum's material is inside */
+        } else {
+            double ex = seg[k].bx - seg[k].ax, ey = seg[k].by - seg[k].ay, den = rx * ey - ry * ex;
+            if (fabs(den) < 1e-12 * hypot(ex, ey)) continue; /* parallel */
+            double ax = seg[k].ax - px, ay = seg[k].ay - py, u = (ax * ry - ay * rx) / den;
+            if (u < -1e-9 || u > 1 + 1e-9) continue;
+            t = (ax * ey - ay * ex) / den;
+            nx = q->n[0], ny = q->n[1];
+        }
+        /* a site on the wall's line (a 45-degree wall through lattice sites) meets it at t = 0 going into
+         * it, not going away from it */
+        double rn = rx * nx + ry * ny, eps = 1e-9 * L->dr;
+        if (t > -eps && (t > eps || rn < 0) && t < best) best = t, hit = k + 1, *front = rn < 0;
+    }
+    return hit;
+}
+
+/* The two ends of different segments nearest to (x, y) that join no other
+ * segment, as "NAME's (x, y) and NAME's (x, y) m, D m apart" in b (empty
+ * when there are not two). */
+static void ctr_free_ends(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg, double x, double y, char *b,
+                          size_t n)
+{
+    int kb[2] = {-1, -1};
+    double best[2] = {INFINITY, INFINITY}, px[2] = {0, 0}, py[2] = {0, 0};
+    b[0] = 0;
+    for (int k = 0; k < L->nw; ++k) {
+        if (s->flow.w.prim[k].shape != WALL_PLANE) continue;
+        for (int e = 0; e < 2; ++e) {
+            double ex = e ? seg[k].bx : seg[k].ax, ey = e ? seg[k].by : seg[k].ay;
+            int joined = 0;
+            for (int o = 0; o < L->nw && !joined; ++o)
+                if (o != k && s->flow.w.prim[o].shape == WALL_PLANE)
+                    joined = hypot(seg[o].ax - ex, seg[o].ay - ey) < 1e-9 * L->dr ||
+                             hypot(seg[o].bx - ex, seg[o].by - ey) < 1e-9 * L->dr;
+            double d = hypot(ex - x, ey - y);
+            if (joined) continue;
+            if (d < best[0]) {
+                if (kb[0] != k) best[1] = best[0], kb[1] = kb[0], px[1] = px[0], py[1] = py[0];
+                best[0] = d, kb[0] = k, px[0] = ex, py[0] = ey;
+            } else if (d < best[1] && k != kb[0]) {
+                best[1] = d, kb[1] = k, px[1] = ex, py[1] = ey;
+            }
+        }
+    }
+    if (kb[1] >= 0)
+        snprintf(b, n, "; the wall ends nearest to it that join no other wall: %s's (%.6g, %.6g) and %s's (%.6g, "
+                 "%.6g) m, %.3g m apart", s->wall_name[kb[0]], px[0], py[0], s->wall_name[kb[1]], px[1], py[1],
+                 hypot(px[0] - px[1], py[0] - py[1]));
+}
+
+/* Material at the start that no wall holds where the scene meant it to be
+ * (warnings, one per region and kind; the run goes on): a site of a fill
+ * with no wall across gravity on one side (a fill above a wall's top stands
+ * free and spills; below an opening or in a gap between a wall and a gate
+ * it falls at once), or any region's site that meets the back of a wall
+ * first along or across gravity (behind a gate, outside the container).
+ * A periodic axis holds what it runs along. */
+static void ctr_check_held(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg)
+{
+    const struct scene *sc = s->sc;
+    const double *g = sc->physics.gravity, gl = hypot(g[0], g[1]);
+    if (!(gl > 0)) return; /* gravity along z: nothing falls in the plane */
+    const double dx = g[0] / gl, dy = g[1] / gl; /* down */
+    const double dir[4][2] = {{dx, dy}, {-dx, -dy}, {-dy, dx}, {dy, -dx}}; /* down, up, across both ways */
+    const unsigned per = sc->geometry.periodic;
+    const unsigned nr = sc->container.regions_count;
+    long *n_free = calloc(nr, sizeof *n_free), *n_back = calloc(nr, sizeof *n_back);
+    double (*at)[4] = calloc(nr, sizeof *at); /* the first free site (x, y), the first behind (x, y) */
+    int *back_wall = calloc(nr, sizeof *back_wall);
+    if (!n_free || !n_back || !at || !back_wall) error_exit(1, "out of memory");
+    for (long j = 0; j < L->nj; ++j)
+        for (long i = 0; i < L->ni; ++i) {
+            int c = L->site[j * L->ni + i];
+            if (c >= 0) continue;
+            unsigned r = (unsigned)(-c - 1);
+            double x = site_x(L, i), y = site_y(L, j);
+            int free_side = 0, back = 0;
+            for (int d = 0; d < 4 && !back; ++d) {
+                int front, w = ctr_ray(s, L, seg, x, y, dir[d][0], dir[d][1], &front);
+                int along_period = ((per & PERIODIC_X) && fabs(dir[d][0]) > 1e-9) ||
+                                   ((per & PERIODIC_Y) && fabs(dir[d][1]) > 1e-9);
+                if (w && !front) back = w;
+                else if (!w && d >= 2 && !along_period) free_side = 1;
+            }
+            if (back && !n_back[r]++) at[r][2] = x, at[r][3] = y, back_wall[r] = back;
+            if (!back && free_side && sc->container.regions[r].shape == REGION_FILL && !n_free[r]++)
+                at[r][0] = x, at[r][1] = y;
+        }
+    double top = -INFINITY; /* the highest wall end, up against gravity */
+    for (int k = 0; k < L->nw; ++k) {
+        const wall_prim *q = &s->flow.w.prim[k];
+        if (q->shape == WALL_CYLINDER)
+            top = fmax(top, -(q->p[0] * dx + q->p[1] * dy) + q->radius);
+        else
+            top = fmax(top, fmax(-(seg[k].ax * dx + seg[k].ay * dy), -(seg[k].bx * dx + seg[k].by * dy)));
+    }
+    char where[512];
+    for (unsigned r = 0; r < nr; ++r) {
+        if (n_free[r]) {
+            double h = -(at[r][0] * dx + at[r][1] * dy);
+            char ends[256] = "";
+            if (h <= top) ctr_free_ends(s, L, seg, at[r][0], at[r][1], ends, sizeof ends);
+            warning("%s: Container:regions:%u: %ld of its sites have no wall beside them across gravity at the start "
+                    "(the first at (%.6g, %.6g) m): %s%s; lower its level or close the walls", ctr_where(sc, "regions",
+                    r, where, sizeof where), r + 1, n_free[r], at[r][0], at[r][1],
+                    h > top ? "the fill rises above the walls' highest end and stands free on top of them, spilling "
+                              "at t = 0"
+                            : "the fill reaches past a wall that ends lower, or into an opening or a gap between "
+                              "walls (a gate that does not meet its neighbours), and falls or spills at t = 0",
+                    ends);
+        }
+        if (n_back[r]) {
+            const int w = back_wall[r];
+            warning("%s: Container:regions:%u: %ld of its sites lie behind wall %s at the start (the first at "
+                    "(%.6g, %.6g) m: it meets that wall's back first, along or across gravity)%s", ctr_where(sc,
+                    "regions", r, where, sizeof where), r + 1, n_back[r], s->wall_name[w - 1], at[r][2], at[r][3],
+                    s->flow.w.prim[w - 1].open_at >= 0 ? ": material below or behind a gate, outside what it closes"
+                                                       : ": material outside the container");
+        }
+    }
+    free(n_free), free(n_back), free(at), free(back_wall);
+}
+
 /* Classify every site of the plane (L->site); exits 2 on overlapping
  * regions, a region reaching behind a wall or holding no site, and a wall
  * with no dummy. */
@@ -316,10 +512,13 @@ static void ctr_classify(const sim_t *s, ctr_lattice *L, const ctr_seg *seg)
             }
             if (reg >= 0 && !w && ctr_inside(s, L, seg, x, y) && ctr_cylinder_band(s, L, x, y))
                 reg = -1; /* too near a cylinder's first ring: empty */
-            if (reg >= 0 && (w || !ctr_inside(s, L, seg, x, y)))
-                input_error("%s: Container:regions:%d: reaches behind the walls at (%.6g, %.6g) m%s%s",
+            if (reg >= 0 && (w || !ctr_inside(s, L, seg, x, y))) {
+                char hint[600];
+                ctr_check_order(s, L, seg, hint, sizeof hint); /* walls listed clockwise: say that */
+                input_error("%s: Container:regions:%d: reaches behind the walls at (%.6g, %.6g) m%s%s%s",
                             ctr_where(sc, "regions", (unsigned)reg, where, sizeof where), reg + 1, x, y,
-                            w ? ", into the dummies of wall " : "", w ? s->wall_name[w - 1] : "");
+                            w ? ", into the dummies of wall " : "", w ? s->wall_name[w - 1] : "", hint);
+            }
             for (int a = 0; a < 2; ++a) {
                 double per = (double)s->flow.w.period[a], xa = a ? y : x;
                 if (!((s->sc->geometry.periodic >> a & 1) && (w || reg >= 0) && !(xa > 0 && xa < per))) continue;
@@ -344,6 +543,7 @@ static void ctr_classify(const sim_t *s, ctr_lattice *L, const ctr_seg *seg)
             input_error("%s: Container:walls:%u: has no dummy particle (another wall lies over it)",
                         ctr_where(sc, "walls", L->ent[w - 1], where, sizeof where), L->ent[w - 1] + 1);
     ctr_check_near(s, L, seg);
+    ctr_check_held(s, L, seg);
     free(held);
     free(dums);
 }

@@ -440,6 +440,64 @@ const char *scene_key_where(const struct scene *s, const char *section, const ch
     return buf;
 }
 
+int scene_key_overridden(const struct scene *s, const char *section, const char *key)
+{
+    char name[2 * SCENE_NAME];
+    int over, line;
+    const struct scene_keys *k = s->keys;
+    snprintf(name, sizeof name, "%s:%s", section, key);
+    leaf_resolve(k ? k->leaf : NULL, k ? k->n_leaf : 0, name, &over, &line);
+    return k && over >= 0 && over < k->n_over;
+}
+
+/* A container's box: the walls' ends and cylinders, the regions' shapes
+ * (a fill below its level, as high as that). */
+static void container_box(const struct scene_container *k, double lo[2], double hi[2])
+{
+    for (int a = 0; a < 2; ++a) lo[a] = INFINITY, hi[a] = -INFINITY;
+    for (unsigned i = 0; i < k->walls_count; ++i) {
+        const struct scene_wall *w = &k->walls[i];
+        if (w->shape == CWALL_ENDS) continue;
+        for (int a = 0; a < 2; ++a) {
+            double l = w->shape == CWALL_CYLINDER ? w->centre[a] - w->radius : fmin(w->from[a], w->to[a]);
+            double h = w->shape == CWALL_CYLINDER ? w->centre[a] + w->radius : fmax(w->from[a], w->to[a]);
+            lo[a] = fmin(lo[a], l), hi[a] = fmax(hi[a], h);
+        }
+    }
+    for (unsigned r = 0; r < k->regions_count; ++r) {
+        const struct scene_region *g = &k->regions[r];
+        if (g->shape == REGION_BOX)
+            for (int a = 0; a < 2; ++a) lo[a] = fmin(lo[a], g->lo[a]), hi[a] = fmax(hi[a], g->hi[a]);
+        else if (g->shape == REGION_SECTOR)
+            for (int a = 0; a < 2; ++a)
+                lo[a] = fmin(lo[a], g->centre[a] - g->r_out), hi[a] = fmax(hi[a], g->centre[a] + g->r_out);
+        else if (g->shape == REGION_COLUMN)
+            lo[0] = fmin(lo[0], g->centre[0] - g->r_out), hi[0] = fmax(hi[0], g->centre[0] + g->r_out),
+            hi[1] = fmax(hi[1], g->level);
+        else
+            hi[1] = fmax(hi[1], g->level);
+    }
+}
+
+void scene_extent(const struct scene *s, double ext[3])
+{
+    const struct scene_geometry *g = &s->geometry;
+    int d3 = g->dim == 3;
+    if (g->type == GEOM_DRUM) {
+        ext[0] = ext[1] = 2 * g->radius, ext[2] = d3 ? g->length : 0;
+    } else if (g->type == GEOM_CONTAINER) {
+        double lo[2], hi[2];
+        container_box(&s->container, lo, hi);
+        for (int a = 0; a < 2; ++a) ext[a] = hi[a] > lo[a] ? hi[a] - lo[a] : 0;
+        if (g->periodic & PERIODIC_X) ext[0] = fmax(ext[0], g->width);
+        if (g->periodic & PERIODIC_Y) ext[1] = fmax(ext[1], g->height);
+        ext[2] = d3 ? g->depth : 0;
+    } else {
+        ext[0] = g->width + (g->type == GEOM_COLUMN ? g->runout : 0), ext[1] = g->height;
+        ext[2] = d3 ? g->depth : 0;
+    }
+}
+
 void scene_free(struct scene *s)
 {
     if (!s) return;

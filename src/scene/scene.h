@@ -165,6 +165,16 @@ int scene_key_line(const struct scene *s, const char *section, const char *key);
 const char *scene_key_where(const struct scene *s, const char *section, const char *key, char *buf,
                             size_t n);
 
+/* Whether a -P override set Section:key (else the file or the default). */
+int scene_key_overridden(const struct scene *s, const char *section, const char *key);
+
+/* The extent of the scene's container along x, y and z (m; z 0 in 2D): a
+ * box's width, height (and depth; a column's runout included), a drum's
+ * diameter (and length), a container's walls and regions (the box around
+ * the segments' ends, the cylinders, the boxes, sectors and columns, fills
+ * below their level) and its depth. */
+void scene_extent(const struct scene *s, double ext[3]);
+
 /* Every key of the scene file, documented from the key table
  * (src/scene/scene_keys.h), as Markdown to f (sphseg --keys, docs/keys.md). */
 #include <stdio.h>

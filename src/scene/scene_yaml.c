@@ -243,12 +243,11 @@ int scene_load_doc(struct scene_ctx *c)
     yaml_parser_delete(&p);
     if (rc) return rc;
     yaml_node_t *root = yaml_document_get_root_node(&c->doc);
-    if (!root) { /* an empty file: start an empty mapping in a fresh document */
-        yaml_document_delete(&c->doc);
-        if (!yaml_document_initialize(&c->doc, NULL, NULL, NULL, 1, 1) ||
-            !yaml_document_add_mapping(&c->doc, NULL, YAML_BLOCK_MAPPING_STYLE))
-            return scene_fail(c, -1, 0, NULL, "out of memory");
-    } else if (root->type != YAML_MAPPING_NODE) {
+    if (!root || is_null(root)) /* nothing but blanks, comments or a null: not a scene missing a key */
+        return scene_fail(c, -1, 0, NULL, "the file is empty (%s): a scene gives at least Run:t_end, Geometry:dr "
+                          "and Output:dt, inputs/*.yml show the rest", c->len ? "no YAML content, only blanks, "
+                          "comments or a null" : "0 bytes");
+    if (root->type != YAML_MAPPING_NODE) {
         return scene_fail(c, -1, (int)root->start_mark.line + 1, NULL,
                     "not a scene: the top level must be a mapping of sections (Run:, ...)");
     }
