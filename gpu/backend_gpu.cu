@@ -1,4 +1,4 @@
-/* gpu/backend_gpu.cu — the CUDA backend (struct backend, src/run/sim.h): its
+/* gpu/backend_gpu.cu — the CUDA backend (struct backend, src/sim/sim.h): its
  * registration, the copies to and from the host, the end of a run; the
  * design of the whole backend (gpu/README.md lists its units).
  *

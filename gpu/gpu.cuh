@@ -25,8 +25,8 @@ extern "C" {
 #include "core/tuning.h"
 #include "mpi/comm.h"
 #include "physics/bound_kern.h"
-#include "run/sim.h"
-#include "run/stages.h"
+#include "sim/sim.h"
+#include "sim/stages.h"
 }
 
 #define CK(call)                                                                                     \

@@ -3,7 +3,7 @@
  * gpu_ipc.cu), the host path of the exchange at list builds, and the
  * refreshes between builds, synchronous or overlapped with the interior's
  * passes; which fields a refresh carries comes from the stage table
- * (src/run/stages.h: fields_tab, moving_fields). */
+ * (src/sim/stages.h: fields_tab, moving_fields). */
 #include "gpu.cuh"
 
 /* ---- ghost refreshes (several ranks) ------------------------------------------ */
@@ -338,7 +338,7 @@ void gpu_halo_lists(sim_t *s, gpu_t *g)
     free(hs);
 }
 
-/* The fields f (src/run/stages.h) of the device store as a refresh table;
+/* The fields f (src/sim/stages.h) of the device store as a refresh table;
  * trim2d: a 2D store's z components and xz, yz stresses left out. */
 ftab fields_tab(const gpu_t *g, uint32_t f, int trim2d)
 {

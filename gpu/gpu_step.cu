@@ -2,7 +2,7 @@
  * walls, L), rates (flow pass, concentration coefficients and dC/dt), the
  * held-back save and advance, the concentration windows (conc_begin,
  * conc_step) and the Shepard filter; each walks the stage table's plan for
- * its hook (src/run/stages.h), a case per stage; the time-step bounds and the
+ * its hook (src/sim/stages.h), a case per stage; the time-step bounds and the
  * check (the step's one synchronisation). The kernels over the neighbour
  * lists are gpu_pairs.cu's; the per-particle ones are here. */
 #include "gpu_reduce.cuh"
@@ -46,7 +46,7 @@ static int gpu_exchange(sim_t *s, gpu_t *g, int exact)
     return 1;
 }
 
-/* The hooks run the stage table's plan (src/run/stages.h) for their hook, each
+/* The hooks run the stage table's plan (src/sim/stages.h) for their hook, each
  * stage's kernels in a case of their own. Where the GPU departs from one
  * kernel per stage in the plan's order, the case says so: ST_PLACE takes
  * the held-back save and advance with it; ST_WALLS and ST_RENORM are one

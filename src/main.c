@@ -18,7 +18,7 @@
 #include "output/outdir.h"
 #include "run.h"
 #include "settings_check.h"
-#include "run/sim.h"
+#include "sim/sim.h"
 #include "core/version.h"
 
 static void usage(void)

@@ -12,11 +12,11 @@
 #include "mpi/comm.h"
 #include "mpi/decomp.h"
 #include "run.h"
-#include "run/stages.h"
+#include "sim/stages.h"
 #include "core/version.h"
 
 /* The arrays a ghost carries: what the run's stages read of ghosts
- * (src/run/stages.h). */
+ * (src/sim/stages.h). */
 static int parallel_ghost_arrays(const sim_t *s, int *arr)
 {
     void *a[PART_NARRAYS];

@@ -9,7 +9,7 @@
 #define SPHSEG_RUN_H
 #include "output/checkpoint.h"
 #include "output/diag.h"
-#include "run/sim.h"
+#include "sim/sim.h"
 
 /* The command line (src/main.c). */
 typedef struct run_cli {

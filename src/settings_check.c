@@ -13,7 +13,7 @@
 #include "core/error.h"
 #include "core/tuning.h"
 #include "mpi/comm.h"
-#include "run/sim.h"
+#include "sim/sim.h"
 
 /* Snapshots, diagnostics rows and checkpoints that Run:t_end asks for: a
  * count beyond a sane bound (Output:dt = 1e-300 with t_end = 1e300) is bad

@@ -4,7 +4,7 @@
 The code declares three things as table rows, each once; a row is only half
 of a change, and this test fails on the other half missing:
 
-- a stage id (src/run/stage_table.h, enum stage_id) needs a row in
+- a stage id (src/sim/stage_table.h, enum stage_id) needs a row in
   stage_table[] and a case in each backend: `case ST_X` in
   src/cpu/backend_cpu.c and in gpu/gpu_step.cu (a backend that fuses a
   stage into another's pass still names it);
@@ -28,7 +28,7 @@ from tools import ROOT
 CODE_GLOBS = ("src/*.c", "src/*/*.c", "src/*/*.h", "mpi/*.c", "mpi/*.h", "gpu/*.cu", "gpu/*.cuh")
 KEY_TABLE = "src/scene/scene_keys.h"
 FIELD_TABLE = "src/core/fields.h"
-STAGE_TABLE = "src/run/stage_table.h"
+STAGE_TABLE = "src/sim/stage_table.h"
 BACKENDS = ("src/cpu/backend_cpu.c", "gpu/gpu_step.cu")
 # keys read by name through the loader's generic paths, not as members
 GENERIC = {}

@@ -1,4 +1,4 @@
-/* test_integrate.c — integrate_step (src/run/integrate.c), the predictor–
+/* test_integrate.c — integrate_step (src/sim/integrate.c), the predictor–
  * corrector (3.17–3.18), through a backend whose hooks integrate one ODE,
  * y' = cos(t) y, exact y = exp(sin t):
  *  - the observed order of accuracy: halving dt from 0.02 divides the error at t = 2
@@ -25,7 +25,7 @@
  *    over the cycle) and the shear rate is |du_x/dy|; the base stays put. */
 #include <mpi.h>
 #include <string.h>
-#include "run/sim.h"
+#include "sim/sim.h"
 #include "testutil.h"
 
 /* The mock backend's state: one ODE variable and its stages. */

@@ -12,7 +12,7 @@
 # filter"). Each probe is a 1-step CPU drum; the warning must be
 # there when the setting is off and absent when it is in range.
 # Issue 55, scales outside what the model is meant for (src/settings_check.c
-# settings_warn_scales, src/run/setup_container.c ctr_check_held): grains of
+# settings_warn_scales, src/sim/setup_container.c ctr_check_held): grains of
 # 1 and 2 m (mm typed as m) against the drum (fewer than 4 large grains
 # across) and against dr (more than 50 dr); a drum's Froude number
 # omega^2 R / g from 0.1 (300 rpm: 3.5; 51 rpm: 0.102 warns, 50 rpm: 0.098

@@ -24,7 +24,7 @@
  *    on a perturbed block exerts no force (flow_ctx.p_back = 2 p0 / rho^2
  *    cancels it in the pair term to round-off), where the pair term alone
  *    pushes a displaced particle by (2 p0 / rho) |grad C|;
- *  - off: the stage is not in the plan (src/run/stages.c): tests/test_stages.c
+ *  - off: the stage is not in the plan (src/sim/stages.c): tests/test_stages.c
  *    holds the plans of the scenes without it. */
 #include "physics/flow.h"
 #include "physics/shift.h"

@@ -1,4 +1,4 @@
-/* test_stages.c — what src/run/stages.c derives from the stage table, against
+/* test_stages.c — what src/sim/stages.c derives from the stage table, against
  * the lists the backends carried by hand before it (issue 15, "Shape":
  * parallel_ghost_arrays in src/run.c, the refreshes of backend_cpu.c,
  * moving_fields in gpu/gpu_halo.cu), worked out from the bodies' reads:
@@ -25,7 +25,7 @@
  *    is segV, segQ, segD;
  *  - every field refreshed is one the ghosts carry. */
 #include "testutil.h"
-#include "run/stages.h"
+#include "sim/stages.h"
 
 #define DRUM (SF_FLOW | SF_SEG | SF_RENORM)
 #define SHEARBOX (SF_SEG | SF_HCSR)

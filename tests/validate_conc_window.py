@@ -1,4 +1,4 @@
-"""Concentration windows (Segregation:every, src/run/integrate.c) against C in
+"""Concentration windows (Segregation:every, src/sim/integrate.c) against C in
 every flow step (Segregation:every = 1, the reference: the predictor-
 corrector of eqs. 3.17-3.18 for x, u, sigma and C together).
 

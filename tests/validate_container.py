@@ -1,5 +1,5 @@
 """A container described as data (Geometry:type container: Container:walls and
-Container:regions, src/run/setup_container.c):
+Container:regions, src/sim/setup_container.c):
 
   - the built-in drum written as a container (a turning cylinder and two
     fill layers, tests/containers.py DRUM_AS_CONTAINER) is the built-in

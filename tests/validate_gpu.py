@@ -127,7 +127,7 @@ CASES = [
 ]
 # (Segregation:every = 1: C with the flow in every step; K > 1: in windows of
 # K steps, closed 5-9 times in these runs, the last one left open at
-# max_steps, src/run/integrate.c)
+# max_steps, src/sim/integrate.c)
 
 
 def run(sphseg, scene, out, backend, steps, over):

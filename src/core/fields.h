@@ -5,7 +5,7 @@
  *
  *   member  the particles_t member (src/core/particles.h); also the field's name
  *           in messages (stage_fields_str);
- *   FLD     its stage-field bit, FLD_<FLD> (src/run/stages.h);
+ *   FLD     its stage-field bit, FLD_<FLD> (src/sim/stages.h);
  *   type    element type: real, creal, preal (src/core/hd.h, which the
  *           includer brings), int64_t, uint8_t;
  *   n       components: 1 (`type *member`), 3 (`type *member[3]`: x, y, z)
@@ -18,7 +18,7 @@
  * part_arrays[] (one array per component, in row order: alloc, free,
  * permute, pack, the GPU's copies and the checkpoints, which hold array k as
  * dataset k: the order is the checkpoints' format; do not reorder), the
- * FLD_ bits, and stage_arrays() and stage_fields_str() (src/run/stages.c). A
+ * FLD_ bits, and stage_arrays() and stage_fields_str() (src/sim/stages.c). A
  * new field is one row here (best at the end); a stage that reads or writes
  * it names FLD_<FLD> in stage_table[], a snapshot field its io_fields[] row.
  *

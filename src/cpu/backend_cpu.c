@@ -10,8 +10,8 @@
 #include "bound.h"
 #include "core/error.h"
 #include "nbr.h"
-#include "run/sim.h"
-#include "run/stages.h"
+#include "sim/sim.h"
+#include "sim/stages.h"
 
 /* Indices per dynamic chunk: a 3D material particle's flow rates cost about
  * 10 us, so a chunk is far above the cost of taking it. */
@@ -33,7 +33,7 @@ static cpu_state *cpu_of(sim_t *s)
     return (cpu_state *)s->be_data;
 }
 
-/* Copy the fields (src/run/stages.h) from their owners into the ghosts
+/* Copy the fields (src/sim/stages.h) from their owners into the ghosts
  * (multi-rank runs; nothing on one rank). */
 static void cpu_refresh(sim_t *s, uint32_t fields)
 {
@@ -135,7 +135,7 @@ static void cpu_shepard(sim_t *s)
         if (p->kind[i] == KIND_MATERIAL) flow_shepard((size_t)i, p, &cpu_of(s)->grid.view, &s->flow);
 }
 
-/* Run stage id of the table (src/run/stages.h) for call c; returns 0 when the
+/* Run stage id of the table (src/sim/stages.h) for call c; returns 0 when the
  * call leaves it out (prepare without classification, say). The loops:
  * streaming ones schedule(static), neighbour loops dynamic (top). */
 static int cpu_stage(sim_t *s, int id, cpu_call *c)

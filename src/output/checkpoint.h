@@ -53,7 +53,7 @@
  * must then route to the ranks that own the positions. */
 #ifndef SPHSEG_CHECKPOINT_H
 #define SPHSEG_CHECKPOINT_H
-#include "run/sim.h"
+#include "sim/sim.h"
 
 /* 3: a dummy's Wall is the 1-based index of its wall primitive (wall.h), no
  * longer a fixed wall id. */

@@ -3,7 +3,7 @@
 #ifndef SPHSEG_DIAG_H
 #define SPHSEG_DIAG_H
 #include <stdio.h>
-#include "run/sim.h"
+#include "sim/sim.h"
 
 typedef struct diag {
     FILE *f;          /* rank 0 only */

@@ -23,7 +23,7 @@
  * dummies); C is not corrected: shifting moves a particle with its C and V
  * unchanged, so sum C_i V_i stays conserved to round-off (a Taylor step of
  * C would not conserve it). Gather style, one material particle per call;
- * it runs in the save hook (ST_SHIFT, src/run/stages.c), after step_save, and
+ * it runs in the save hook (ST_SHIFT, src/sim/stages.c), after step_save, and
  * writes only i's start-of-step copies x_n, v_n, sig_n, which no neighbour
  * reads: the predictor and corrector then start from the shifted state. */
 #ifndef SPHSEG_SHIFT_H

@@ -59,7 +59,7 @@ per direction), B_net 25 GB/s between nodes (InfiniBand HDR200/NDR), lat 3 us.
 import argparse
 import math
 
-# ---- what the code sends (gpu/gpu_halo.cu, src/run/stages.c, src/core/fields.h) ----------------------------------
+# ---- what the code sends (gpu/gpu_halo.cu, src/sim/stages.c, src/core/fields.h) ----------------------------------
 # The drum runs with concentration windows (Segregation:every auto), so a refresh when the particles moved carries
 # stage_moving_fields = x, v, sig (tests/test_stages.c): 3 + 3 + 6 reals. Two such refreshes a step (two prepares),
 # and sig (6 reals) after the Shepard store every Flow:shepard_every = 30 steps; the windows' C and gsum once a

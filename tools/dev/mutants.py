@@ -32,7 +32,7 @@ from tools import ROOT  # noqa: E402
 
 MUTANTS = [
     # ---- physics: flow
-    ("shepard_never", "physics", "src/run/integrate.c",
+    ("shepard_never", "physics", "src/sim/integrate.c",
      [("every > 0 && s->step % (long)every == 0) be->filter(s);", "every > 0 && 0) be->filter(s);")],
      "the Shepard filter (3.12) is never applied"),
     ("shepard_unweighted", "physics", "src/physics/wall.h",
@@ -107,19 +107,19 @@ MUTANTS = [
      [("> R(0.5) * sq2 * r) {", "> R(0.7) * sq2 * r) {")],
      "the free-surface umbrella test (4.19) uses a wider cone"),
     # ---- integration
-    ("midpoint_at_t_dt", "integration", "src/run/integrate.c",
+    ("midpoint_at_t_dt", "integration", "src/sim/integrate.c",
      [("be->prepare(s, s->t + 0.5 * dt, 0);", "be->prepare(s, s->t + dt, 0);")],
      "the midpoint stage is evaluated at t + dt"),
-    ("save_after_predictor", "integration", "src/run/integrate.c",
+    ("save_after_predictor", "integration", "src/sim/integrate.c",
      [("    be->save_start(s);\n    be->advance(s, 0.5 * dt, 0.0);", "    be->advance(s, 0.5 * dt, 0.0);\n    be->save_start(s);")],
      "the corrector starts from the predicted state"),
     ("conc_from_current", "integration", "src/physics/step.h",
      [("if (seg_on) p->C[i] = p->C_n[i] + (creal)a * p->dCdt[i];", "if (seg_on) p->C[i] = p->C[i] + (creal)a * p->dCdt[i];")],
      "C advances from its current value, not the start of the step"),
-    ("diffusion_cfl_x10", "integration", "src/run/integrate.c",
+    ("diffusion_cfl_x10", "integration", "src/sim/integrate.c",
      [("dt = fmin(dt, sc->run.cfl_diffusion * h * h / dmax);", "dt = fmin(dt, 10 * sc->run.cfl_diffusion * h * h / dmax);")],
      "the diffusion time-step bound is 10x too loose"),
-    ("flow_cfl_x10", "integration", "src/run/integrate.c",
+    ("flow_cfl_x10", "integration", "src/sim/integrate.c",
      [("stress_dt((real)sc->run.cfl_flow,", "stress_dt((real)(10 * sc->run.cfl_flow),")],
      "the flow time-step bound (3.19) is 10x too loose"),
     # ---- walls

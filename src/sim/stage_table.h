@@ -1,5 +1,5 @@
 /* stage_table.h — the step's stages: each stage's id and its rows, in one
- * file (src/run/stages.h says what follows from them). A new stage is an id
+ * file (src/sim/stages.h says what follows from them). A new stage is an id
  * in enum stage_id and one row per case in stage_table[]; its body lives in
  * src/physics/ and each backend runs it under its id (src/cpu/backend_cpu.c
  * cpu_stage, gpu/gpu_step.cu gpu_hook): tests/test_counterparts.py fails on

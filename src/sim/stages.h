@@ -9,7 +9,7 @@
  *  - the halo refresh after a stage (stage_refresh_after), and the fields a
  *    backend that keeps its ghosts between list builds refreshes when the
  *    particles move (stage_moving_fields: the GPU's).
- * A new term in the step is an id and a row in src/run/stage_table.h, its
+ * A new term in the step is an id and a row in src/sim/stage_table.h, its
  * body in src/physics/, and its case in each backend (docs/architecture.md). */
 #ifndef SPHSEG_STAGES_H
 #define SPHSEG_STAGES_H
@@ -59,7 +59,7 @@ typedef struct stage {
     int from_owner;  /* the ghosts' results are replaced by their owners' (a refresh after it) */
 } stage;
 
-/* The stage ids and the table's rows: src/run/stage_table.h, one file. */
+/* The stage ids and the table's rows: src/sim/stage_table.h, one file. */
 #include "stage_table.h"
 
 /* The table, in step order within each hook. */

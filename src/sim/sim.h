@@ -1,6 +1,6 @@
 /* sim.h — the state of one run and the backend seam. A backend owns where
  * the particle arrays live and runs the per-step stages; the driver
- * (src/main.c, src/run.c) and time integration (src/run/integrate.c) call it only through
+ * (src/main.c, src/run.c) and time integration (src/sim/integrate.c) call it only through
  * struct backend. The CPU backend (src/cpu/backend_cpu.c) runs OpenMP loops over
  * the shared bodies of src/physics/; the CUDA backend (gpu/) plugs in here. */
 #ifndef SPHSEG_SIM_H
@@ -117,7 +117,7 @@ typedef struct sim {
     unsigned gate;     /* bit k: the dummies of gate primitive k (flow.w.prim[k].open_at >= 0) are still in the store */
 } sim_t;
 
-/* Build the particles of the scene at t = 0 (src/run/setup.c). Exits with status
+/* Build the particles of the scene at t = 0 (src/sim/setup.c). Exits with status
  * 2 if the resolution needs more memory than the machine has. */
 void setup_particles(sim_t *s);
 /* The 1-based id of the wall primitive called `name` ("base", "gate", "drum", ...), 0 if none. */
@@ -136,7 +136,7 @@ const struct backend *backend_cpu(void);
 int gpu_devices(void);
 const struct backend *backend_gpu(int local_rank);
 
-/* One predictor–corrector step (3.17–3.18) of length dt (src/run/integrate.c). */
+/* One predictor–corrector step (3.17–3.18) of length dt (src/sim/integrate.c). */
 void integrate_step(sim_t *s, double dt);
 /* The stable time step (s): bounds by diffusion, segregation, kinematics;
  * with concentration windows it also fixes the next window's length. */
