@@ -84,8 +84,29 @@ from tools.analysis import snap  # noqa: E402
 
 
 def used_params(outdir):
+    """A run's used_params.yml; a container turning one cylinder about the origin (Geometry:type container,
+    e.g. a drum periodic along z) is read as a drum: its radius, rpm and direction in Geometry:radius,
+    Walls:rpm and :direction, and in 3D its depth as Geometry:length (the period, when periodic in z)."""
     with open(os.path.join(outdir, "used_params.yml")) as f:
-        return yaml.safe_load(f)
+        par = yaml.safe_load(f)
+    return drum_of_container(par)
+
+
+def drum_of_container(par):
+    g = par.get("Geometry", {})
+    if g.get("type") != "container":
+        return par
+    cyl = [w for w in par.get("Container", {}).get("walls", []) or []
+           if w.get("shape") == "cylinder" and w.get("motion") == "turning"]
+    if len(cyl) != 1 or any(abs(float(c)) > 1e-12 for c in cyl[0].get("centre", [0, 0])):
+        return par  # not a drum about the origin: the drum tools do not apply
+    w = cyl[0]
+    g["radius"] = float(w["radius"])
+    par.setdefault("Walls", {})["rpm"] = float(w.get("rpm", 0))
+    par["Walls"]["direction"] = w.get("direction", "clockwise")
+    if int(g.get("dim", 2)) == 3:
+        g["length"] = float(g["depth"])
+    return par
 
 
 def drum_wall(par):
