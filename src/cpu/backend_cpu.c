@@ -150,6 +150,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         return 1;
     case ST_EXCHANGE:
         if (s->halo) halo_exchange(s->halo, p);
+        if (s->halo) nbr_set_period(&cpu_of(s)->grid, s->halo->per, s->halo->plo, s->halo->plen);
         nbr_build(&cpu_of(s)->grid, p, R(2.0) * s->seg.k.h, s->halo ? s->halo->origin : NULL);
         if (s->halo) halo_sorted(s->halo, cpu_of(s)->grid.perm, p->n + p->ng);
         return 1;
