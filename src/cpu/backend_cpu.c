@@ -336,6 +336,7 @@ const struct backend *backend_cpu(void)
 {
     static const struct backend b = {"cpu",          cpu_prepare,   cpu_rates,      cpu_advance, cpu_conc_begin,
                                       cpu_conc_step,  cpu_save_start, cpu_filter,     cpu_bounds,  cpu_check,
-                                      cpu_to_host,    cpu_finish,     cpu_from_host,  HALO_DEPTH};
+                                      cpu_to_host,    cpu_finish,     cpu_from_host,  HALO_DEPTH,
+                                      NULL /* relist: every prepare sorts */};
     return &b;
 }
