@@ -16,11 +16,13 @@
  * run in the next prepare's motion kernel (gpu_step_kernel).
  *
  * The neighbour build mirrors src/cpu/nbr.c: the same grid (grid_fit on the same
- * bounding box), cell keys sorted by a stable CUB radix sort (the order of a
- * stable counting sort: CPU and GPU hold particles in the same order), cell
- * start/end from key changes, then every array gathered into a spare set of
+ * bounding box; on several ranks the same global lattice), the store sorted
+ * by (cell, image last, global ID) with two stable CUB radix sorts (rank,
+ * then cell: CPU and GPU hold particles in the same order), cell start/end
+ * from key changes, then every array gathered into a spare set of
  * buffers and the two sets swapped; then a neighbour list per particle
- * (grid_list_fill, in the cell scan's order) that every neighbour loop reads.
+ * (grid_list_fill_ranked, in the cell scan's order, a cell's owned
+ * particles and ghosts merged by rank) that every neighbour loop reads.
  *
  * Verlet skin: the list holds the particles within 2h + skin (skin =
  * Run:list_skin h, default 0.1 h) and is kept, with the store's order and cells, for as long as
@@ -32,7 +34,13 @@
  * snapshots) uses no skin and cells of edge 2h, as the CPU does, so that the
  * classes are the CPU's; the next stage rebuilds. Between builds the order
  * of the store differs from the CPU's (which sorts every stage), so sums are
- * taken in another order: CPU and GPU agree to round-off, not bitwise.
+ * taken in another order: CPU and GPU agree to round-off, not bitwise. Rank
+ * counts are meant to agree bitwise (tests/test_ranks_bitwise.py --backend
+ * gpu): the builds fall on the same steps on any rank count (the skin test
+ * on the largest displacements over all ranks, gpu_check; a build at every
+ * load-balance check, relist, as a re-cut makes one), on the lattice one rank
+ * would use (the halo's corner, gpu_exchange), and the team size comes from
+ * the particles of all ranks (gpu_get).
  *
  * Several ranks (mpi/halo.h; one GPU per rank, or several ranks sharing
  * one): the device store holds the owned particles at [0, n) and ghosts at
@@ -88,6 +96,14 @@ static void gpu_from_host(sim_t *s)
     gpu_reserve(g, s->p.n, 0);
     gpu_counts(g, s->p.n, 0);
     gpu_upload(g, &s->p, 0, s->p.n);
+    g->built = 0;
+}
+
+/* Every load-balance check, on any rank count (src/run.c parallel_balance):
+ * the next prepare builds the lists afresh, as after a re-cut. */
+static void gpu_relist(sim_t *s)
+{
+    gpu_t *g = gpu_hook(s, 1);
     g->built = 0;
 }
 
@@ -159,7 +175,8 @@ extern "C" const struct backend *backend_gpu(int local_rank)
 {
     static const struct backend b = {"gpu",          gpu_prepare,    gpu_rates,  gpu_advance, gpu_conc_begin,
                                       gpu_conc_step,  gpu_save_start, gpu_filter, gpu_bounds,  gpu_check,
-                                      gpu_to_host,    gpu_finish,     gpu_from_host, 3};
+                                      gpu_to_host,    gpu_finish,     gpu_from_host, 3,
+                                      gpu_relist};
     g_local_rank = local_rank;
     return &b;
 }

@@ -9,6 +9,34 @@
 
 /* ---- the neighbour build ------------------------------------------------- */
 
+/* A particle's rank in its cell, as the CPU's (src/cpu/nbr.c nbr_rank): bit
+ * 31 for a periodic image (outside the period along a periodic axis), the
+ * global ID below (IDs under 2^31). */
+struct rank_of {
+    particles_t p;
+    int per;
+    double lo[3], hi[3];
+    __device__ unsigned operator()(size_t i) const
+    {
+        unsigned img = 0;
+        for (int d = 0; d < 3; ++d)
+            if (per >> d & 1) img |= (double)p.x[d][i] < lo[d] || (double)p.x[d][i] >= hi[d];
+        return ((unsigned)p.id[i] & 0x7fffffffu) | img << 31;
+    }
+};
+
+static rank_of rank_fn(const gpu_t *g, const halo_t *hl)
+{
+    rank_of f;
+    f.p = g->d;
+    f.per = hl ? hl->per : 0;
+    for (int d = 0; d < 3; ++d) {
+        f.lo[d] = hl ? (double)hl->plo[d] : 0;
+        f.hi[d] = hl ? f.lo[d] + (double)hl->plen[d] : 0;
+    }
+    return f;
+}
+
 /* Every array of the store, from the current set into the spare one. */
 static perm_tab perm_all(const gpu_t *g)
 {
@@ -80,8 +108,10 @@ static void gpu_permute_store(gpu_t *g, const unsigned *perm, size_t n)
 }
 
 /* The Verlet list of every particle within sqrt(list2), from the cell scan in
- * its order; the positions at the build (xb) kept for the Verlet test. */
-static void gpu_list(gpu_t *g, int dim, real list2, size_t n)
+ * its order, a cell's owned particles and ghosts merged by their ranks rk
+ * (grid_list_fill_ranked: cells of 2h + skin on several ranks hold both);
+ * the positions at the build (xb) kept for the Verlet test. */
+static void gpu_list(gpu_t *g, int dim, real list2, size_t n, const unsigned *rk)
 {
     grid_view vc = g->view;
     vc.nl = vc.ncnt = NULL;
@@ -90,7 +120,7 @@ static void gpu_list(gpu_t *g, int dim, real list2, size_t n)
     prof_begin(g->st);
     for (;;) { /* a list too short for the densest particle grows, once in a while */
         unsigned *nl = g->nl, cap = g->nl_cap;
-        each(g, n, [=] __device__(size_t i) { cnt[i] = grid_list_fill(&vc, q.x, i, list2, nl, n, cap); });
+        each(g, n, [=] __device__(size_t i) { cnt[i] = grid_list_fill_ranked(&vc, q.x, i, list2, nl, n, cap, rk); });
         reduce(g, cnt, (unsigned *)g->dfirst, n, max_uint(), 0u);
         CK(cudaMemcpyAsync(g->hfirst, g->dfirst, sizeof(long long), cudaMemcpyDeviceToHost, g->st));
         CK(cudaStreamSynchronize(g->st));
@@ -153,7 +183,8 @@ static void gpu_marks(gpu_t *g, size_t n, size_t nown)
 }
 
 /* Cells of edge `support` over owned particles and ghosts, each range
- * sorted apart (a ghost bit above the cell index), on the global lattice
+ * sorted apart (a ghost bit above the cell index), each cell in the CPU's
+ * canonical order (images last, each part by ID), on the global lattice
  * when origin is given (multi-rank exact builds: HCSR cell types as on one
  * rank); the list of the particles within sqrt(list2). With ghosts, the
  * permutation goes back to the halo lists (halo_sorted). */
@@ -189,20 +220,41 @@ void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, const re
         g->cell_type = (unsigned char *)dev_alloc(g->cap_cell);
     }
     grid_view v = g->view;
-    unsigned *key = g->key, *idx = g->idx;
     const unsigned gbit = (unsigned)g->ncell;
     prof_begin(g->st);
-    each(g, n, [=] __device__(size_t i) {
-        int c[3];
-        grid_cell_coords(&v, p.x[0], p.x[1], p.x[2], i, c);
-        key[i] = (unsigned)grid_cell_index(&v, c[0], c[1], c[2]) + (i >= nown ? gbit : 0u);
-        idx[i] = (unsigned)i;
-    });
+    /* The order of a cell's particles is canonical, as on the CPU
+     * (src/cpu/nbr.c nbr_rank): periodic images last, each part in global
+     * ID order, whatever the store's order before, so that the lists, and
+     * every sum over them, meet a particle's neighbours in the same order on
+     * any rank count: a stable sort by that rank (bit 31 the image, the ID
+     * below: IDs under 2^31), then a stable sort by cell of that order. */
+    {
+        unsigned *key = g->key, *idx = g->idx;
+        const rank_of rk = rank_fn(g, hl);
+        each(g, n, [=] __device__(size_t i) {
+            key[i] = rk(i);
+            idx[i] = (unsigned)i;
+        });
+    }
+    cub::DoubleBuffer<unsigned> kb(g->key, g->key2), vb(g->idx, g->idx2);
+    size_t bytes = 0;
+    CK(cub::DeviceRadixSort::SortPairs(NULL, bytes, kb, vb, (int64_t)n, 0, 32, g->st));
+    CK(cub::DeviceRadixSort::SortPairs(scratch(g, bytes), bytes, kb, vb, (int64_t)n, 0, 32, g->st));
+    {
+        unsigned *key = kb.Alternate();
+        const unsigned *ord = vb.Current();
+        each(g, n, [=] __device__(size_t k) {
+            const size_t i = ord[k];
+            int c[3];
+            grid_cell_coords(&v, p.x[0], p.x[1], p.x[2], i, c);
+            key[k] = (unsigned)grid_cell_index(&v, c[0], c[1], c[2]) + (i >= nown ? gbit : 0u);
+        });
+    }
+    kb.selector ^= 1; /* the cell keys (in ID order) are the keys now */
     const size_t nkey = g->ng ? 2 * g->ncell : g->ncell;
     int bits = 1;
     while (bits < 32 && ((size_t)1 << bits) < nkey) ++bits;
-    cub::DoubleBuffer<unsigned> kb(g->key, g->key2), vb(g->idx, g->idx2);
-    size_t bytes = 0;
+    bytes = 0;
     CK(cub::DeviceRadixSort::SortPairs(NULL, bytes, kb, vb, (int64_t)n, 0, bits, g->st));
     CK(cub::DeviceRadixSort::SortPairs(scratch(g, bytes), bytes, kb, vb, (int64_t)n, 0, bits, g->st));
     const unsigned *sk = kb.Current(), *perm = vb.Current();
@@ -217,6 +269,11 @@ void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, const re
     prof_end(g->st, P_SORT);
     gpu_follow(g, hl, perm, n);
     gpu_permute_store(g, perm, n);
-    gpu_list(g, dim, list2, n);
+    { /* the ranks in the new order, for the lists' merged walk of a cell */
+        unsigned *key = g->key;
+        const rank_of rk = rank_fn(g, hl);
+        each(g, n, [=] __device__(size_t i) { key[i] = rk(i); });
+    }
+    gpu_list(g, dim, list2, n, g->key);
     gpu_marks(g, n, nown);
 }

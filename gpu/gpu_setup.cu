@@ -125,7 +125,7 @@ void gpu_counts(gpu_t *g, size_t n, size_t ng)
 /* Threads per particle in the neighbour loops: SPHSEG_GPU_TEAM (1, 2, 4, 8
  * or 16; core/tuning.h), else GPU_TEAM_MAX of the dimension (by the length of the list:
  * 4 in 2D, about 30 neighbours; 8 in 3D, about 140), halved while n T
- * exceeds GPU_TEAM_THREADS: a small store runs more threads per particle
+ * exceeds GPU_TEAM_THREADS, n the particles of all ranks (gpu_get): a small store runs more threads per particle
  * (latency), a large one fills the device with one (the rule is measured in
  * docs/gpu.md, "Teams"). */
 static int gpu_team_size(int dim, size_t n)
@@ -170,7 +170,9 @@ gpu_t *gpu_get(sim_t *s)
         s->halo->exposed_measured = 1;
         for (int k = 0; k < HX_EV; ++k) CK(cudaEventCreate(&g->hx->ev[k]));
     }
-    g->team = gpu_team_size(h->dim, n);
+    /* the team from the particles of all ranks: the lanes' partial sums, and so
+     * the bits, depend on the team size, which must not follow the rank count */
+    g->team = gpu_team_size(h->dim, (size_t)comm_sum_ll((long long)n));
     message("gpu: device %d of %d, %s, %.1f GiB; %zu MiB of particle arrays (two sets), %zu MiB of neighbour "
             "list (%u per particle, skin %.3g h), %d threads per particle in neighbour loops%s%s", g->dev, ndev,
             prop.name, (double)prop.totalGlobalMem / (1u << 30), 2 * n * part_bytes_per_particle() >> 20,

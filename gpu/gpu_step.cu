@@ -38,8 +38,14 @@ static int gpu_exchange(sim_t *s, gpu_t *g, int exact)
     if (s->halo && g->hx->dev) gpu_device_exchange(s, g);
     else if (s->halo) gpu_full_exchange(s, g);
     real skin = exact ? R(0.0) : g->skin, sup = R(2.0) * s->seg.k.h + skin;
-    gpu_build(g, s->halo, s->p.dim, sup, exact ? s->seg.k.support2 : sup * sup,
-              s->halo && exact ? s->halo->origin : NULL);
+    /* Several ranks bin on the global lattice of cells of edge sup that one
+     * rank's grid_fit makes (its corner less 1e-6 sup; a periodic axis's
+     * fixed origin), so that the lists meet neighbours in the one-rank order */
+    real org[3];
+    if (s->halo)
+        for (int d = 0; d < 3; ++d)
+            org[d] = exact || (s->halo->per >> d & 1) ? s->halo->origin[d] : s->halo->corner[d] - R(1e-6) * sup;
+    gpu_build(g, s->halo, s->p.dim, sup, exact ? s->seg.k.support2 : sup * sup, s->halo ? org : NULL);
     if (s->halo && !g->hx->dev) gpu_halo_lists(s, g);
     g->built = 1;
     g->stale = exact; /* a list without skin is stale as soon as anything moves */
@@ -354,6 +360,10 @@ long gpu_check(sim_t *s)
     if (s->halo) hx_resolve(g, s->halo); /* whole pairs only: one may be in flight */
     const chk *c = &g->hchk->c;
     double D = sqrt((double)c->build2), d = sqrt((double)c->step2), skin = g->skin;
+    if (s->halo) { /* the largest over all ranks, as one rank measures them: builds on the same steps */
+        D = comm_max(D);
+        d = comm_max(d);
+    }
     g->stale |= D + 2 * d > 0.5 * skin;
     g->every = !s->flow_on || d > 0.25 * skin; /* prescribed motion: x_n is not kept */
     return c->first >= (long long)g->n ? -1 : (long)c->first;

@@ -433,6 +433,7 @@ void halo_set_origin(halo_t *h, const real lo_local[3])
     MPICHECK(MPI_Allreduce(MPI_IN_PLACE, lo, 3, HALO_MPI_REAL, MPI_MIN, MPI_COMM_WORLD));
     h->wall_wait += MPI_Wtime() - t0;
     for (int d = 0; d < 3; ++d) {
+        h->corner[d] = d < h->dim ? lo[d] : 0;
         if (h->per >> d & 1) continue; /* fixed (halo_set_periodic) */
         h->origin[d] = d < h->dim ? lo[d] - R(1e-6) * h->support : 0;
     }

@@ -48,6 +48,10 @@ typedef struct halo {
     int depth;             /* ghost lattice cells on each side (HALO_DEPTH) */
     real support;          /* lattice cell edge 2h, m */
     real origin[3];        /* lattice origin of the last exchange, m */
+    real corner[3];        /* the particles' lower corner over all ranks at the last exchange
+                            * (origin = corner - 1e-6 2h off periodic axes), m: a backend that bins
+                            * into cells of another edge e takes corner - 1e-6 e, as grid_fit does
+                            * on one rank, so that every rank count bins alike */
     long *bound;           /* slabs: size + 1 column bounds; bound[0] and bound[size] open */
     /* METIS: the coarse grid of blk^dim lattice cells per vertex, its owners */
     int blk, cg_n[3];

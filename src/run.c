@@ -81,24 +81,36 @@ static double next_event(double t, double every, double t_end)
 
 /* Every Parallel:balance_every steps: move the slab bounds if the measured
  * compute time is out of balance (mpi/halo.h), then prepare the state at t
- * again (the particles moved between ranks; prepare is idempotent). */
+ * again (the particles moved between ranks; prepare is idempotent). A
+ * backend that keeps neighbour lists between builds (relist: the GPU) builds
+ * them afresh and prepares again at every check on any rank count, one rank
+ * included, re-cut or not, so that its builds, and so its sums' order, fall
+ * on the same steps whatever the ranks. */
 static void parallel_balance(sim_t *s, double *cost)
 {
     unsigned every = s->sc->parallel.balance_every;
-    if (!s->halo || every == 0 || s->step % (long)every != 0) return;
-    const tuning *tu = tuning_get(); /* SPHSEG_BALANCE_SKEW: one rank's time counted F times */
-    double c = *cost * (tu->skew_rank == comm_rank() ? tu->skew_factor : 1.0);
-    double thr = s->sc->parallel.balance_threshold, imb = halo_imbalance(s->halo, c);
-    if (imb > thr) {
-        double t0 = diag_wall();
-        s->be->to_host(s); /* the re-cut reads positions and moves whole particles */
-        if (halo_recut(s->halo, &s->p, c, imb, thr)) {
-            s->be->from_host(s);
-            s->be->prepare(s, s->t, !s->win.on);
-            s->halo->recuts++;
+    if (every == 0 || s->step % (long)every != 0) return;
+    int moved = 0;
+    if (s->halo) {
+        const tuning *tu = tuning_get(); /* SPHSEG_BALANCE_SKEW: one rank's time counted F times */
+        double c = *cost * (tu->skew_rank == comm_rank() ? tu->skew_factor : 1.0);
+        double thr = s->sc->parallel.balance_threshold, imb = halo_imbalance(s->halo, c);
+        if (imb > thr) {
+            double t0 = diag_wall();
+            s->be->to_host(s); /* the re-cut reads positions and moves whole particles */
+            if (halo_recut(s->halo, &s->p, c, imb, thr)) {
+                s->be->from_host(s);
+                s->be->prepare(s, s->t, !s->win.on);
+                s->halo->recuts++;
+                moved = 1;
+            }
+            s->halo->recut_checks++;
+            s->halo->recut_s += diag_wall() - t0;
         }
-        s->halo->recut_checks++;
-        s->halo->recut_s += diag_wall() - t0;
+    }
+    if (!moved && s->be->relist) {
+        s->be->relist(s);
+        s->be->prepare(s, s->t, !s->win.on);
     }
     *cost = 0;
 }

@@ -209,10 +209,149 @@ static void test_nbr_parallel_order(void **st)
     part_free(&q);
 }
 
+/* The canonical order (DESIGN.md "Parallel model": results do not depend on
+ * the rank count; issue 55): the same cloud held as one rank holds it and as
+ * a rank of two holds it gives every particle its neighbours in the same
+ * order. The cloud (IDs shuffled) is periodic along x over [0, 0.8): the
+ * points beyond are images. Store A, one rank: the points inside the period
+ * owned, the images ghosts. Store B, a cut along y on a lattice line: the
+ * points inside the period below it owned, the rest ghosts (the other
+ * rank's and the images). Each store in another shuffled order. The cells
+ * at the period's end hold owned points and images in both. Reference: the
+ * neighbour IDs of each particle met by the cell scan of store A. Then the
+ * GPU's list build over a cut off the lattice (store C). */
+static void nbr_fill_shuffled(particles_t *q, const double (*pt)[2], const int64_t *id, const int *own,
+                              size_t n, unsigned seed)
+{
+    size_t *ord = malloc(n * sizeof *ord), no = 0;
+    for (size_t k = 0; k < n; ++k) ord[k] = k;
+    srand(seed);
+    for (size_t k = n - 1; k > 0; --k) { /* Fisher-Yates */
+        size_t m = (size_t)rand() % (k + 1), t = ord[k];
+        ord[k] = ord[m], ord[m] = t;
+    }
+    for (int pass = 0; pass < 2; ++pass) /* owned first, then ghosts */
+        for (size_t k = 0; k < n; ++k)
+            if (own[ord[k]] == !pass) {
+                tu_put(q, pt[ord[k]][0], pt[ord[k]][1], 0, KIND_MATERIAL, 1.0);
+                q->id[q->n - 1] = id[ord[k]];
+                no += !pass;
+            }
+    q->ng = q->n - no;
+    q->n = no;
+    free(ord);
+}
+
+static void test_nbr_canonical_order(void **st)
+{
+    (void)st;
+    const size_t n = 4000;
+    const real plo[3] = {0, 0, 0}, plen[3] = {R(0.8), 0, 0};
+    double (*pt)[2] = malloc(n * sizeof *pt);
+    int64_t *id = malloc(n * sizeof *id);
+    int *ownA = malloc(n * sizeof *ownA), *ownB = malloc(n * sizeof *ownB);
+    srand(55);
+    for (size_t k = 0; k < n; ++k) {
+        pt[k][0] = rand() / (double)RAND_MAX, pt[k][1] = rand() / (double)RAND_MAX;
+        id[k] = (int64_t)((k * 7919u) % n); /* a permutation: 7919 is prime, not a factor of n */
+    }
+    const real support = R(0.05);
+    particles_t A = {0}, B = {0};
+    part_alloc(&A, 2, n), part_alloc(&B, 2, n);
+    for (size_t k = 0; k < n; ++k) ownA[k] = pt[k][0] < 0.8;
+    nbr_fill_shuffled(&A, (const double(*)[2])pt, id, ownA, n, 1);
+    nbr_grid ga = {0}, gb = {0};
+    nbr_set_period(&ga, 1, plo, plen);
+    nbr_build(&ga, &A, support, NULL);
+    const real ycut = ga.view.lo[1] + R(9.0) * support; /* a lattice line */
+    for (size_t k = 0; k < n; ++k) ownB[k] = pt[k][0] < 0.8 && pt[k][1] < ycut;
+    nbr_fill_shuffled(&B, (const double(*)[2])pt, id, ownB, n, 2);
+    nbr_set_period(&gb, 1, plo, plen);
+    nbr_build(&gb, &B, support, NULL);
+    assert_true(A.ng > 0 && B.ng > A.ng && B.n > 0);
+    size_t mixed = 0; /* cells of A with owned points and images */
+    for (size_t c = 0; c < ga.ncell; ++c) mixed += ga.end[c] > ga.start[c] && ga.gend[c] > ga.gstart[c];
+    assert_true(mixed > 0);
+    /* where each ID sits in store B */
+    size_t *atB = malloc(n * sizeof *atB);
+    for (size_t k = 0; k < n; ++k) atB[B.id[k]] = k;
+    int64_t *seq = malloc(n * sizeof *seq);
+    size_t checked = 0;
+    for (size_t i = 0; i < A.n + A.ng; ++i) {
+        size_t m = 0, k = 0;
+        NBR_BEGIN(&ga.view, A.x, i, j)
+            seq[m++] = A.id[j];
+        NBR_END
+        const size_t ib = atB[A.id[i]]; /* B's grid is A's: the same box */
+        NBR_BEGIN(&gb.view, B.x, ib, j)
+            assert_true(k < m);
+            assert_true(B.id[j] == seq[k]);
+            ++k;
+        NBR_END
+        assert_int_equal(k, m);
+        ++checked;
+    }
+    assert_int_equal(checked, n);
+    /* The GPU's lists (grid_list_fill_ranked) over a cut that is no lattice
+     * line (its cells of 2h + skin are not the slabs'): cells hold owned
+     * particles and the other rank's ghosts; merged by rank (images last,
+     * then ID), a particle's list is store A's in-support cell scan. */
+    particles_t C = {0};
+    part_alloc(&C, 2, n);
+    int *ownC = malloc(n * sizeof *ownC);
+    for (size_t k = 0; k < n; ++k) ownC[k] = pt[k][0] < 0.8 && pt[k][1] < ycut + R(0.3) * support;
+    nbr_fill_shuffled(&C, (const double(*)[2])pt, id, ownC, n, 3);
+    nbr_grid gc = {0};
+    nbr_set_period(&gc, 1, plo, plen);
+    nbr_build(&gc, &C, support, NULL);
+    size_t cut = 0; /* cells of C with owned particles and other ghosts than images */
+    for (size_t c = 0; c < gc.ncell; ++c)
+        for (size_t k = gc.gstart[c]; k < gc.gend[c] && gc.end[c] > gc.start[c]; ++k) cut += C.x[0][k] < R(0.8);
+    assert_true(cut > 0);
+    unsigned *rk = malloc(n * sizeof *rk), *nl = malloc(n * 64 * sizeof *nl), *cnt = malloc(n * sizeof *cnt);
+    for (size_t k = 0; k < n; ++k) rk[k] = (unsigned)C.id[k] | (unsigned)(C.x[0][k] >= R(0.8)) << 31;
+    const real s2 = support * support;
+    for (size_t k = 0; k < n; ++k) cnt[k] = grid_list_fill_ranked(&gc.view, C.x, k, s2, nl, n, 64, rk);
+    size_t *atC = malloc(n * sizeof *atC);
+    for (size_t k = 0; k < n; ++k) atC[C.id[k]] = k;
+    size_t differ = 0;
+    for (size_t i = 0; i < A.n + A.ng; ++i) {
+        size_t m = 0;
+        NBR_BEGIN(&ga.view, A.x, i, j)
+            real xij[3];
+            if (grid_pair(2, A.x, i, j, xij) < s2) seq[m++] = A.id[j];
+        NBR_END
+        const size_t ic = atC[A.id[i]];
+        assert_true(cnt[ic] <= 64);
+        assert_int_equal(cnt[ic], m);
+        for (size_t q = 0; q < m; ++q) assert_true(C.id[nl[q * n + ic]] == seq[q]);
+    }
+    /* the plain cell scan of C (owned, then ghosts) is not that order: the check has teeth */
+    for (size_t i = 0; i < A.n + A.ng; ++i) {
+        size_t m = 0, k = 0, bad = 0;
+        NBR_BEGIN(&ga.view, A.x, i, j)
+            seq[m++] = A.id[j];
+        NBR_END
+        NBR_BEGIN(&gc.view, C.x, atC[A.id[i]], j)
+            bad |= k >= m || C.id[j] != seq[k];
+            ++k;
+        NBR_END
+        differ += bad;
+    }
+    assert_true(differ > 0);
+    free(rk), free(nl), free(cnt), free(atC), free(ownC);
+    nbr_free(&gc);
+    part_free(&C);
+    free(seq), free(atB), free(pt), free(id), free(ownA), free(ownB);
+    nbr_free(&ga), nbr_free(&gb);
+    part_free(&A), part_free(&B);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_nbr_2d), cmocka_unit_test(test_nbr_3d),
                                        cmocka_unit_test(test_nbr_permutes_fields), cmocka_unit_test(test_list_2d),
-                                       cmocka_unit_test(test_list_3d), cmocka_unit_test(test_nbr_parallel_order)};
+                                       cmocka_unit_test(test_list_3d), cmocka_unit_test(test_nbr_parallel_order),
+                                       cmocka_unit_test(test_nbr_canonical_order)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

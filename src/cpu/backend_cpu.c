@@ -150,6 +150,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         return 1;
     case ST_EXCHANGE:
         if (s->halo) halo_exchange(s->halo, p);
+        if (s->halo) nbr_set_period(&cpu_of(s)->grid, s->halo->per, s->halo->plo, s->halo->plen);
         nbr_build(&cpu_of(s)->grid, p, R(2.0) * s->seg.k.h, s->halo ? s->halo->origin : NULL);
         if (s->halo) halo_sorted(s->halo, cpu_of(s)->grid.perm, p->n + p->ng);
         return 1;
@@ -335,6 +336,7 @@ const struct backend *backend_cpu(void)
 {
     static const struct backend b = {"cpu",          cpu_prepare,   cpu_rates,      cpu_advance, cpu_conc_begin,
                                       cpu_conc_step,  cpu_save_start, cpu_filter,     cpu_bounds,  cpu_check,
-                                      cpu_to_host,    cpu_finish,     cpu_from_host,  HALO_DEPTH};
+                                      cpu_to_host,    cpu_finish,     cpu_from_host,  HALO_DEPTH,
+                                      NULL /* relist: every prepare sorts */};
     return &b;
 }

@@ -1,5 +1,8 @@
 /* nbr.c — cell-linked list with sorting: a counting sort by cell index
- * (stable, O(N + cells)); see nbr.h. Every pass runs on all threads: a
+ * (stable, O(N + cells)), then each cell's run in a canonical order, periodic
+ * images last, each part by global particle ID (an insertion sort of runs
+ * that the last build left nearly in order; nbr.h says why). Every pass runs
+ * on all threads: a
  * min/max reduction for the bounding box, per-thread histograms of
  * contiguous index chunks for the sort (chunk t's particles of a cell go
  * after chunk t-1's, so the order is the serial stable sort's whatever the
@@ -55,6 +58,7 @@ static void nbr_reserve(nbr_grid *g, size_t n)
     g->nthread = (int)nt;
     if (n > g->cap_part) {
         g->key = nbr_grow(g->key, n, sizeof(size_t));
+        g->rank = nbr_grow(g->rank, n, sizeof(uint64_t));
         g->perm = nbr_grow(g->perm, n, sizeof(size_t));
         g->cap_part = n;
     }
@@ -94,6 +98,38 @@ static void nbr_sort_range(nbr_grid *g, size_t a, size_t b, size_t *start, size_
     }
     for (size_t i = i0; i < i1; ++i) g->perm[h[g->key[i]]++] = i;
 #pragma omp barrier
+    /* each cell's run by its rank in the cell (nbr_rank); an insertion sort: the
+     * runs are short and, the store sorted at the last build, nearly in order */
+    const uint64_t *rk = g->rank;
+#pragma omp for schedule(static)
+    for (size_t c = 0; c < nc; ++c)
+        for (size_t k = start[c] + 1; k < end[c]; ++k) {
+            const size_t v = g->perm[k];
+            const uint64_t r = rk[v];
+            size_t m = k;
+            for (; m > start[c] && rk[g->perm[m - 1]] > r; --m) g->perm[m] = g->perm[m - 1];
+            g->perm[m] = v;
+        }
+}
+
+/* The rank of particle i in its cell: its global ID, with bit 62 set for a
+ * periodic image (a position outside the period along a periodic axis:
+ * owned particles are wrapped into it, images lie beyond it). */
+static uint64_t nbr_rank(const nbr_grid *g, const particles_t *p, size_t i)
+{
+    uint64_t img = 0;
+    for (int d = 0; d < p->dim; ++d)
+        if (g->per >> d & 1) {
+            const double x = (double)p->x[d][i];
+            img |= x < g->plo[d] || x >= g->plo[d] + g->plen[d];
+        }
+    return (uint64_t)p->id[i] | img << 62;
+}
+
+void nbr_set_period(nbr_grid *g, int mask, const real lo[3], const real len[3])
+{
+    g->per = mask;
+    for (int d = 0; d < 3; ++d) g->plo[d] = (double)lo[d], g->plen[d] = (double)len[d];
 }
 
 void nbr_build(nbr_grid *g, particles_t *p, real support, const real *origin)
@@ -109,6 +145,7 @@ void nbr_build(nbr_grid *g, particles_t *p, real support, const real *origin)
             int c[3];
             grid_cell_coords(&g->view, p->x[0], p->x[1], p->x[2], (size_t)i, c);
             g->key[i] = grid_cell_index(&g->view, c[0], c[1], c[2]);
+            g->rank[i] = nbr_rank(g, p, (size_t)i);
         }
         nbr_sort_range(g, 0, p->n, g->start, g->end);
         if (p->ng) nbr_sort_range(g, p->n, n, g->gstart, g->gend);
@@ -128,6 +165,7 @@ void nbr_free(nbr_grid *g)
     free(g->gend);
     free(g->hist);
     free(g->key);
+    free(g->rank);
     free(g->perm);
     *g = (nbr_grid){0};
 }

@@ -90,7 +90,10 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
  * its ghosts); or, where the view has a neighbour list, over the list, which
  * holds the same particles within the support in the same order, so that
  * sums come out alike. Bodies test the distance themselves and may
- * `continue`. */
+ * `continue`. The store order of a cell is canonical (nbr_build: periodic
+ * images last, each part in global ID order) and the lattice global
+ * (grid_fit_lattice), so a particle's neighbours come in the one-rank order
+ * on any rank count, and every sum has the one-rank bits. */
 #define NBR_BEGIN(g, x, i, j) NBR_BEGIN_T(g, x, i, j, 0, 1)
 
 /* The same loop for lane `lane` of a team of `nlanes` (hd.h): entries
@@ -179,6 +182,36 @@ HD_INLINE unsigned grid_list_fill(const grid_view *g, real *const *x, size_t i, 
         if (c < cap) nl[(size_t)c * stride + i] = (unsigned)j;
         ++c;
     NBR_END
+    return c;
+}
+
+/* grid_list_fill where a cell may hold owned particles and ghosts that
+ * must be met in one order (the GPU's lists over cells of 2h + skin, whose
+ * lines are not the slabs'; periodic images): each cell's owned run and
+ * ghost run, each sorted by rk (the build's key: images last, then the
+ * global ID), taken merged by rk, so that the list holds a particle's
+ * neighbours in the order of one rank's store whatever the ranks. */
+HD_INLINE unsigned grid_list_fill_ranked(const grid_view *g, real *const *x, size_t i, real support2, unsigned *nl,
+                                         size_t stride, unsigned cap, const unsigned *rk)
+{
+    int c0[3];
+    grid_cell_coords(g, x[0], x[1], x[2], i, c0);
+    const int zr = g->dim == 3 ? 1 : 0;
+    unsigned c = 0;
+    for (int s = 0; s < (zr ? 27 : 9); ++s) {
+        int cx = c0[0] + s % 3 - 1, cy = c0[1] + (s / 3) % 3 - 1, cz = c0[2] + (zr ? s / 9 - 1 : 0);
+        if (cx < 0 || cy < 0 || cz < 0 || cx >= g->nc[0] || cy >= g->nc[1] || cz >= g->nc[2]) continue;
+        const size_t cell = grid_cell_index(g, cx, cy, cz);
+        size_t a = g->start[cell], b = g->end[cell], r = 0, e = 0;
+        if (g->gstart) r = g->gstart[cell], e = g->gend[cell];
+        while (a < b || r < e) {
+            const size_t j = r >= e || (a < b && rk[a] < rk[r]) ? a++ : r++;
+            real xij[3];
+            if (grid_pair(g->dim, x, i, j, xij) >= support2) continue;
+            if (c < cap) nl[(size_t)c * stride + i] = (unsigned)j;
+            ++c;
+        }
+    }
     return c;
 }
 

@@ -75,6 +75,12 @@ struct backend {
      * GPU, whose neighbour lists and ghosts are kept between builds while
      * particles move up to a skin. */
     int ghost_depth;
+    /* Drop the neighbour lists kept between prepares, so that the next
+     * prepare builds them afresh (the GPU's Verlet lists); NULL where every
+     * prepare sorts anyway (the CPU). At every load-balance check
+     * (Parallel:balance_every), on any rank count, as a re-cut does on
+     * several: the lists' order, so the sums' bits, follow the builds. */
+    void (*relist)(struct sim *s);
 };
 
 /* The concentration equation in windows of K flow steps (Segregation:every,
