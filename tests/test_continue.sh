@@ -23,14 +23,6 @@ cd "$tmp" || exit 1
 cp "$repo/inputs/shearbox_2d.yml" my.yml
 opts=(-P Run:t_end=78 -P Output:dt=13 -P Run:progress_s=0.01)
 
-# start "$@" in the background and wait until it is stepping (a progress line)
-start_run() { # log, command...
-    local log=$1; shift
-    "$@" >"$log" 2>&1 &
-    pid=$!
-    for _ in $(seq 400); do grep -q "^step " "$log" 2>/dev/null && return 0; kill -0 $pid 2>/dev/null || return 1; sleep 0.05; done
-    return 1
-}
 printed() { grep -A1 '^stopping at' "$1" | tail -1 | sed 's/^  //'; }
 # diagnostics.csv: one header, steps from 0 strictly increasing, ending at t_end (78 s)
 diag_whole() {

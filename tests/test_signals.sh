@@ -14,14 +14,7 @@ MPI="mpirun --oversubscribe --allow-run-as-root"
 scene=inputs/shearbox_2d.yml
 long=(-P Run:t_end=2000 -P Output:dt=13 -P Run:progress_s=0.01)
 
-# start "$@" in the background and wait until it is stepping (a progress line)
-start_run() { # log, command...
-    local log=$1; shift
-    "$@" >"$log" 2>&1 &
-    pid=$!
-    for _ in $(seq 200); do grep -q "^step " "$log" 2>/dev/null && return 0; kill -0 $pid 2>/dev/null || return 1; sleep 0.05; done
-    return 1
-}
+START_TRIES=200 # start_run (testlib.sh): 10 s for a run to start stepping
 
 for sig in TERM USR1 INT; do
     d=$tmp/one_$sig

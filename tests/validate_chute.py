@@ -56,7 +56,13 @@ def main():
     ok = True
     for c in cases:
         cs.reduce_run(os.path.join(a.work, c.name), float(c.over["Geometry:dr"]))
-    S = {c.name: cs.summarise(a.work, c.name, {"theta": c.meta["theta"], "H": c.meta["H"]}) for c in cases}
+    # the steady layers' profiles: the mean of the snapshots of the last 0.5 s (t = 0.7-1.2 s, six of them),
+    # rows of fewer than half the median count (a stray grain between two rows) left out. One snapshot of the
+    # layer without artificial viscosity (alpha 0) is one realisation: at t = 1.2 s one grain had slipped
+    # below the first row, so that the rows read one off and "the rows above the first" lay within 18.3 % of
+    # u(H); with E moved by 4e-14 of itself, 4.8 % (2026-11-29, after the reordered sums of issue 55)
+    S = {c.name: cs.summarise(a.work, c.name, {"theta": c.meta["theta"], "H": c.meta["H"]},
+                              window=0.5 if c.name.startswith("steady") else 0.0) for c in cases}
 
     s = S["steady"]
     good = s["err_mean"] <= TOL_MEAN and s["err_profile"] <= TOL_ROWS

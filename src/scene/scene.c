@@ -416,23 +416,27 @@ int scene_load(struct scene *s, const char *path, int n_over, char **over)
     if (scene_parse(s, path, n_over, over, err, sizeof err)) input_error("%s", err);
     return 0;
 }
-int scene_key_line(const struct scene *s, const char *section, const char *key)
+/* Where Section:key was set: the override index (or -1) and the file line. */
+static void key_origin(const struct scene *s, const char *section, const char *key, int *over, int *line)
 {
     char name[2 * SCENE_NAME];
-    int over, line;
     const struct scene_keys *k = s->keys;
     snprintf(name, sizeof name, "%s:%s", section, key);
-    leaf_resolve(k ? k->leaf : NULL, k ? k->n_leaf : 0, name, &over, &line);
+    leaf_resolve(k ? k->leaf : NULL, k ? k->n_leaf : 0, name, over, line);
+}
+
+int scene_key_line(const struct scene *s, const char *section, const char *key)
+{
+    int over, line;
+    key_origin(s, section, key, &over, &line);
     return line;
 }
 
 const char *scene_key_where(const struct scene *s, const char *section, const char *key, char *buf, size_t n)
 {
-    char name[2 * SCENE_NAME];
     int over, line;
     const struct scene_keys *k = s->keys;
-    snprintf(name, sizeof name, "%s:%s", section, key);
-    leaf_resolve(k ? k->leaf : NULL, k ? k->n_leaf : 0, name, &over, &line);
+    key_origin(s, section, key, &over, &line);
     if (k && over >= 0 && over < k->n_over)
         snprintf(buf, n, "%s", k->over[over]);
     else
@@ -442,17 +446,15 @@ const char *scene_key_where(const struct scene *s, const char *section, const ch
 
 int scene_key_overridden(const struct scene *s, const char *section, const char *key)
 {
-    char name[2 * SCENE_NAME];
     int over, line;
     const struct scene_keys *k = s->keys;
-    snprintf(name, sizeof name, "%s:%s", section, key);
-    leaf_resolve(k ? k->leaf : NULL, k ? k->n_leaf : 0, name, &over, &line);
+    key_origin(s, section, key, &over, &line);
     return k && over >= 0 && over < k->n_over;
 }
 
 /* A container's box: the walls' ends and cylinders, the regions' shapes
  * (a fill below its level, as high as that). */
-static void container_box(const struct scene_container *k, double lo[2], double hi[2])
+void scene_container_box(const struct scene_container *k, double lo[2], double hi[2])
 {
     for (int a = 0; a < 2; ++a) lo[a] = INFINITY, hi[a] = -INFINITY;
     for (unsigned i = 0; i < k->walls_count; ++i) {
@@ -487,7 +489,7 @@ void scene_extent(const struct scene *s, double ext[3])
         ext[0] = ext[1] = 2 * g->radius, ext[2] = d3 ? g->length : 0;
     } else if (g->type == GEOM_CONTAINER) {
         double lo[2], hi[2];
-        container_box(&s->container, lo, hi);
+        scene_container_box(&s->container, lo, hi);
         for (int a = 0; a < 2; ++a) ext[a] = hi[a] > lo[a] ? hi[a] - lo[a] : 0;
         if (g->periodic & PERIODIC_X) ext[0] = fmax(ext[0], g->width);
         if (g->periodic & PERIODIC_Y) ext[1] = fmax(ext[1], g->height);

@@ -141,6 +141,8 @@ int scene_load(struct scene *s, const char *path, int n_over, char **over);
 /* The keys ("Section:key=value", NULL-ended) that Run:preset p sets, or NULL (none). */
 const char *const *scene_preset_keys(int p);
 const char *scene_preset_name(int p);
+/* The x-y box of a container's walls (less the end walls) and regions, m. */
+void scene_container_box(const struct scene_container *k, double lo[2], double hi[2]);
 
 /* Write every parameter with the value used (defaults included) as YAML, with
  * the same section and key names; numbers read back exactly. Writes

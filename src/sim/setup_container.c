@@ -639,29 +639,14 @@ void container_place(sim_t *s)
     L.ent = calloc(k->walls_count, sizeof *L.ent);
     if (!seg || !L.ent) error_exit(1, "out of memory");
     /* the lattice: the walls' box, and the regions' boxes, with nl + 1 sites to spare */
-    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (unsigned i = 0; i < k->walls_count; ++i) {
         const struct scene_wall *w = &k->walls[i];
         if (w->shape == CWALL_ENDS) continue; /* the end walls of 3D: no primitive of its own */
         L.ent[L.nw] = i;
         seg[L.nw++] = (ctr_seg){w->from[0], w->from[1], w->to[0], w->to[1]};
-        for (int a = 0; a < 2; ++a) {
-            double l = w->shape == CWALL_CYLINDER ? w->centre[a] - w->radius : fmin(w->from[a], w->to[a]);
-            double h = w->shape == CWALL_CYLINDER ? w->centre[a] + w->radius : fmax(w->from[a], w->to[a]);
-            lo[a] = fmin(lo[a], l), hi[a] = fmax(hi[a], h);
-        }
     }
-    for (unsigned r = 0; r < k->regions_count; ++r) {
-        const struct scene_region *g = &k->regions[r];
-        if (g->shape == REGION_BOX)
-            for (int a = 0; a < 2; ++a) lo[a] = fmin(lo[a], g->lo[a]), hi[a] = fmax(hi[a], g->hi[a]);
-        if (g->shape == REGION_FILL) hi[1] = fmax(hi[1], g->level); /* a fill may rise above the walls */
-        if (g->shape == REGION_COLUMN)
-            lo[0] = fmin(lo[0], g->centre[0] - g->r_out), hi[0] = fmax(hi[0], g->centre[0] + g->r_out),
-            hi[1] = fmax(hi[1], g->level);
-        if (g->shape == REGION_SECTOR)
-            for (int a = 0; a < 2; ++a) lo[a] = fmin(lo[a], g->centre[a] - g->r_out), hi[a] = fmax(hi[a], g->centre[a] + g->r_out);
-    }
+    double lo[2], hi[2]; /* the walls' and the regions' box (a fill may rise above the walls) */
+    scene_container_box(k, lo, hi);
     char where[512];
     for (int a = 0; a < 2; ++a) { /* a periodic axis: the whole period, and every cylinder's rings within it */
         if (!(sc->geometry.periodic >> a & 1)) continue;

@@ -231,14 +231,24 @@ def reduce_done(a, c, rec):
         print("%s: %d row records" % (c.name, n), flush=True)
 
 
-def summarise(out, name, row):
+def summarise(out, name, row, window=0.0):
     """Surface and depth-mean speed of a run at its last snapshot and 0.5 s
-    before, and its error against the analytic profile."""
+    before, and its error against the analytic profile. With window > 0 (s)
+    the profile is the row-by-row mean of the snapshots of the last `window`
+    seconds (a steady layer's profile is a time average: one snapshot of a
+    layer without artificial viscosity carries its realisation's noise)."""
     theta, H = float(row["theta"]), float(row["H"])
     reading = READING[row.get("yield") or "drucker_prager"]  # runs.csv before Material:yield: drucker_prager
     prof = load_profiles(os.path.join(out, name))
     times = sorted(prof)
     last = prof[times[-1]]
+    if window > 0:  # rows of fewer than half the median count are stray grains between rows, not rows
+        full = {t: prof[t][prof[t]["n"] >= 0.5 * np.median(prof[t]["n"])] for t in times}
+        last = full[times[-1]]
+        span = [full[t] for t in times if t >= times[-1] - window - 1e-9 and len(full[t]["u"]) == len(last["u"])]
+        last = last.copy()  # a structured array: its rows' u and n the window's means
+        last["u"] = np.mean([p["u"] for p in span], axis=0)
+        last["n"] = np.mean([p["n"] for p in span], axis=0)
     before = prof[min(times, key=lambda t: abs(t - (times[-1] - 0.5)))]
     steady = np.isfinite(inertial_number(theta, reading))
     ref = bagnold(last["y"], theta, H, reading) if steady else np.full(len(last["y"]), np.nan)
