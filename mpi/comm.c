@@ -39,6 +39,11 @@ double comm_sum_compensated(double hi, double lo)
     return ksum_value(k);
 }
 double comm_max(double x) { return comm_reduce(x, MPI_MAX); }
+
+void comm_max_n(double *x, int n)
+{
+    if (comm_size() > 1) MPICHECK(MPI_Allreduce(MPI_IN_PLACE, x, n, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD));
+}
 double comm_min(double x) { return comm_reduce(x, MPI_MIN); }
 
 long long comm_sum_ll(long long x)

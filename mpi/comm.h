@@ -18,6 +18,8 @@ double comm_sum(double x);
  * total, independent of how the particles are split and ordered. */
 double comm_sum_compensated(double hi, double lo);
 double comm_max(double x);
+/* x[0..n) replaced by its maxima over ranks, in one reduction (a no-op on one rank). */
+void comm_max_n(double *x, int n);
 double comm_min(double x);
 long long comm_sum_ll(long long x);
 

@@ -77,7 +77,8 @@ int integrate_conc(sim_t *s, int force)
     if (s->hcsr) be->prepare(s, s->t, 1);
     double b[STEP_NBOUNDS];
     be->conc_begin(s, w->T, b);
-    double tc = conc_dt(s, comm_max(b[STEP_D]), comm_max(b[STEP_WAVE]));
+    comm_max_n(b, STEP_NBOUNDS);
+    double tc = conc_dt(s, b[STEP_D], b[STEP_WAVE]);
     long m = tc >= w->T ? 1 : (long)ceil(w->T / tc);
     for (long q = 0; q < m; ++q) be->conc_step(s, w->T / (double)m, q == m - 1);
     w->windows++, w->substeps += m;
@@ -107,12 +108,13 @@ double integrate_dt(sim_t *s)
     const struct scene *sc = s->sc;
     double h = s->seg.k.h, b[STEP_NBOUNDS];
     s->be->bounds(s, b);
-    double dmax = comm_max(b[STEP_D]), amax = comm_max(b[STEP_WAVE]), umax = comm_max(b[STEP_SPEED]);
+    comm_max_n(b, STEP_NBOUNDS); /* one reduction for every bound */
+    double dmax = b[STEP_D], amax = b[STEP_WAVE], umax = b[STEP_SPEED];
     double dt = sc->run.dt_max, tc = conc_dt(s, dmax, amax);
     if (!s->win.on) dt = fmin(dt, tc);
     if (umax > 0) dt = fmin(dt, sc->run.cfl_kinematic * h / umax);
     if (s->flow_on) /* (3.19); |acc| from the last rate evaluation */
-        dt = fmin(dt, stress_dt((real)sc->run.cfl_flow, (real)h, (real)comm_max(b[STEP_ACC]), s->flow.cs));
+        dt = fmin(dt, stress_dt((real)sc->run.cfl_flow, (real)h, (real)b[STEP_ACC], s->flow.cs));
     if (s->flow_on && s->flow.nu > 0) dt = fmin(dt, 0.125 * h * h / (double)s->flow.nu);
     conc_window *w = &s->win;
     if (w->on && w->k == 0) { /* a window opens: its length in steps */
