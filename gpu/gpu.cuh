@@ -152,6 +152,8 @@ typedef struct gpu {
     size_t *cell_mat;
     bound_sums *sums;
     unsigned *nl, *ncnt, nl_cap; /* neighbour list (grid_view), rebuilt with the cells */
+    int nbr_form;       /* the list's form (GRID_NBR_*, SPHSEG_GPU_NBR): nl holds 4-byte entries, 2-byte
+                         * ones (list16), or is NULL (cells) */
     real *xb[3];        /* positions at the last build */
     real skin;          /* m */
     int built, stale, every; /* the list: exists; must be rebuilt; rebuild every stage */
@@ -223,6 +225,11 @@ static inline sel sel_bd(const gpu_t *g, int lo) { return sel{g->lvl, 0, (uint8_
 /* ---- set-up (gpu_setup.cu) ----------------------------------------------- */
 void *dev_alloc(size_t bytes);
 void *scratch(gpu_t *g, size_t bytes);
+/* Bytes of one list entry in the list's form (0: no list). */
+static inline size_t gpu_nl_esize(const gpu_t *g)
+{
+    return g->nbr_form == GRID_NBR_LIST ? sizeof(unsigned) : g->nbr_form == GRID_NBR_LIST16 ? sizeof(unsigned short) : 0;
+}
 void gpu_reserve(gpu_t *g, size_t need, size_t keep);
 void gpu_upload(gpu_t *g, const particles_t *h, size_t a, size_t b);
 void gpu_counts(gpu_t *g, size_t n, size_t ng);

@@ -110,35 +110,56 @@ static void gpu_permute_store(gpu_t *g, const unsigned *perm, size_t n)
 /* The Verlet list of every particle within sqrt(list2), from the cell scan in
  * its order, a cell's owned particles and ghosts merged by their ranks rk
  * (grid_list_fill_ranked: cells of 2h + skin on several ranks hold both);
- * the positions at the build (xb) kept for the Verlet test. */
+ * the positions at the build (xb) kept for the Verlet test. In the list's
+ * form (g->nbr_form): 4-byte entries, 2-byte ones (grid_enc16; a cell past
+ * their offsets takes this build to the cells form), or none (the cells
+ * form: the pair loops count the same particles from the cells, xb and rk). */
 static void gpu_list(gpu_t *g, int dim, real list2, size_t n, const unsigned *rk)
 {
     grid_view vc = g->view;
     vc.nl = vc.ncnt = NULL;
+    vc.nl16 = NULL;
+    vc.form = GRID_NBR_LIST;
     particles_t q = g->d;
     unsigned *cnt = g->ncnt;
+    int form = g->nbr_form;
     prof_begin(g->st);
-    for (;;) { /* a list too short for the densest particle grows, once in a while */
-        unsigned *nl = g->nl, cap = g->nl_cap;
-        each(g, n, [=] __device__(size_t i) { cnt[i] = grid_list_fill_ranked(&vc, q.x, i, list2, nl, n, cap, rk); });
+    while (form != GRID_NBR_CELLS) { /* a list too short for the densest particle grows, once in a while */
+        unsigned *nl = form == GRID_NBR_LIST ? g->nl : NULL, cap = g->nl_cap;
+        unsigned short *nl16 = form == GRID_NBR_LIST16 ? (unsigned short *)g->nl : NULL;
+        each(g, n, [=] __device__(size_t i) {
+            cnt[i] = grid_list_fill_form(&vc, q.x, i, list2, nl, nl16, n, cap, rk);
+        });
         reduce(g, cnt, (unsigned *)g->dfirst, n, max_uint(), 0u);
         CK(cudaMemcpyAsync(g->hfirst, g->dfirst, sizeof(long long), cudaMemcpyDeviceToHost, g->st));
         CK(cudaStreamSynchronize(g->st));
         unsigned most;
         memcpy(&most, g->hfirst, sizeof most);
+        if (form == GRID_NBR_LIST16 && most == GRID_ENC16_OVER) {
+            static int told;
+            if (!told++)
+                message("gpu: a cell holds more than %u particles, past the 16-bit list's offsets: the cells form "
+                        "for such builds (the same sums)", GRID_ENC16_OFF + 1);
+            form = GRID_NBR_CELLS;
+            break;
+        }
         if (most <= cap) break;
         CK(cudaFree(g->nl));
         g->nl_cap = (most + most / 4 + 7) / 8 * 8;
-        g->nl = (unsigned *)dev_alloc(g->cap * g->nl_cap * sizeof(unsigned));
+        g->nl = (unsigned *)dev_alloc(g->cap * g->nl_cap * gpu_nl_esize(g));
     }
     for (int d = 0; d < dim; ++d)
         CK(cudaMemcpyAsync(g->xb[d], q.x[d], n * sizeof(real), cudaMemcpyDeviceToDevice, g->st));
-    unsigned *nl = g->nl, cap = g->nl_cap;
     prof_end(g->st, P_LIST);
-    g->view.nl = nl;
-    g->view.ncnt = cnt;
+    g->view.form = form;
+    g->view.nl = form == GRID_NBR_LIST ? g->nl : NULL;
+    g->view.nl16 = form == GRID_NBR_LIST16 ? (const unsigned short *)g->nl : NULL;
+    g->view.ncnt = form == GRID_NBR_CELLS ? NULL : cnt;
     g->view.nl_stride = n;
-    g->view.nl_cap = cap;
+    g->view.nl_cap = g->nl_cap;
+    for (int d = 0; d < 3; ++d) g->view.xb[d] = g->xb[d];
+    g->view.rk = rk;
+    g->view.list2 = list2;
 }
 
 /* From the new list: the dummies no material reaches (wact) and the halo
@@ -146,12 +167,12 @@ static void gpu_list(gpu_t *g, int dim, real list2, size_t n, const unsigned *rk
 static void gpu_marks(gpu_t *g, size_t n, size_t nown)
 {
     particles_t q = g->d;
-    unsigned *cnt = g->ncnt, cap = g->nl_cap;
+    const unsigned *cnt = g->view.ncnt, cap = g->nl_cap; /* cnt NULL: the cells form, no fallback */
     if (g->wact) { /* dummies that no material reaches until the next build (the list's skin) */
         uint8_t *wa = g->wact;
         grid_view vw = g->view;
         each(g, n, [=] __device__(size_t i) {
-            int r = q.kind[i] == KIND_DUMMY && cnt[i] > cap; /* a cell scan at use: keep the loop */
+            int r = q.kind[i] == KIND_DUMMY && cnt && cnt[i] > cap; /* a cell scan at use: keep the loop */
             if (q.kind[i] == KIND_DUMMY && !r) {
                 NBR_BEGIN(&vw, q.x, i, j)
                     r |= q.kind[j] == KIND_MATERIAL;

@@ -91,7 +91,7 @@ void gpu_reserve(gpu_t *g, size_t need, size_t keep)
         g->xb[d] = (real *)dev_alloc(cap * sizeof(real));
         CK(cudaMemset(g->xb[d], 0, cap * sizeof(real)));
     }
-    g->nl = (unsigned *)dev_alloc(cap * g->nl_cap * sizeof(unsigned));
+    g->nl = gpu_nl_esize(g) ? (unsigned *)dev_alloc(cap * g->nl_cap * gpu_nl_esize(g)) : NULL;
     g->ncnt = (unsigned *)dev_alloc(cap * sizeof(unsigned));
     g->amag = (real *)dev_alloc(cap * sizeof(real));
     CK(cudaMemset(g->amag, 0, cap * sizeof(real)));
@@ -160,6 +160,9 @@ gpu_t *gpu_get(sim_t *s)
     const particles_t *h = &s->p;
     size_t n = h->n;
     const double skin = s->sc->run.list_skin; /* Run:list_skin, in units of h */
+    g->nbr_form = tuning_get()->gpu_nbr;
+    if (g->nbr_form < 0)
+        error_exit(2, "SPHSEG_GPU_NBR=%s: expected list, list16 or cells", tuning_get()->gpu_nbr_text);
     g->nl_cap = grid_list_cap(h->dim, (1 + 0.5 * skin) * (double)(s->seg.k.h / s->seg.k.dr));
     if (s->halo) {
         g->hx = (dhalo *)calloc(1, sizeof *g->hx);
@@ -174,9 +177,9 @@ gpu_t *gpu_get(sim_t *s)
      * the bits, depend on the team size, which must not follow the rank count */
     g->team = gpu_team_size(h->dim, (size_t)comm_sum_ll((long long)n));
     message("gpu: device %d of %d, %s, %.1f GiB; %zu MiB of particle arrays (two sets), %zu MiB of neighbour "
-            "list (%u per particle, skin %.3g h), %d threads per particle in neighbour loops%s%s", g->dev, ndev,
+            "list (%u per particle of %zu bytes, skin %.3g h), %d threads per particle in neighbour loops%s%s", g->dev, ndev,
             prop.name, (double)prop.totalGlobalMem / (1u << 30), 2 * n * part_bytes_per_particle() >> 20,
-            (n * g->nl_cap * sizeof(unsigned)) >> 20, g->nl_cap, skin, g->team,
+            (n * g->nl_cap * gpu_nl_esize(g)) >> 20, g->nl_cap, gpu_nl_esize(g), skin, g->team,
             !g->hx                  ? ""
             : g->hx->cuda_aware     ? "; halo: packed on the device, CUDA-aware MPI on device buffers"
                                     : "; halo: packed on the device, staged through pinned host memory",

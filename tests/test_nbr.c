@@ -347,11 +347,127 @@ static void test_nbr_canonical_order(void **st)
     part_free(&A), part_free(&B);
 }
 
+/* The list's other forms (grid.h form: the GPU's SPHSEG_GPU_NBR): the
+ * 16-bit list (grid_enc16) and the cells form (no list: the build's cells,
+ * owned and ghost runs merged by rank, counted within the list's radius at
+ * the build's positions) hand every lane of a team of T (1 to 16) the same
+ * particles in the same order as the plain list, in 2D and 3D, with cells
+ * that hold owned particles and ghosts, after the particles moved (under
+ * half the skin) from where the build put them. Reference: the 32-bit list
+ * (grid_list_fill_ranked). */
+static void check_forms(int dim)
+{
+    const size_t n = dim == 3 ? 6000 : 3000;
+    const double sup = dim == 3 ? 0.1 : 0.04, skin = 0.1 * sup; /* cell edge = the list's radius */
+    particles_t p = {0};
+    part_alloc(&p, dim, n);
+    srand(31u + (unsigned)dim);
+    size_t no = 0;
+    for (int pass = 0; pass < 2; ++pass) /* owned (x < 0.6, and some beyond) first, then ghosts */
+        for (size_t k = 0; k < n; ++k) {
+            srand(1000u * (unsigned)dim + (unsigned)k); /* the same point in both passes */
+            double x = rand() / (double)RAND_MAX, y = rand() / (double)RAND_MAX, z = rand() / (double)RAND_MAX;
+            int own = x < 0.6 || rand() % 5 == 0;
+            if (own != !pass) continue;
+            tu_put(&p, x, y, dim == 3 ? z : 0, KIND_MATERIAL, 1.0);
+            p.id[p.n - 1] = (int64_t)((k * 7919u) % n);
+            no += !pass;
+        }
+    p.ng = p.n - no, p.n = no;
+    nbr_grid g = {0};
+    nbr_build(&g, &p, (real)sup, NULL);
+    const size_t nt = p.n + p.ng;
+    size_t mixed = 0;
+    for (size_t c = 0; c < g.ncell; ++c) mixed += g.end[c] > g.start[c] && g.gend[c] > g.gstart[c];
+    assert_true(mixed > 10); /* cells where the merge by rank matters */
+    const unsigned cap = dim == 3 ? 64 : 32;
+    const real l2 = (real)(sup * sup);
+    unsigned *rk = malloc(nt * sizeof *rk), *nl = malloc(nt * cap * sizeof *nl), *cnt = malloc(nt * sizeof *cnt);
+    unsigned short *nl16 = malloc(nt * cap * sizeof *nl16);
+    real *xb[3];
+    for (int d = 0; d < 3; ++d) xb[d] = malloc(nt * sizeof(real)), memcpy(xb[d], p.x[d], nt * sizeof(real));
+    for (size_t k = 0; k < nt; ++k) rk[k] = (unsigned)p.id[k];
+    for (size_t i = 0; i < nt; ++i) {
+        cnt[i] = grid_list_fill_ranked(&g.view, p.x, i, l2, nl, nt, cap, rk);
+        assert_true(cnt[i] <= cap);
+        assert_int_equal(grid_list_fill_form(&g.view, p.x, i, l2, NULL, nl16, nt, cap, rk), cnt[i]);
+    }
+    size_t moved = 0; /* then the particles move, under half the skin along each axis */
+    for (size_t k = 0; k < nt; ++k) {
+        int c0[3], c1[3];
+        grid_cell_coords(&g.view, p.x[0], p.x[1], p.x[2], k, c0);
+        for (int d = 0; d < dim; ++d) p.x[d][k] += (real)(skin * 0.45 * (2.0 * rand() / RAND_MAX - 1));
+        grid_cell_coords(&g.view, p.x[0], p.x[1], p.x[2], k, c1);
+        moved += c0[0] != c1[0] || c0[1] != c1[1] || c0[2] != c1[2];
+    }
+    assert_true(moved > 0); /* some particles left the cell they were sorted into */
+    grid_view v[3] = {g.view, g.view, g.view};
+    v[0].nl = nl, v[0].ncnt = cnt, v[0].nl_stride = nt, v[0].nl_cap = cap;
+    v[1].form = GRID_NBR_LIST16, v[1].nl16 = nl16, v[1].ncnt = cnt, v[1].nl_stride = nt, v[1].nl_cap = cap;
+    v[2].form = GRID_NBR_CELLS;
+    for (int f = 1; f < 3; ++f) {
+        for (int d = 0; d < 3; ++d) v[f].xb[d] = xb[d];
+        v[f].rk = rk, v[f].list2 = l2;
+    }
+    size_t *ref = malloc(cap * sizeof *ref), met = 0;
+    for (size_t i = 0; i < nt; ++i)
+        for (int T = 1; T <= 16; T *= 2)
+            for (int l = 0; l < T; ++l) {
+                size_t m = 0;
+                NBR_BEGIN_T(&v[0], p.x, i, j, l, T)
+                    ref[m++] = j;
+                NBR_END
+                for (int f = 1; f < 3; ++f) {
+                    size_t k = 0;
+                    NBR_BEGIN_T(&v[f], p.x, i, j, l, T)
+                        assert_true(k < m);
+                        assert_int_equal(j, ref[k]);
+                        ++k;
+                    NBR_END
+                    assert_int_equal(k, m);
+                }
+                met += m;
+            }
+    assert_true(met > 5 * nt); /* real neighbours were compared */
+    free(ref), free(rk), free(nl), free(cnt), free(nl16);
+    for (int d = 0; d < 3; ++d) free(xb[d]);
+    nbr_free(&g);
+    part_free(&p);
+}
+
+static void test_forms_2d(void **st) { (void)st; check_forms(2); }
+static void test_forms_3d(void **st) { (void)st; check_forms(3); }
+
+/* A cell past the 16-bit offsets (more than GRID_ENC16_OFF + 1 candidates)
+ * is reported, not wrapped: the GPU then takes the cells form. */
+static void test_forms_overflow(void **st)
+{
+    (void)st;
+    const size_t n = 2100;
+    particles_t p = {0};
+    part_alloc(&p, 2, n);
+    srand(5);
+    for (size_t k = 0; k < n; ++k) tu_put(&p, 0.01 * rand() / RAND_MAX, 0.01 * rand() / RAND_MAX, 0, KIND_MATERIAL, 1.0);
+    nbr_grid g = {0};
+    nbr_build(&g, &p, R(0.1), NULL);
+    unsigned *rk = malloc(n * sizeof *rk);
+    unsigned short *nl16 = malloc(n * n * sizeof *nl16);
+    for (size_t k = 0; k < n; ++k) rk[k] = (unsigned)p.id[k];
+    size_t over = 0;
+    for (size_t i = 0; i < n; ++i)
+        over += grid_list_fill_form(&g.view, p.x, i, R(0.01), NULL, nl16, n, (unsigned)n, rk) == GRID_ENC16_OVER;
+    assert_true(over > 0);
+    free(rk), free(nl16);
+    nbr_free(&g);
+    part_free(&p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_nbr_2d), cmocka_unit_test(test_nbr_3d),
                                        cmocka_unit_test(test_nbr_permutes_fields), cmocka_unit_test(test_list_2d),
                                        cmocka_unit_test(test_list_3d), cmocka_unit_test(test_nbr_parallel_order),
-                                       cmocka_unit_test(test_nbr_canonical_order)};
+                                       cmocka_unit_test(test_nbr_canonical_order), cmocka_unit_test(test_forms_2d),
+                                       cmocka_unit_test(test_forms_3d), cmocka_unit_test(test_forms_overflow)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -6,8 +6,8 @@
 #include "error.h"
 
 /* The settings' names, and their values as read (NULL: not set). */
-enum { T_PROFILE, T_TEAM, T_WALLSKIP, T_OVERLAP, T_HOSTX, T_IPC, T_CUDA_AWARE, T_SKEW, T_N };
-static const char *const tuning_names[T_N] = {"SPHSEG_GPU_PROFILE", "SPHSEG_GPU_TEAM",  "SPHSEG_GPU_WALLSKIP",
+enum { T_PROFILE, T_TEAM, T_NBR, T_WALLSKIP, T_OVERLAP, T_HOSTX, T_IPC, T_CUDA_AWARE, T_SKEW, T_N };
+static const char *const tuning_names[T_N] = {"SPHSEG_GPU_PROFILE", "SPHSEG_GPU_TEAM",  "SPHSEG_GPU_NBR", "SPHSEG_GPU_WALLSKIP",
                                               "SPHSEG_GPU_OVERLAP", "SPHSEG_GPU_HOSTX", "SPHSEG_GPU_IPC",
                                               "SPHSEG_CUDA_AWARE", "SPHSEG_BALANCE_SKEW"};
 static const char *tuning_raw[T_N];
@@ -23,6 +23,13 @@ static int team_of(const char *e)
     char *end;
     long t = strtol(e, &end, 10);
     return *end || (t != 1 && t != 2 && t != 4 && t != 8 && t != 16) ? -1 : (int)t;
+}
+
+/* "list" 0 (or not set), "list16" 1, "cells" 2; else -1. */
+static int nbr_of(const char *e)
+{
+    if (!is_set(e) || !strcmp(e, "list")) return 0;
+    return !strcmp(e, "list16") ? 1 : !strcmp(e, "cells") ? 2 : -1;
 }
 
 /* "R:F", R a rank >= 0 and F a finite factor > 0; else *rank = -2. */
@@ -48,12 +55,14 @@ const tuning *tuning_get(void)
     const char *const *r = tuning_raw;
     t = (tuning){.gpu_profile = is_set(r[T_PROFILE]) && !is_zero(r[T_PROFILE]),
                  .gpu_team = team_of(r[T_TEAM]),
+                 .gpu_nbr = nbr_of(r[T_NBR]),
                  .gpu_wallskip = !is_zero(r[T_WALLSKIP]),
                  .gpu_overlap = !is_zero(r[T_OVERLAP]),
                  .gpu_hostx = is_set(r[T_HOSTX]) && !is_zero(r[T_HOSTX]),
                  .gpu_ipc = !is_zero(r[T_IPC]),
                  .cuda_aware = !is_zero(r[T_CUDA_AWARE]),
                  .gpu_team_text = is_set(r[T_TEAM]) ? r[T_TEAM] : NULL,
+                 .gpu_nbr_text = is_set(r[T_NBR]) ? r[T_NBR] : NULL,
                  .skew_text = is_set(r[T_SKEW]) ? r[T_SKEW] : NULL};
     skew_of(r[T_SKEW], &t.skew_rank, &t.skew_factor);
     read = 1;

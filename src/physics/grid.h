@@ -24,7 +24,29 @@ typedef struct grid_view {
     const unsigned *nl, *ncnt;
     size_t nl_stride;
     unsigned nl_cap;
+    /* The GPU's other forms of the pass (SPHSEG_GPU_NBR, core/tuning.h;
+     * docs/performance.md, "Neighbour pass"), each meeting the list's
+     * particles in the list's order, lane by lane (test_nbr.c):
+     * GRID_NBR_LIST16, the list in 16-bit entries nl16 (grid_enc16);
+     * GRID_NBR_CELLS, no list: the cell scan of the build, owned and ghost
+     * runs merged by rk, the particles within sqrt(list2) at the build's
+     * positions xb. Both take i's cell from xb (the cell it was sorted
+     * into). GRID_NBR_LIST (0): the list nl, or the plain cell scan. */
+    int form;
+    const unsigned short *nl16;
+    real *xb[3];
+    const unsigned *rk;
+    real list2;
 } grid_view;
+
+enum { GRID_NBR_LIST = 0, GRID_NBR_LIST16 = 1, GRID_NBR_CELLS = 2 };
+
+/* A 16-bit entry: the slot s of the neighbour's cell among i's 3^d cells
+ * (the scan's order, dz, dy, dx ascending; bits 11-15) and its offset in
+ * that cell's owned run followed by its ghost run (bits 0-10). */
+#define GRID_ENC16_OFF 2047u
+#define GRID_ENC16_OVER 0xffffffffu /* a build's count: an offset past GRID_ENC16_OFF */
+HD_INLINE unsigned grid_enc16(int s, size_t off) { return (unsigned)s << 11 | (unsigned)off; }
 
 /* Fit the grid to the bounding box [lo, hi] of n particles with cells of
  * edge `support` (2h); returns the number of cells. Shared by the CPU and
@@ -98,15 +120,24 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
 
 /* The same loop for lane `lane` of a team of `nlanes` (hd.h): entries
  * lane, lane + nlanes, ... of each segment (the list, or each cell), so that
- * the lanes of a team meet every neighbour exactly once between them. */
+ * the lanes of a team meet every neighbour exactly once between them. The
+ * list's other forms (form, above) hand each lane the entries the list
+ * would: GRID_NBR_LIST16 decodes them (grid_dec16), GRID_NBR_CELLS counts
+ * the particles within the list's radius across its cells (grid_ex_next). */
 #define NBR_BEGIN_T(g, x, i, j, lane, nlanes)                                          \
     {                                                                                  \
+        const int frm_ = (g)->form;                                                    \
         int c0_[3];                                                                    \
-        grid_cell_coords((g), (x)[0], (x)[1], (x)[2], (i), c0_);                       \
+        if (frm_ == GRID_NBR_LIST) grid_cell_coords((g), (x)[0], (x)[1], (x)[2], (i), c0_); \
+        else grid_cell_coords((g), (g)->xb[0], (g)->xb[1], (g)->xb[2], (i), c0_);      \
         const int zr_ = (g)->dim == 3 ? 1 : 0;                                         \
-        const int lst_ = (g)->nl != NULL && (g)->ncnt[i] <= (g)->nl_cap;               \
-        const int nsub_ = (g)->gstart != NULL ? 2 : 1;                                 \
+        const int l16_ = (g)->nl16 != NULL && (g)->ncnt[i] <= (g)->nl_cap;             \
+        const int lst_ = l16_ || ((g)->nl != NULL && (g)->ncnt[i] <= (g)->nl_cap);     \
+        const int ex_ = frm_ == GRID_NBR_CELLS;                                        \
+        const int nsub_ = (g)->gstart != NULL && !ex_ ? 2 : 1;                         \
         const int nseg_ = lst_ ? 1 : (zr_ ? 27 : 9) * nsub_;                           \
+        grid_dec dc_ = {-1, 0, 0, 0};                                                  \
+        grid_ex xs_ = {(size_t)(i), 0, 0, 0, 0, 0};                                    \
         for (int s_ = 0; s_ < nseg_; ++s_) {                                           \
             size_t a_ = 0, b_ = 0;                                                     \
             if (lst_) {                                                                \
@@ -119,11 +150,15 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
                     cy_ >= (g)->nc[1] || cz_ >= (g)->nc[2])                            \
                     continue;                                                          \
                 size_t cell_ = grid_cell_index((g), cx_, cy_, cz_);                    \
-                if (s_ % nsub_ == 0) a_ = (g)->start[cell_], b_ = (g)->end[cell_];     \
+                if (ex_) grid_ex_cell(&xs_, (g), cell_), b_ = GRID_EX_END;             \
+                else if (s_ % nsub_ == 0) a_ = (g)->start[cell_], b_ = (g)->end[cell_]; \
                 else a_ = (g)->gstart[cell_], b_ = (g)->gend[cell_];                   \
             }                                                                          \
-            for (size_t q_ = a_ + (size_t)(lane); q_ < b_; q_ += (size_t)(nlanes)) {   \
-                const size_t j = lst_ ? (size_t)(g)->nl[q_ * (g)->nl_stride + (i)] : q_;
+            for (size_t q_ = ex_ ? grid_ex_next(&xs_, (g), (lane), (nlanes)) : a_ + (size_t)(lane); \
+                 q_ < b_; q_ = ex_ ? grid_ex_next(&xs_, (g), (lane), (nlanes)) : q_ + (size_t)(nlanes)) { \
+                const size_t j = !lst_ ? q_                                            \
+                                 : l16_ ? grid_dec16((g), &dc_, c0_, (g)->nl16[q_ * (g)->nl_stride + (i)]) \
+                                        : (size_t)(g)->nl[q_ * (g)->nl_stride + (i)];
 
 #define NBR_END                                                                        \
             }                                                                          \
@@ -148,6 +183,56 @@ HD_INLINE real grid_pair(int dim, real *const *x, size_t i, size_t j, real xij[3
     xij[1] = x[1][i] - x[1][j];
     xij[2] = dim == 3 ? x[2][i] - x[2][j] : R(0.0);
     return xij[0] * xij[0] + xij[1] * xij[1] + xij[2] * xij[2];
+}
+
+/* GRID_NBR_LIST16: the particle of 16-bit entry e of the particle in cell
+ * c0 (at its build), the slot's cell ranges cached in d (a lane's entries
+ * come slot by slot, in ascending order). */
+typedef struct grid_dec {
+    int s;
+    size_t a, na, ga;
+} grid_dec;
+
+HD_INLINE size_t grid_dec16(const grid_view *g, grid_dec *d, const int c0[3], unsigned e)
+{
+    const int s = (int)(e >> 11);
+    const size_t o = e & GRID_ENC16_OFF;
+    if (s != d->s) {
+        const size_t c = grid_cell_index(g, c0[0] + s % 3 - 1, c0[1] + (s / 3) % 3 - 1,
+                                         c0[2] + (g->dim == 3 ? s / 9 - 1 : 0));
+        d->s = s, d->a = g->start[c], d->na = g->end[c] - g->start[c];
+        d->ga = g->gstart ? g->gstart[c] : 0;
+    }
+    return o < d->na ? d->a + o : d->ga + (o - d->na);
+}
+
+/* GRID_NBR_CELLS: a lane's walk over i's cells, each cell's owned run
+ * [a, b) and ghost run [r, e) merged by rk (grid_list_fill_ranked's
+ * order), m the particles within the list's radius met so far. */
+typedef struct grid_ex {
+    size_t i, a, b, r, e, m;
+} grid_ex;
+#define GRID_EX_END ((size_t)-1)
+
+HD_INLINE void grid_ex_cell(grid_ex *w, const grid_view *g, size_t cell)
+{
+    w->a = g->start[cell], w->b = g->end[cell], w->r = w->e = 0;
+    if (g->gstart) w->r = g->gstart[cell], w->e = g->gend[cell];
+}
+
+/* The lane's next particle in the cell (GRID_EX_END: none): the m-th within
+ * the radius, m = lane mod nlanes, as the list's entry m would be. */
+HD_INLINE size_t grid_ex_next(grid_ex *w, const grid_view *g, int lane, int nlanes)
+{
+    for (;;) {
+        size_t j;
+        if (w->a < w->b && (w->r >= w->e || g->rk[w->a] < g->rk[w->r])) j = w->a++;
+        else if (w->r < w->e) j = w->r++;
+        else return GRID_EX_END;
+        real xij[3];
+        if (grid_pair(g->dim, g->xb, w->i, j, xij) >= g->list2) continue;
+        if (w->m++ % (size_t)nlanes == (size_t)lane) return j;
+    }
 }
 
 /* Periodic images (mpi/halo.h) are ghosts whose positions are their
@@ -185,34 +270,49 @@ HD_INLINE unsigned grid_list_fill(const grid_view *g, real *const *x, size_t i, 
     return c;
 }
 
+/* grid_list_fill_ranked (below), either form of entry. */
+HD_INLINE unsigned grid_list_fill_form(const grid_view *g, real *const *x, size_t i, real support2, unsigned *nl,
+                                       unsigned short *nl16, size_t stride, unsigned cap, const unsigned *rk)
+{
+    int c0[3];
+    grid_cell_coords(g, x[0], x[1], x[2], i, c0);
+    const int zr = g->dim == 3 ? 1 : 0;
+    unsigned c = 0, over = 0;
+    for (int s = 0; s < (zr ? 27 : 9); ++s) {
+        int cx = c0[0] + s % 3 - 1, cy = c0[1] + (s / 3) % 3 - 1, cz = c0[2] + (zr ? s / 9 - 1 : 0);
+        if (cx < 0 || cy < 0 || cz < 0 || cx >= g->nc[0] || cy >= g->nc[1] || cz >= g->nc[2]) continue;
+        const size_t cell = grid_cell_index(g, cx, cy, cz);
+        const size_t a0 = g->start[cell], na = g->end[cell] - a0;
+        size_t a = a0, b = g->end[cell], r = 0, e = 0, r0 = 0;
+        if (g->gstart) r0 = r = g->gstart[cell], e = g->gend[cell];
+        while (a < b || r < e) {
+            const size_t j = r >= e || (a < b && rk[a] < rk[r]) ? a++ : r++;
+            real xij[3];
+            if (grid_pair(g->dim, x, i, j, xij) >= support2) continue;
+            if (c < cap && nl) nl[(size_t)c * stride + i] = (unsigned)j;
+            if (c < cap && !nl) {
+                const size_t off = j >= a0 && j < a0 + na ? j - a0 : na + (j - r0);
+                over |= off > GRID_ENC16_OFF;
+                nl16[(size_t)c * stride + i] = (unsigned short)grid_enc16(s, off & GRID_ENC16_OFF);
+            }
+            ++c;
+        }
+    }
+    return over ? GRID_ENC16_OVER : c;
+}
+
 /* grid_list_fill where a cell may hold owned particles and ghosts that
  * must be met in one order (the GPU's lists over cells of 2h + skin, whose
  * lines are not the slabs'; periodic images): each cell's owned run and
  * ghost run, each sorted by rk (the build's key: images last, then the
  * global ID), taken merged by rk, so that the list holds a particle's
- * neighbours in the order of one rank's store whatever the ranks. */
+ * neighbours in the order of one rank's store whatever the ranks. Entries
+ * go to nl, or where nl is NULL to nl16 as grid_enc16 (the same particles;
+ * returns GRID_ENC16_OVER where an offset exceeds GRID_ENC16_OFF). */
 HD_INLINE unsigned grid_list_fill_ranked(const grid_view *g, real *const *x, size_t i, real support2, unsigned *nl,
                                          size_t stride, unsigned cap, const unsigned *rk)
 {
-    int c0[3];
-    grid_cell_coords(g, x[0], x[1], x[2], i, c0);
-    const int zr = g->dim == 3 ? 1 : 0;
-    unsigned c = 0;
-    for (int s = 0; s < (zr ? 27 : 9); ++s) {
-        int cx = c0[0] + s % 3 - 1, cy = c0[1] + (s / 3) % 3 - 1, cz = c0[2] + (zr ? s / 9 - 1 : 0);
-        if (cx < 0 || cy < 0 || cz < 0 || cx >= g->nc[0] || cy >= g->nc[1] || cz >= g->nc[2]) continue;
-        const size_t cell = grid_cell_index(g, cx, cy, cz);
-        size_t a = g->start[cell], b = g->end[cell], r = 0, e = 0;
-        if (g->gstart) r = g->gstart[cell], e = g->gend[cell];
-        while (a < b || r < e) {
-            const size_t j = r >= e || (a < b && rk[a] < rk[r]) ? a++ : r++;
-            real xij[3];
-            if (grid_pair(g->dim, x, i, j, xij) >= support2) continue;
-            if (c < cap) nl[(size_t)c * stride + i] = (unsigned)j;
-            ++c;
-        }
-    }
-    return c;
+    return grid_list_fill_form(g, x, i, support2, nl, NULL, stride, cap, rk);
 }
 
 /* List capacity for smoothing length h = h_dr * dr: the lattice count in
