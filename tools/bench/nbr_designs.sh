@@ -14,7 +14,7 @@
 #     profile's ms per step, the list's size and the device's peak memory in use
 #     (nvidia-smi sampled every 100 ms).
 # Usage (repository root, one GPU):
-#   OUT=DIR [SPHSEG_GPU=local/sphseg_gpu] [SPHSEG_GPU_DOUBLE=BIN] [STEPS=150] [PYTHON=python3] \
+#   OUT=DIR [SPHSEG_GPU=local/sphseg_gpu] [SPHSEG_GPU_DOUBLE=BIN] [STEPS=200] [PYTHON=python3] \
 #     bash tools/bench/nbr_designs.sh
 # SPHSEG_GPU is a single-precision build (make GPU=1 PRECISION=single); SPHSEG_GPU_DOUBLE,
 # if given, a double one, timed after it. Writes under OUT: identity.txt, ranks.txt,
@@ -23,7 +23,7 @@ set -uo pipefail
 out=${OUT:?set OUT to a folder for the results}
 bin=${SPHSEG_GPU:-local/sphseg_gpu}
 bind=${SPHSEG_GPU_DOUBLE:-}
-steps=${STEPS:-150}
+steps=${STEPS:-200}
 py=${PYTHON:-python3}
 forms="list list16 cells"
 mkdir -p "$out"
@@ -88,7 +88,7 @@ for f in $forms; do left 60 && drum "$f" single "$bin" || echo "$f single: skipp
 for f in $forms; do
     left 60 || { echo "(out of time: $f not run)" >> "$out/ranks.txt"; continue; }
     echo "== SPHSEG_GPU_NBR=$f: tests/test_ranks_bitwise.py --backend gpu" >> "$out/ranks.txt"
-    SPHSEG_GPU_NBR=$f timeout 120 "$py" tests/test_ranks_bitwise.py --backend gpu --sphseg "$bin" \
+    SPHSEG_GPU_NBR=$f timeout 120 "$py" -m tests.test_ranks_bitwise --backend gpu --sphseg "$bin" \
         >> "$out/ranks.txt" 2>&1; echo "(exit $?)" >> "$out/ranks.txt"
 done
 
