@@ -134,17 +134,14 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
         const int l16_ = (g)->nl16 != NULL && (g)->ncnt[i] <= (g)->nl_cap;             \
         const int lst_ = l16_ || ((g)->nl != NULL && (g)->ncnt[i] <= (g)->nl_cap);     \
         const int ex_ = frm_ == GRID_NBR_CELLS;                                        \
-        const int nsub_ = (g)->gstart != NULL ? 2 : 1;                                 \
-        const int nseg_ = lst_ || ex_ ? 1 : (zr_ ? 27 : 9) * nsub_;                    \
+        const int nsub_ = (g)->gstart != NULL && !ex_ ? 2 : 1;                         \
+        const int nseg_ = lst_ ? 1 : (zr_ ? 27 : 9) * nsub_;                           \
         grid_dec dc_ = {-1, 0, 0, 0};                                                  \
-        grid_ex xs_;                                                                   \
-        grid_ex_init(&xs_, (g), (i), c0_);                                             \
+        grid_ex xs_ = {(size_t)(i), 0, 0, 0, 0, 0};                                    \
         for (int s_ = 0; s_ < nseg_; ++s_) {                                           \
             size_t a_ = 0, b_ = 0;                                                     \
             if (lst_) {                                                                \
                 b_ = (g)->ncnt[i];                                                     \
-            } else if (ex_) {                                                          \
-                b_ = GRID_EX_END;                                                      \
             } else {                                                                   \
                 const int k_ = s_ / nsub_;                                             \
                 int cx_ = c0_[0] + k_ % 3 - 1, cy_ = c0_[1] + (k_ / 3) % 3 - 1;        \
@@ -153,7 +150,8 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
                     cy_ >= (g)->nc[1] || cz_ >= (g)->nc[2])                            \
                     continue;                                                          \
                 size_t cell_ = grid_cell_index((g), cx_, cy_, cz_);                    \
-                if (s_ % nsub_ == 0) a_ = (g)->start[cell_], b_ = (g)->end[cell_];     \
+                if (ex_) grid_ex_cell(&xs_, (g), cell_), b_ = GRID_EX_END;             \
+                else if (s_ % nsub_ == 0) a_ = (g)->start[cell_], b_ = (g)->end[cell_]; \
                 else a_ = (g)->gstart[cell_], b_ = (g)->gend[cell_];                   \
             }                                                                          \
             for (size_t q_ = ex_ ? grid_ex_next(&xs_, (g), (lane), (nlanes)) : a_ + (size_t)(lane); \
@@ -208,41 +206,29 @@ HD_INLINE size_t grid_dec16(const grid_view *g, grid_dec *d, const int c0[3], un
     return o < d->na ? d->a + o : d->ga + (o - d->na);
 }
 
-/* GRID_NBR_CELLS: a lane's walk over i's 3^d cells (slot s of ns, the scan's
- * order) as one sequence, each cell's owned run [a, b) and ghost run [r, e)
- * merged by rk (grid_list_fill_ranked's order), m the particles within the
- * list's radius met so far: one loop, so that the lanes of a warp run the
- * bodies together whatever cell their particles' neighbours are in. */
+/* GRID_NBR_CELLS: a lane's walk over i's cells, each cell's owned run
+ * [a, b) and ghost run [r, e) merged by rk (grid_list_fill_ranked's
+ * order), m the particles within the list's radius met so far. */
 typedef struct grid_ex {
     size_t i, a, b, r, e, m;
-    int c0[3], s, ns;
 } grid_ex;
 #define GRID_EX_END ((size_t)-1)
 
-HD_INLINE void grid_ex_init(grid_ex *w, const grid_view *g, size_t i, const int c0[3])
+HD_INLINE void grid_ex_cell(grid_ex *w, const grid_view *g, size_t cell)
 {
-    w->i = i, w->a = w->b = w->r = w->e = w->m = 0;
-    w->c0[0] = c0[0], w->c0[1] = c0[1], w->c0[2] = c0[2];
-    w->s = -1, w->ns = g->dim == 3 ? 27 : 9;
+    w->a = g->start[cell], w->b = g->end[cell], w->r = w->e = 0;
+    if (g->gstart) w->r = g->gstart[cell], w->e = g->gend[cell];
 }
 
-/* The lane's next particle (GRID_EX_END: none left): the m-th within the
- * radius, m = lane mod nlanes, as the list's entry m would be. */
+/* The lane's next particle in the cell (GRID_EX_END: none): the m-th within
+ * the radius, m = lane mod nlanes, as the list's entry m would be. */
 HD_INLINE size_t grid_ex_next(grid_ex *w, const grid_view *g, int lane, int nlanes)
 {
     for (;;) {
-        while (w->a >= w->b && w->r >= w->e) { /* this cell done: the next in the grid */
-            if (++w->s >= w->ns) return GRID_EX_END;
-            const int cx = w->c0[0] + w->s % 3 - 1, cy = w->c0[1] + (w->s / 3) % 3 - 1;
-            const int cz = w->c0[2] + (g->dim == 3 ? w->s / 9 - 1 : 0);
-            if (cx < 0 || cy < 0 || cz < 0 || cx >= g->nc[0] || cy >= g->nc[1] || cz >= g->nc[2]) continue;
-            const size_t cell = grid_cell_index(g, cx, cy, cz);
-            w->a = g->start[cell], w->b = g->end[cell], w->r = w->e = 0;
-            if (g->gstart) w->r = g->gstart[cell], w->e = g->gend[cell];
-        }
         size_t j;
         if (w->a < w->b && (w->r >= w->e || g->rk[w->a] < g->rk[w->r])) j = w->a++;
-        else j = w->r++;
+        else if (w->r < w->e) j = w->r++;
+        else return GRID_EX_END;
         real xij[3];
         if (grid_pair(g->dim, g->xb, w->i, j, xij) >= g->list2) continue;
         if (w->m++ % (size_t)nlanes == (size_t)lane) return j;
