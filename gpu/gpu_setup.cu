@@ -177,9 +177,11 @@ gpu_t *gpu_get(sim_t *s)
      * the bits, depend on the team size, which must not follow the rank count */
     g->team = gpu_team_size(h->dim, (size_t)comm_sum_ll((long long)n));
     message("gpu: device %d of %d, %s, %.1f GiB; %zu MiB of particle arrays (two sets), %zu MiB of neighbour "
-            "list (%u per particle of %zu bytes, skin %.3g h), %d threads per particle in neighbour loops%s%s", g->dev, ndev,
-            prop.name, (double)prop.totalGlobalMem / (1u << 30), 2 * n * part_bytes_per_particle() >> 20,
-            (n * g->nl_cap * gpu_nl_esize(g)) >> 20, g->nl_cap, gpu_nl_esize(g), skin, g->team,
+            "list (SPHSEG_GPU_NBR %s: %u per particle of %zu bytes, skin %.3g h), %d threads per particle in neighbour "
+            "loops%s%s", g->dev, ndev, prop.name, (double)prop.totalGlobalMem / (1u << 30),
+            2 * n * part_bytes_per_particle() >> 20, (n * g->nl_cap * gpu_nl_esize(g)) >> 20,
+            g->nbr_form == GRID_NBR_LIST16 ? "list16" : g->nbr_form == GRID_NBR_CELLS ? "cells" : "list", g->nl_cap,
+            gpu_nl_esize(g), skin, g->team,
             !g->hx                  ? ""
             : g->hx->cuda_aware     ? "; halo: packed on the device, CUDA-aware MPI on device buffers"
                                     : "; halo: packed on the device, staged through pinned host memory",
