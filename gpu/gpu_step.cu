@@ -361,8 +361,9 @@ long gpu_check(sim_t *s)
     const chk *c = &g->hchk->c;
     double D = sqrt((double)c->build2), d = sqrt((double)c->step2), skin = g->skin;
     if (s->halo) { /* the largest over all ranks, as one rank measures them: builds on the same steps */
-        D = comm_max(D);
-        d = comm_max(d);
+        double m[2] = {D, d};
+        comm_max_n(m, 2); /* one reduction for both */
+        D = m[0], d = m[1];
     }
     g->stale |= D + 2 * d > 0.5 * skin;
     g->every = !s->flow_on || d > 0.25 * skin; /* prescribed motion: x_n is not kept */
