@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "mpi/comm.h"
 #include "sim.h"
+#include "stages.h"
 
 /* Explicit midpoint form of (3.17)–(3.18): the predictor advances half a
  * step, X^{n+1/2} = X^n + (dt/2) Gamma^n, and the corrector takes the full
@@ -67,12 +68,18 @@ static void step_lf(sim_t *s, double dt, int win)
         be->prepare(s, s->t, !win); /* as a restart's first prepare (run_start): the same bits */
         be->rates(s);
     }
+    /* The shift rides in the midpoint flow pass (flow_rates_body: the same
+     * pairs, no pass of its own), from the state there; it moves the saved
+     * copies, so the corrector starts from the shifted state as in step_pc. */
+    s->shift_due = stage_runs(stage_flags(s), ST_SHIFT);
     be->save_start(s);
     be->advance(s, 0.5 * dt, 0.0);
     be->prepare(s, s->t + 0.5 * dt, !win);
-    be->rates(s);
+    be->rates(s); /* clears shift_due */
     be->advance(s, dt, win ? dt : 0.0);
+    s->kgc_skip = 1; /* B is made again at the next midpoint (or fresh) prepare, before any rates */
     be->prepare(s, s->t + dt, 0);
+    s->kgc_skip = 0;
 }
 
 void integrate_step(sim_t *s, double dt)
