@@ -207,6 +207,8 @@ def glass_rows(runs, where):
         if not m:
             continue
         r, f = runs[n], load(where[n], n)
+        if runs[n]["rc"] != "0" or f["t"][-1] < float(r["t_end"]) - 0.011:  # stopped early (limit, signal): partial
+            continue
         av, L0 = float(r["a"]), float(r["L0"])
         run, hf = (f["front"][-1] - L0) / L0, f["height_at_wall"][-1] / L0
         creep = (f["front"][-1] - f["front"][-2]) / (f["t"][-1] - f["t"][-2]) * 1e3
