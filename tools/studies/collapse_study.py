@@ -219,7 +219,7 @@ def glass_rows(runs, where):
 
 
 def glass_report(runs, where, P, docs):
-    """The glass-bead sets: a table, docs/glass.csv and the chart of runout and height against a."""
+    """The glass-bead sets: a table, glass.csv (in the --docs folder) and the chart of runout and height against a."""
     rows = glass_rows(runs, where)
     if not rows:
         return
