@@ -1,7 +1,7 @@
 #!/bin/bash
 # The glass-bead column collapse (issue 57, item 3) on one GPU: the sets lajeunesse (mu(I)),
 # lajeunesse_const (mu = tan 27.4 deg) and lajeunesse_E (E x 10) of tools/studies/collapse_study.py,
-# a = 0.5, 2, 4, 8 at L0/dr 10, 20, 40 (29 runs, 2D), then the report. Run from the repository root:
+# a = 0.5, 2, 4, 8 at L0/dr 10, 20, 40 (28 runs, 2D; the largest, a = 8 at L0/dr 40, holds 12800 particles), then the report. Run from the repository root:
 #
 #   OUT=DIR SPHSEG_GPU=local/sphseg_gpu PYTHON=python3 bash tools/studies/collapse_device.sh
 #
