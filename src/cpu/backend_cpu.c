@@ -183,7 +183,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
     case ST_DCDT: cpu_dcdt(s, p); return 1;
     case ST_SAVE:
 #pragma omp parallel for schedule(static)
-        for (long i = 0; i < n; ++i) step_save((size_t)i, p, s->flow_on);
+        for (long i = 0; i < n; ++i) step_save((size_t)i, p, s->flow_on, s->seg_on);
         return 1;
     case ST_SHIFT: cpu_shift(s); return 1;
     case ST_ADVANCE: { /* step_advance does x, u, sigma, C and gsum in one pass: ST_ADVANCE_C, _GSUM */
