@@ -139,13 +139,16 @@ typedef struct gpu {
     uint8_t *wact;      /* a dummy with material in its list (gpu_build); NULL: every dummy
                          * runs its loop (SPHSEG_GPU_WALLSKIP=0, for measuring the skip) */
     int wskip;
+    int hcsr;           /* s->hcsr: the classification runs every step (g->sums kept) */
     struct dhalo *hx;   /* several ranks, else NULL */
     grid_view view;     /* start/end point to device memory */
     size_t *start, *end, ncell, cap_cell;
     unsigned *key, *key2, *idx, *idx2;
     unsigned char *cell_type, *cls;
     size_t *cell_mat;
-    bound_sums *sums;
+    bound_sums *sums;   /* the classification's support sums between its two sweeps, where it runs every
+                         * step (the HCSR schemes, s->hcsr); NULL otherwise: the second sweep gathers
+                         * them again (gpu_classify; a snapshot's classes, the conservative scheme) */
     unsigned *nl, *ncnt, nl_cap; /* neighbour list (grid_view), rebuilt with the cells */
     real *xb[3];        /* positions at the last build */
     real skin;          /* m */

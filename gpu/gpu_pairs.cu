@@ -24,11 +24,14 @@ void gpu_classify(gpu_t *g, const sph_ctx *kc)
     for (int pass = 0; pass < 2; ++pass)
         each(g, g->ncell, [=] __device__(size_t c) { type[c] = bound_cell_type(&v, type, mat, c, pass); });
     each(g, n, [=] __device__(size_t i) {
-        p.bclass[i] = (uint8_t)bound_class_first(i, &p, &v, &k, type, &sums[i]);
+        bound_sums s;
+        p.bclass[i] = (uint8_t)bound_class_first(i, &p, &v, &k, type, sums ? &sums[i] : &s);
     });
     each(g, n, [=] __device__(size_t i) {
         particles_t q = p;
-        cls[i] = (unsigned char)bound_class_second(i, &q, &v, &k, type, &sums[i]);
+        bound_sums s; /* without the stored sums, gathered again: the same loop over x, vol, kind */
+        if (!sums) s = bound_gather(i, &q, &v, &k);
+        cls[i] = (unsigned char)bound_class_second(i, &q, &v, &k, type, sums ? &sums[i] : &s);
     });
     CK(cudaMemcpyAsync(p.bclass, cls, n, cudaMemcpyDeviceToDevice, g->st));
     prof_end(g->st, P_CLASSIFY);

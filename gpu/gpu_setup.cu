@@ -95,7 +95,7 @@ void gpu_reserve(gpu_t *g, size_t need, size_t keep)
     g->idx = (unsigned *)dev_alloc(cap * sizeof(unsigned));
     g->idx2 = (unsigned *)dev_alloc(cap * sizeof(unsigned));
     g->cls = (unsigned char *)dev_alloc(cap);
-    g->sums = (bound_sums *)dev_alloc(cap * sizeof(bound_sums));
+    g->sums = g->hcsr ? (bound_sums *)dev_alloc(cap * sizeof(bound_sums)) : NULL;
     for (int d = 0; d < 3; ++d) {
         g->xb[d] = (real *)dev_alloc(cap * sizeof(real));
         CK(cudaMemset(g->xb[d], 0, cap * sizeof(real)));
@@ -170,6 +170,7 @@ gpu_t *gpu_get(sim_t *s)
     CK(cudaStreamCreateWithFlags(&g->st, cudaStreamNonBlocking));
     prof.on = tuning_get()->gpu_profile;
     g->wskip = tuning_get()->gpu_wallskip;
+    g->hcsr = s->hcsr;
     if (prof.on) {
         CK(cudaEventCreate(&prof.a));
         CK(cudaEventCreate(&prof.b));
