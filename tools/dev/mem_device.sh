@@ -11,12 +11,16 @@
 #     [SPHSEG_GPU_BEFORE=local/sphseg_gpu_main] bash tools/dev/mem_device.sh
 #
 # SPHSEG_GPU_SINGLE: this branch built with PRECISION=single GPU=1 (skipped if
-# absent); SPHSEG_GPU_BEFORE (optional): main's double binary, run once on the
-# 1.1e7 drum for its memory and permutation time beside this branch's.
+# absent); SPHSEG_GPU_BEFORE (optional): main's double binary: first six small
+# scenes' diagnostics rows, 150 steps on the GPU, against this branch's
+# ("same ... IDENTICAL" in summary.txt), then the 1.1e7 drum for its memory and
+# permutation time beside this branch's.
 # Writes under $OUT: mem_drum3d.csv (one row a run), summary.txt (the memory and
 # permute lines), and each run's log tail. About 4-7 minutes on one H200; each
 # run has its own timeout, so the script ends within 8 minutes.
 set -u
+cd "$(dirname "$0")/../.."
+[ -d local/lib ] && export LD_LIBRARY_PATH=$PWD/local/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
 B=${SPHSEG_GPU:-local/sphseg_gpu}
 BS=${SPHSEG_GPU_SINGLE:-local/sphseg_gpu_single}
 BB=${SPHSEG_GPU_BEFORE:-}
@@ -70,6 +74,30 @@ print(",".join([name, binary, length, str(int(n.group(1)) + int(n.group(2))) if 
                + (list(m.groups()) if m else [""] * 7) + [perm, str(builds), smi.group(1) if smi else ""]))
 EOF
 }
+
+# same: with SPHSEG_GPU_BEFORE, the diagnostics rows (every column but wall_s, as text) of both
+# binaries, 150 steps of small scenes on the GPU, a row every step: the flow, C and dt bit for bit
+same() {
+    local scene=$1 rc=0
+    for side in before after; do
+        local bin=$BB
+        [ $side = after ] && bin=$B
+        timeout 60 "$bin" "inputs/$scene.yml" -o "/tmp/mem_same_$side" --overwrite --backend gpu -P Run:max_steps=150 \
+            -P Output:snapshots=off -P Output:diag_dt=1e-5 -P Run:t_end=1 -P Run:progress_s=1e9 >/dev/null 2>&1 || rc=1
+    done
+    python3 - "$scene" "$rc" >>"$SUM" <<'EOF'
+import csv, sys
+scene, rc = sys.argv[1], sys.argv[2]
+try:
+    a, b = [[{k: v for k, v in r.items() if k != "wall_s"} for r in csv.DictReader(open("/tmp/mem_same_%s/diagnostics.csv" % s))]
+            for s in ("before", "after")]
+    print("same %-14s %s (%d diagnostics rows%s)" % (scene, "IDENTICAL" if a == b and a else "DIFFERS", len(a),
+                                                     "" if rc == "0" else "; a run failed"))
+except OSError as e:
+    print("same %-14s FAILED: %s" % (scene, e))
+EOF
+}
+if [ -n "$BB" ]; then for sc in drum_2d_EV drum_2d_EN shearbox_2d silo_2d chute_2d column_2d; do same $sc; done; fi
 
 run double_1e7 "$B" 0.1 20 120 1
 [ -n "$BB" ] && run before_double_1e7 "$BB" 0.1 20 120 1
