@@ -75,8 +75,11 @@ void gpu_reserve(gpu_t *g, size_t need, size_t keep)
         size_t es = part_array_esize(k);
         slot_used[pscr_slot(es)] = 1;
         void *old = g->key ? part_array_get(&g->d, k) : NULL, *q = dev_alloc(cap * es);
-        if (old && keep) CK(cudaMemcpyAsync(q, old, keep * es, cudaMemcpyDeviceToDevice, g->st));
-        if (old) CK(cudaFree(old)); /* waits for the copy */
+        if (old && keep) {
+            CK(cudaMemcpyAsync(q, old, keep * es, cudaMemcpyDeviceToDevice, g->st));
+            CK(cudaStreamSynchronize(g->st)); /* the copy done before the old array goes */
+        }
+        if (old) CK(cudaFree(old));
         part_array_set(&g->d, k, q);
     }
     static const size_t slot_es[PSCR_N] = {8, 4, 1};
