@@ -4,8 +4,9 @@
 # double, at 1.1e7 particles (inputs/drum_3d.yml, Run:preset converged,
 # Geometry:dr 0.25 mm, Geometry:length 0.1 m, as tools/studies/time_to_solution.py
 # makes the drum), with the permutation's time (SPHSEG_GPU_PROFILE);
-# then the largest drums in single: 5e7 and 1.5e8 particles (the same dr,
-# lengths 0.45 and 1.35 m), a few steps each. Run from the repository root:
+# then the largest drums in single: 5e7, 1e8 and 1.5e8 particles (the same
+# dr, lengths 0.45, 0.9 and 1.35 m), 3 steps each (a drum that does not fit
+# ends with "GPU out of memory", in summary.txt). Run from the repository root:
 #
 #   SPHSEG_GPU=local/sphseg_gpu SPHSEG_GPU_SINGLE=local/sphseg_gpu_single \
 #     [SPHSEG_GPU_BEFORE=local/sphseg_gpu_main] bash tools/dev/mem_device.sh
@@ -99,10 +100,11 @@ EOF
 }
 if [ -n "$BB" ]; then for sc in drum_2d_EV drum_2d_EN shearbox_2d silo_2d chute_2d column_2d; do same $sc; done; fi
 
-run double_1e7 "$B" 0.1 20 120 1
-[ -n "$BB" ] && run before_double_1e7 "$BB" 0.1 20 120 1
-run single_1e7 "$BS" 0.1 20 120 1
-run single_5e7 "$BS" 0.45 5 150
-run single_1.5e8 "$BS" 1.35 3 240
+run double_1e7 "$B" 0.1 20 90 1
+[ -n "$BB" ] && run before_double_1e7 "$BB" 0.1 20 90 1
+run single_1e7 "$BS" 0.1 20 90 1
+run single_5e7 "$BS" 0.45 3 110
+run single_1e8 "$BS" 0.9 3 150
+run single_1.5e8 "$BS" 1.35 3 200
 echo "total $(($(date +%s) - T0)) s" >>"$SUM"
 cat "$SUM"
