@@ -98,11 +98,13 @@ void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, int kgc, sel sl
 /* The flow rates of the owned particles in sl, and with segregation their
  * concentration coefficients (seg_coeffs reads only i's C and the shear
  * rate just computed). */
-template <int RENORM, int KGC> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
+template <int RENORM, int KGC, int SHIFT> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
 {
     particles_t p = g->d;
     grid_view v = g->view;
     flow_ctx c = s->flow;
+    shift_ctx sh = s->shift;
+    const real sdt = (real)s->dt;
     seg_ctx sc = s->seg;
     const int seg = gpu_plans(s, HOOK_RATES, ST_SEG_COEFFS); /* not in windows: at their close */
     real *amag = g->amag;
@@ -110,7 +112,8 @@ template <int RENORM, int KGC> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel
         if (!sel_on(sl, i)) return;
         particles_t q = p;
         const int mat = q.kind[i] == KIND_MATERIAL;
-        real a = mat ? flow_rates_team(i, &q, &v, &c, lane, T, RENORM, KGC) : R(0.0);
+        real a = mat ? flow_rates_body(i, &q, &v, &c, lane, T, RENORM, KGC, SHIFT ? &sh : (const shift_ctx *)0, sdt)
+                     : R(0.0);
         if (lane != 0) return;
         amag[i] = a;
         if (seg && mat) seg_coeffs(i, &q, &sc);
@@ -119,13 +122,19 @@ template <int RENORM, int KGC> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel
 
 /* (and the owned particles' L when prepare left them due: a kernel of its
  * own, so that the other passes keep the smaller register count; the
- * corrected gradient likewise) */
+ * corrected gradient and the fused shift (sim.h shift_due) likewise) */
+template <int SHIFT> static void gpu_flow_kgc(sim_t *s, gpu_t *g, sel sl)
+{
+    const int kgc = s->flow.kgc; /* its own kernels: the others keep their register count */
+    if (s->renorm_due) kgc ? gpu_flow_pass<1, 1, SHIFT>(s, g, sl) : gpu_flow_pass<1, 0, SHIFT>(s, g, sl);
+    else kgc ? gpu_flow_pass<0, 1, SHIFT>(s, g, sl) : gpu_flow_pass<0, 0, SHIFT>(s, g, sl);
+}
+
 void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl)
 {
     prof_begin(g->st);
-    const int kgc = s->flow.kgc; /* its own kernels: the others keep their register count */
-    if (s->renorm_due) kgc ? gpu_flow_pass<1, 1>(s, g, sl) : gpu_flow_pass<1, 0>(s, g, sl);
-    else kgc ? gpu_flow_pass<0, 1>(s, g, sl) : gpu_flow_pass<0, 0>(s, g, sl);
+    if (s->shift_due) gpu_flow_kgc<1>(s, g, sl);
+    else gpu_flow_kgc<0>(s, g, sl);
     g->acc_pending = 1;
     prof_end(g->st, P_FLOW);
 }

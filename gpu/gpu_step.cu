@@ -79,7 +79,7 @@ void gpu_prepare(sim_t *s, double t, int classify)
             renorm = classify != 0;
             if (renorm) s->renorm_due = s->flow_on;
             break;
-        case ST_KGC: kgc = 1; break; /* with ST_WALLS' pass */
+        case ST_KGC: kgc = !s->kgc_skip; break; /* with ST_WALLS' pass; none when no rates read it (sim.h) */
         case ST_WALLS: walls = 1; break;
         default: error_exit(1, "backend_gpu: stage %d has no body in prepare", m->ids[HOOK_PREPARE][k]);
         }
@@ -151,6 +151,7 @@ void gpu_rates(sim_t *s)
                 gpu_flow_rates(s, g, sel_all());
             }
             s->renorm_due = 0;
+            s->shift_due = 0;
             break;
         case ST_SEG_COEFFS: break; /* in the flow pass, and the rest with dC/dt */
         case ST_DCDT:
@@ -197,6 +198,7 @@ void gpu_save_start(sim_t *s)
     for (int k = 0; k < m->n[HOOK_SAVE]; ++k) switch (m->ids[HOOK_SAVE][k]) {
         case ST_SAVE: g->pend_save = 1; break;
         case ST_SHIFT:
+            if (s->shift_due) break; /* with the next flow rates (sim.h) */
             gpu_settle(s, g);
             gpu_step_kernel(s, g, 0, 0.0);
             prof_begin(g->st);
@@ -361,8 +363,9 @@ long gpu_check(sim_t *s)
     const chk *c = &g->hchk->c;
     double D = sqrt((double)c->build2), d = sqrt((double)c->step2), skin = g->skin;
     if (s->halo) { /* the largest over all ranks, as one rank measures them: builds on the same steps */
-        D = comm_max(D);
-        d = comm_max(d);
+        double m[2] = {D, d};
+        comm_max_n(m, 2); /* one reduction for both */
+        D = m[0], d = m[1];
     }
     g->stale |= D + 2 * d > 0.5 * skin;
     g->every = !s->flow_on || d > 0.25 * skin; /* prescribed motion: x_n is not kept */

@@ -68,7 +68,7 @@ export BUILD
 run_one single_build make -s -j2 PRECISION=single GPU=0 BUILD="$BUILD-single" all
 # the validations, shortest first (FAIL_FAST stops sooner), then any others
 vals=()
-for n in restart column steady drum drum3d mpi; do [ -f "tests/validate_$n.py" ] && vals+=("tests/validate_$n.py"); done
+for n in restart leapfrog column steady drum drum3d mpi; do [ -f "tests/validate_$n.py" ] && vals+=("tests/validate_$n.py"); done
 # issue 19: what a cluster does to a job
 run_one signals bash tests/test_signals.sh "$BUILD/sphseg"
 # issue 55: the printed continuation command runs as printed (1 and 2 ranks); --restart DIR continues in DIR

@@ -87,15 +87,18 @@ static void cpu_flow_rates(sim_t *s)
     particles_t *p = &s->p;
     const long n = (long)p->n;
     const int renorm = s->renorm_due;
+    const shift_ctx *sh = s->shift_due ? &s->shift : NULL; /* the step's shift, fused (sim.h) */
+    const real sdt = (real)s->dt;
     double amax = 0;
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK) reduction(max : amax)
     for (long i = 0; i < n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
-        double a = flow_rates_team((size_t)i, p, &cpu_of(s)->grid.view, &s->flow, 0, 1, renorm, s->flow.kgc);
+        double a = flow_rates_body((size_t)i, p, &cpu_of(s)->grid.view, &s->flow, 0, 1, renorm, s->flow.kgc, sh, sdt);
         amax = a > amax ? a : amax;
     }
     s->amax = amax;
     s->renorm_due = 0;
+    s->shift_due = 0;
 }
 
 /* A concentration window's time-step bounds, from the material of q (the
@@ -169,6 +172,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         cpu_renorm(s, s->flow_on ? n : 0);
         return 1;
     case ST_KGC: /* ghosts included: a ghost within 2h of the slab has its whole support here */
+        if (s->kgc_skip) return 0; /* no rates read it before the next prepare (sim.h) */
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK)
         for (long i = 0; i < ng; ++i)
             if (p->kind[i] == KIND_MATERIAL) flow_kgc_team((size_t)i, p, &cpu_of(s)->grid.view, &s->flow, 0, 1);
@@ -185,7 +189,10 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
 #pragma omp parallel for schedule(static)
         for (long i = 0; i < n; ++i) step_save((size_t)i, p, s->flow_on, s->seg_on);
         return 1;
-    case ST_SHIFT: cpu_shift(s); return 1;
+    case ST_SHIFT: /* or with the next flow rates (sim.h shift_due) */
+        if (s->shift_due) return 0;
+        cpu_shift(s);
+        return 1;
     case ST_ADVANCE: { /* step_advance does x, u, sigma, C and gsum in one pass: ST_ADVANCE_C, _GSUM */
         const int seg = stage_runs(stage_flags(s), ST_ADVANCE_C);
 #pragma omp parallel for schedule(static)

@@ -25,6 +25,7 @@
 #include "options.h"
 #include "seg.h"
 #include "seg_kern.h"
+#include "shift.h"
 #include "sph.h"
 #include "stress.h"
 #include "wall.h"
@@ -218,9 +219,12 @@ HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6
  * kgc set (Flow:gradient_correction; p->B made by flow_kgc_team for i and its
  * material neighbours), the velocity gradient is L B_i and the stress
  * divergence its work conjugate, m_j (sigma_i B_i + sigma_j B_j) grad W / rho^2,
- * a dummy j taking B_i; the GPU passes kgc as a template constant. */
-HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
-                               int nlanes, int renorm, int kgc)
+ * a dummy j taking B_i; the GPU passes kgc as a template constant. With sh
+ * given (not NULL), the shift of a step of length sdt comes with it
+ * (shift_team's sums over the same pairs, shift_finish): Run:integrator
+ * leapfrog's midpoint pass (src/sim/integrate.c), fused. */
+HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
+                               int nlanes, int renorm, int kgc, const shift_ctx *sh, real sdt)
 {
     const sph_ctx *k = &c->k;
     real L[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, a[3] = {0, 0, 0}, m[6] = {0, 0, 0, 0, 0, 0};
@@ -235,6 +239,8 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
     real Bi[6] = {1, 1, 1, 0, 0, 0}; /* Flow:gradient_correction (kgc: the caller's c->kgc) */
     if (kgc)
         for (int q = 0; q < 6; ++q) Bi[q] = p->B[q][i];
+    shift_sums ss;
+    if (sh) shift_sums_zero(&ss);
     NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
         if (j == i) continue;
         real uj[3], sj[6], volj = 0;
@@ -243,7 +249,9 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
         real r2 = grid_pair_xi(k->dim, xi, p->x, j, xij);
         if (r2 >= k->support2) continue;
         if (!SPH_EARLY_LOADS) flow_load_j(p, j, uj, sj, &volj);
-        real f = kernel_f((real)sqrt((double)r2), k->h, k->alpha);
+        const real r = (real)sqrt((double)r2);
+        real f = kernel_f(r, k->h, k->alpha);
+        if (sh) shift_pair_add(&ss, sh, r, r2, f, volj, xij, uj, sj, ui, si);
         if (renorm && p->kind[j] == KIND_MATERIAL) seg_renorm_add(m, k->dim, -f * volj, xij);
         real gradW[3] = {f * xij[0], f * xij[1], f * xij[2]};
         real uij[3] = {ui[0] - uj[0], ui[1] - uj[1], ui[2] - uj[2]};
@@ -281,6 +289,7 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
     team_sum(a, 3, nlanes);
     if (c->pdiff > 0) team_sum(&pd, 1, nlanes);
     if (renorm) team_sum(m, 6, nlanes);
+    if (sh) shift_finish(i, p, sh, sdt, &ss, ui, lane, nlanes);
     if (lane != 0) return R(0.0);
     if (renorm) seg_renorm_store(i, p, k->dim, m);
     real eps[6], w[3], ds[6];
@@ -300,6 +309,12 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
     p->gdot[i] = stress_shear_rate(eps);
     real a2 = p->acc[0][i] * p->acc[0][i] + p->acc[1][i] * p->acc[1][i] + p->acc[2][i] * p->acc[2][i];
     return (real)sqrt((double)a2);
+}
+
+HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
+                               int nlanes, int renorm, int kgc)
+{
+    return flow_rates_body(i, p, g, c, lane, nlanes, renorm, kgc, (const shift_ctx *)0, R(0.0));
 }
 
 HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)

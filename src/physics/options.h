@@ -36,4 +36,10 @@ enum seg_limiter { SEG_LIMITER_NONE = 0, SEG_LIMITER_DONOR = 1 };
  * granular flow (momentum 3.9, stress 2.16). */
 enum kin_type { KIN_REST = 0, KIN_OSCILLATORY_SHEAR = 1, KIN_COMPUTED = 2 };
 
+/* Run:integrator (src/sim/integrate.c): predictor_corrector, the paper's
+ * explicit midpoint rule (3.17-3.18), two rate evaluations a step;
+ * leapfrog, the same midpoint rule whose predictor takes the rates of the
+ * previous step's corrector, one rate evaluation a step (docs/method.md). */
+enum run_integrator { INTEGRATOR_PREDICTOR_CORRECTOR = 0, INTEGRATOR_LEAPFROG = 1 };
+
 #endif

@@ -57,6 +57,59 @@ HD_INLINE shift_ctx shift_make(const sph_ctx *k, int kind, real A)
     return c;
 }
 
+/* The sums of a shift (shift_team): grad C (with the anti-clumping
+ * weight), div r, and the gradients of u and sigma, over i's neighbours. */
+typedef struct shift_sums {
+    real gc[3], div, gu[9], gs[18];
+} shift_sums;
+
+HD_INLINE void shift_sums_zero(shift_sums *a)
+{
+    for (int b = 0; b < 3; ++b) a->gc[b] = 0;
+    a->div = 0;
+    for (int q = 0; q < 9; ++q) a->gu[q] = 0;
+    for (int q = 0; q < 18; ++q) a->gs[q] = 0;
+}
+
+/* Neighbour j's share (r, r2, f = kernel_f(r), V = V_j, x_ij, u_j, sigma_j;
+ * ui, si: i's). Called from shift_team and, fused, from the flow pass
+ * (flow_rates_body): the same arithmetic in both. */
+HD_INLINE void shift_pair_add(shift_sums *a, const shift_ctx *c, real r, real r2, real f, real V, const real xij[3],
+                              const real uj[3], const real sj[6], const real ui[3], const real si[6])
+{
+    const sph_ctx *k = &c->k;
+    const real t = kernel_w(r, k->h, k->alpha) / c->w_dr, t2 = t * t;
+    const real cw = V * (R(1.0) + c->R * t2 * t2) * f, vf = V * f;
+    a->div -= vf * r2;
+    for (int b = 0; b < 3; ++b) {
+        a->gc[b] += cw * xij[b];
+        for (int d = 0; d < 3; ++d) a->gu[3 * d + b] += vf * (uj[d] - ui[d]) * xij[b];
+        for (int q = 0; q < 6; ++q) a->gs[3 * q + b] += vf * (sj[q] - si[q]) * xij[b];
+    }
+}
+
+/* The team's sums added up; lane 0 applies the shift dr_i to x_n and its
+ * Taylor steps to v_n and sig_n (step length dt; ui: i's velocity). */
+HD_INLINE void shift_finish(size_t i, particles_t *p, const shift_ctx *c, real dt, shift_sums *a, const real ui[3],
+                            int lane, int nlanes)
+{
+    const sph_ctx *k = &c->k;
+    team_sum(a->gc, 3, nlanes);
+    team_sum(&a->div, 1, nlanes);
+    team_sum(a->gu, 9, nlanes);
+    team_sum(a->gs, 18, nlanes);
+    if (lane != 0) return;
+    const real speed = (real)sqrt((double)(ui[0] * ui[0] + ui[1] * ui[1] + ui[2] * ui[2]));
+    const real D = c->A * k->h * speed * dt;
+    const real dr[3] = {-D * a->gc[0], -D * a->gc[1], -D * a->gc[2]};
+    if (a->div < c->div_free) return; /* at a free surface: not shifted */
+    for (int d = 0; d < k->dim; ++d) p->x_n[d][i] += (preal)dr[d];
+    for (int d = 0; d < 3; ++d)
+        p->v_n[d][i] += a->gu[3 * d] * dr[0] + a->gu[3 * d + 1] * dr[1] + a->gu[3 * d + 2] * dr[2];
+    for (int q = 0; q < 6; ++q)
+        p->sig_n[q][i] += a->gs[3 * q] * dr[0] + a->gs[3 * q + 1] * dr[1] + a->gs[3 * q + 2] * dr[2];
+}
+
 /* Material particle i at the start of a step of length dt: the shift
  * dr_i into x_n and the Taylor steps into v_n and sig_n (after step_save).
  * Lane `lane` of a team of nlanes (hd.h); lane 0 writes. */
@@ -64,8 +117,8 @@ HD_INLINE void shift_team(size_t i, particles_t *p, const grid_view *g, const sh
                           int nlanes)
 {
     const sph_ctx *k = &c->k;
-    real gc[3] = {0, 0, 0}, div = 0, gu[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, gs[18];
-    for (int q = 0; q < 18; ++q) gs[q] = 0;
+    shift_sums a;
+    shift_sums_zero(&a);
     const real xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]}, ui[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
     real si[6];
     for (int q = 0; q < 6; ++q) si[q] = p->sig[q][i];
@@ -74,30 +127,12 @@ HD_INLINE void shift_team(size_t i, particles_t *p, const grid_view *g, const sh
         real xij[3];
         real r2 = grid_pair_xi(k->dim, xi, p->x, j, xij);
         if (r2 >= k->support2) continue;
-        const real r = (real)sqrt((double)r2), f = kernel_f(r, k->h, k->alpha), V = p->vol[j];
-        const real t = kernel_w(r, k->h, k->alpha) / c->w_dr, t2 = t * t;
-        const real cw = V * (R(1.0) + c->R * t2 * t2) * f, vf = V * f;
-        div -= vf * r2;
-        for (int b = 0; b < 3; ++b) {
-            gc[b] += cw * xij[b];
-            for (int a = 0; a < 3; ++a) gu[3 * a + b] += vf * (p->v[a][j] - ui[a]) * xij[b];
-            for (int q = 0; q < 6; ++q) gs[3 * q + b] += vf * (p->sig[q][j] - si[q]) * xij[b];
-        }
+        const real r = (real)sqrt((double)r2), f = kernel_f(r, k->h, k->alpha);
+        const real uj[3] = {p->v[0][j], p->v[1][j], p->v[2][j]};
+        const real sj[6] = {p->sig[0][j], p->sig[1][j], p->sig[2][j], p->sig[3][j], p->sig[4][j], p->sig[5][j]};
+        shift_pair_add(&a, c, r, r2, f, p->vol[j], xij, uj, sj, ui, si);
     NBR_END
-    team_sum(gc, 3, nlanes);
-    team_sum(&div, 1, nlanes);
-    team_sum(gu, 9, nlanes);
-    team_sum(gs, 18, nlanes);
-    if (lane != 0) return;
-    const real speed = (real)sqrt((double)(ui[0] * ui[0] + ui[1] * ui[1] + ui[2] * ui[2]));
-    const real D = c->A * k->h * speed * dt;
-    const real dr[3] = {-D * gc[0], -D * gc[1], -D * gc[2]};
-    if (div < c->div_free) return; /* at a free surface: not shifted */
-    for (int a = 0; a < k->dim; ++a) p->x_n[a][i] += (preal)dr[a];
-    for (int a = 0; a < 3; ++a)
-        p->v_n[a][i] += gu[3 * a] * dr[0] + gu[3 * a + 1] * dr[1] + gu[3 * a + 2] * dr[2];
-    for (int q = 0; q < 6; ++q)
-        p->sig_n[q][i] += gs[3 * q] * dr[0] + gs[3 * q + 1] * dr[1] + gs[3 * q + 2] * dr[2];
+    shift_finish(i, p, c, dt, &a, ui, lane, nlanes);
 }
 
 #endif

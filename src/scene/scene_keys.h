@@ -57,6 +57,8 @@ static const cyaml_strval_t flow_stabs[] = {
 static const cyaml_strval_t flow_filters[] = {{"shepard", FLOW_FILTER_SHEPARD}, {"mls", FLOW_FILTER_MLS}};
 static const cyaml_strval_t mat_yields[] = {{"drucker_prager", YIELD_DRUCKER_PRAGER}, {"mu_I", YIELD_MU_I}};
 static const cyaml_strval_t mat_mu_laws[] = {{"regularized", MAT_MU_REGULARIZED}, {"partial", MAT_MU_PARTIAL}};
+static const cyaml_strval_t run_integrators[] = {{"predictor_corrector", INTEGRATOR_PREDICTOR_CORRECTOR},
+                                                  {"leapfrog", INTEGRATOR_LEAPFROG}};
 static const cyaml_strval_t slab_axes[] = {{"auto", AXIS_AUTO}, {"x", AXIS_X}, {"y", AXIS_Y}, {"z", AXIS_Z}};
 
 static const cyaml_strval_t cwall_shapes[] = {
@@ -137,6 +139,9 @@ SECTION("Run", run, scene_run)
       "dt <= cfl_kinematic h / |u|_max; default 1 (time resolution of the moving geometry, not stability)")
     KF("Run", run, scene_run, cfl_flow, OPT, "0.1", 0, 10, LO_OPEN, ALWAYS,
       "chi_CFL of (3.19): dt <= chi min(sqrt(h/a_max), h/c_s); default 0.1")
+    KE("Run", run, scene_run, integrator, enum run_integrator, run_integrators, "predictor_corrector",
+      "predictor_corrector (default: the paper's midpoint rule 3.17-3.18, two rate evaluations a step) | leapfrog"
+      " (its predictor takes the last step's corrector rates: one evaluation a step); docs/method.md \"Time integration\"")
     KF("Run", run, scene_run, dt_max, OPT, "1e30", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "s, upper bound on dt; default 1e30 (none)")
     KF("Run", run, scene_run, progress_s, OPT, "10", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,

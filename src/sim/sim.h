@@ -113,6 +113,10 @@ typedef struct sim {
     double surface_y;  /* initial free-surface height, m (geostatic stress) */
     double amax;       /* largest |acceleration| of the last rate evaluation, m/s^2 (CPU) */
     int renorm_due;    /* the owned particles' L are due in the next flow rates (set by prepare) */
+    int shift_due;     /* this step's shift (ST_SHIFT) comes with the next flow rates, not in
+                        * save_start (Run:integrator leapfrog, integrate.c step_lf) */
+    int kgc_skip;      /* the next prepare leaves B (ST_KGC) alone: no flow rates read it
+                        * before another prepare makes it (leapfrog's end-of-step prepare) */
     conc_window win;   /* the concentration's windows (integrate.c) */
     double t;          /* simulated time, s */
     long step;
