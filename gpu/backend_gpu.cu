@@ -107,6 +107,26 @@ static void gpu_relist(sim_t *s)
     g->built = 0;
 }
 
+/* The memory line (issue 56; tools/bench reads it): the device's peak in
+ * use during the run (cudaMemGetInfo after every allocation) less what was
+ * in use before its first, over this rank's particles, and its parts a
+ * particle: the store (the run's fields), the permutation's spares, the
+ * neighbour list, the rest (keys, sums, halo buffers, CUB's scratch). */
+static void gpu_mem_report(sim_t *s, gpu_t *g)
+{
+    size_t before, peak;
+    gpu_mem_use(&before, &peak);
+    const double n = g->n ? (double)g->n : 1.0, c = (double)g->cap / n, all = (double)(peak - before) / n;
+    const double store = c * (double)part_store_bytes(&g->d), spare = c * (double)gpu_spare_bytes(&g->d),
+                 list = c * (double)g->nl_cap * sizeof(unsigned);
+    message("gpu memory: peak %.3f GB in use (%.3f GB before the run's first allocation), %.0f bytes a particle over "
+            "%zu particles (rank 0): store %.0f (%d of %d fields), permutation spares %.0f, neighbour list %.0f, "
+            "other scratch %.0f", 1e-9 * (double)peak, 1e-9 * (double)before, all, g->n, store,
+            __builtin_popcount(g->d.fields), __builtin_popcount(part_fields_all()), spare, list,
+            all - store - spare - list);
+    (void)s;
+}
+
 static void gpu_finish(sim_t *s)
 {
     gpu_t *g = (gpu_t *)s->be_data;
@@ -117,6 +137,7 @@ static void gpu_finish(sim_t *s)
     const long steps = s->step - g->step0; /* this run's, from its checkpoint on a restart */
     message("gpu: %ld neighbour-list builds in %ld steps (Run:list_skin %.3g h: one build in %.1f steps)", g->builds,
             steps, (double)(g->skin / s->seg.k.h), g->builds ? (double)steps / (double)g->builds : 0.0);
+    gpu_mem_report(s, g);
     if (prof.on) {
         double tot = 0;
         for (int k = 0; k < P_NPROF; ++k) tot += prof.ms[k];
@@ -152,10 +173,8 @@ static void gpu_finish(sim_t *s)
         for (int k = 0; k < HX_EV; ++k) CK(cudaEventDestroy(x->ev[k]));
         free(x->soff), free(x->roff), free(x->sb), free(x->rb), free(x);
     }
-    for (size_t k = 0; k < part_narrays(); ++k) {
-        CK(cudaFree(part_array_get(&g->d, k)));
-        CK(cudaFree(part_array_get(&g->alt, k)));
-    }
+    for (size_t k = 0; k < part_narrays(); ++k) CK(cudaFree(part_array_get(&g->d, k))); /* NULL: not held */
+    for (int c = 0; c < PSCR_N; ++c) CK(cudaFree(g->pscr[c]));
     void *bufs[] = {g->start, g->end, g->cell_mat, g->cell_type, g->key, g->key2, g->idx, g->idx2,
                     g->cls, g->sums, g->nl, g->ncnt, g->amag, g->tmp, g->dbox, g->dres, g->dfirst,
                     g->dchk, g->dstep, g->xb[0], g->xb[1], g->xb[2], g->lvl, g->wact};

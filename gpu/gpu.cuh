@@ -37,22 +37,15 @@ extern "C" {
                        #call);                                                                       \
     } while (0)
 
-/* The permutation and migration tables hold every per-particle array of the
- * field table (core/fields.h): sized from it, so a new field needs no edit here. */
+/* The migration tables hold every per-particle array of the field table
+ * (core/fields.h): sized from it, so a new field needs no edit here. */
 enum { PERM_MAX = PART_NARRAYS, BLOCK = 128 };
+/* The permutation's spare arrays, one per element size (gpu_permute). */
+enum { PSCR_8, PSCR_4, PSCR_1, PSCR_N };
 #define GPU_TEAM_MAX_2D 4 /* threads per particle in the neighbour loops (gpu_team_size) */
 #define GPU_TEAM_MAX_3D 8
 #define GPU_TEAM_THREADS 2097152.0
 
-/* Source and destination of every per-particle array (the permutation). */
-struct perm_tab {
-    int n;
-    unsigned char es[PERM_MAX];
-    void *src[PERM_MAX], *dst[PERM_MAX];
-};
-
-/* perm_tab travels as a kernel parameter: it must fit CUDA's 4 kB limit. */
-static_assert(sizeof(struct perm_tab) <= 4096, "perm_tab over the 4 kB kernel-parameter limit: too many particle arrays");
 
 struct box {
     real lo[3], hi[3];
@@ -138,19 +131,24 @@ struct dhalo {
 typedef struct gpu {
     int dev;
     cudaStream_t st;
-    particles_t d, alt; /* device arrays: current and the permutation's spare set */
+    particles_t d;      /* device arrays: the fields the host store holds (s->p.fields), the others NULL */
+    void *pscr[PSCR_N]; /* the permutation's spare array of each element size (8, 4, 1 bytes; NULL: none
+                         * of that size), cap elements: gpu_permute gathers into it and swaps */
     size_t n, ng, cap;  /* owned particles, ghosts (at [n, n + ng)), allocated */
     uint8_t *lvl;       /* halo level of each particle (several ranks), else NULL */
     uint8_t *wact;      /* a dummy with material in its list (gpu_build); NULL: every dummy
                          * runs its loop (SPHSEG_GPU_WALLSKIP=0, for measuring the skip) */
     int wskip;
+    int hcsr;           /* s->hcsr: the classification runs every step (g->sums kept) */
     struct dhalo *hx;   /* several ranks, else NULL */
     grid_view view;     /* start/end point to device memory */
     size_t *start, *end, ncell, cap_cell;
     unsigned *key, *key2, *idx, *idx2;
     unsigned char *cell_type, *cls;
     size_t *cell_mat;
-    bound_sums *sums;
+    bound_sums *sums;   /* the classification's support sums between its two sweeps, where it runs every
+                         * step (the HCSR schemes, s->hcsr); NULL otherwise: the second sweep gathers
+                         * them again (gpu_classify; a snapshot's classes, the conservative scheme) */
     unsigned *nl, *ncnt, nl_cap; /* neighbour list (grid_view), rebuilt with the cells */
     int nbr_form;       /* the list's form (GRID_NBR_*, SPHSEG_GPU_NBR): nl holds 4-byte entries, 2-byte
                          * ones (list16), or is NULL (cells) */
@@ -241,6 +239,11 @@ const step_ctx *gpu_step_ctx(sim_t *s, gpu_t *g);
 
 /* ---- the neighbour pass: build (gpu_nbr.cu), pair loops (gpu_pairs.cu) --- */
 void gpu_permute(gpu_t *g, const unsigned *perm, size_t n);
+int pscr_slot(size_t es);
+/* Device memory in use (cudaMemGetInfo) at the first allocation and at its
+ * peak, sampled after every dev_alloc (usage grows only there). */
+void gpu_mem_use(size_t *before, size_t *peak);
+size_t gpu_spare_bytes(const particles_t *p);
 void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, const real *origin);
 void gpu_classify(gpu_t *g, const sph_ctx *kc);
 void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, int kgc, sel sl);

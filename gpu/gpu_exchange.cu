@@ -209,7 +209,8 @@ static ftab all_tab(const particles_t *p)
 {
     ftab t;
     t.n = 0;
-    for (size_t k = 0; k < part_narrays(); ++k) ft_add(&t, part_array_get(p, k), part_array_esize(k));
+    for (size_t k = 0; k < part_narrays(); ++k) /* the fields the run holds */
+        if (part_array_get(p, k)) ft_add(&t, part_array_get(p, k), part_array_esize(k));
     return t;
 }
 

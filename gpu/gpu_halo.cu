@@ -276,7 +276,8 @@ void gpu_download(sim_t *s, gpu_t *g)
     CK(cudaStreamSynchronize(g->st));
     part_reserve(&s->p, g->n); /* the device exchange may have grown the store */
     for (size_t k = 0; k < part_narrays(); ++k)
-        CK(cudaMemcpy(part_array_get(&s->p, k), part_array_get(&g->d, k), g->n * part_array_esize(k),
+        if (part_array_get(&g->d, k)) /* a field the run holds */
+            CK(cudaMemcpy(part_array_get(&s->p, k), part_array_get(&g->d, k), g->n * part_array_esize(k),
                       cudaMemcpyDeviceToHost));
     s->p.n = g->n, s->p.ng = 0;
 }

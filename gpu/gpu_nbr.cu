@@ -37,44 +37,45 @@ static rank_of rank_fn(const gpu_t *g, const halo_t *hl)
     return f;
 }
 
-/* Every array of the store, from the current set into the spare one. */
-static perm_tab perm_all(const gpu_t *g)
-{
-    perm_tab t;
-    t.n = (int)part_narrays();
-    for (int a = 0; a < t.n; ++a) {
-        t.es[a] = (unsigned char)part_array_esize((size_t)a);
-        t.src[a] = part_array_get(&g->d, (size_t)a);
-        t.dst[a] = part_array_get(&g->alt, (size_t)a);
-    }
-    return t;
-}
-
-__global__ void k_permute(perm_tab t, const unsigned *perm, size_t n)
+template <typename T> __global__ void k_gather(T *__restrict__ dst, const T *__restrict__ src,
+                                               const unsigned *__restrict__ perm, size_t n)
 {
     size_t k = (size_t)blockIdx.x * blockDim.x + threadIdx.x;
-    if (k >= n) return;
-    int a = blockIdx.y;
-    size_t s = perm[k];
-    switch (t.es[a]) {
-    case 8: ((uint64_t *)t.dst[a])[k] = ((const uint64_t *)t.src[a])[s]; break;
-    case 4: ((uint32_t *)t.dst[a])[k] = ((const uint32_t *)t.src[a])[s]; break;
-    default: ((uint8_t *)t.dst[a])[k] = ((const uint8_t *)t.src[a])[s]; break;
-    }
+    if (k < n) dst[k] = src[perm[k]];
 }
 
-/* The store gathered by perm (perm[k] = old index now at k, over n) into the
- * spare set, which becomes the store (the build's sort; the kept particles
- * of a migration). */
+/* The spare slot of an element size (gpu.cuh PSCR_). */
+int pscr_slot(size_t es)
+{
+    if (es == 8) return PSCR_8;
+    if (es == 4) return PSCR_4;
+    if (es == 1) return PSCR_1;
+    error_exit(1, "backend_gpu: a particle array of %zu-byte elements: the permutation has spares of 8, 4 and 1",
+               es);
+    return -1;
+}
+
+/* The store gathered by perm (perm[k] = old index now at k, over n; the
+ * build's sort, the kept particles of a migration), array by array: each
+ * into the spare of its element size, which then takes its place, the old
+ * array becoming the spare. A spare of 8, 4 and 1 bytes a particle, not a
+ * second store (issue 56); an array the store does not hold is skipped. */
 void gpu_permute(gpu_t *g, const unsigned *perm, size_t n)
 {
-    perm_tab t = perm_all(g);
-    dim3 grid((unsigned)((n + 255) / 256), (unsigned)t.n);
-    if (n) k_permute<<<grid, 256, 0, g->st>>>(t, perm, n);
-    CK(cudaGetLastError());
-    particles_t tmp = g->d;
-    g->d = g->alt;
-    g->alt = tmp;
+    if (!n) return;
+    const unsigned grid = (unsigned)((n + 255) / 256);
+    for (size_t k = 0; k < part_narrays(); ++k) {
+        void *a = part_array_get(&g->d, k);
+        if (!a) continue;
+        const size_t es = part_array_esize(k);
+        void *&spare = g->pscr[pscr_slot(es)];
+        if (es == 8) k_gather<<<grid, 256, 0, g->st>>>((uint64_t *)spare, (const uint64_t *)a, perm, n);
+        else if (es == 4) k_gather<<<grid, 256, 0, g->st>>>((uint32_t *)spare, (const uint32_t *)a, perm, n);
+        else k_gather<<<grid, 256, 0, g->st>>>((uint8_t *)spare, (const uint8_t *)a, perm, n);
+        CK(cudaGetLastError());
+        part_array_set(&g->d, k, spare);
+        spare = a;
+    }
 }
 
 /* The halo lists follow the particles through the sort (perm[k] = old
@@ -94,8 +95,7 @@ static void gpu_follow(gpu_t *g, halo_t *hl, const unsigned *perm, size_t n)
     }
 }
 
-/* The store permuted by the sort (the spare set becomes the store) and the
- * view's cell ranges set. */
+/* The store permuted by the sort and the view's cell ranges set. */
 static void gpu_permute_store(gpu_t *g, const unsigned *perm, size_t n)
 {
     prof_begin(g->st);

@@ -44,12 +44,15 @@ template <int F> static void gpu_classify_f(gpu_t *g, const sph_ctx *kc)
         each(g, g->ncell, [=] __device__(size_t c) { type[c] = bound_cell_type(&v, type, mat, c, pass); });
     each(g, n, [=] __device__(size_t i) {
         const grid_view w = view_as<F>(v);
-        p.bclass[i] = (uint8_t)bound_class_first(i, &p, &w, &k, type, &sums[i]);
+        bound_sums s;
+        p.bclass[i] = (uint8_t)bound_class_first(i, &p, &w, &k, type, sums ? &sums[i] : &s);
     });
     each(g, n, [=] __device__(size_t i) {
         particles_t q = p;
         const grid_view w = view_as<F>(v);
-        cls[i] = (unsigned char)bound_class_second(i, &q, &w, &k, type, &sums[i]);
+        bound_sums s; /* without the stored sums, gathered again: the same loop over x, vol, kind */
+        if (!sums) s = bound_gather(i, &q, &w, &k);
+        cls[i] = (unsigned char)bound_class_second(i, &q, &w, &k, type, sums ? &sums[i] : &s);
     });
     CK(cudaMemcpyAsync(p.bclass, cls, n, cudaMemcpyDeviceToDevice, g->st));
     prof_end(g->st, P_CLASSIFY);

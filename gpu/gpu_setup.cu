@@ -16,13 +16,32 @@ extern "C" int gpu_devices(void)
     return n;
 }
 
+static size_t mem_before, mem_peak; /* gpu_mem_use */
+
+/* Device memory in use now (the device's total less its free). */
+static size_t mem_in_use(void)
+{
+    size_t fr = 0, tot = 0;
+    CK(cudaMemGetInfo(&fr, &tot));
+    return tot - fr;
+}
+
+void gpu_mem_use(size_t *before, size_t *peak)
+{
+    *before = mem_before;
+    *peak = mem_peak;
+}
+
 void *dev_alloc(size_t bytes)
 {
     void *p = NULL;
+    if (!mem_before) mem_before = mem_peak = mem_in_use();
     cudaError_t e = cudaMalloc(&p, bytes ? bytes : 1);
     if (e != cudaSuccess)
         error_exit(1, "GPU out of memory: %zu bytes (%s); use fewer particles per GPU (a larger Geometry:dr "
                    "or more ranks)", bytes, cudaGetErrorString(e));
+    size_t u = mem_in_use();
+    if (u > mem_peak) mem_peak = u;
     return p;
 }
 
@@ -37,43 +56,36 @@ void *scratch(gpu_t *g, size_t bytes)
     return g->tmp;
 }
 
-/* Per-particle device arrays for at least need particles. The first keep
- * particles of the store are kept (the device exchange grows the store
- * under its owned particles), by way of the spare set, so that at most two
- * sets are held at once; with keep 0 nothing is (callers upload after).
- * The work arrays (keys, lists, levels) are never kept: a build follows. */
+/* Per-particle device arrays for at least need particles: those the host
+ * store holds (its fields; the others stay NULL) and the permutation's
+ * spares. The first keep particles of the store are kept (the device
+ * exchange grows the store under its owned particles), array by array, so
+ * that one array at a time is held twice; with keep 0 nothing is (callers
+ * upload after). The work arrays (keys, lists, levels) are never kept: a
+ * build follows. */
 void gpu_reserve(gpu_t *g, size_t need, size_t keep)
 {
     if (need <= g->cap && g->key) return;
     size_t cap = g->key ? need + need / 8 + 1024 : need; /* one rank: exactly n, as before */
     if (cap >= 0xffffffffu) error_exit(1, "backend_gpu: %zu particles on one rank: more than 2^32 - 1", cap);
     size_t na = part_narrays();
-    if (g->key && keep) { /* the spare set grown and filled first, then the current one */
-        for (size_t k = 0; k < na; ++k) {
-            size_t es = part_array_esize(k);
-            CK(cudaFree(part_array_get(&g->alt, k)));
-            void *q = dev_alloc(cap * es);
-            CK(cudaMemcpyAsync(q, part_array_get(&g->d, k), keep * es, cudaMemcpyDeviceToDevice, g->st));
-            part_array_set(&g->alt, k, q);
+    int slot_used[PSCR_N] = {0, 0, 0};
+    for (size_t k = 0; k < na; ++k) {
+        if (!(g->d.fields >> part_array_field(k) & 1)) continue; /* not this run's: NULL */
+        size_t es = part_array_esize(k);
+        slot_used[pscr_slot(es)] = 1;
+        void *old = g->key ? part_array_get(&g->d, k) : NULL, *q = dev_alloc(cap * es);
+        if (old && keep) {
+            CK(cudaMemcpyAsync(q, old, keep * es, cudaMemcpyDeviceToDevice, g->st));
+            CK(cudaStreamSynchronize(g->st)); /* the copy done before the old array goes */
         }
-        CK(cudaStreamSynchronize(g->st));
-        for (size_t k = 0; k < na; ++k) {
-            CK(cudaFree(part_array_get(&g->d, k)));
-            part_array_set(&g->d, k, dev_alloc(cap * part_array_esize(k)));
-        }
-        particles_t t = g->d;
-        g->d = g->alt, g->alt = t;
-    } else {
-        if (g->key)
-            for (size_t k = 0; k < na; ++k) {
-                CK(cudaFree(part_array_get(&g->d, k)));
-                CK(cudaFree(part_array_get(&g->alt, k)));
-            }
-        for (size_t k = 0; k < na; ++k) {
-            size_t bytes = cap * part_array_esize(k);
-            part_array_set(&g->d, k, dev_alloc(bytes));
-            part_array_set(&g->alt, k, dev_alloc(bytes));
-        }
+        if (old) CK(cudaFree(old));
+        part_array_set(&g->d, k, q);
+    }
+    static const size_t slot_es[PSCR_N] = {8, 4, 1};
+    for (int c = 0; c < PSCR_N; ++c) {
+        if (g->pscr[c]) CK(cudaFree(g->pscr[c]));
+        g->pscr[c] = slot_used[c] ? dev_alloc(cap * slot_es[c]) : NULL;
     }
     if (g->key) {
         void *bufs[] = {g->key, g->key2, g->idx, g->idx2, g->cls, g->sums, g->nl, g->ncnt, g->amag,
@@ -86,7 +98,7 @@ void gpu_reserve(gpu_t *g, size_t need, size_t keep)
     g->idx = (unsigned *)dev_alloc(cap * sizeof(unsigned));
     g->idx2 = (unsigned *)dev_alloc(cap * sizeof(unsigned));
     g->cls = (unsigned char *)dev_alloc(cap);
-    g->sums = (bound_sums *)dev_alloc(cap * sizeof(bound_sums));
+    g->sums = g->hcsr ? (bound_sums *)dev_alloc(cap * sizeof(bound_sums)) : NULL;
     for (int d = 0; d < 3; ++d) {
         g->xb[d] = (real *)dev_alloc(cap * sizeof(real));
         CK(cudaMemset(g->xb[d], 0, cap * sizeof(real)));
@@ -98,7 +110,7 @@ void gpu_reserve(gpu_t *g, size_t need, size_t keep)
     g->lvl = g->hx ? (uint8_t *)dev_alloc(cap) : NULL;
     g->wact = g->wskip ? (uint8_t *)dev_alloc(cap) : NULL;
     g->cap = cap;
-    g->d.cap = g->alt.cap = cap;
+    g->d.cap = cap;
     g->built = 0;
 }
 
@@ -107,6 +119,7 @@ void gpu_upload(gpu_t *g, const particles_t *h, size_t a, size_t b)
 {
     for (size_t k = 0; k < part_narrays(); ++k) {
         size_t es = part_array_esize(k);
+        if (!part_array_get(h, k)) continue; /* not this run's */
         CK(cudaMemcpyAsync((char *)part_array_get(&g->d, k) + a * es, (const char *)part_array_get(h, k) + a * es,
                            (b - a) * es, cudaMemcpyHostToDevice, g->st));
     }
@@ -117,9 +130,9 @@ void gpu_upload(gpu_t *g, const particles_t *h, size_t a, size_t b)
 void gpu_counts(gpu_t *g, size_t n, size_t ng)
 {
     g->n = n, g->ng = ng;
-    g->d.n = g->alt.n = n;
-    g->d.ng = g->alt.ng = ng;
-    g->d.cap = g->alt.cap = g->cap;
+    g->d.n = n;
+    g->d.ng = ng;
+    g->d.cap = g->cap;
 }
 
 /* Threads per particle in the neighbour loops: SPHSEG_GPU_TEAM (1, 2, 4, 8
@@ -139,6 +152,15 @@ static int gpu_team_size(int dim, size_t n)
     return t;
 }
 
+/* Bytes a particle of the permutation's spares for the arrays p holds. */
+size_t gpu_spare_bytes(const particles_t *p)
+{
+    int used[PSCR_N] = {0, 0, 0};
+    for (size_t k = 0; k < part_narrays(); ++k)
+        if (part_array_get(p, k)) used[pscr_slot(part_array_esize(k))] = 1;
+    return 8 * (size_t)used[PSCR_8] + 4 * (size_t)used[PSCR_4] + (size_t)used[PSCR_1];
+}
+
 gpu_t *gpu_get(sim_t *s)
 {
     if (s->be_data) return (gpu_t *)s->be_data;
@@ -151,6 +173,7 @@ gpu_t *gpu_get(sim_t *s)
     CK(cudaStreamCreateWithFlags(&g->st, cudaStreamNonBlocking));
     prof.on = tuning_get()->gpu_profile;
     g->wskip = tuning_get()->gpu_wallskip;
+    g->hcsr = s->hcsr;
     if (prof.on) {
         CK(cudaEventCreate(&prof.a));
         CK(cudaEventCreate(&prof.b));
@@ -176,18 +199,19 @@ gpu_t *gpu_get(sim_t *s)
     /* the team from the particles of all ranks: the lanes' partial sums, and so
      * the bits, depend on the team size, which must not follow the rank count */
     g->team = gpu_team_size(h->dim, (size_t)comm_sum_ll((long long)n));
-    message("gpu: device %d of %d, %s, %.1f GiB; %zu MiB of particle arrays (two sets), %zu MiB of neighbour "
-            "list (SPHSEG_GPU_NBR %s: %u per particle of %zu bytes, skin %.3g h), %d threads per particle in neighbour "
-            "loops%s%s", g->dev, ndev, prop.name, (double)prop.totalGlobalMem / (1u << 30),
-            2 * n * part_bytes_per_particle() >> 20, (n * g->nl_cap * gpu_nl_esize(g)) >> 20,
+    message("gpu: device %d of %d, %s, %.1f GiB; %zu MiB of particle arrays (the run's fields and the "
+            "permutation's spares), %zu MiB of neighbour list (SPHSEG_GPU_NBR %s: %u per particle of %zu bytes, "
+            "skin %.3g h), %d threads per particle in neighbour loops%s%s", g->dev, ndev, prop.name,
+            (double)prop.totalGlobalMem / (1u << 30), n * (part_store_bytes(h) + gpu_spare_bytes(h)) >> 20,
+            (n * g->nl_cap * gpu_nl_esize(g)) >> 20,
             g->nbr_form == GRID_NBR_LIST16 ? "list16" : g->nbr_form == GRID_NBR_CELLS ? "cells" : "list", g->nl_cap,
             gpu_nl_esize(g), skin, g->team,
             !g->hx                  ? ""
             : g->hx->cuda_aware     ? "; halo: packed on the device, CUDA-aware MPI on device buffers"
                                     : "; halo: packed on the device, staged through pinned host memory",
             !g->hx ? "" : g->hx->dev ? "; list-build exchanges on the device" : "; list-build exchanges through the host (SPHSEG_GPU_HOSTX)");
-    g->d = *h;
-    g->alt = *h;
+    g->d = *h; /* its counts and fields; gpu_reserve puts device arrays in place of the host's */
+    for (size_t k = 0; k < part_narrays(); ++k) part_array_set(&g->d, k, NULL);
     gpu_reserve(g, n, 0);
     gpu_counts(g, n, 0);
     gpu_upload(g, h, 0, n);

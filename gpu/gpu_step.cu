@@ -175,14 +175,14 @@ void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t)
     g->pend_save = g->pend_adv = 0;
     particles_t p = g->d;
     flow_ctx c = g->pend_fc;
-    const int flow = s->flow_on, seg = stage_runs(stage_flags(s), ST_ADVANCE_C);
+    const int flow = s->flow_on, seg = stage_runs(stage_flags(s), ST_ADVANCE_C), segon = s->seg_on;
     const real a = g->pend_a, w8 = g->pend_w;
     wall_geom w = s->flow.w;
     kin_params kin = s->kin;
     prof_begin(g->st);
     each(g, g->n, [=] __device__(size_t i) {
         particles_t q = p;
-        if (sv) step_save(i, &q, flow);
+        if (sv) step_save(i, &q, flow, segon);
         if (ad) step_advance(i, &q, a, &c, flow, seg, w8);
         if (place) step_place(i, &q, flow, &w, &kin, t);
     });

@@ -439,11 +439,15 @@ void halo_set_origin(halo_t *h, const real lo_local[3])
     }
 }
 
-static void halo_all_arrays(int *arr, int *narr)
+/* Every array the store holds (a field the run does not allocate is NULL
+ * and not sent: part_alloc_fields). */
+static void halo_all_arrays(const particles_t *p, int *arr, int *narr)
 {
-    *narr = (int)part_narrays();
-    if (*narr > HALO_MAX_ARRAYS + 8) error_exit(1, "halo: %d particle arrays, room for %d", *narr, HALO_MAX_ARRAYS + 8);
-    for (int k = 0; k < *narr; ++k) arr[k] = k;
+    if ((int)part_narrays() > HALO_MAX_ARRAYS + 8)
+        error_exit(1, "halo: %zu particle arrays, room for %d", part_narrays(), HALO_MAX_ARRAYS + 8);
+    *narr = 0;
+    for (size_t k = 0; k < part_narrays(); ++k)
+        if (part_array_get(p, k)) arr[(*narr)++] = (int)k;
 }
 
 /* Particles whose cell another rank owns go to it, whole (every array);
@@ -451,7 +455,7 @@ static void halo_all_arrays(int *arr, int *narr)
 static void halo_migrate(halo_t *h, particles_t *p)
 {
     int all[HALO_MAX_ARRAYS + 8], nall;
-    halo_all_arrays(all, &nall);
+    halo_all_arrays(p, all, &nall);
     halo_wrap(h, p);
     size_t nkeep = 0;
     h->inv = halo_grow(h->inv, &h->cap_inv, p->n, sizeof(size_t)); /* keep list */
@@ -607,7 +611,7 @@ static void halo_cut_metis(halo_t *h, const double *w, size_t nv)
 static void halo_route(halo_t *h, particles_t *p)
 {
     int all[HALO_MAX_ARRAYS + 8], nall, P = h->size;
-    halo_all_arrays(all, &nall);
+    halo_all_arrays(p, all, &nall);
     size_t rec = part_record_bytes(all, nall), nkeep = 0, nout = 0;
     int *cnt = halo_calloc((size_t)4 * P, sizeof(int)), *rcnt = cnt + P, *sdis = cnt + 2 * P, *rdis = cnt + 3 * P;
     size_t *order = halo_calloc(p->n + 1, sizeof(size_t)), *keep = halo_calloc(p->n + 1, sizeof(size_t));

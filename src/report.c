@@ -9,6 +9,7 @@
 #include "run.h"
 #include "settings_check.h"
 #include "core/version.h"
+#include "sim/stages.h"
 
 /* arg, single-quoted for a POSIX shell when it holds anything but plain
  * characters, appended to b. */
@@ -138,6 +139,30 @@ static void threads_log(const run_threads *t)
     settings_warn_threads(t);
 }
 
+/* The fields the run allocates (part_alloc_fields, from the stage rows
+ * that run: stage_store_fields) and the store's bytes a particle; the
+ * backend's scratch comes in its memory line at the end. */
+static void report_fields(const particles_t *p)
+{
+    char left[512];
+    int n = 0, m = 0;
+    size_t o = 0;
+    left[0] = 0;
+    for (size_t k = 0, f = (size_t)-1; k < part_narrays(); ++k) {
+        if ((size_t)part_array_field(k) == f) continue;
+        f = (size_t)part_array_field(k), ++m;
+        if (p->fields >> f & 1) ++n;
+        else {
+            char one[64];
+            o += (size_t)snprintf(left + o, o < sizeof left ? sizeof left - o : 0, "%s%s", o ? ", " : "",
+                                  stage_fields_str(1u << f, one, sizeof one));
+        }
+    }
+    message("fields: %d of %d allocated, %zu bytes a particle (store; all %d: %zu), + the backend's scratch (its "
+            "memory line at the end)%s%s", n, m, part_store_bytes(p), m, part_bytes_per_particle(),
+            n < m ? "; not held: " : "", left);
+}
+
 void report_start(sim_t *s, const outputs *o, const run_cli *c)
 {
     const struct scene *sc = s->sc;
@@ -152,6 +177,7 @@ void report_start(sim_t *s, const outputs *o, const run_cli *c)
             s->flow_on ? "computed" : "prescribed", scheme, comm_size(), th.threads, s->be->name, o->dir);
     threads_log(&th);
     tuning_log();
+    report_fields(&s->p);
     char wl[1024], st[128];
     message("container: walls %s", wall_list(s, 1, wl, sizeof wl));
     if (s->flow_on) {

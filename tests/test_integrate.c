@@ -138,7 +138,7 @@ static void test_stage_update(void **st)
     memset(&c, 0, sizeof c);
     part_alloc(&p, 2, 1);
     p.n = 1, p.kind[0] = KIND_MATERIAL, p.C[0] = (real)0.25, p.dCdt[0] = 2;
-    step_save(0, &p, 0);
+    step_save(0, &p, 0, 1);
     step_advance(0, &p, (real)0.05, &c, 0, 1, R(0.0)); /* predictor, dt = 0.1 */
     assert_true(fabs(p.C[0] - 0.35) < RT(1e-14));
     p.dCdt[0] = 3; /* the midpoint rate */

@@ -52,7 +52,7 @@ static void test_creep(void **st)
     const long steps = 40000;
     for (long k = 0; k < steps; ++k)
         for (int i = 0; i < NP; ++i) {
-            step_save((size_t)i, &p, 1);
+            step_save((size_t)i, &p, 1, 1);
             step_advance((size_t)i, &p, dt / 2, &c, 1, 0, 0); /* the predictor, then the corrector */
             step_advance((size_t)i, &p, dt, &c, 1, 0, 0);
         }

@@ -185,10 +185,77 @@ static void test_arrays(void **st)
     part_free(&p);
 }
 
+/* What the rows name under flags: their halo, writes and own reads (all
+ * rows, or only those whose `when` holds bit `need`). */
+static uint32_t named(unsigned flags, unsigned need)
+{
+    uint32_t m = 0;
+    for (int k = 0; k < stage_table_n; ++k) {
+        const stage *r = &stage_table[k];
+        if ((r->when & flags) != r->when || (r->unless & flags)) continue;
+        if (need && !(r->when & need)) continue;
+        m |= r->halo | r->writes | r->reads;
+    }
+    return m;
+}
+
+/* Issue 56: a run allocates every field a running row names (no body
+ * meets a NULL array) and no field that only rows of a module it does not
+ * run name. The module's own fields come from the table (the rows that need
+ * SF_SEG or SF_WIN, SF_FLOW), not from a list here: a scene without
+ * segregation holds no dC/dt, C_n, V, Q, D, gsum, L; a scene with
+ * prescribed flow no stress rate, acceleration or start-of-step v, sigma. */
+static void test_store_fields(void **st)
+{
+    (void)st;
+    const uint32_t xr = POS_REMAINDER ? 0 : FLD_XR; /* double: x is the position, xr never read */
+    for (unsigned f = 0; f < 128; ++f) {
+        const uint32_t have = stage_store_fields(f);
+        assert_int_equal(named(f, 0) & ~xr & ~have, 0);                /* every named field held */
+        assert_int_equal(have & ~(named(f, 0) | STAGE_STORE_BASE | stage_ghost_fields(f)), 0); /* and no other */
+        assert_int_equal(have & xr, 0);
+    }
+    /* the modules' own fields: named by their rows, by no row that runs without them, not in the base */
+    const unsigned flow = SF_FLOW | SF_KGC | SF_SHIFT, seg = SF_SEG | SF_WIN | SF_RENORM | SF_HCSR;
+    const uint32_t seg_own = named(flow | seg, SF_SEG | SF_WIN) & ~named(flow, 0) & ~STAGE_STORE_BASE;
+    const uint32_t flow_own = named(flow | seg, SF_FLOW) & ~named(seg, 0) & ~STAGE_STORE_BASE;
+    const uint32_t want_seg = FLD_DCDT | FLD_CN | FLD_SEGC | FLD_GSUM | FLD_L;
+    const uint32_t want_flow = FLD_DSIG | FLD_ACC | FLD_VN | FLD_SIGN | FLD_B;
+    assert_int_equal(seg_own & want_seg, want_seg); /* the table names them as the segregation's own */
+    assert_int_equal(flow_own & want_flow, want_flow);
+    for (unsigned f = 0; f < 128; ++f) {
+        if (!(f & SF_SEG) && !(f & SF_WIN)) assert_int_equal(stage_store_fields(f) & seg_own, 0);
+        if (!(f & SF_FLOW)) assert_int_equal(stage_store_fields(f) & flow_own, 0);
+        if (!(f & SF_KGC)) assert_int_equal(stage_store_fields(f) & FLD_B, 0);
+        if (!(f & SF_RENORM)) assert_int_equal(stage_store_fields(f) & FLD_L, 0);
+        if (!(f & SF_WIN)) assert_int_equal(stage_store_fields(f) & FLD_GSUM, 0);
+    }
+    /* a store of some fields: the others NULL, and the loops over the arrays skip them */
+    particles_t p;
+    const uint32_t some = stage_store_fields(SF_FLOW);
+    part_alloc_fields(&p, 2, 8, some);
+    assert_null(p.dCdt);
+    assert_null(p.C_n);
+    assert_null(p.segV);
+    assert_non_null(p.acc[0]);
+    assert_non_null(p.C);
+    assert_int_equal(part_store_bytes(&p), part_fields_bytes(some));
+    assert_true(part_store_bytes(&p) < part_bytes_per_particle());
+    p.n = 8;
+    for (size_t i = 0; i < 8; ++i) p.id[i] = (int64_t)i, p.x[0][i] = (real)i;
+    size_t perm[8] = {7, 6, 5, 4, 3, 2, 1, 0};
+    part_permute(&p, perm);
+    part_reserve(&p, 20);
+    assert_null(p.dCdt);
+    for (size_t i = 0; i < 8; ++i) assert_true(p.id[i] == (int64_t)(7 - i) && p.x[0][i] == (real)(7 - i));
+    assert_int_equal(part_array_find(&p, NULL), -1);
+    part_free(&p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_plans), cmocka_unit_test(test_ghost_fields),
                                        cmocka_unit_test(test_refreshes), cmocka_unit_test(test_schedule),
-                                       cmocka_unit_test(test_arrays)};
+                                       cmocka_unit_test(test_arrays), cmocka_unit_test(test_store_fields)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -20,6 +20,23 @@ static const struct part_array part_arrays[] = {PART_FIELDS(PART_ARRAY_ROW)};
 #undef PART_ARRAY_ROW
 #undef PART_ARRAY_COMP
 
+/* Each row's component count, in order: array k's row is the row whose
+ * components cover k (part_array_field). */
+#define PART_ROW_N(member, fld, type, n, trim) n,
+static const int part_row_n[] = {PART_FIELDS(PART_ROW_N)};
+#undef PART_ROW_N
+enum { PART_NFIELDS = (int)(sizeof part_row_n / sizeof part_row_n[0]) };
+_Static_assert(PART_NFIELDS <= 32, "a field mask is a uint32_t");
+
+int part_array_field(size_t k)
+{
+    int r = 0;
+    for (size_t c = (size_t)part_row_n[0]; c <= k; c += (size_t)part_row_n[++r]) {}
+    return r;
+}
+
+uint32_t part_fields_all(void) { return PART_NFIELDS == 32 ? 0xffffffffu : (1u << PART_NFIELDS) - 1; }
+
 /* The table makes every array member of particles_t and the list alike; past
  * the counts at its head, particles_t holds those pointers and nothing
  * else, one after another (a member added outside the table fails here). */
@@ -55,27 +72,31 @@ static void part_touch(particles_t *p, size_t a, size_t b)
         const size_t k0 = a + (b - a) * t / T, k1 = a + (b - a) * (t + 1) / T;
         for (size_t k = 0; k < PART_NARRAYS; k++) {
             size_t es = part_arrays[k].size;
-            memset((char *)part_get(p, &part_arrays[k]) + k0 * es, 0, (k1 - k0) * es);
+            char *a = part_get(p, &part_arrays[k]);
+            if (a) memset(a + k0 * es, 0, (k1 - k0) * es);
         }
     }
 }
 
-void part_alloc(particles_t *p, int dim, size_t cap)
+void part_alloc_fields(particles_t *p, int dim, size_t cap, uint32_t fields)
 {
     memset(p, 0, sizeof *p);
     p->dim = dim;
     p->n = 0;
     p->cap = cap;
+    p->fields = fields & part_fields_all();
     size_t nalloc = cap > 0 ? cap : 1; /* calloc(0) may return NULL */
     for (size_t k = 0; k < PART_NARRAYS; k++) {
+        if (!(p->fields >> part_array_field(k) & 1)) continue; /* not this run's: NULL */
         void *buf = calloc(nalloc, part_arrays[k].size); /* fresh large blocks: pages untouched */
         if (!buf)
-            error_exit(1, "out of memory allocating %zu particles (%zu bytes each)", cap,
-                       part_bytes_per_particle());
+            error_exit(1, "out of memory allocating %zu particles (%zu bytes each)", cap, part_store_bytes(p));
         part_set(p, &part_arrays[k], buf);
     }
     part_touch(p, 0, nalloc);
 }
+
+void part_alloc(particles_t *p, int dim, size_t cap) { part_alloc_fields(p, dim, cap, part_fields_all()); }
 
 void part_free(particles_t *p)
 {
@@ -132,14 +153,16 @@ static void part_gather_all(particles_t *p, const size_t *perm, size_t m)
         const size_t T = (size_t)omp_get_num_threads(), t = (size_t)omp_get_thread_num();
         const size_t k0 = m * t / T, k1 = m * (t + 1) / T;
         for (size_t k = 0; k <= PART_NARRAYS; k++) {
-            if (k > 0) { /* array k-1 back from its buffer */
+            char *prev = k > 0 ? part_get(p, &part_arrays[k - 1]) : NULL;
+            const void *cur = k < PART_NARRAYS ? part_get(p, &part_arrays[k]) : NULL;
+            if (prev) { /* array k-1 back from its buffer */
                 size_t es = part_arrays[k - 1].size;
-                memcpy((char *)part_get(p, &part_arrays[k - 1]) + k0 * es, scr[(k - 1) % 2] + k0 * es,
-                       (k1 - k0) * es);
+                memcpy(prev + k0 * es, scr[(k - 1) % 2] + k0 * es, (k1 - k0) * es);
             }
-            if (k < PART_NARRAYS)
-                part_gather(scr[k % 2], part_get(p, &part_arrays[k]), perm, k0, k1, part_arrays[k].size);
+            if (cur) part_gather(scr[k % 2], cur, perm, k0, k1, part_arrays[k].size);
+            if (prev || cur) {
 #pragma omp barrier
+            }
         }
     }
     free(buf);
@@ -158,6 +181,7 @@ void part_reserve(particles_t *p, size_t cap)
 {
     if (cap <= p->cap) return;
     for (size_t k = 0; k < PART_NARRAYS; k++) {
+        if (!part_get(p, &part_arrays[k])) continue; /* not this run's */
         void *buf = realloc(part_get(p, &part_arrays[k]), cap * part_arrays[k].size);
         if (!buf) error_exit(1, "out of memory growing the particle store to %zu particles", cap);
         part_set(p, &part_arrays[k], buf);
@@ -168,6 +192,7 @@ void part_reserve(particles_t *p, size_t cap)
 
 int part_array_find(const particles_t *p, const void *ptr)
 {
+    if (!ptr) return -1; /* a field the store does not hold */
     for (size_t k = 0; k < PART_NARRAYS; k++)
         if (part_get(p, &part_arrays[k]) == ptr) return (int)k;
     return -1;
@@ -209,10 +234,14 @@ size_t part_array_esize(size_t k) { return part_arrays[k].size; }
 void *part_array_get(const particles_t *p, size_t k) { return part_get(p, &part_arrays[k]); }
 void part_array_set(particles_t *p, size_t k, void *ptr) { part_set(p, &part_arrays[k], ptr); }
 
-size_t part_bytes_per_particle(void)
+size_t part_fields_bytes(uint32_t fields)
 {
     size_t b = 0;
     for (size_t k = 0; k < PART_NARRAYS; k++)
-        b += part_arrays[k].size;
+        if (fields >> part_array_field(k) & 1) b += part_arrays[k].size;
     return b;
 }
+
+size_t part_bytes_per_particle(void) { return part_fields_bytes(part_fields_all()); }
+
+size_t part_store_bytes(const particles_t *p) { return part_fields_bytes(p->fields); }

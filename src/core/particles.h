@@ -26,6 +26,8 @@ typedef struct particles {
     size_t ng;  /* ghost copies of other ranks' particles, at [n, n + ng) (mpi/halo.h);
                  * 0 on one rank */
     size_t cap; /* allocated (n + ng <= cap) */
+    uint32_t fields; /* the fields allocated, one bit per row of PART_FIELDS in its order (FLD_<X> of
+                      * src/sim/stages.h): a field outside it has NULL arrays (part_alloc_fields) */
     /* the arrays, one member per row of PART_FIELDS (src/core/fields.h); an
      * array is declared there and nowhere else */
 #define PART_MEMBER(member, fld, type, n, trim) type *member PART_FIELD_DIMS(n);
@@ -39,7 +41,13 @@ typedef struct particles {
 enum { PART_NARRAYS = 0 PART_FIELDS(PART_NCOMP) };
 #undef PART_NCOMP
 
+/* Every field (tests, tools), or those of fields (bit r: row r of
+ * PART_FIELDS; a run's come from its stage rows, stage_store_fields): the
+ * arrays of the others stay NULL, and every loop below skips them. */
 void part_alloc(particles_t *p, int dim, size_t cap);
+void part_alloc_fields(particles_t *p, int dim, size_t cap, uint32_t fields);
+/* All of the table's fields, as a mask for part_alloc_fields. */
+uint32_t part_fields_all(void);
 void part_free(particles_t *p);
 /* Grow the arrays to hold at least cap particles, keeping their contents. */
 void part_reserve(particles_t *p, size_t cap);
@@ -48,7 +56,14 @@ void part_permute(particles_t *p, const size_t *perm);
 /* Keep particles keep[0..m-1] (increasing indices), in that order, at
  * [0, m); p->n = m, p->ng = 0. */
 void part_compact(particles_t *p, const size_t *keep, size_t m);
+/* Bytes a particle of every field of the table (the store before issue 56),
+ * and of the fields p holds (its store). */
 size_t part_bytes_per_particle(void);
+size_t part_store_bytes(const particles_t *p);
+/* The same for a field mask (part_alloc_fields), before any allocation. */
+size_t part_fields_bytes(uint32_t fields);
+/* The field row (its bit position in a mask) array k belongs to. */
+int part_array_field(size_t k);
 /* The per-particle arrays as a list (for backends that keep their own copies,
  * e.g. on a GPU): count, element size in bytes, and the k-th pointer. */
 size_t part_narrays(void);

@@ -187,7 +187,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
     case ST_DCDT: cpu_dcdt(s, p); return 1;
     case ST_SAVE:
 #pragma omp parallel for schedule(static)
-        for (long i = 0; i < n; ++i) step_save((size_t)i, p, s->flow_on);
+        for (long i = 0; i < n; ++i) step_save((size_t)i, p, s->flow_on, s->seg_on);
         return 1;
     case ST_SHIFT: /* or with the next flow rates (sim.h shift_due) */
         if (s->shift_due) return 0;
@@ -333,6 +333,12 @@ static void cpu_finish(sim_t *s)
 {
     cpu_state *c = (cpu_state *)s->be_data;
     if (!c) return;
+    /* the memory line (issue 56): the store's fields and the backend's per-particle scratch */
+    const size_t cl = c->grid.cap_part ? 2 * sizeof(size_t) + sizeof(uint64_t) : 0, /* key, perm, rank */
+        bc = c->bw.cap_part ? sizeof(bound_sums) + 1 : 0;                              /* sums, classes */
+    message("cpu memory: store %zu bytes a particle (%d of %d fields), scratch %zu bytes a particle (cell list %zu, "
+            "classification %zu), rank 0", part_store_bytes(&s->p), __builtin_popcount(s->p.fields),
+            __builtin_popcount(part_fields_all()), cl + bc, cl, bc);
     nbr_free(&c->grid);
     bound_free(&c->bw);
     free(c);

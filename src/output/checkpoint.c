@@ -148,7 +148,9 @@ static void ckpt_write_decomp(hid_t file, const halo_t *h)
     H5CHECK(H5Gclose(g));
 }
 
-/* /Particles: RankCounts, then every array of the store, raw. */
+/* /Particles: RankCounts, then every array of the store, raw; an array
+ * this run does not allocate (part_alloc_fields) as zeros, so that the
+ * format is the table's whatever the run (a restart reads it or not). */
 static void ckpt_write_particles(hid_t file, const particles_t *p, long long ntot, long long offset)
 {
     int size = comm_size(), rank = comm_rank();
@@ -160,16 +162,21 @@ static void ckpt_write_particles(hid_t file, const particles_t *p, long long nto
     H5CHECK(d = ckpt_write_rows(g, "RankCounts", H5T_STD_I64LE, H5T_NATIVE_LLONG, counts, rank == 0 ? size : 0,
                                 size, 0));
     H5CHECK(H5Dclose(d));
+    void *zeros = NULL;
     for (size_t k = 0; k < part_narrays(); ++k) {
         char name[24];
         size_t es = part_array_esize(k);
         snprintf(name, sizeof name, "%02zu", k);
-        H5CHECK(d = ckpt_write_rows(g, name, ckpt_raw_file(es), ckpt_raw_mem(es), part_array_get(p, k), n, ntot,
+        const void *a = part_array_get(p, k);
+        if (!a && !zeros && !(zeros = calloc(n > 0 ? (size_t)n : 1, 8)))
+            error_exit(EXIT_SYSTEM, "out of memory writing a checkpoint");
+        H5CHECK(d = ckpt_write_rows(g, name, ckpt_raw_file(es), ckpt_raw_mem(es), a ? a : zeros, n, ntot,
                                     offset));
         ckpt_attr_int64(d, "ElementBytes", (long long)es);
         H5CHECK(H5Dclose(d));
     }
     H5CHECK(H5Gclose(g));
+    free(zeros);
     free(counts);
 }
 

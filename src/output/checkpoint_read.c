@@ -22,6 +22,7 @@ static unsigned ckpt_acc_rdonly(void) { return H5F_ACC_RDONLY; }
 #include "core/error.h"
 #include "io.h"
 #include "mpi/comm.h"
+#include "sim/stages.h"
 
 #define CKPT_PATH_MAX 4200
 
@@ -369,15 +370,17 @@ static void ckpt_read_particles(hid_t f, sim_t *s, int dim, long long ntot, int 
         if (ckpt_get_int(d[k], "ElementBytes", 1, 8) != (long long)part_array_esize(k))
             ckpt_bad("particle array %s has elements of another size: written by another version", name);
     }
-    double need = (double)n * (double)(part_bytes_per_particle() + 64);
+    const uint32_t fields = stage_store_fields(stage_flags(s)); /* this run's: the others are not read */
+    double need = (double)n * (double)(part_fields_bytes(fields) + 64);
     double have = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
     if (need > 0.8 * have)
         ckpt_bad("%lld particles, %lld on this rank, need %.1f GiB per rank; this machine has %.1f GiB", ntot, n,
                  need / 1073741824.0, have / 1073741824.0);
-    part_alloc(&s->p, dim, (size_t)n);
+    part_alloc_fields(&s->p, dim, (size_t)n, fields);
     s->p.n = (size_t)n;
     for (size_t k = 0; k < part_narrays(); ++k) {
-        ckpt_read_rows(d[k], ckpt_raw_mem(part_array_esize(k)), part_array_get(&s->p, k), n, offset);
+        if (part_array_get(&s->p, k))
+            ckpt_read_rows(d[k], ckpt_raw_mem(part_array_esize(k)), part_array_get(&s->p, k), n, offset);
         H5CHECK(H5Dclose(d[k]));
     }
     H5CHECK(H5Gclose(g));

@@ -111,10 +111,12 @@ HD_INLINE void step_place(size_t i, const particles_t *p, int flow_on, const wal
     p->gdot[i] = gd;
 }
 
-/* save_start(): the start-of-step copies of particle i. */
-HD_INLINE void step_save(size_t i, const particles_t *p, int flow_on)
+/* save_start(): the start-of-step copies of particle i: C_n with the
+ * concentration equation, x_n, v_n, sig_n with computed flow (the store
+ * holds no others: ST_SAVE's rows). */
+HD_INLINE void step_save(size_t i, const particles_t *p, int flow_on, int seg_on)
 {
-    p->C_n[i] = p->C[i];
+    if (seg_on) p->C_n[i] = p->C[i];
     if (!flow_on) return;
     for (int d = 0; d < 3; ++d) {
         p->x_n[d][i] = POS_REMAINDER ? (preal)p->x[d][i] + (preal)p->xr[d][i] : (preal)p->x[d][i];

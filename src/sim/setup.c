@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "mpi/comm.h"
 #include "setup.h"
+#include "stages.h"
 
 typedef struct box_layout {
     long nx, ny, nl; /* material columns, rows; dummy layers */
@@ -46,19 +47,21 @@ static struct {
 
 /* Allocate this rank's share of n particles; exit with status 2 if it
  * would not fit in this machine. */
-void setup_alloc(const struct scene *sc, particles_t *p, int dim, size_t n)
+void setup_alloc(sim_t *s, int dim, size_t n)
 {
+    const struct scene *sc = s->sc;
     size_t r = (size_t)comm_rank(), P = (size_t)comm_size();
     setup_win.lo = n * r / P, setup_win.hi = n * (r + 1) / P;
     size_t share = setup_win.hi - setup_win.lo;
-    double need = (double)share * (double)(part_bytes_per_particle() + 64); /* + grid, scratch */
+    const uint32_t fields = stage_store_fields(stage_flags(s));
+    double need = (double)share * (double)(part_fields_bytes(fields) + 64); /* + grid, scratch */
     double have = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
     char where[512];
     if (need > 0.8 * have)
         input_error("%s: Geometry:dr: %.3g m gives %zu particles, %zu on each of %zu rank(s), needing %.1f GiB "
                     "per rank; this machine has %.1f GiB", scene_key_where(sc, "Geometry", "dr", where, sizeof where),
                     sc->geometry.dr, n, share, P, need / 1073741824.0, have / 1073741824.0);
-    part_alloc(p, dim, share);
+    part_alloc_fields(&s->p, dim, share, fields);
 }
 
 /* Particle k of the scene at (x, y, z), stored if it is in this rank's
@@ -94,7 +97,7 @@ static void setup_box(sim_t *s)
     const struct scene *sc = s->sc;
     double dr = sc->geometry.dr, vol = dr * dr;
     box_layout b = setup_layout(sc);
-    setup_alloc(sc, &s->p, 2, b.n_mat + b.n_dum);
+    setup_alloc(s, 2, b.n_mat + b.n_dum);
     particles_t *p = &s->p;
     size_t k = 0;
     double H = b.ny * dr, split = sc->initial.split * H;
@@ -218,7 +221,7 @@ static void setup_drum(sim_t *s)
     const struct scene *sc = s->sc;
     drum_layout d = drum_layout_of(sc);
     size_t n_mat = (size_t)d.nz * drum_disc(NULL, 0, &d, 0), n = drum_place(NULL, &d);
-    setup_alloc(sc, &s->p, d.dim, n);
+    setup_alloc(s, d.dim, n);
     particles_t *p = &s->p;
     p->n = setup_count(drum_place(p, &d));
     s->n_material = n_mat;
@@ -279,7 +282,7 @@ static void setup_box3d(sim_t *s)
     long sx = g->periodic & PERIODIC_X ? 0 : nl, sz = g->periodic & PERIODIC_Z ? 0 : nl; /* side wall layers */
     long nr = lround(g->runout / dr);                                                   /* runout columns */
     size_t cap = (size_t)((nx + nr + 2 * sx) * (ny + 2 * nl) * (nz + 2 * sz));
-    setup_alloc(sc, &s->p, 3, cap);
+    setup_alloc(s, 3, cap);
     particles_t *p = &s->p;
     size_t k = 0;
     double H = ny * dr, split = sc->initial.split * H;

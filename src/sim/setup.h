@@ -6,10 +6,11 @@
 #define SPHSEG_SETUP_H
 #include "sim.h"
 
-/* Allocate this rank's share of the scene's n particles (exit 2 if they
- * would not fit); particle k of the scene (its ID) is then placed with
+/* Allocate this rank's share of the scene's n particles, the fields of the
+ * run (stage_store_fields: the others stay NULL; exit 2 if they would not
+ * fit); particle k of the scene (its ID) is then placed with
  * setup_put, which keeps it if it is in this rank's share. */
-void setup_alloc(const struct scene *sc, particles_t *p, int dim, size_t n);
+void setup_alloc(sim_t *s, int dim, size_t n);
 void setup_put(particles_t *p, size_t k, double x, double y, double z, int kind, double vol, double C);
 /* Particle k's wall id (a dummy placed for a primitive that claims none by
  * position), if it is in this rank's share. */

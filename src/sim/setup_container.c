@@ -671,7 +671,7 @@ void container_place(sim_t *s)
     size_t n_mat;
     double top;
     size_t n = ctr_place(s, NULL, &L, seg, &n_mat, &top);
-    setup_alloc(sc, &s->p, (int)sc->geometry.dim, n);
+    setup_alloc(s, (int)sc->geometry.dim, n);
     ctr_place(s, &s->p, &L, seg, &n_mat, &top);
     s->p.n = setup_count(n);
     s->n_material = n_mat;

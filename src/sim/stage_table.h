@@ -45,38 +45,46 @@ enum stage_id {
  * run has a row per case. A row may serve several hooks (ST_WALLS). */
 #define H(h) (1u << (h)) /* a hook's bit */
 const stage stage_table[] = {
-    /* id, hooks, body, when, unless, range, halo, writes, from_owner */
-    {ST_PLACE, H(HOOK_PREPARE), "step_place", SF_FLOW, 0, RANGE_OWNED, 0, FLD_X | FLD_V, 0},
-    {ST_PLACE, H(HOOK_PREPARE), "step_place", 0, SF_FLOW, RANGE_OWNED, 0, FLD_X | FLD_V | FLD_GDOT, 0},
-    {ST_EXCHANGE, H(HOOK_PREPARE), "halo_exchange, nbr_build", 0, 0, RANGE_ALL, 0, 0, 0},
+    /* id, hooks, body, when, unless, range, halo, writes, from_owner, reads (own: what the body reads of the
+     * particle itself beyond halo; with halo and writes, the fields the run allocates: stage_store_fields) */
+    {ST_PLACE, H(HOOK_PREPARE), "step_place", SF_FLOW, 0, RANGE_OWNED, 0, FLD_X | FLD_V, 0, FLD_X0 | FLD_KIND | FLD_WALL},
+    {ST_PLACE, H(HOOK_PREPARE), "step_place", 0, SF_FLOW, RANGE_OWNED, 0, FLD_X | FLD_V | FLD_GDOT, 0, FLD_X0},
+    /* a periodic wrap moves x with xr and x_n (hg_move) */
+    {ST_EXCHANGE, H(HOOK_PREPARE), "halo_exchange, nbr_build", 0, 0, RANGE_ALL, 0, 0, 0, FLD_X | FLD_XR | FLD_XN},
     /* classes are decisions: the owners' bits, whatever a ghost's summation order */
-    {ST_CLASSIFY, H(HOOK_PREPARE), "bound_classify", 0, 0, RANGE_ALL, NB_GEOM, FLD_BCLASS | FLD_NRM | FLD_PSI, 1},
-    {ST_RENORM, H(HOOK_PREPARE), "seg_renorm", SF_SEG | SF_RENORM, 0, RANGE_ALL, NB_GEOM, FLD_L, 0},
+    {ST_CLASSIFY, H(HOOK_PREPARE), "bound_classify", 0, 0, RANGE_ALL, NB_GEOM, FLD_BCLASS | FLD_NRM | FLD_PSI, 1, 0},
+    {ST_RENORM, H(HOOK_PREPARE), "seg_renorm", SF_SEG | SF_RENORM, 0, RANGE_ALL, NB_GEOM, FLD_L, 0, 0},
     /* each prepare: B follows the positions; the ghosts' from their own support (ghost depth 4h) */
-    {ST_KGC, H(HOOK_PREPARE), "flow_kgc_team", SF_FLOW | SF_KGC, 0, RANGE_ALL, NB_GEOM, FLD_B, 0},
-    {ST_SHEPARD, H(HOOK_FILTER), "flow_shepard", SF_FLOW, 0, RANGE_OWNED, FLD_X | FLD_KIND | FLD_SIG, FLD_DSIG, 0},
-    {ST_SHEPARD_STORE, H(HOOK_FILTER), "flow_shepard_store", SF_FLOW, 0, RANGE_OWNED, 0, FLD_SIG, 0},
+    {ST_KGC, H(HOOK_PREPARE), "flow_kgc_team", SF_FLOW | SF_KGC, 0, RANGE_ALL, NB_GEOM, FLD_B, 0, 0},
+    {ST_SHEPARD, H(HOOK_FILTER), "flow_shepard", SF_FLOW, 0, RANGE_OWNED, FLD_X | FLD_KIND | FLD_SIG, FLD_DSIG, 0,
+     FLD_VOL},
+    {ST_SHEPARD_STORE, H(HOOK_FILTER), "flow_shepard_store", SF_FLOW, 0, RANGE_OWNED, 0, FLD_SIG, 0, FLD_DSIG},
     /* a dummy's own wall id gives a box wall's normal */
     {ST_WALLS, H(HOOK_PREPARE) | H(HOOK_FILTER), "flow_wall", SF_FLOW, 0, RANGE_ALL, NB_FLOW | FLD_WALL,
-     FLD_V | FLD_SIG, 0},
+     FLD_V | FLD_SIG, 0, 0},
     /* with SF_RENORM the owned L come with it when prepare classified: ST_RENORM's, fused */
-    {ST_FLOW, H(HOOK_RATES), "flow_rates_team", SF_FLOW, 0, RANGE_OWNED, NB_FLOW, FLD_ACC | FLD_DSIG | FLD_GDOT, 0},
-    {ST_FLOW, H(HOOK_RATES), "flow_rates_team", SF_FLOW | SF_KGC, 0, RANGE_OWNED, FLD_B, 0, 0},
-    {ST_SEG_COEFFS, H(HOOK_RATES), "seg_coeffs", SF_SEG, SF_WIN, RANGE_ALL, FLD_C | FLD_GDOT, FLD_SEGC, 0},
-    {ST_DCDT, H(HOOK_RATES), "seg_dCdt", SF_SEG, SF_WIN, RANGE_OWNED, NB_CONC, FLD_DCDT, 0},
-    {ST_DCDT, H(HOOK_RATES), "seg_dCdt", SF_SEG | SF_RENORM, SF_WIN, RANGE_OWNED, FLD_L, 0, 0},
-    {ST_SAVE, H(HOOK_SAVE), "step_save", 0, 0, RANGE_OWNED, 0, FLD_XN | FLD_VN | FLD_SIGN | FLD_CN, 0},
+    {ST_FLOW, H(HOOK_RATES), "flow_rates_team", SF_FLOW, 0, RANGE_OWNED, NB_FLOW, FLD_ACC | FLD_DSIG | FLD_GDOT, 0,
+     FLD_C},
+    {ST_FLOW, H(HOOK_RATES), "flow_rates_team", SF_FLOW | SF_KGC, 0, RANGE_OWNED, FLD_B, 0, 0, 0},
+    {ST_SEG_COEFFS, H(HOOK_RATES), "seg_coeffs", SF_SEG, SF_WIN, RANGE_ALL, FLD_C | FLD_GDOT, FLD_SEGC, 0, 0},
+    {ST_DCDT, H(HOOK_RATES), "seg_dCdt", SF_SEG, SF_WIN, RANGE_OWNED, NB_CONC, FLD_DCDT, 0, FLD_SEGC},
+    {ST_DCDT, H(HOOK_RATES), "seg_dCdt", SF_SEG | SF_RENORM, SF_WIN, RANGE_OWNED, FLD_L, 0, 0, 0},
+    {ST_SAVE, H(HOOK_SAVE), "step_save", SF_FLOW, 0, RANGE_OWNED, 0, FLD_XN | FLD_VN | FLD_SIGN, 0,
+     FLD_X | FLD_XR | FLD_V | FLD_SIG},
+    {ST_SAVE, H(HOOK_SAVE), "step_save", SF_SEG, 0, RANGE_OWNED, 0, FLD_CN, 0, FLD_C},
     /* after the save: it writes only the start-of-step copies, which no neighbour reads */
-    {ST_SHIFT, H(HOOK_SAVE), "shift_team", SF_FLOW | SF_SHIFT, 0, RANGE_OWNED, NB_FLOW, FLD_XN | FLD_VN | FLD_SIGN, 0},
-    {ST_ADVANCE, H(HOOK_ADVANCE), "step_advance", SF_FLOW, 0, RANGE_OWNED, 0, FLD_X | FLD_V | FLD_SIG, 0},
-    {ST_ADVANCE_C, H(HOOK_ADVANCE), "step_advance", SF_SEG, SF_WIN, RANGE_OWNED, 0, FLD_C, 0},
-    {ST_ADVANCE_GSUM, H(HOOK_ADVANCE), "step_advance", SF_WIN, 0, RANGE_OWNED, 0, FLD_GSUM, 0},
-    {ST_SHEAR_MEAN, H(HOOK_CONC_BEGIN), "step_shear_mean", SF_WIN, 0, RANGE_OWNED, 0, FLD_GSUM, 0},
-    {ST_WIN_RENORM, H(HOOK_CONC_BEGIN), "seg_renorm", SF_WIN | SF_RENORM, 0, RANGE_ALL, NB_GEOM, FLD_L, 0},
-    {ST_WIN_BOUNDS, H(HOOK_CONC_BEGIN), "step_bounds_of", SF_WIN, 0, RANGE_OWNED, 0, 0, 0},
-    {ST_WIN_COEFFS, H(HOOK_CONC_STEP), "seg_coeffs", SF_WIN, 0, RANGE_ALL, FLD_C | FLD_GSUM, FLD_SEGC, 0},
-    {ST_WIN_DCDT, H(HOOK_CONC_STEP), "seg_dCdt", SF_WIN, 0, RANGE_OWNED, NB_CONC, FLD_DCDT, 0},
-    {ST_WIN_DCDT, H(HOOK_CONC_STEP), "seg_dCdt", SF_WIN | SF_RENORM, 0, RANGE_OWNED, FLD_L, 0, 0},
-    {ST_WIN_ADVANCE, H(HOOK_CONC_STEP), "step_conc_advance", SF_WIN, 0, RANGE_OWNED, 0, FLD_C | FLD_CN, 0},
+    {ST_SHIFT, H(HOOK_SAVE), "shift_team", SF_FLOW | SF_SHIFT, 0, RANGE_OWNED, NB_FLOW, FLD_XN | FLD_VN | FLD_SIGN, 0,
+     FLD_ACC | FLD_DSIG},
+    {ST_ADVANCE, H(HOOK_ADVANCE), "step_advance", SF_FLOW, 0, RANGE_OWNED, 0, FLD_X | FLD_XR | FLD_V | FLD_SIG, 0,
+     FLD_KIND | FLD_XN | FLD_VN | FLD_SIGN | FLD_ACC | FLD_DSIG | FLD_GDOT | FLD_C},
+    {ST_ADVANCE_C, H(HOOK_ADVANCE), "step_advance", SF_SEG, SF_WIN, RANGE_OWNED, 0, FLD_C, 0, FLD_CN | FLD_DCDT},
+    {ST_ADVANCE_GSUM, H(HOOK_ADVANCE), "step_advance", SF_WIN, 0, RANGE_OWNED, 0, FLD_GSUM, 0, FLD_GDOT},
+    {ST_SHEAR_MEAN, H(HOOK_CONC_BEGIN), "step_shear_mean", SF_WIN, 0, RANGE_OWNED, 0, FLD_GSUM, 0, 0},
+    {ST_WIN_RENORM, H(HOOK_CONC_BEGIN), "seg_renorm", SF_WIN | SF_RENORM, 0, RANGE_ALL, NB_GEOM, FLD_L, 0, 0},
+    {ST_WIN_BOUNDS, H(HOOK_CONC_BEGIN), "step_bounds_of", SF_WIN, 0, RANGE_OWNED, 0, 0, 0, FLD_C | FLD_GSUM},
+    {ST_WIN_COEFFS, H(HOOK_CONC_STEP), "seg_coeffs", SF_WIN, 0, RANGE_ALL, FLD_C | FLD_GSUM, FLD_SEGC, 0, 0},
+    {ST_WIN_DCDT, H(HOOK_CONC_STEP), "seg_dCdt", SF_WIN, 0, RANGE_OWNED, NB_CONC, FLD_DCDT, 0, FLD_SEGC},
+    {ST_WIN_DCDT, H(HOOK_CONC_STEP), "seg_dCdt", SF_WIN | SF_RENORM, 0, RANGE_OWNED, FLD_L, 0, 0, 0},
+    {ST_WIN_ADVANCE, H(HOOK_CONC_STEP), "step_conc_advance", SF_WIN, 0, RANGE_OWNED, 0, FLD_C | FLD_CN, 0, FLD_DCDT},
 };
 #endif

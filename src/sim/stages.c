@@ -81,6 +81,17 @@ static uint32_t id_writes(int id, unsigned flags, int *range, int *from_owner)
     return m;
 }
 
+uint32_t stage_store_fields(unsigned flags)
+{
+    uint32_t m = STAGE_STORE_BASE | stage_ghost_fields(flags);
+    for (int k = 0; k < stage_table_n; ++k) {
+        const stage *r = &stage_table[k];
+        if (row_on(r, flags)) m |= r->halo | r->writes | r->reads;
+    }
+    if (!POS_REMAINDER) m &= ~(uint32_t)FLD_XR;
+    return m;
+}
+
 uint32_t stage_ghost_fields(unsigned flags)
 {
     uint32_t m = FLD_X | FLD_ID | FLD_KIND;

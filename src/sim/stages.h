@@ -57,6 +57,7 @@ typedef struct stage {
     uint32_t halo;   /* what it reads of a ghost that the ghost's owner must supply (enum stage_field) */
     uint32_t writes; /* what it writes */
     int from_owner;  /* the ghosts' results are replaced by their owners' (a refresh after it) */
+    uint32_t reads;  /* what it reads of the particle itself beyond halo (stage_store_fields) */
 } stage;
 
 /* The stage ids and the table's rows: src/sim/stage_table.h, one file. */
@@ -77,6 +78,19 @@ int stage_plan(int hook, unsigned flags, const stage **rows);
  * fuses stages into one pass (ST_ADVANCE with ST_ADVANCE_C) learns what the
  * pass does, instead of deciding it from the run's state. */
 int stage_runs(unsigned flags, int id);
+
+/* What the driver, the snapshots (io_fields[]) and the diagnostics read
+ * in every run, whatever stage runs: the snapshot's fields, and x_n (the
+ * blow-up guard's step length, a periodic wrap). */
+#define STAGE_STORE_BASE                                                                                     \
+    (FLD_X | FLD_V | FLD_VOL | FLD_C | FLD_GDOT | FLD_SIG | FLD_NRM | FLD_PSI | FLD_KIND | FLD_BCLASS |      \
+     FLD_WALL | FLD_ID | FLD_XN)
+
+/* The fields a run under flags allocates (issue 56): STAGE_STORE_BASE and
+ * every field a running row reads (halo, reads) or writes; xr only in the
+ * single build (POS_REMAINDER, core/hd.h: 0 and never read in double).
+ * The rest stay NULL in the store (part_alloc_fields) and on the device. */
+uint32_t stage_store_fields(unsigned flags);
 
 /* The fields a ghost carries: those some running stage reads of a ghost,
  * those refreshed from the owners, and x, id, kind (the halo's own). */

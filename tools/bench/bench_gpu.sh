@@ -27,14 +27,16 @@
 # (riemann with bed damping, the corrected gradient, Fickian shifting), which
 # is what users run: each drum series shows both.
 # Particle-steps count material and dummy particles; the rate excludes
-# set-up, output and diagnostics (the "done:" line of sphseg).
+# set-up, output and diagnostics (the "done:" line of sphseg). peak_GB and
+# bytes_per_particle: the backend's "gpu memory:" line (the device's peak in
+# use during the run, and that less what was in use before, a particle).
 # Usage: tools/bench/bench_gpu.sh CSV BIN_DOUBLE [BIN_SINGLE] [MAX_PARTICLES] (an empty BIN skips its precision)
 set -uo pipefail
 csv=${1:?usage: bench_gpu.sh CSV BIN_DOUBLE [BIN_SINGLE] [MAX_PARTICLES]}
 bind=${2:-}; bins=${3:-}; nmax=${4:-3e7}
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 gpu=$(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1)
-echo "case,precision,particles,steps,wall_s,particle_steps_per_s,steps_per_s,gpu" > "$csv"
+echo "case,precision,particles,steps,wall_s,particle_steps_per_s,steps_per_s,gpu,peak_GB,bytes_per_particle" > "$csv"
 printf "%-9s %-6s %10s %6s %8s %12s %9s   (%s)\n" case prec particles steps wall_s p-steps/s steps/s "$gpu"
 
 one() { # case precision binary steps scene overrides...
@@ -55,7 +57,8 @@ one() { # case precision binary steps scene overrides...
     rate=$(echo "$line" | sed 's/.*wall, \([0-9.e+]*\) particle.*/\1/')
     local sps; sps=$(python3 -c "print('%.4g' % ($rate / $n))")
     printf "%-9s %-6s %10s %6s %8s %12s %9s\n" "$case" "$prec" "$n" "$steps" "$wall" "$rate" "$sps"
-    echo "$case,$prec,$n,$steps,$wall,$rate,$sps,$gpu" >> "$csv"
+    local mem; mem=$(sed -n 's/^gpu memory: peak \([0-9.]*\) GB .*), \(-*[0-9]*\) bytes a particle over.*/\1,\2/p' "$tmp/log")
+    echo "$case,$prec,$n,$steps,$wall,$rate,$sps,$gpu,${mem:-,}" >> "$csv"
 }
 
 sweep() { # precision binary
