@@ -36,4 +36,10 @@ enum seg_limiter { SEG_LIMITER_NONE = 0, SEG_LIMITER_DONOR = 1 };
  * granular flow (momentum 3.9, stress 2.16). */
 enum kin_type { KIN_REST = 0, KIN_OSCILLATORY_SHEAR = 1, KIN_COMPUTED = 2 };
 
+/* DEM:coupling (src/physics/dem.h, src/dem/dem.c): one_way, the grains feel
+ * the fluid (drag, eq. 19-23) and the fluid does not feel them; two_way, the
+ * fluid also takes the interaction source (14), its fluid fraction (15-16) in
+ * the momentum and the superficial density (the DEM paper's eq. 6). */
+enum dem_coupling { DEM_ONE_WAY = 0, DEM_TWO_WAY = 1 };
+
 #endif

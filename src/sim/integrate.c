@@ -23,12 +23,15 @@ void integrate_step(sim_t *s, double dt)
     s->flow.damping = (real)(s->t < s->sc->flow.damping_until ? s->sc->flow.damping : 0.0);
     s->dt = dt; /* this step's, for the shift in save_start (physics/shift.h) */
     be->rates(s);
+    if (s->dem) dem_couple(s->dem, &s->p, &s->flow.w, s->t, (double)s->flow.visc_norm);
     be->save_start(s);
     be->advance(s, 0.5 * dt, 0.0);
     be->prepare(s, s->t + 0.5 * dt, 0);
     be->rates(s);
+    if (s->dem) dem_couple(s->dem, &s->p, &s->flow.w, s->t + 0.5 * dt, (double)s->flow.visc_norm);
     be->advance(s, dt, win ? dt : 0.0);
     be->prepare(s, s->t + dt, !win); /* windows classify and renormalise at their close */
+    if (s->dem) dem_advance(s->dem, &s->flow.w, s->t, dt); /* the grains over the step, the coupling's forces */
     s->t += dt;
     s->step++;
     if (win) s->win.k++, s->win.T += dt;
