@@ -96,7 +96,7 @@ DRIVER_SRC := src/main.c src/settings_check.c src/run.c src/run_guard.c src/repo
 DRIVER_OBJ := $(DRIVER_SRC:%.c=$(BUILD)/obj/%.o)
 HEADERS  := $(wildcard src/*.h src/*/*.h mpi/*.h)
 
-UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_stab test_halo test_checkpoint test_stages test_position test_shift test_ksum
+UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_stab test_halo test_checkpoint test_stages test_position test_shift test_ksum test_dem
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
 
 .PHONY: all deps deps-test run test test-slurm unit bench clean format test-mutants

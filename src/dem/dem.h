@@ -28,6 +28,9 @@ typedef struct dem {
     int *ncon;            /* contacts of each grain */
     int64_t *cid;         /* [n][DEM_CMAX] partner: a grain's ID, or -1 - k for wall primitive k */
     double *cxi;          /* [n][DEM_CMAX][3] the tangential springs' elongation (the history), m */
+    int *ncon2;           /* the spare lists a DEM step writes while it reads the last step's */
+    int64_t *cid2;
+    double *cxi2;
     double V, m, I;       /* a grain's volume (m^3), mass (kg), moment of inertia (kg m^2) */
     double dt;            /* the DEM step: the contact time / 20, s */
     double rho_f, nu, K, h; /* the fluid's density, kinematic viscosity, bulk modulus; the kernel's h */

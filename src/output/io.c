@@ -675,6 +675,10 @@ static void io_write_dem(hid_t file, const dem_t *d)
                    "contacts of the grain (with grains and walls) at the last DEM step", "1");
     io_dem_dataset(g, "FluidFraction", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, d->eps, n, 1,
                    "fluid fraction at the grain, eq. (20) of Markauskas et al. 2016", "1");
+    for (size_t i = 0; i < n; ++i)
+        for (int a = 0; a < 3; ++a) buf[3 * i + (size_t)a] = d->uf[a][i];
+    io_dem_dataset(g, "FluidVelocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, buf, n, 3,
+                   "fluid velocity at the grain, eq. (20)'s interpolation", "m/s");
     io_dem_dataset(g, "ParticleIDs", H5T_STD_I64LE, H5T_NATIVE_INT64, d->id, n, 1, "grain ID", "1");
     H5CHECK(H5Gclose(g));
     free(buf), free(ib);
@@ -750,12 +754,13 @@ static void io_xdmf_grid(FILE *fp, int index, double time, long long n)
                 "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" NodesPerElement=\"1\"/>\n"
                 "        <Geometry GeometryType=\"XYZ\">\n          <DataItem Dimensions=\"%zu 3\" NumberType=\"Float\""
                 " Precision=\"8\" Format=\"HDF\">%s:/DEM/Coordinates</DataItem>\n        </Geometry>\n", index, g, g, h5name);
-    static const char *const at[5] = {"Velocities", "AngularVelocities", "Diameter", "Contacts", "FluidFraction"};
-    for (int k = 0; k < 5; ++k)
+    static const char *const at[6] = {"Velocities", "AngularVelocities", "FluidVelocity", "Diameter", "Contacts",
+                                      "FluidFraction"};
+    for (int k = 0; k < 6; ++k)
         fprintf(fp, "        <Attribute Name=\"%s\" AttributeType=\"%s\" Center=\"Node\">\n          <DataItem "
                     "Dimensions=\"%zu%s\" NumberType=\"%s\" Precision=\"%d\" Format=\"HDF\">%s:/DEM/%s</DataItem>\n"
-                    "        </Attribute>\n", at[k], k < 2 ? "Vector" : "Scalar", g, k < 2 ? " 3" : "",
-                k == 3 ? "Int" : "Float", k == 3 ? 4 : 8, h5name, at[k]);
+                    "        </Attribute>\n", at[k], k < 3 ? "Vector" : "Scalar", g, k < 3 ? " 3" : "",
+                k == 4 ? "Int" : "Float", k == 4 ? 4 : 8, h5name, at[k]);
     fprintf(fp, "      </Grid>\n      </Grid>\n");
 }
 

@@ -59,7 +59,7 @@ extern const int io_nfields;
  * 2 xlo, ..."), in the header attribute Walls. */
 /* The run's DEM grains (src/dem/dem.h; NULL: none): each snapshot then has
  * the group /DEM (Coordinates, Velocities, AngularVelocities, Diameter,
- * Contacts, FluidFraction, ParticleIDs) and the XDMF shows them beside the
+ * Contacts, FluidFraction, FluidVelocity, ParticleIDs) and the XDMF shows them beside the
  * fluid (a spatial collection per time). One rank only (settings_check). */
 void io_set_grains(const dem_t *d);
 int io_write_snapshot(const char *outdir, int index, const particles_t *p, double time, long step,

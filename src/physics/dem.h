@@ -40,7 +40,7 @@ HD_INLINE real dem_damping(real e, real mstar, real k)
 }
 
 /* The contact time (s) of the linear spring-dashpot, pi / sqrt(k/m* -
- * (gamma / 2m*)^2): the DEM step is a twentieth of it (dem.c). */
+ * (gamma / 2m*)^2): the DEM step is a fiftieth of it (dem.c). */
 HD_INLINE real dem_contact_time(real k, real mstar, real gamma)
 {
     real w2 = k / mstar - (gamma / (R(2.0) * mstar)) * (gamma / (R(2.0) * mstar));

@@ -283,8 +283,8 @@ static int check_dem(struct scene_ctx *c, struct scene *s)
     if (k->placement == DEM_BLOCK) {
         for (int a = 0; a < 3; ++a) {
             double n = k->block_n[a];
-            if (!(n >= 1 && n <= 1e4 && n == floor(n)) || (s->geometry.dim == 2 && a == 2 && n != 1))
-                return scene_fail_at(c, "DEM:block_n", "expected whole numbers from 1 to 10000 (1 along z in 2D), got %g "
+            if (!(n >= 1 && n <= 1e4 && n == floor(n)))
+                return scene_fail_at(c, "DEM:block_n", "expected whole numbers from 1 to 10000, got %g "
                                      "along %c", n, 'x' + a);
         }
         if (!(k->block_spacing >= k->d))
