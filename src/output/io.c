@@ -680,6 +680,9 @@ static void io_write_dem(hid_t file, const dem_t *d)
     io_dem_dataset(g, "FluidVelocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, buf, n, 3,
                    "fluid velocity at the grain, eq. (20)'s interpolation", "m/s");
     io_dem_dataset(g, "ParticleIDs", H5T_STD_I64LE, H5T_NATIVE_INT64, d->id, n, 1, "grain ID", "1");
+    for (size_t i = 0; i < n; ++i) ib[i] = (int)i; /* the XDMF's Polyvertex connectivity (issue 33: without it the
+                                                     * Xdmf3 readers show no cells) */
+    io_dem_dataset(g, "Vertices", H5T_STD_I32LE, H5T_NATIVE_INT, ib, n, 1, "grain k is vertex k", "1");
     H5CHECK(H5Gclose(g));
     free(buf), free(ib);
 }
@@ -751,9 +754,12 @@ static void io_xdmf_grid(FILE *fp, int index, double time, long long n)
     if (!io_grains) return;
     const size_t g = io_grains->n;
     fprintf(fp, "      <Grid Name=\"grains_%05d\" GridType=\"Uniform\">\n"
-                "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" NodesPerElement=\"1\"/>\n"
+                "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" NodesPerElement=\"1\">\n"
+                "          <DataItem Dimensions=\"%zu\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">"
+                "%s:/DEM/Vertices</DataItem>\n        </Topology>\n"
                 "        <Geometry GeometryType=\"XYZ\">\n          <DataItem Dimensions=\"%zu 3\" NumberType=\"Float\""
-                " Precision=\"8\" Format=\"HDF\">%s:/DEM/Coordinates</DataItem>\n        </Geometry>\n", index, g, g, h5name);
+                " Precision=\"8\" Format=\"HDF\">%s:/DEM/Coordinates</DataItem>\n        </Geometry>\n", index, g, g,
+                h5name, g, h5name);
     static const char *const at[6] = {"Velocities", "AngularVelocities", "FluidVelocity", "Diameter", "Contacts",
                                       "FluidFraction"};
     for (int k = 0; k < 6; ++k)
