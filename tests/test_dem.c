@@ -14,6 +14,9 @@
  *  - a grain resting on a plane wall carries its weight: the wall's normal
  *    force equals m g to 1e-6 (the damped contact settles; 1 s is over 1000
  *    contact times) and the overlap is m g / kn;
+ *  - a stack of 4 grains on a wall: the wall carries the stack's weight,
+ *    4 m g to 1e-6, through the grain-grain contacts (each grain keeps its
+ *    contacts with its neighbours, the lowest one the wall's too);
  *  - a grain sliding on a wall with friction (the tangential spring with its
  *    Coulomb limit, and the spin) ends rolling at 5/7 of its sliding speed
  *    (a uniform sphere: friction's impulse J slows it by J/m and spins it
@@ -107,6 +110,22 @@ static void test_resting(void **st)
     dem_free(d);
 }
 
+static void test_stack(void **st)
+{
+    (void)st;
+    wall_geom w = base();
+    dem_t *d = grains(4, 0.5, 0.3, -9.81);
+    for (size_t i = 0; i < 4; ++i) d->x[0][i] = 0.01, d->x[1][i] = 0.0021 + 0.0041 * (double)i; /* apart */
+    for (int s = 0; s < 2000; ++s) dem_advance(d, &w, s * 1e-3, 1e-3);
+    double mg = d->m * 9.81, load = dem_wall_load(d, &w, 0);
+    print_message("stack of 4: wall load %.6e N, 4 m g %.6e N; contacts %d %d %d %d\n", load, 4 * mg, d->ncon[0],
+                  d->ncon[1], d->ncon[2], d->ncon[3]);
+    assert_true(fabs(load - 4 * mg) <= 1e-6 * 4 * mg);
+    assert_true(d->ncon[0] == 2 && d->ncon[1] == 2 && d->ncon[2] == 2 && d->ncon[3] == 1);
+    for (size_t i = 0; i < 4; ++i) assert_true(fabs(d->x[0][i] - 0.01) < 1e-12); /* it stays upright */
+    dem_free(d);
+}
+
 static void test_rolling(void **st)
 {
     (void)st;
@@ -156,6 +175,7 @@ static void test_gamma(void **st)
 int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_restitution), cmocka_unit_test(test_resting),
+                                       cmocka_unit_test(test_stack),
                                        cmocka_unit_test(test_rolling), cmocka_unit_test(test_gamma)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
