@@ -89,14 +89,14 @@ LIBS   := $(HDF5_LIBS) $(CYAML_LIBS) $(METIS_LIBS) $(LDLIBS)
 
 CORE_SRC := src/core/error.c src/core/tuning.c src/scene/scene.c src/scene/scene_yaml.c src/scene/scene_walk.c src/scene/scene_check.c src/scene/scene_write.c src/scene/scene_doc.c src/scene/scene_preset.c src/core/particles.c src/cpu/nbr.c src/cpu/bound.c src/sim/setup.c src/sim/setup_container.c \
             src/cpu/backend_cpu.c src/sim/integrate.c src/output/diag.c src/output/io.c src/output/checkpoint.c \
-            src/output/checkpoint_read.c src/output/checkpoint_keys.c src/output/outdir.c src/sim/stages.c mpi/comm.c mpi/halo.c mpi/decomp.c
+            src/output/checkpoint_read.c src/output/checkpoint_keys.c src/output/outdir.c src/sim/stages.c src/dem/dem.c mpi/comm.c mpi/halo.c mpi/decomp.c
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
 # the driver: the command line, the settings' checks, the run loop and its log (not in the unit tests)
 DRIVER_SRC := src/main.c src/settings_check.c src/run.c src/run_guard.c src/report.c
 DRIVER_OBJ := $(DRIVER_SRC:%.c=$(BUILD)/obj/%.o)
 HEADERS  := $(wildcard src/*.h src/*/*.h mpi/*.h)
 
-UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_stab test_halo test_checkpoint test_stages test_position test_shift test_ksum
+UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_stab test_halo test_checkpoint test_stages test_position test_shift test_ksum test_dem
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
 
 .PHONY: all deps deps-test run test test-slurm unit bench clean format test-mutants

@@ -60,6 +60,7 @@ static void write_snapshot(outputs *o, sim_t *s)
     if (!s->sc->output.snapshots) return;
     if (!s->hcsr) s->be->prepare(s, s->t, 2); /* classes and normals for the record */
     s->be->to_host(s);
+    io_set_grains(s->dem);
     io_write_snapshot(o->dir, o->n, &s->p, s->t, s->step, o->text, o->walls, SPHSEG_VERSION);
     o->times = realloc(o->times, (size_t)(o->n + 1) * sizeof(double));
     o->npart = realloc(o->npart, (size_t)(o->n + 1) * sizeof(long long));

@@ -58,6 +58,15 @@ int settings_check(const struct scene *sc, const char *backend)
 {
     check_output_counts(sc);
     int ndev = check_backend(backend);
+    if (sc->dem.on) { /* issue 58: the grains' GPU passes and their migration between ranks are not built yet */
+        if (comm_size() > 1)
+            input_error("DEM:d: a scene with DEM grains runs on one rank for now (the grains do not cross ranks "
+                        "yet); run it without mpirun, or with -np 1");
+        if (!strcmp(backend, "gpu"))
+            input_error("DEM:d: a scene with DEM grains runs on the CPU backend for now (no GPU passes for the "
+                        "grains yet); run it with --backend cpu or auto");
+        ndev = 0; /* auto: the CPU */
+    }
     if (sc->parallel.axis == AXIS_Z && sc->geometry.dim == 2)
         input_error("Parallel:axis: z is not an axis of a 2D scene (x or y, or auto)");
     const tuning *tu = tuning_get();

@@ -4,12 +4,13 @@
 Each C, CUDA or header file of src/, mpi/ and gpu/ lies in a room; a room may
 include its own files and those of the rooms below it, never above:
 
-    core < physics < mpi < scene < sim < {cpu, gpu} < output < driver
+    core < physics < mpi < scene < dem < sim < {cpu, gpu} < output < driver
 
 - core     src/core/      store, field table, errors, tuning, hd.h, version
 - physics  src/physics/   header-only bodies, CPU and GPU alike
 - mpi      mpi/           decomposition, halo, migration, reductions
 - scene    src/scene/     the key table, the loader, the checks
+- dem      src/dem/       the DEM grains: their store, contacts, sub-cycling, coupling
 - sim      src/sim/       a run's state (sim.h), the stage table, the integrator, setup
 - cpu, gpu src/cpu/, gpu/ the two backends (neither includes the other)
 - output   src/output/    snapshots, XDMF, checkpoints, diagnostics
@@ -27,7 +28,8 @@ import sys
 
 from tools import ROOT
 
-ORDER = {"core": 0, "physics": 1, "mpi": 2, "scene": 3, "sim": 4, "cpu": 5, "gpu": 5, "output": 6, "driver": 7}
+ORDER = {"core": 0, "physics": 1, "mpi": 2, "scene": 3, "dem": 4, "sim": 5, "cpu": 6, "gpu": 6, "output": 7,
+         "driver": 8}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 TOP_MAX = 12  # files at the top of src/ (issue 54)
 

@@ -117,7 +117,8 @@ static void diag_start(diag *d, const char *outdir, const sim_t *s, double small
     diag_check(d, !d->f, "open");
     int bad = old ? diag_keep_rows(d->f, old, s->step)
                   : fprintf(d->f, "step,time,dt,n_material,small_volume,small_volume_drift,kinetic_energy,"
-                                  "max_speed,wall_s,C_min,C_max,n_outflow,small_volume_outflow\n") < 0;
+                                  "max_speed,wall_s,C_min,C_max,n_outflow,small_volume_outflow%s\n",
+                            s->dem ? ",dem_kinetic_energy,dem_exchange_x,dem_exchange_y,dem_exchange_z" : "") < 0;
     diag_check(d, bad || fflush(d->f) != 0, "header");
     free(old);
 }
@@ -146,9 +147,13 @@ void diag_row(diag *d, const sim_t *s)
                     "Segregation:drift_tol = %.3g", s->step, s->t, v.drift, s->sc->segregation.drift_tol);
     }
     if (!d->f) return;
-    int bad = fprintf(d->f, "%ld,%.17g,%.17g,%lld,%.17g,%.17g,%.17g,%.17g,%.6f,%.17g,%.17g,%lld,%.17g\n", s->step,
+    int bad = fprintf(d->f, "%ld,%.17g,%.17g,%lld,%.17g,%.17g,%.17g,%.17g,%.6f,%.17g,%.17g,%lld,%.17g", s->step,
                       s->t, s->dt, v.n_material, v.small_volume, v.drift, v.kinetic_energy, v.max_speed,
                       diag_wall() - d->wall0, v.C_min, v.C_max, v.n_outflow, v.small_outflow) < 0;
+    if (s->dem) /* the grains (one rank): kinetic energy, J; momentum the fluid gave them so far, N s */
+        bad |= fprintf(d->f, ",%.17g,%.17g,%.17g,%.17g", dem_kinetic_energy(s->dem), s->dem->exch[0], s->dem->exch[1],
+                       s->dem->exch[2]) < 0;
+    bad |= fputc('\n', d->f) == EOF;
     diag_check(d, bad || fflush(d->f) != 0, "a row");
 }
 

@@ -630,6 +630,63 @@ hid_t io_select_rows(hid_t fspace, hid_t mspace, uint64_t start, uint64_t count)
     return dxpl;
 }
 
+/* ---- DEM grains (issue 58; one rank) -------------------------------------------- */
+
+static const dem_t *io_grains; /* io_set_grains: the run's grains, or NULL */
+
+void io_set_grains(const dem_t *d) { io_grains = d; }
+
+static void io_dem_dataset(hid_t grp, const char *name, hid_t ftype, hid_t mtype, const void *buf, size_t n, int nc,
+                           const char *desc, const char *units)
+{
+    hsize_t dims[2] = {(hsize_t)n, (hsize_t)nc};
+    hid_t sp, ds;
+    H5CHECK(sp = H5Screate_simple(nc > 1 ? 2 : 1, dims, NULL));
+    H5CHECK(ds = H5Dcreate2(grp, name, ftype, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    if (n > 0) H5CHECK(H5Dwrite(ds, mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf));
+    io_attr_string(ds, "Description", desc);
+    io_attr_string(ds, "Units", units);
+    H5CHECK(H5Dclose(ds));
+    H5CHECK(H5Sclose(sp));
+}
+
+/* The group /DEM: the grains in ID order (their store's order). */
+static void io_write_dem(hid_t file, const dem_t *d)
+{
+    hid_t g;
+    size_t n = d->n;
+    double *buf = malloc((n ? n : 1) * 3 * sizeof(double));
+    int *ib = malloc((n ? n : 1) * sizeof(int));
+    if (!buf || !ib) error_exit(1, "out of memory writing %zu grains", n);
+    H5CHECK(g = H5Gcreate2(file, "DEM", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    double *const *vec[3] = {d->x, d->v, d->w};
+    static const char *const vname[3] = {"Coordinates", "Velocities", "AngularVelocities"};
+    static const char *const vdesc[3] = {"grain centre", "grain velocity", "grain angular velocity"};
+    static const char *const vunit[3] = {"m", "m/s", "rad/s"};
+    for (int k = 0; k < 3; ++k) {
+        for (size_t i = 0; i < n; ++i)
+            for (int a = 0; a < 3; ++a) buf[3 * i + (size_t)a] = vec[k][a][i];
+        io_dem_dataset(g, vname[k], H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, buf, n, 3, vdesc[k], vunit[k]);
+    }
+    for (size_t i = 0; i < n; ++i) buf[i] = (double)d->c.d;
+    io_dem_dataset(g, "Diameter", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, buf, n, 1, "grain diameter", "m");
+    for (size_t i = 0; i < n; ++i) ib[i] = d->ncon[i];
+    io_dem_dataset(g, "Contacts", H5T_STD_I32LE, H5T_NATIVE_INT, ib, n, 1,
+                   "contacts of the grain (with grains and walls) at the last DEM step", "1");
+    io_dem_dataset(g, "FluidFraction", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, d->eps, n, 1,
+                   "fluid fraction at the grain, eq. (20) of Markauskas et al. 2016", "1");
+    for (size_t i = 0; i < n; ++i)
+        for (int a = 0; a < 3; ++a) buf[3 * i + (size_t)a] = d->uf[a][i];
+    io_dem_dataset(g, "FluidVelocity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, buf, n, 3,
+                   "fluid velocity at the grain, eq. (20)'s interpolation", "m/s");
+    io_dem_dataset(g, "ParticleIDs", H5T_STD_I64LE, H5T_NATIVE_INT64, d->id, n, 1, "grain ID", "1");
+    for (size_t i = 0; i < n; ++i) ib[i] = (int)i; /* the XDMF's Polyvertex connectivity (issue 33: without it the
+                                                     * Xdmf3 readers show no cells) */
+    io_dem_dataset(g, "Vertices", H5T_STD_I32LE, H5T_NATIVE_INT, ib, n, 1, "grain k is vertex k", "1");
+    H5CHECK(H5Gclose(g));
+    free(buf), free(ib);
+}
+
 int io_write_snapshot(const char *outdir, int index, const particles_t *p, double time, long step,
                       const char *scene_text, const char *walls, const char *code_version)
 {
@@ -647,6 +704,7 @@ int io_write_snapshot(const char *outdir, int index, const particles_t *p, doubl
     hid_t file = io_create_file(tmp, 0, (double)ntot * row + text);
     io_write_header(file, p->dim, time, step, ntot, scene_text, walls, code_version);
     io_write_particles(file, p, ntot);
+    if (io_grains) io_write_dem(file, io_grains);
     io_close_file(file);
     io_commit(tmp, path, 1);
     io_forget_tmp();
@@ -671,6 +729,9 @@ static void io_xdmf_grid(FILE *fp, int index, double time, long long n)
 {
     char h5name[32];
     snprintf(h5name, sizeof h5name, "snapshot_%05d.h5", index);
+    if (io_grains) /* the fluid and the grains side by side, one time */
+        fprintf(fp, "      <Grid Name=\"step_%05d\" GridType=\"Collection\" CollectionType=\"Spatial\">\n"
+                    "      <Time Value=\"%.17g\"/>\n", index, time);
     fprintf(fp, "      <Grid Name=\"snapshot_%05d\" GridType=\"Uniform\">\n", index);
     fprintf(fp, "        <Time Value=\"%.17g\"/>\n", time);
     fprintf(fp,
@@ -690,6 +751,23 @@ static void io_xdmf_grid(FILE *fp, int index, double time, long long n)
         fprintf(fp, geom ? "        </Geometry>\n" : "        </Attribute>\n");
     }
     fprintf(fp, "      </Grid>\n");
+    if (!io_grains) return;
+    const size_t g = io_grains->n;
+    fprintf(fp, "      <Grid Name=\"grains_%05d\" GridType=\"Uniform\">\n"
+                "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" NodesPerElement=\"1\">\n"
+                "          <DataItem Dimensions=\"%zu\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">"
+                "%s:/DEM/Vertices</DataItem>\n        </Topology>\n"
+                "        <Geometry GeometryType=\"XYZ\">\n          <DataItem Dimensions=\"%zu 3\" NumberType=\"Float\""
+                " Precision=\"8\" Format=\"HDF\">%s:/DEM/Coordinates</DataItem>\n        </Geometry>\n", index, g, g,
+                h5name, g, h5name);
+    static const char *const at[6] = {"Velocities", "AngularVelocities", "FluidVelocity", "Diameter", "Contacts",
+                                      "FluidFraction"};
+    for (int k = 0; k < 6; ++k)
+        fprintf(fp, "        <Attribute Name=\"%s\" AttributeType=\"%s\" Center=\"Node\">\n          <DataItem "
+                    "Dimensions=\"%zu%s\" NumberType=\"%s\" Precision=\"%d\" Format=\"HDF\">%s:/DEM/%s</DataItem>\n"
+                    "        </Attribute>\n", at[k], k < 3 ? "Vector" : "Scalar", g, k < 3 ? " 3" : "",
+                k == 4 ? "Int" : "Float", k == 4 ? 4 : 8, h5name, at[k]);
+    fprintf(fp, "      </Grid>\n      </Grid>\n");
 }
 
 /* Rank 0 writes OUTDIR/snapshots.xmf.tmp: 0, or 1 (cannot open it) or 2

@@ -29,6 +29,7 @@
  * functions return 0. */
 #ifndef SPHSEG_IO_H
 #define SPHSEG_IO_H
+#include "dem/dem.h"
 #include "core/particles.h"
 
 enum io_type { IO_REAL = 0, IO_UINT8 = 1, IO_INT64 = 2, IO_CREAL = 3 }; /* CREAL: creal (hd.h) */
@@ -56,6 +57,11 @@ extern const int io_nfields;
  * rank (scene_text and walls may be NULL: stored as ""). walls names the
  * container's wall primitives, which the Wall field indexes ("1 base,
  * 2 xlo, ..."), in the header attribute Walls. */
+/* The run's DEM grains (src/dem/dem.h; NULL: none): each snapshot then has
+ * the group /DEM (Coordinates, Velocities, AngularVelocities, Diameter,
+ * Contacts, FluidFraction, FluidVelocity, ParticleIDs) and the XDMF shows them beside the
+ * fluid (a spatial collection per time). One rank only (settings_check). */
+void io_set_grains(const dem_t *d);
 int io_write_snapshot(const char *outdir, int index, const particles_t *p, double time, long step,
                       const char *scene_text, const char *walls, const char *code_version);
 

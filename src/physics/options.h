@@ -42,4 +42,10 @@ enum kin_type { KIN_REST = 0, KIN_OSCILLATORY_SHEAR = 1, KIN_COMPUTED = 2 };
  * previous step's corrector, one rate evaluation a step (docs/method.md). */
 enum run_integrator { INTEGRATOR_PREDICTOR_CORRECTOR = 0, INTEGRATOR_LEAPFROG = 1 };
 
+/* DEM:coupling (src/physics/dem.h, src/dem/dem.c): one_way, the grains feel
+ * the fluid (drag, eq. 19-23) and the fluid does not feel them; two_way, the
+ * fluid also takes the interaction source (14), its fluid fraction (15-16) in
+ * the momentum and the superficial density (the DEM paper's eq. 6). */
+enum dem_coupling { DEM_ONE_WAY = 0, DEM_TWO_WAY = 1 };
+
 #endif

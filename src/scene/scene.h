@@ -48,6 +48,9 @@ enum cwall_shape { CWALL_SEGMENT = 0, CWALL_CYLINDER = 1, CWALL_ENDS = 2 };
 enum cwall_motion { CWALL_FIXED = 0, CWALL_TRANSLATING = 1, CWALL_TURNING = 2 };
 /* a cylinder's material: inside it (a drum) or outside (a post, an obstacle) */
 enum cwall_side { CWALL_INSIDE = 0, CWALL_OUTSIDE = 1 };
+/* DEM:placement and DEM:motion (src/dem/dem.c). */
+enum dem_place { DEM_SINGLE = 0, DEM_BLOCK = 1 };
+enum dem_motion { DEM_FREE = 0, DEM_RIGID = 1, DEM_FIXED = 2 };
 enum region_shape { REGION_BOX = 0, REGION_SECTOR = 1, REGION_FILL = 2, REGION_COLUMN = 3 };
 
 /* The most walls and regions a container lists (the end walls of 3D take
@@ -82,6 +85,7 @@ enum { SCENE_WALLS_MAX = 10, SCENE_REGIONS_MAX = 32 };
 #define SCENE_NOT_KEYS_parallel
 #define SCENE_NOT_KEYS_outlet
 #define SCENE_NOT_KEYS_container
+#define SCENE_NOT_KEYS_dem int on; /* DEM:d > 0: the scene has grains */
 
 #define SCENE_KEYS_ROWS_ONLY /* the rows, not the names of the enumerated keys (libcyaml's) */
 #include "scene_keys_undef.h"

@@ -204,7 +204,7 @@ static int check_models(struct scene_ctx *c, const struct scene *s)
     if (vel == KIN_COMPUTED && box)
         return scene_fail_at(c, "Kinematics:velocity",
                              "computed needs Geometry:type column or drum (the shear box's walls are prescribed)");
-    if (!s->segregation.enabled && vel != KIN_COMPUTED)
+    if (!s->segregation.enabled && vel != KIN_COMPUTED && !(s->dem.d > 0)) /* DEM grains are solved */
         return scene_fail_at(c, "Segregation:enabled", "off with prescribed velocity leaves nothing to solve");
     if (!(s->grains.d_small < s->grains.d_large))
         return scene_fail_at(c, "Grains:d_large", "must be larger than Grains:d_small");
@@ -261,13 +261,52 @@ static int check_openings(struct scene_ctx *c, const struct scene *s)
     return 0;
 }
 
+/* DEM grains (DEM:d > 0): a Newtonian fluid with computed flow, 3D or 2D,
+ * no periodic axis (the grains' images are not made yet), the placement's
+ * keys whole and inside the container's extent. */
+static int check_dem(struct scene_ctx *c, struct scene *s)
+{
+    struct scene_dem *k = &s->dem;
+    k->on = k->d > 0;
+    if (!k->on) return 0;
+    if (s->material.model != MAT_NEWTONIAN)
+        return scene_fail_at(c, "DEM:d", "grains need a fluid: Material:model newtonian");
+    /* one_way: the fluid may be held at rest (Kinematics:velocity rest), the fluid of eq. (27) */
+    if (s->kinematics.velocity != KIN_COMPUTED && (s->kinematics.velocity != KIN_REST || k->coupling != DEM_ONE_WAY))
+        return scene_fail_at(c, "Kinematics:velocity", "DEM grains need computed flow, or rest with DEM:coupling one_way");
+    if (s->geometry.dim != 3)
+        return scene_fail_at(c, "DEM:d", "grains are spheres in a 3D fluid: needs Geometry:dim 3");
+    if (s->geometry.periodic != PERIODIC_NONE)
+        return scene_fail_at(c, "Geometry:periodic", "DEM grains do not cross a periodic axis yet; use walls");
+    double ext[3];
+    scene_extent(s, ext);
+    if (k->placement == DEM_BLOCK) {
+        for (int a = 0; a < 3; ++a) {
+            double n = k->block_n[a];
+            if (!(n >= 1 && n <= 1e4 && n == floor(n)))
+                return scene_fail_at(c, "DEM:block_n", "expected whole numbers from 1 to 10000, got %g "
+                                     "along %c", n, 'x' + a);
+        }
+        if (!(k->block_spacing >= k->d))
+            return scene_fail_at(c, "DEM:block_spacing", "%.4g m is less than DEM:d %.4g m", k->block_spacing, k->d);
+    }
+    for (int a = 0; a < 3 && s->geometry.type != GEOM_CONTAINER; ++a) {
+        double lo = k->placement == DEM_BLOCK ? k->block_origin[a] : k->at[a];
+        double hi = k->placement == DEM_BLOCK ? lo + (k->block_n[a] - 1) * k->block_spacing : lo;
+        if (lo - 0.5 * k->d < 0 || hi + 0.5 * k->d > ext[a])
+            return scene_fail_at(c, k->placement == DEM_BLOCK ? "DEM:block_origin" : "DEM:at",
+                                 "a grain reaches outside the container along %c (0 to %.4g m)", 'x' + a, ext[a]);
+    }
+    return 0;
+}
+
 /* The checks across keys, in this order; the first that fails is reported. */
 int scene_check_special(struct scene_ctx *c, struct scene *s)
 {
     const char *backend = s->run.backend ? s->run.backend : "";
     int vel = s->kinematics.velocity;
     if (check_geometry(c, &s->geometry) || check_container(c, s) || check_models(c, s) || check_vectors(c, s) ||
-        check_openings(c, s))
+        check_openings(c, s) || check_dem(c, s))
         return -1;
     if (s->geometry.periodic != PERIODIC_NONE && vel != KIN_COMPUTED)
         return scene_fail_at(c, "Geometry:periodic", "needs Kinematics:velocity computed");

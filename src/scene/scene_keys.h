@@ -68,6 +68,9 @@ static const cyaml_strval_t cwall_motions[] = {
 static const cyaml_strval_t cwall_sides[] = {{"inside", CWALL_INSIDE}, {"outside", CWALL_OUTSIDE}};
 static const cyaml_strval_t region_shapes[] = {
     {"box", REGION_BOX}, {"sector", REGION_SECTOR}, {"fill", REGION_FILL}, {"column", REGION_COLUMN}};
+static const cyaml_strval_t dem_couplings[] = {{"one_way", DEM_ONE_WAY}, {"two_way", DEM_TWO_WAY}};
+static const cyaml_strval_t dem_places[] = {{"single", DEM_SINGLE}, {"block", DEM_BLOCK}};
+static const cyaml_strval_t dem_motions[] = {{"free", DEM_FREE}, {"rigid", DEM_RIGID}, {"fixed", DEM_FIXED}};
 enum { ALWAYS, IF_CONSTANT, IF_SHEAR_RATE, NO_RANGE }; /* which Segregation:model checks a range */
 enum { CLOSED = 0, LO_OPEN = 1, HI_OPEN = 2 };          /* bound kinds, ORed */
 #endif
@@ -395,3 +398,35 @@ SECTION("Container", container, scene_container)
     KL("Container", container, scene_container, regions, scene_region, region_entry, SCENE_REGIONS_MAX,
       "Geometry:type container: where the material starts, a list of boxes, sectors and fills, each with its C (Container:regions:K keys below)")
 END_SECTION(container)
+/* DEM grains in a Newtonian fluid (Markauskas et al. 2016; src/dem/dem.c,
+ * src/physics/dem.h): present when d > 0. */
+SECTION("DEM", dem, scene_dem)
+    KF("DEM", dem, scene_dem, d, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "grain diameter, m; 0 (default): no grains. A scene with grains needs Material:model newtonian, one rank, the CPU backend")
+    KF("DEM", dem, scene_dem, rho, OPT, "1200", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "grain density, kg/m^3; default 1200 (the DEM paper's block, §8)")
+    KE("DEM", dem, scene_dem, coupling, enum dem_coupling, dem_couplings, "two_way",
+      "one_way (the grains feel the fluid, eqs. 19-23; the fluid not the grains) | two_way (also the interaction source 14 and the fluid fraction 15-16 in the fluid's momentum); default two_way")
+    KF("DEM", dem, scene_dem, kn, OPT, "1000", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
+      "normal contact stiffness, N/m; default 1000 (a numerical choice: the DEM step is t_c / 20)")
+    KF("DEM", dem, scene_dem, kt, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "tangential contact stiffness, N/m; 0 (default): 2/7 kn, the ratio that gives the normal and tangential oscillations one period")
+    KF("DEM", dem, scene_dem, e, OPT, "0.9", 0, 1, LO_OPEN, ALWAYS,
+      "normal restitution coefficient (0, 1], which sets the normal damping; default 0.9")
+    KF("DEM", dem, scene_dem, mu, OPT, "0.3", 0, INFINITY, HI_OPEN, ALWAYS,
+      "Coulomb friction coefficient of a contact (grain-grain and grain-wall); default 0.3")
+    KF("DEM", dem, scene_dem, t_damp, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "s: gravity on the grains grows over this time by eqs. (3)-(4); 0 (default): at once")
+    KE("DEM", dem, scene_dem, placement, enum dem_place, dem_places, "single",
+      "single (one grain at DEM:at) | block (a lattice of block_n grains, spacing block_spacing, from block_origin); default single")
+    KV("DEM", dem, scene_dem, at, 3, "[0, 0, 0]",
+      "single: the grain's centre (x, y, z), m")
+    KV("DEM", dem, scene_dem, block_n, 3, "[1, 1, 1]",
+      "block: grains along x, y, z (whole numbers >= 1; 1 along z in 2D)")
+    KF("DEM", dem, scene_dem, block_spacing, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "block: distance between neighbouring grains' centres, m, >= d")
+    KV("DEM", dem, scene_dem, block_origin, 3, "[0, 0, 0]",
+      "block: the centre of its grain of lowest x, y, z, m")
+    KE("DEM", dem, scene_dem, motion, enum dem_motion, dem_motions, "free",
+      "free (each grain its own) | rigid (the grains translate as one body: the block of §8) | fixed (held in place: the porous block of §7); default free")
+END_SECTION(dem)

@@ -649,4 +649,6 @@ void setup_contexts(sim_t *s)
     st->seg_cap = g->scheme == SEG_SCHEME_CONSERVATIVE && g->limiter == SEG_LIMITER_DONOR;
     st->outlet = sc->outlet.enabled;
     st->outlet_below = sc->outlet.below;
+    const double gv[3] = {sc->physics.gravity[0], sc->physics.gravity[1], sc->physics.gravity[2]};
+    s->dem = dem_create(sc, (double)s->seg.k.h, (double)s->flow.rho, (double)s->flow.nu, (double)s->flow.m.K, gv);
 }

@@ -7,6 +7,7 @@
 #define SPHSEG_SIM_H
 #include "mpi/halo.h"
 #include "core/particles.h"
+#include "dem/dem.h"
 #include "physics/flow.h"
 #include "physics/kin.h"
 #include "physics/seg_kern.h"
@@ -124,6 +125,7 @@ typedef struct sim {
     size_t n_material; /* material particles (set by setup; all ranks together) */
     long long out_n;   /* Outlet: material particles that left the run through it, on this rank */
     double out_cv;     /* Outlet: their sum C_i V_i (diagnostics: inside plus outflow is conserved) */
+    dem_t *dem;        /* the DEM grains (DEM:d > 0; src/dem/dem.h), or NULL */
     unsigned gate;     /* bit k: the dummies of gate primitive k (flow.w.prim[k].open_at >= 0) are still in the store */
 } sim_t;
 

@@ -1,0 +1,78 @@
+/* dem/dem.h — DEM grains in the SPH fluid (issue 58; Markauskas et al. 2016):
+ * the grains' own store, their contacts and sub-cycled motion, and the
+ * coupling with the fluid's particles. A room between the scene and the
+ * simulation (docs/architecture.md, "DEM grains"): the integrator
+ * (src/sim/integrate.c) calls dem_couple after each evaluation of the fluid's
+ * rates and dem_advance after each fluid step; the bodies are
+ * src/physics/dem.h. A scene without grains has no dem_t (NULL). */
+#ifndef SPHSEG_DEM_DEM_H
+#define SPHSEG_DEM_DEM_H
+#include <stddef.h>
+#include <stdint.h>
+#include "core/particles.h"
+#include "physics/dem.h"
+#include "physics/wall.h"
+#include "scene/scene.h"
+
+enum { DEM_CMAX = 16 }; /* contacts a grain keeps (12 touch a sphere in the densest packing; walls add 3) */
+
+typedef struct dem {
+    dem_params c;
+    int coupling, motion; /* enum dem_coupling, enum dem_motion */
+    size_t n;             /* grains */
+    double *x[3], *v[3], *w[3]; /* centre (m), velocity (m/s), angular velocity (rad/s) */
+    double *fint[3];      /* the interaction force of eq. (23) at the last coupling, N */
+    double *uf[3], *eps;  /* fluid velocity (eq. 20's interpolation) and fluid fraction (20) at each grain */
+    double *snorm;        /* sum_a V_a W_ai, the denominator of eq. (14) */
+    int64_t *id;          /* grain IDs 0..n-1 */
+    int *ncon;            /* contacts of each grain */
+    int64_t *cid;         /* [n][DEM_CMAX] partner: a grain's ID, or -1 - k for wall primitive k */
+    double *cxi;          /* [n][DEM_CMAX][3] the tangential springs' elongation (the history), m */
+    int *ncon2;           /* the spare lists a DEM step writes while it reads the last step's */
+    int64_t *cid2;
+    double *cxi2;
+    double V, m, I;       /* a grain's volume (m^3), mass (kg), moment of inertia (kg m^2) */
+    double dt;            /* the DEM step: the contact time / 20, s */
+    double rho_f, nu, K, h; /* the fluid's density, kinematic viscosity, bulk modulus; the kernel's h */
+    double g[3], t_damp;
+    double exch[3];       /* the momentum the fluid gave the grains so far, int sum_i F_int dt, N s */
+    double *eps_f;        /* the fluid fraction at each fluid particle (15-16), the last coupling's */
+    double *deps_f;       /* its rate following the fluid particle, 1/s */
+    size_t eps_cap;
+    /* the coupling's cell grid (cells of at least 2h and d): grains and fluid particles by cell */
+    double lo[3], cell;
+    int nc[3];
+    size_t *gstart, *gidx, *fstart, *fidx, ncell_cap, fidx_cap;
+} dem_t;
+
+/* The grains of the scene (sc->dem.on), at rest, or NULL when it has none.
+ * h: the fluid's smoothing length; rho_f, nu, K: its density, kinematic
+ * viscosity and bulk modulus; g: gravity. */
+dem_t *dem_create(const struct scene *sc, double h, double rho_f, double nu, double K, const double g[3]);
+void dem_free(dem_t *d);
+/* n grains at the origin, at rest, eps 1 (dem_create's first step; tests);
+ * then d->c (d, rho, kn, kt, mu) and dem_derive(d, e) for mass, damping
+ * and the DEM step from the restitution e. */
+dem_t *dem_alloc(size_t n);
+void dem_derive(dem_t *d, double e);
+
+/* The coupling at the fluid's present state p (after its rates): the fluid
+ * fraction at the fluid particles (15-16) and at the grains (20), the fluid
+ * velocity at the grains, the interaction forces (19-23); two_way: the
+ * source (14), -eps grad p and div(eps tau) and the superficial density's
+ * pressure rate added to the fluid's acc and dsig. t: the time of p. */
+void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double visc_norm);
+
+/* The grains from t to t + dt in steps of at most d->dt: contacts with
+ * each other and the walls w, gravity (3-4), the interaction force (23)
+ * with the drag at the present grain velocity. */
+void dem_advance(dem_t *d, const wall_geom *w, double t, double dt);
+
+/* The grains' kinetic energy (translation and rotation), J. */
+double dem_kinetic_energy(const dem_t *d);
+
+/* The normal force the walls w carry from grain i now (overlap and
+ * velocity as they are), N. */
+double dem_wall_load(const dem_t *d, const wall_geom *w, size_t i);
+
+#endif
