@@ -118,7 +118,7 @@ static void gpu_mem_report(sim_t *s, gpu_t *g)
     gpu_mem_use(&before, &peak);
     const double n = g->n ? (double)g->n : 1.0, c = (double)g->cap / n, all = (double)(peak - before) / n;
     const double store = c * (double)part_store_bytes(&g->d), spare = c * (double)gpu_spare_bytes(&g->d),
-                 list = c * (double)g->nl_cap * sizeof(unsigned);
+                 list = c * (double)g->nl_cap * (double)gpu_nl_esize(g); /* 0 for the cells form */
     message("gpu memory: peak %.3f GB in use (%.3f GB before the run's first allocation), %.0f bytes a particle over "
             "%zu particles (rank 0): store %.0f (%d of %d fields), permutation spares %.0f, neighbour list %.0f, "
             "other scratch %.0f", 1e-9 * (double)peak, 1e-9 * (double)before, all, g->n, store,

@@ -42,18 +42,33 @@ template <int F> static void gpu_classify_f(gpu_t *g, const sph_ctx *kc)
     });
     for (int pass = 0; pass < 2; ++pass)
         each(g, g->ncell, [=] __device__(size_t c) { type[c] = bound_cell_type(&v, type, mat, c, pass); });
-    each(g, n, [=] __device__(size_t i) {
-        const grid_view w = view_as<F>(v);
-        bound_sums s;
-        p.bclass[i] = (uint8_t)bound_class_first(i, &p, &w, &k, type, sums ? &sums[i] : &s);
-    });
-    each(g, n, [=] __device__(size_t i) {
-        particles_t q = p;
-        const grid_view w = view_as<F>(v);
-        bound_sums s; /* without the stored sums, gathered again: the same loop over x, vol, kind */
-        if (!sums) s = bound_gather(i, &q, &w, &k);
-        cls[i] = (unsigned char)bound_class_second(i, &q, &w, &k, type, sums ? &sums[i] : &s);
-    });
+    /* Two kernels per case, not one choosing &sums[i] or a local inside the
+     * lambda: so written, the list form's first sweep (nvcc 13.0, sm_90)
+     * left sums[] unwritten, and the paper scheme's classes, normals and psi~
+     * came out wrong (psi~ NaN) under the list alone (list16 and cells right). */
+    if (sums) { /* the sums kept between the sweeps (the HCSR schemes: every step) */
+        each(g, n, [=] __device__(size_t i) {
+            const grid_view w = view_as<F>(v);
+            p.bclass[i] = (uint8_t)bound_class_first(i, &p, &w, &k, type, &sums[i]);
+        });
+        each(g, n, [=] __device__(size_t i) {
+            particles_t q = p;
+            const grid_view w = view_as<F>(v);
+            cls[i] = (unsigned char)bound_class_second(i, &q, &w, &k, type, &sums[i]);
+        });
+    } else { /* none kept: the second sweep gathers them again (the same loop over x, vol, kind) */
+        each(g, n, [=] __device__(size_t i) {
+            const grid_view w = view_as<F>(v);
+            bound_sums s;
+            p.bclass[i] = (uint8_t)bound_class_first(i, &p, &w, &k, type, &s);
+        });
+        each(g, n, [=] __device__(size_t i) {
+            particles_t q = p;
+            const grid_view w = view_as<F>(v);
+            const bound_sums s = bound_gather(i, &q, &w, &k);
+            cls[i] = (unsigned char)bound_class_second(i, &q, &w, &k, type, &s);
+        });
+    }
     CK(cudaMemcpyAsync(p.bclass, cls, n, cudaMemcpyDeviceToDevice, g->st));
     prof_end(g->st, P_CLASSIFY);
 }

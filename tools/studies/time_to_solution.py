@@ -144,6 +144,10 @@ SCENE_FLOW = ["Flow:stabilization=riemann", "Flow:bed_damping=1", "Flow:gradient
               "Flow:shifting=fickian", "Segregation:every=auto"]
 # Run:preset's sets that are rows of the planner (src/scene/scene_keys.h holds them; keep the two alike)
 PRESETS = {"fast": {"Material:E": 3e4, "Run:cfl_flow": 0.2}, "converged": {"Material:E": 1e5, "Run:cfl_flow": 0.2}}
+# Run:integrator leapfrog's rate over the predictor-corrector's on the 1.1e7 3D drum, the scenes' flow at E 10 kPa,
+# chi 0.2, single (1.728e8 against 1.029e8 particle-steps/s, one H200, 2026-11-29: docs/performance.md "One
+# evaluation a step", tools/bench/drum_rates.sh); the fast preset runs it (src/scene/scene_preset.c)
+LEAPFROG_RATE = 1.728e8 / 1.029e8
 TTS_DRUM = {"dr": 0.00025, "length": 0.1, "particles": 1.12e7}  # the drum the hours were measured on at dr 0.25 mm
 
 
@@ -203,6 +207,10 @@ def cmd_plan(a):
                           ", ".join("%+.1f %%" % (-100 * q["speed_err"]) for q in coarse) or "-"))
     print("cost: %.3g GPU-hours per revolution (one H100, single build; measured %.4g h at dr %g mm, scaled by "
           "(dr_measured / dr)^4)" % (h * a.length / ref["length"], r["hours"], r["dr"] * 1e3))
+    if preset == ["fast"]:
+        print("  with the preset's Run:integrator leapfrog: about %.3g GPU-hours (the hours above over its measured "
+              "rate ratio %.2f; accuracy cost within 0.4 %% on the 2D drums, docs/performance.md)"
+              % (h * a.length / ref["length"] / LEAPFROG_RATE, LEAPFROG_RATE))
     print("source row: %s\n  %s" % (r["label"], r["source"]))
     return 0
 
