@@ -148,6 +148,7 @@ PRESETS = {"fast": {"Material:E": 3e4, "Run:cfl_flow": 0.2}, "converged": {"Mate
 # chi 0.2, single (1.728e8 against 1.029e8 particle-steps/s, one H200, 2026-11-29: docs/performance.md "One
 # evaluation a step", tools/bench/drum_rates.sh); the fast preset runs it (src/scene/scene_preset.c)
 LEAPFROG_RATE = 1.728e8 / 1.029e8
+RAW_DATA_MOVE = "b1945a9"  # the commit that took the studies' raw data out of docs/data (docs/CHANGELOG.md)
 TTS_DRUM = {"dr": 0.00025, "length": 0.1, "particles": 1.12e7}  # the drum the hours were measured on at dr 0.25 mm
 
 
@@ -212,6 +213,9 @@ def cmd_plan(a):
               "rate ratio %.2f; accuracy cost within 0.4 %% on the 2D drums, docs/performance.md)"
               % (h * a.length / ref["length"] / LEAPFROG_RATE, LEAPFROG_RATE))
     print("source row: %s\n  %s" % (r["label"], r["source"]))
+    gone = sorted({m for m in re.findall(r"docs/data/[\w./-]+", r["source"]) if not os.path.exists(os.path.join(ROOT, m))})
+    if gone:  # the raw data left the tree with the docs' move (b1945a9): in git history
+        print("  (%s: in git history, e.g. git show %s^:%s)" % (", ".join(gone), RAW_DATA_MOVE, gone[0]))
     return 0
 
 
