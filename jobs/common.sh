@@ -125,7 +125,8 @@ SCALING_COLUMNS=mode,ranks,particles,steps,wall_s,particle_steps_per_s,halo_s,io
 # corrected gradient and shifting); "fast", "converged" and "paper", the
 # presets of that name (Run:preset, docs/guide.md "Presets": fast and converged
 # are the drum scenes' flow at E 30 kPa and 0.1 MPa, chi 0.2, within 2.4 % and
-# 0.9 % of the converged drum at dr 0.5 mm); "monaghan_soft", the paper's
+# 0.9 % of the converged drum at dr 0.5 mm; fast with Run:integrator
+# leapfrog, one flow evaluation a step); "monaghan_soft", the paper's
 # monaghan at E 10 kPa, alpha 3.162, chi 0.2, the sweeps' "fast" until
 # issue 56 (it does not converge in dr: kept to compare with older sweeps).
 sphseg_settings_args() {
