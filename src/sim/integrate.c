@@ -50,7 +50,8 @@ static int lf_fresh(const sim_t *s)
  * Gamma^{n+1/2} by O(dt^3): second order, as the predictor–corrector. The
  * same rule for x (its rate u), u, sigma (return-mapped after each stage)
  * and C, so the bodies, stages and hooks are the predictor–corrector's and
- * shifting (in save_start) and the Shepard filter work unchanged. Chosen
+ * the Shepard filter works unchanged; the shift rides in the midpoint flow
+ * pass (below). Chosen
  * over kick–drift–kick and Verlet because the one flow pass gives du/dt
  * and dsigma/dt at the same state: a symplectic (staggered) update of the
  * u–sigma wave needs grad u after the kick, a second pass. On the linear
