@@ -28,7 +28,7 @@ HD_INLINE bound_sums bound_gather(size_t i, const particles_t *p, const grid_vie
         real xij[3];
         real r2 = grid_pair(k->dim, p->x, i, j, xij);
         if (r2 >= k->support2) continue;
-        real r = (real)sqrt((double)r2);
+        real r = sqrt_r(r2);
         real w = kernel_w(r, k->h, k->alpha) * p->vol[j];
         real f = kernel_f(r, k->h, k->alpha) * p->vol[j];
         int dum = p->kind[j] == KIND_DUMMY;
@@ -56,7 +56,7 @@ HD_INLINE int bound_is_surface(size_t i, const particles_t *p, const grid_view *
         real xji[3];
         real r2 = grid_pair(k->dim, p->x, j, i, xji);
         if (r2 >= k->support2) continue;
-        real r = (real)sqrt((double)r2);
+        real r = sqrt_r(r2);
         if (r >= sq2 * k->h) {
             real t[3] = {xji[0] - k->h * a[0], xji[1] - k->h * a[1], xji[2] - k->h * a[2]};
             if (sph_norm(t) < k->h * k->h) surface = 0;
@@ -95,7 +95,7 @@ HD_INLINE int bound_near_free(size_t i, const particles_t *p, const grid_view *g
         real xij[3];
         real r2 = grid_pair(k->dim, p->x, i, j, xij);
         if (r2 >= k->support2) continue;
-        real r = (real)sqrt((double)r2);
+        real r = sqrt_r(r2);
         if (r < lim) near = 1;
         real f = kernel_f(r, k->h, k->alpha) * p->vol[j];
         for (int d = 0; d < 3; ++d) nf[d] -= f * xij[d];

@@ -36,7 +36,7 @@ HD_INLINE real dem_volume(real d) { return R(M_PI / 6.0) * d * d * d; }
 HD_INLINE real dem_damping(real e, real mstar, real k)
 {
     real le = (real)log((double)e);
-    return -R(2.0) * le * (real)sqrt((double)(mstar * k)) / (real)sqrt((double)(R(M_PI * M_PI) + le * le));
+    return -R(2.0) * le * sqrt_r(mstar * k) / sqrt_r(R(M_PI * M_PI) + le * le);
 }
 
 /* The contact time (s) of the linear spring-dashpot, pi / sqrt(k/m* -
@@ -44,7 +44,7 @@ HD_INLINE real dem_damping(real e, real mstar, real k)
 HD_INLINE real dem_contact_time(real k, real mstar, real gamma)
 {
     real w2 = k / mstar - (gamma / (R(2.0) * mstar)) * (gamma / (R(2.0) * mstar));
-    return R(M_PI) / (real)sqrt((double)w2);
+    return R(M_PI) / sqrt_r(w2);
 }
 
 /* The force on grain i of one contact (§2): normal unit n (from the partner
@@ -65,7 +65,7 @@ HD_INLINE real dem_contact(const dem_params *c, const real n[3], real delta, con
     real xn = xi[0] * n[0] + xi[1] * n[1] + xi[2] * n[2];
     for (int a = 0; a < 3; ++a) xi[a] += -xn * n[a] + vt[a] * dt; /* into the contact plane, then the slip */
     real ft[3] = {-c->kt * xi[0], -c->kt * xi[1], -c->kt * xi[2]};
-    real ftm = (real)sqrt((double)(ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2])), lim = c->mu * fn;
+    real ftm = sqrt_r(ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2]), lim = c->mu * fn;
     if (ftm > lim && ftm > 0) { /* sliding: the spring held at the Coulomb limit */
         real s = lim / ftm;
         for (int a = 0; a < 3; ++a) ft[a] *= s, xi[a] = -ft[a] / c->kt;
@@ -97,11 +97,11 @@ HD_INLINE void dem_gravity(real V, const real g[3], real rho_f, real rho_s, real
  * d^2 u |u| eps^(2 - chi) / 8 (N). Zero at u = 0. */
 HD_INLINE void dem_drag(real d, real rho_f, real nu, real eps, const real u[3], real F[3])
 {
-    real um = (real)sqrt((double)(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]));
+    real um = sqrt_r(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
     F[0] = F[1] = F[2] = 0;
     if (!(um > 0)) return;
     real Re = eps * um * d / nu;
-    real cd = R(0.63) + R(4.8) / (real)sqrt((double)Re);
+    real cd = R(0.63) + R(4.8) / sqrt_r(Re);
     cd *= cd;
     real l = R(1.5) - (real)log10((double)Re);
     real chi = R(3.7) - R(0.65) * (real)exp((double)(-l * l / R(2.0)));

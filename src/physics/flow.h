@@ -77,7 +77,7 @@ HD_INLINE real flow_bed_q(const real s[6], real k)
 {
     const real p = stress_pressure(s);
     if (!(p > 0)) return R(1.0);
-    return (real)sqrt((double)stress_J2(s)) / (k * p);
+    return sqrt_r(stress_J2(s)) / (k * p);
 }
 
 /* The pressure diffusion's coefficient flow_ctx.pdiff (mom_pdiff) from the
@@ -145,7 +145,7 @@ HD_INLINE void flow_wall_team(size_t d, particles_t *p, const grid_view *g, cons
         real xdm[3];
         real r2 = grid_pair(k->dim, p->x, d, m, xdm);
         if (r2 >= k->support2) continue;
-        real W = kernel_w((real)sqrt((double)r2), k->h, k->alpha);
+        real W = kernel_w(sqrt_r(r2), k->h, k->alpha);
         real um[3] = {p->v[0][m], p->v[1][m], p->v[2][m]};
         real sm[6] = {p->sig[0][m], p->sig[1][m], p->sig[2][m], p->sig[3][m], p->sig[4][m], p->sig[5][m]};
         wall_add(&ws, W, p->vol[m], c->rho * p->vol[m], um, sm, geff, xdm);
@@ -249,7 +249,7 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
         real r2 = grid_pair_xi(k->dim, xi, p->x, j, xij);
         if (r2 >= k->support2) continue;
         if (!SPH_EARLY_LOADS) flow_load_j(p, j, uj, sj, &volj);
-        const real r = (real)sqrt((double)r2);
+        const real r = sqrt_r(r2);
         real f = kernel_f(r, k->h, k->alpha);
         if (sh) shift_pair_add(&ss, sh, r, r2, f, volj, xij, uj, sj, ui, si);
         if (renorm && p->kind[j] == KIND_MATERIAL) seg_renorm_add(m, k->dim, -f * volj, xij);
@@ -308,7 +308,7 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
     for (int d = 0; d < 3; ++d) p->acc[d][i] = a[d] + c->g[d] - c->damping * p->v[d][i];
     p->gdot[i] = stress_shear_rate(eps);
     real a2 = p->acc[0][i] * p->acc[0][i] + p->acc[1][i] * p->acc[1][i] + p->acc[2][i] * p->acc[2][i];
-    return (real)sqrt((double)a2);
+    return sqrt_r(a2);
 }
 
 HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
@@ -416,7 +416,7 @@ HD_INLINE void flow_shepard_team(size_t i, particles_t *p, const grid_view *g, c
         real r2 = grid_pair(k->dim, p->x, i, j, xij);
         if (r2 >= k->support2) continue;
         real sj[6] = {p->sig[0][j], p->sig[1][j], p->sig[2][j], p->sig[3][j], p->sig[4][j], p->sig[5][j]};
-        const real W = kernel_w((real)sqrt((double)r2), k->h, k->alpha);
+        const real W = kernel_w(sqrt_r(r2), k->h, k->alpha);
         shepard_add(acc, &wsum, W, sj);
         if (mls) flow_mls_add(mo, s1, W, xij, inv_h, sj);
     NBR_END

@@ -61,7 +61,7 @@ HD_INLINE real mom_riemann(real eta, real cs, real rho, const real uij[3], const
 {
     real ux = uij[0] * xij[0] + uij[1] * xij[1] + uij[2] * xij[2];
     if (ux >= 0 || r2 <= 0) return 0;
-    real dU = -ux / (real)sqrt((double)r2);
+    real dU = -ux / sqrt_r(r2);
     real beta = wall || eta * dU >= cs ? cs : eta * dU;
     return -beta * dU / rho;
 }
@@ -80,7 +80,7 @@ HD_INLINE real mom_riemann(real eta, real cs, real rho, const real uij[3], const
 HD_INLINE real mom_pdiff(real dp, real V_j, real f, real r2, real eta2, int riemann)
 {
     real w = -f * V_j * dp;
-    return riemann ? w * (real)sqrt((double)r2) : w * r2 / (r2 + eta2);
+    return riemann ? w * sqrt_r(r2) : w * r2 / (r2 + eta2);
 }
 
 /* Adds the pair j to the acceleration of i, eq. (3.9):
@@ -118,7 +118,7 @@ HD_INLINE real mom_visc_lattice(int dim, real h, real dr)
         for (int b = -n; b <= n; ++b)
             for (int c = dim == 3 ? -n : 0; c <= (dim == 3 ? n : 0); ++c) {
                 real r2 = dr * dr * (real)(a * a + b * b + c * c);
-                if (r2 > 0) s -= vol * kernel_f((real)sqrt((double)r2), h, alpha) * r2;
+                if (r2 > 0) s -= vol * kernel_f(sqrt_r(r2), h, alpha) * r2;
             }
     return s / (real)dim;
 }

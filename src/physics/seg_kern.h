@@ -98,7 +98,7 @@ HD_INLINE seg_rate seg_rate_hcsr(size_t i, const particles_t *p, const grid_view
         real xij[3];
         real r2 = grid_pair(k->dim, p->x, i, j, xij);
         if (r2 >= k->support2) continue;
-        real r = (real)sqrt((double)r2);
+        real r = sqrt_r(r2);
         real f = kernel_f(r, k->h, k->alpha) * p->vol[j];
         real grad[3] = {f * xij[0], f * xij[1], f * xij[2]};
         if (p->kind[j] == KIND_DUMMY) {
@@ -173,7 +173,7 @@ HD_INLINE void seg_moment_team(size_t i, const particles_t *p, const grid_view *
         real xij[3];
         real r2 = grid_pair(k->dim, p->x, i, j, xij);
         if (r2 >= k->support2) continue;
-        real w = -kernel_f((real)sqrt((double)r2), k->h, k->alpha) * p->vol[j];
+        real w = -kernel_f(sqrt_r(r2), k->h, k->alpha) * p->vol[j];
         seg_renorm_add(m, k->dim, w, xij);
     NBR_END
     team_sum(m, 6, nlanes);
@@ -292,7 +292,7 @@ HD_INLINE seg_rate seg_rate_conservative(size_t i, const particles_t *p, const g
         if (r2 >= k->support2) continue;
         if (!SPH_EARLY_LOADS) seg_load_j(p, j, c->limiter, Lj, cqdv);
         real Cj = cqdv[0], Qj = cqdv[1], Dj = cqdv[2], volj = cqdv[3];
-        real r = (real)sqrt((double)r2);
+        real r = sqrt_r(r2);
         real w = kernel_f(r, k->h, k->alpha) * volj;
         real lx[3] = {xij[0], xij[1], xij[2]};
         if (c->renorm) seg_Lbar(Li, Lj, xij, lx);

@@ -99,7 +99,7 @@ HD_INLINE void shift_finish(size_t i, particles_t *p, const shift_ctx *c, real d
     team_sum(a->gu, 9, nlanes);
     team_sum(a->gs, 18, nlanes);
     if (lane != 0) return;
-    const real speed = (real)sqrt((double)(ui[0] * ui[0] + ui[1] * ui[1] + ui[2] * ui[2]));
+    const real speed = sqrt_r(ui[0] * ui[0] + ui[1] * ui[1] + ui[2] * ui[2]);
     const real D = c->A * k->h * speed * dt;
     const real dr[3] = {-D * a->gc[0], -D * a->gc[1], -D * a->gc[2]};
     if (a->div < c->div_free) return; /* at a free surface: not shifted */
@@ -127,7 +127,7 @@ HD_INLINE void shift_team(size_t i, particles_t *p, const grid_view *g, const sh
         real xij[3];
         real r2 = grid_pair_xi(k->dim, xi, p->x, j, xij);
         if (r2 >= k->support2) continue;
-        const real r = (real)sqrt((double)r2), f = kernel_f(r, k->h, k->alpha);
+        const real r = sqrt_r(r2), f = kernel_f(r, k->h, k->alpha);
         const real uj[3] = {p->v[0][j], p->v[1][j], p->v[2][j]};
         const real sj[6] = {p->sig[0][j], p->sig[1][j], p->sig[2][j], p->sig[3][j], p->sig[4][j], p->sig[5][j]};
         shift_pair_add(&a, c, r, r2, f, p->vol[j], xij, uj, sj, ui, si);

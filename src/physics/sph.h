@@ -35,7 +35,7 @@ HD_INLINE void sph_unit(real v[3], real scale)
         v[0] = v[1] = v[2] = 0;
         return;
     }
-    real s = R(1.0) / (real)sqrt((double)n2);
+    real s = R(1.0) / sqrt_r(n2);
     v[0] *= s;
     v[1] *= s;
     v[2] *= s;

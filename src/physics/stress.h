@@ -37,7 +37,7 @@ HD_INLINE void stress_moduli(real E, real nu, real *G, real *K)
 /* Elastic sound speed sqrt((K + 4G/3)/rho), m/s (the c_s of 3.10 and 3.19). */
 HD_INLINE real stress_sound_speed(real G, real K, real rho)
 {
-    return (real)sqrt((double)((K + R(4.0) / R(3.0) * G) / rho));
+    return sqrt_r((K + R(4.0) / R(3.0) * G) / rho);
 }
 
 /* p = -tr(sigma)/3, Pa, positive in compression. */
@@ -58,11 +58,11 @@ HD_INLINE real stress_shear_rate(const real e[6])
     real v = (e[0] + e[1] + e[2]) / R(3.0);
     real d0 = e[0] - v, d1 = e[1] - v, d2 = e[2] - v;
     real ee = d0 * d0 + d1 * d1 + d2 * d2 + R(2.0) * (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]);
-    return (real)sqrt((double)(R(2.0) * ee));
+    return sqrt_r(R(2.0) * ee);
 }
 
 /* k_mu = 3 mu / sqrt(9 + 12 mu^2), eq. (2.12). */
-HD_INLINE real stress_kmu(real mu) { return R(3.0) * mu / (real)sqrt((double)(R(9.0) + R(12.0) * mu * mu)); }
+HD_INLINE real stress_kmu(real mu) { return R(3.0) * mu / sqrt_r(R(9.0) + R(12.0) * mu * mu); }
 
 /* Regularized mu(I), eq. (2.14): mu_s + (mu_d - mu_s) gdot /
  * (I0 sqrt(p / (rho_s d^2)) + sqrt(gdot^2 + lambda^2)); finite at gdot = 0
@@ -80,12 +80,12 @@ HD_INLINE real stress_mu(const mat_params *m, real gdot, real p, real davg)
 {
     real pp = p > 0 ? p : R(0.0);
     if (m->pr_IN1 > 0 && pp > 0) {
-        real I = (real)sqrt((double)(gdot * gdot + m->lambda * m->lambda)) * davg / (real)sqrt((double)(pp / m->rho_s));
+        real I = sqrt_r(gdot * gdot + m->lambda * m->lambda) * davg / sqrt_r(pp / m->rho_s);
         if (I < m->pr_IN1)
-            return I > 0 ? (real)sqrt((double)(m->pr_alpha / (real)log((double)(m->pr_A / I)))) : R(0.0);
+            return I > 0 ? sqrt_r(m->pr_alpha / (real)log((double)(m->pr_A / I))) : R(0.0);
     }
-    real den = m->I0 * (real)sqrt((double)(pp / (m->rho_s * davg * davg))) +
-               (real)sqrt((double)(gdot * gdot + m->lambda * m->lambda));
+    real den = m->I0 * sqrt_r(pp / (m->rho_s * davg * davg)) +
+               sqrt_r(gdot * gdot + m->lambda * m->lambda);
     if (!(den > 0)) return m->mu_s; /* lambda = 0 at gdot = 0, p = 0: the unregularized limit */
     return m->mu_s + (m->mu_d - m->mu_s) * gdot / den;
 }
@@ -172,7 +172,7 @@ HD_INLINE int stress_return_map(real s[6], real kmu)
         for (int c = 0; c < 6; ++c) s[c] = 0;
         return 2;
     }
-    real tau = (real)sqrt((double)stress_J2(s));
+    real tau = sqrt_r(stress_J2(s));
     if (tau <= kmu * p) return 0;
     real r = kmu * p / tau;
     for (int c = 0; c < 3; ++c) s[c] = -p + r * (s[c] + p);
@@ -214,7 +214,7 @@ HD_INLINE int stress_return_yield(real s[6], int yield, real mu)
 /* Time step of (3.19): chi_CFL min(sqrt(h / a_max), h / c_s), s. */
 HD_INLINE real stress_dt(real chi, real h, real amax, real cs)
 {
-    real a = amax > 0 ? (real)sqrt((double)(h / amax)) : (real)1e30;
+    real a = amax > 0 ? sqrt_r(h / amax) : (real)1e30;
     real b = h / cs;
     return chi * (a < b ? a : b);
 }

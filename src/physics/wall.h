@@ -116,7 +116,7 @@ HD_INLINE int wall_prim_normal(const wall_prim *q, const real x[3], real n[3])
     n[0] = n[1] = n[2] = 0;
     if (q->shape == WALL_CYLINDER) {
         real dx = q->p[0] - x[0], dy = q->p[1] - x[1];
-        real r = (real)sqrt((double)(dx * dx + dy * dy));
+        real r = sqrt_r(dx * dx + dy * dy);
         if (q->outside) r = -r;
         if (r != 0) n[0] = dx / r, n[1] = dy / r;
     } else {
@@ -137,7 +137,7 @@ HD_INLINE real wall_prim_depth(const wall_prim *q, const real x[3])
 {
     if (q->shape == WALL_CYLINDER) {
         real dx = q->p[0] - x[0], dy = q->p[1] - x[1];
-        real d = (real)sqrt((double)(dx * dx + dy * dy)) - q->radius;
+        real d = sqrt_r(dx * dx + dy * dy) - q->radius;
         return q->outside ? -d : d;
     }
     return -(q->n[0] * (x[0] - q->p[0]) + q->n[1] * (x[1] - q->p[1]) + q->n[2] * (x[2] - q->p[2]));

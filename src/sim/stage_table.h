@@ -53,7 +53,8 @@ const stage stage_table[] = {
     {ST_EXCHANGE, H(HOOK_PREPARE), "halo_exchange, nbr_build", 0, 0, RANGE_ALL, 0, 0, 0, FLD_X | FLD_XR | FLD_XN},
     /* classes are decisions: the owners' bits, whatever a ghost's summation order */
     {ST_CLASSIFY, H(HOOK_PREPARE), "bound_classify", 0, 0, RANGE_ALL, NB_GEOM, FLD_BCLASS | FLD_NRM | FLD_PSI, 1, 0},
-    {ST_RENORM, H(HOOK_PREPARE), "seg_renorm", SF_SEG | SF_RENORM, 0, RANGE_ALL, NB_GEOM, FLD_L, 0, 0},
+    /* not with windows: their dC/dt reads the L of ST_WIN_RENORM, made at the window's close */
+    {ST_RENORM, H(HOOK_PREPARE), "seg_renorm", SF_SEG | SF_RENORM, SF_WIN, RANGE_ALL, NB_GEOM, FLD_L, 0, 0},
     /* each prepare: B follows the positions; the ghosts' from their own support (ghost depth 4h) */
     {ST_KGC, H(HOOK_PREPARE), "flow_kgc_team", SF_FLOW | SF_KGC, 0, RANGE_ALL, NB_GEOM, FLD_B, 0, 0},
     {ST_SHEPARD, H(HOOK_FILTER), "flow_shepard", SF_FLOW, 0, RANGE_OWNED, FLD_X | FLD_KIND | FLD_SIG, FLD_DSIG, 0,
