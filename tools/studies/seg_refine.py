@@ -1,0 +1,456 @@
+#!/usr/bin/env python3
+"""The segregation under refinement (issue 57 item 1): what sets the concentration's resolution error
+on the 2D drums, factor by factor.
+
+  python3 -m tools.studies.seg_refine commands [--sphseg BIN] [--out DIR] [--script FILE] [--tiny]
+  bash FILE                                                  (one device call: runs, analyses, deletes snapshots)
+  python3 -m tools.studies.seg_refine analyse RUNDIR --json FILE [--rc RC] [--log LOG]   (the script calls it)
+  python3 -m tools.studies.seg_refine table FILE.json... [--csv docs/data/drum/seg_refine.csv]
+  python3 -m tools.studies.seg_refine chart [--csv ...] [--png docs/data/drum/seg_refine.png]
+
+The runs. The scenes (inputs/drum_2d_EV.yml, drum_2d_EN.yml) with their flow (riemann, bed damping 1,
+the corrected gradient, Fickian shifting, C in windows `every auto`) at E 10 kPa, chi 0.2, the
+predictor-corrector (as the issue's 3-7 % were measured), Output:dt 2 s, at dr 1.0, 0.5 and 0.25 mm.
+Each variant changes one existing key against the baseline `base`:
+  every1    Segregation:every=1        the windows (and the window's time average of the shear rate)
+  limnone   Segregation:limiter=none   the donor limiter
+  const     Segregation:model=constant, V=1e-4 m/s, D=2e-8 m^2/s: V and D free of the shear rate
+            (no key gives a constant D beside V = chi_V gdot d; this one removes both dependences;
+            V h / D = 3.75 at dr 0.5 mm against the shear-rate model's chi_V h / (chi_D d_avg) = 7.2)
+  shift05   Flow:shift_coeff=0.5       the shifting's strength (the disorder it leaves and its drift of
+            particles, which carry C unchanged), against the scenes' 2
+  bd3       Flow:bed_damping=3         the bed's shear-rate noise (what damps it), against 1
+  chiD2     Segregation:chi_D=0.0614   twice the physical diffusion: a numerical diffusion that sets the
+            error would matter half as much
+  fill      Geometry:fill moved by one lattice row at dr 1.0 and 0.25 mm (FILL below) so that the
+            three beds' areas agree within 0.6 % (base: 5 % EV, 3.2 % EN)
+The initial state is well mixed (C_below = C_above), so its "interface" is the bed's free surface on
+the lattice and the wall's gap: the bed's area (its mass) is first order in dr and jumps by a row of
+the fill line (FILL's comment); every run's JSON has the volume at t = 0.
+
+Budget (one H200, double build; rates measured alone in docs/validation.md "Rotating drums": EV
+8e5 steps in 149 s at dr 0.5 mm = 5.4e3 steps/s, 1.6e6 in 460 s at 0.25 mm = 3.5e3; EN 5.2e3 and
+2.6e3; dr 1.0 mm taken as 6e3, launch-bound). dt = chi 1.5 dr / c_s, c_s = 3.0 m/s at E 10 kPa:
+1e-4, 5e-5, 2.5e-5 s at dr 1.0, 0.5, 0.25 mm, so 1e4, 2e4, 4e4 steps per simulated second.
+  dr 0.25 mm to 10 s (4e5 steps):  EV base 115 s (t_end 20 allowed, 230 s), EN base 150 s,
+                                   EV fill 115 s (t_end 20 allowed), EV shift05 115 s, EV limnone 115 s
+  dr 0.5 mm to 20 s (4e5 steps):   EV base 75 s, EN base 78 s
+  dr 1.0 mm to 40 s (4e5 steps):   EV base, EN base, EV fill, EN fill 67 s each
+  variants to 10 s:                EV x 6 at dr 0.5 (37 s each) and 1.0 (17 s), EN shift05 and
+                                   limnone at both: 432 s
+  total about 1.5e3 s of one process alone (up to 1.8e3 where the t_end 20 runs get there), run SLOTS (default 6) at a time on the one GPU within
+  BUDGET (default 470 s) of wall: the runs are small and launch-bound, so they share the GPU, but
+  how well is not measured. Every run is therefore started in the order above with
+  Run:max_wall_time = the time left less 45 s (it writes a checkpoint and stops cleanly) and one
+  that would get under 40 s is skipped: what the call cannot finish comes back as shorter series
+  (the table compares resolutions only at the times both reached). CPU runs are not used: a dr
+  1.0-mm drum runs about 40 steps/s on 2 threads (this development machine), 1e4 steps per second
+  of simulated time. Output under $OUT: one JSON (series, profiles) and the log tail per run, about
+  0.2 MB each; the snapshots are deleted after each analysis.
+
+analyse (on the device, numpy, h5py, PyYAML; scipy's cKDTree where present, else a grid): per
+snapshot, through tools.analysis.drum_analysis.Drum: dynamic angle, surface speed on the
+mid-chord, segregation index, C range, the mid-chord profiles (speed, shear rate, C; 120 points),
+the material's volume, the bed's shear-rate noise (the volume-weighted mean shear rate of particles
+that move with the drum to within 5 % of the wall speed and lie more than 2h from the wall and the
+surface line, and its share of the bed's sum of V gdot, which drives the segregation flux there)
+and the particle disorder (interior particles, up to 3000 of them: the nearest neighbour's
+distance over dr, mean and standard deviation, and the standard deviation of the kernel sum
+sum_j V_j W_ij).
+
+table: per drum and variant, at each time both resolutions reached, the index change and the RMS
+of the mid-chord C profiles' difference (on d_mc / R over the shorter profile) for dr 1.0 -> 0.5
+and 0.5 -> 0.25 mm, the shear-rate profile's relative RMS change, the observed order where three
+resolutions meet, and the factor's share: 1 - |change with the variant| / |change of base| at the
+same pair and time (1: switching the factor removes the resolution change; 0: no effect; negative:
+the variant changes more).
+chart: the index against dr per variant, and the index change per refinement step.
+"""
+import argparse
+import csv
+import glob
+import json
+import math
+import os
+import sys
+import time
+
+from tools import ROOT
+
+CSV = os.path.join(ROOT, "docs", "data", "drum", "seg_refine.csv")
+PNG = os.path.join(ROOT, "docs", "data", "drum", "seg_refine.png")
+FLOW = ["Material:E=1e4", "Run:cfl_flow=0.2", "Output:dt=2", "Output:diag_dt=0.25", "Run:progress_s=60"]
+VARIANTS = {
+    "base": [],
+    "every1": ["Segregation:every=1"],
+    "limnone": ["Segregation:limiter=none"],
+    "const": ["Segregation:model=constant", "Segregation:V=1e-4", "Segregation:D=2e-8"],
+    "shift05": ["Flow:shift_coeff=0.5"],
+    "bd3": ["Flow:bed_damping=3"],
+    "chiD2": ["Segregation:chi_D=0.0614"],
+    "fill": [],  # Geometry:fill from FILL
+}
+# The bed's area is N dr^2 of the lattice points inside R - dr/2 below the fill line (src/sim/setup.c,
+# drum_disc): against the segment's exact area EV 0.9466, 0.9877, 0.9966 and EN 0.9579, 0.9894, 0.9899 at
+# dr 1.0, 0.5, 0.25 mm (the wall's gap of dr/2 and the rows' quantisation of the fill line). The variant
+# "fill" moves the fill line by one row where that brings the bed's area to the dr 0.5-mm one's:
+# EV 0.9909, (0.9877), 0.9854; EN 0.9866, (0.9894), (0.9899); where no fill is given it is base's run.
+FILL = {("EV", 0.001): 0.422857, ("EV", 0.00025): 0.418571, ("EN", 0.001): 0.594286}
+# (drum, variant, dr m, t_end s), in the order they start (the long ones first; see the budget above)
+RUNS = [("EV", "base", 0.00025, 20), ("EN", "base", 0.00025, 10), ("EV", "base", 0.0005, 20),
+        ("EV", "base", 0.001, 40), ("EV", "fill", 0.00025, 20), ("EV", "shift05", 0.00025, 10),
+        ("EN", "base", 0.0005, 20), ("EN", "base", 0.001, 40), ("EV", "fill", 0.001, 40), ("EN", "fill", 0.001, 40),
+        ("EV", "limnone", 0.00025, 10)] + \
+       [("EV", v, dr, 10) for v in ("shift05", "limnone", "every1", "const", "bd3", "chiD2")
+        for dr in (0.0005, 0.001)] + \
+       [("EN", v, dr, 10) for v in ("shift05", "limnone") for dr in (0.0005, 0.001)]
+
+
+def label_of(drum, var, dr):
+    return "%s_%s_dr%g" % (drum, var, dr * 1e3)
+
+
+# ---------------------------------------------------------------- commands
+
+def commands(a):
+    runs = RUNS
+    if a.tiny:  # the local check: dr 2 mm, 0.2 s, snapshots every 0.1 s, every run once
+        runs = [(d, v, 0.002, 0.2) for d, v in dict.fromkeys((d, v) for d, v, _, _ in RUNS)]
+        FILL.update({("EV", 0.002): 0.43, ("EN", 0.002): 0.6})
+    lines = ["#!/bin/bash",
+             "# seg_refine: issue 57 item 1, one device call (written by python3 -m tools.studies.seg_refine "
+             "commands). Run from the repository root:",
+             "#   OUT=... SLOTS=6 BUDGET=470 bash THIS   (defaults below)",
+             "set -u",
+             "SPHSEG=${SPHSEG:-%s}" % a.sphseg,
+             "OUT=${OUT:-%s}" % a.out,
+             "SLOTS=${SLOTS:-%d}" % (2 if a.tiny else 6),
+             "BUDGET=${BUDGET:-%d}" % (3000 if a.tiny else 470),
+             "BACKEND=${BACKEND:-%s}" % ("cpu" if a.tiny else "gpu"),
+             "PY=${PY:-python3}",
+             "export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1}",
+             "T0=$(date +%s)",
+             'mkdir -p "$OUT/res" "$OUT/runs"',
+             "one() {  # LABEL SCENE ARGS...: run, analyse, delete the snapshots",
+             "  local label=$1 scene=$2; shift 2",
+             "  local left=$((T0 + BUDGET - 45 - $(date +%s)))",
+             '  if [ "$left" -lt 40 ]; then echo "skipped: ${left} s left" > "$OUT/res/$label.skipped"; return; fi',
+             "  local t1=$(date +%s)",
+             '  "$SPHSEG" "$scene" --backend "$BACKEND" -o "$OUT/runs/$label" -P Run:max_wall_time=$left "$@" '
+             '> "$OUT/runs/$label.log" 2>&1',
+             "  local rc=$? t2=$(date +%s)",
+             '  tail -n 25 "$OUT/runs/$label.log" > "$OUT/res/$label.log"',
+             '  $PY -m tools.studies.seg_refine analyse "$OUT/runs/$label" --json "$OUT/res/$label.json" '
+             '--rc $rc --wall $((t2 - t1)) --log "$OUT/runs/$label.log" >> "$OUT/res/$label.log" 2>&1',
+             '  rm -f "$OUT/runs/$label"/*.h5',
+             '  echo "$label rc $rc wall $((t2 - t1)) s, done at $(( $(date +%s) - T0 )) s"',
+             "}",
+             "started=0"]
+    for drum, var, dr, t_end in runs:
+        keys = FLOW + ["Geometry:dr=%g" % dr, "Run:t_end=%g" % t_end] + VARIANTS[var]
+        if var == "fill":
+            keys.append("Geometry:fill=%g" % FILL[(drum, 0.002 if a.tiny else dr)])
+        if a.tiny:
+            keys = [{"Output:dt=2": "Output:dt=0.1", "Output:diag_dt=0.25": "Output:diag_dt=0.05"}.get(k, k) for k in keys]
+        lab = label_of(drum, var, dr)
+        lines.append('while [ "$(jobs -rp | wc -l)" -ge "$SLOTS" ]; do wait -n; done')
+        lines.append("one %s inputs/drum_2d_%s.yml %s &" % (lab, drum, " ".join("-P '%s'" % k for k in keys)))
+        lines.append("sleep 1")
+    lines += ["wait", 'echo "all done at $(( $(date +%s) - T0 )) s"', 'ls "$OUT/res" | wc -l', 'du -sh "$OUT"']
+    text = "\n".join(lines) + "\n"
+    if a.script:
+        with open(a.script, "w") as f:
+            f.write(text)
+        os.chmod(a.script, 0o755)
+        print("wrote %s (%d runs)" % (a.script, len(runs)), file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+
+
+# ---------------------------------------------------------------- analyse
+
+class GridTree:
+    """scipy.spatial.cKDTree's query_ball_point on a uniform grid, for machines without scipy."""
+
+    def __init__(self, x):
+        import numpy as np
+        self.np, self.x, self.r = np, np.asarray(x), None
+
+    def _build(self, r):
+        np = self.np
+        self.r = r
+        self.ij = np.floor(self.x / r).astype(np.int64)
+        self.cells = {}
+        for k, key in enumerate(map(tuple, self.ij)):
+            self.cells.setdefault(key, []).append(k)
+
+    def query_ball_point(self, p, r):
+        np = self.np
+        if self.r != r:
+            self._build(r)
+        i, j = (int(math.floor(p[0] / r)), int(math.floor(p[1] / r)))
+        idx = [k for di in (-1, 0, 1) for dj in (-1, 0, 1) for k in self.cells.get((i + di, j + dj), ())]
+        if not idx:
+            return []
+        idx = np.array(idx)
+        d = np.hypot(*(self.x[idx] - np.asarray(p)[None, :2]).T)
+        return list(idx[d <= r])
+
+
+def _drum_analysis():
+    try:
+        import scipy.spatial  # noqa: F401
+        tree = "cKDTree"
+    except ImportError:  # drum_analysis imports cKDTree: give it the grid
+        import types
+        sp, sps = types.ModuleType("scipy"), types.ModuleType("scipy.spatial")
+        sps.cKDTree = GridTree
+        sp.spatial = sps
+        sys.modules["scipy"], sys.modules["scipy.spatial"] = sp, sps
+        tree = "grid"
+    from tools.analysis import drum_analysis
+    return drum_analysis, tree
+
+
+def snapshot_metrics(d, om):
+    """The bed's shear-rate noise and the interior's disorder of one drum_analysis.Drum."""
+    import numpy as np
+    x, R, h, dr = d.x, d.R, d.h, d.dr
+    rw = R - np.hypot(x[:, 0], x[:, 1])  # distance from the wall
+    depth = (x - d.M) @ d.n  # below the surface line
+    inner = (rw > 2 * h) & (depth > 2 * h)
+    rigid = np.stack([-om * x[:, 1], om * x[:, 0]], 1)
+    bed = inner & (np.hypot(*(d.v - rigid).T) < 0.05 * abs(om) * R)
+    w = d.vol * d.gdot * (d.C * (1 - d.C))  # V F ~ gdot F: the segregation flux's drive
+    out = {"bed_gdot_mean": float(np.average(d.gdot[bed], weights=d.vol[bed])) if bed.any() else float("nan"),
+           "bed_gdot_p90": float(np.percentile(d.gdot[bed], 90)) if bed.any() else float("nan"),
+           "bed_drive_share": float(w[bed].sum() / w.sum()) if w.sum() > 0 else float("nan"),
+           "bed_volume_share": float(d.vol[bed].sum() / d.vol.sum())}
+    sel = np.flatnonzero(inner)
+    if len(sel) > 3000:
+        sel = np.random.default_rng(1).choice(sel, 3000, replace=False)
+    nn, ks = [], []
+    norm = 7 / (4 * np.pi * h * h)
+    for i in sel:
+        idx = np.asarray(d.tree.query_ball_point(x[i], 2 * h))
+        r = np.hypot(*(x[idx] - x[i]).T)
+        nn.append(np.min(r[r > 0]) / dr if (r > 0).any() else np.nan)
+        q = r / h
+        ks.append(float(np.sum(d.vol[idx] * (1 - q / 2) ** 4 * (2 * q + 1)) * norm))
+    out.update({"nn_mean": float(np.nanmean(nn)) if nn else float("nan"),
+                "nn_std": float(np.nanstd(nn)) if nn else float("nan"),
+                "ksum_mean": float(np.mean(ks)) if ks else float("nan"),
+                "ksum_std": float(np.std(ks)) if ks else float("nan"), "n_interior": int(inner.sum())})
+    return out
+
+
+def analyse(a):
+    import numpy as np
+    res = {"label": os.path.basename(os.path.normpath(a.rundir)), "rc": a.rc, "wall_s": a.wall, "series": [],
+           "profiles": {}}
+    try:
+        da, res["tree"] = _drum_analysis()
+        from tools.analysis import snap
+        par = da.used_params(a.rundir)
+        g, s = par["Geometry"], par["Segregation"]
+        res.update({"dr": float(g["dr"]), "fill": float(g["fill"]), "E": float(par["Material"]["E"]),
+                    "chi": float(par["Run"]["cfl_flow"]), "every": str(s.get("every")),
+                    "limiter": s.get("limiter"), "model": s.get("model"),
+                    "shift_coeff": float(par["Flow"].get("shift_coeff", float("nan"))),
+                    "bed_damping": float(par["Flow"].get("bed_damping", float("nan"))),
+                    "chi_D": float(s.get("chi_D", float("nan"))), "t_end": float(par["Run"]["t_end"])})
+        _, om = da.drum_wall(par)
+        for p in snap.list_snapshots(a.rundir):
+            d = da.Drum(p, par)
+            row = {"t": d.t, "angle": d.angle, "flatness": d.flatness, "speed": d.surface_speed(),
+                   "index": d.segregation_index(), "C_min": float(d.C.min()), "C_max": float(d.C.max()),
+                   "volume": float(d.vol.sum()), "n": int(len(d.C))}
+            if d.t > 0:
+                row.update(snapshot_metrics(d, om))
+                dm, pts = d.midchord()
+                res["profiles"]["%g" % round(d.t, 6)] = {
+                    "d": [round(float(v), 6) for v in dm],
+                    "speed": [round(float(v), 6) for v in d.interp(pts, d.speed)],
+                    "gdot": [round(float(v), 5) for v in d.interp(pts, d.gdot)],
+                    "C": [round(float(v), 6) for v in d.interp(pts, d.C)]}
+            res["series"].append(row)
+        try:
+            dg = snap.read_diagnostics(a.rundir, partial=True)
+            res["drift_max"] = float(np.abs(dg["small_volume_drift"]).max())
+            res["diag_C_min"], res["diag_C_max"] = float(np.min(dg["C_min"])), float(np.max(dg["C_max"]))
+        except Exception as e:  # noqa: BLE001
+            res["diag_error"] = repr(e)
+    except Exception as e:  # noqa: BLE001
+        res["error"] = repr(e)
+    if a.log and os.path.exists(a.log):
+        res["log_done"] = [ln.strip() for ln in open(a.log, errors="replace") if ln.startswith(("done:", "concentr"))]
+    with open(a.json, "w") as f:
+        json.dump(res, f, separators=(",", ":"), allow_nan=True)
+    print("%s: %d snapshots, last t %s, %s" % (res["label"], len(res["series"]),
+                                               res["series"][-1]["t"] if res["series"] else "-",
+                                               res.get("error", "ok")))
+
+
+# ---------------------------------------------------------------- table and chart
+
+def load(files):
+    runs = {}
+    for f in files:
+        r = json.load(open(f))
+        if "error" in r or "dr" not in r:
+            print("skipped %s: %s" % (f, r.get("error", "no parameters")), file=sys.stderr)
+            continue
+        drum, var, _ = r["label"].split("_")
+        r["drum"], r["var"] = drum, var
+        r["t_series"] = {round(s["t"], 6): s for s in r["series"]}
+        runs[(drum, var, round(r["dr"] * 1e3, 4))] = r
+    for (drum, var, dr), r in list(runs.items()):  # fill: base's run where the fill line stays
+        if var == "base" and (drum, round(dr * 1e-3, 8)) not in FILL:
+            runs.setdefault((drum, "fill", dr), r)
+    return runs
+
+
+def prof_rms(pa, pb, key):
+    """RMS over d_mc/R of the difference of two mid-chord profiles (on the shorter's range), and of b's
+    magnitude (for a relative figure)."""
+    import numpy as np
+    da, db = np.array(pa["d"]), np.array(pb["d"])
+    ya, yb = np.array(pa[key], float), np.array(pb[key], float)
+    top = min(da.max(), db.max())
+    q = np.linspace(0, top, 100)
+    fa, fb = np.interp(q, da, ya), np.interp(q, db, yb)
+    ok = np.isfinite(fa) & np.isfinite(fb)
+    return float(np.sqrt(np.mean((fb[ok] - fa[ok]) ** 2))), float(np.sqrt(np.mean(fb[ok] ** 2)))
+
+
+def table(a):
+    runs = load(a.files)
+    rows = []
+    pairs = ((1.0, 0.5), (0.5, 0.25), (2.0, 1.0))
+    for (drum, var, dr), r in sorted(runs.items()):
+        for c, f in pairs:
+            if dr != f or (drum, var, c) not in runs:
+                continue
+            rc = runs[(drum, var, c)]
+            for t in sorted(set(r["t_series"]) & set(rc["t_series"])):
+                if t <= 0:
+                    continue
+                ic, ifn = rc["t_series"][t]["index"], r["t_series"][t]["index"]
+                row = {"drum": drum, "variant": var, "dr_coarse_mm": c, "dr_fine_mm": f, "t_s": t,
+                       "index_coarse": ic, "index_fine": ifn, "index_change_pct": 100 * (ifn - ic) / ic,
+                       "speed_change_pct": 100 * (r["t_series"][t]["speed"] / rc["t_series"][t]["speed"] - 1)}
+                key = "%g" % t
+                if key in r["profiles"] and key in rc["profiles"]:
+                    row["C_rms"] = prof_rms(rc["profiles"][key], r["profiles"][key], "C")[0]
+                    g, gm = prof_rms(rc["profiles"][key], r["profiles"][key], "gdot")
+                    row["gdot_rel_rms"] = g / gm if gm > 0 else float("nan")
+                for k in ("bed_gdot_mean", "bed_drive_share", "ksum_std", "nn_std"):
+                    row[k + "_coarse"] = rc["t_series"][t].get(k, float("nan"))
+                    row[k + "_fine"] = r["t_series"][t].get(k, float("nan"))
+                rows.append(row)
+    # the observed order where three resolutions meet, and each factor's share
+    by = {(r["drum"], r["variant"], r["dr_fine_mm"], r["t_s"]): r for r in rows}
+    for r in rows:
+        prev = by.get((r["drum"], r["variant"], r["dr_coarse_mm"], r["t_s"]))
+        if prev is not None and abs(r["index_fine"] - r["index_coarse"]) > 0:
+            r["order_index"] = math.log2(abs(prev["index_fine"] - prev["index_coarse"])
+                                         / abs(r["index_fine"] - r["index_coarse"]))
+        base = by.get((r["drum"], "base", r["dr_fine_mm"], r["t_s"]))
+        if base is not None and r["variant"] != "base" and base["index_change_pct"] != 0:
+            r["share_index"] = 1 - abs(r["index_change_pct"]) / abs(base["index_change_pct"])
+            if "C_rms" in r and base.get("C_rms"):
+                r["share_C_rms"] = 1 - r["C_rms"] / base["C_rms"]
+    # the variant's effect at fixed dr
+    for r in rows:
+        base = runs.get((r["drum"], "base", r["dr_fine_mm"]))
+        if base and r["t_s"] in base["t_series"]:
+            r["variant_vs_base_fine_pct"] = 100 * (r["index_fine"] / base["t_series"][r["t_s"]]["index"] - 1)
+    fields = ["drum", "variant", "dr_coarse_mm", "dr_fine_mm", "t_s", "index_coarse", "index_fine",
+              "index_change_pct", "C_rms", "gdot_rel_rms", "speed_change_pct", "order_index", "share_index",
+              "share_C_rms", "variant_vs_base_fine_pct", "bed_gdot_mean_coarse", "bed_gdot_mean_fine",
+              "bed_drive_share_coarse", "bed_drive_share_fine", "ksum_std_coarse", "ksum_std_fine",
+              "nn_std_coarse", "nn_std_fine"]
+    os.makedirs(os.path.dirname(os.path.abspath(a.csv)), exist_ok=True)
+    with open(a.csv, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fields)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("%.4g" % r[k] if isinstance(r.get(k), float) else r.get(k, "")) for k in fields})
+    print("wrote %s (%d rows)" % (a.csv, len(rows)))
+    print("%-3s %-8s %-10s %5s %9s %9s %8s %7s %7s %6s %6s" % ("drm", "variant", "dr", "t", "I coarse", "I fine",
+                                                             "dI %", "C rms", "gd rms", "order", "share"))
+    for r in rows:
+        print("%-3s %-8s %4g->%-4g %5g %9.4f %9.4f %+8.2f %7.4f %7.3f %6s %6s" % (
+            r["drum"], r["variant"], r["dr_coarse_mm"], r["dr_fine_mm"], r["t_s"], r["index_coarse"],
+            r["index_fine"], r["index_change_pct"], r.get("C_rms", float("nan")), r.get("gdot_rel_rms", float("nan")),
+            "%.2f" % r["order_index"] if "order_index" in r else "", "%.2f" % r["share_index"]
+            if "share_index" in r else ""))
+    vols = sorted({(d, dr): r["series"][0]["volume"] for (d, v, dr), r in runs.items()
+                   if r["series"] and r["series"][0]["t"] == 0}.items())
+    if vols:
+        print("bed volume at t = 0 (m^2 per m): " + ", ".join("%s dr %g: %.6e" % (d, dr, v) for (d, dr), v in vols))
+
+
+def chart(a):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rows = list(csv.DictReader(open(a.csv)))
+    drums = sorted({r["drum"] for r in rows})
+    fig, ax = plt.subplots(len(drums), 2, figsize=(11, 4 * len(drums)), squeeze=False)
+    for k, drum in enumerate(drums):
+        rs = [r for r in rows if r["drum"] == drum]
+        for var in sorted({r["variant"] for r in rs}, key=lambda v: (v != "base", v)):
+            vs = [r for r in rs if r["variant"] == var]
+            for pair, mk in (("2->1", "^:"), ("1->0.5", "o-"), ("0.5->0.25", "s--")):
+                c, f = map(float, pair.split("->"))
+                p = sorted((r for r in vs if float(r["dr_coarse_mm"]) == c and float(r["dr_fine_mm"]) == f),
+                           key=lambda r: float(r["t_s"]))
+                if not p:
+                    continue
+                t = [float(r["t_s"]) for r in p]
+                ax[k][0].plot(t, [float(r["index_change_pct"]) for r in p], mk, label="%s, dr %s mm" % (var, pair),
+                              lw=2.5 if var == "base" else 1, ms=4)
+                ax[k][1].plot(t, [float(r["C_rms"] or "nan") for r in p], mk, label="%s, dr %s mm" % (var, pair),
+                              lw=2.5 if var == "base" else 1, ms=4)
+        ax[k][0].axhspan(-3, 3, color="0.9")
+        ax[k][1].axhline(0.02, color="0.5", ls=":")
+        ax[k][0].set_ylabel("%s: segregation index change, %%" % drum)
+        ax[k][1].set_ylabel("%s: mid-chord C profile RMS difference" % drum)
+        for j in (0, 1):
+            ax[k][j].set_xlabel("t, s")
+            ax[k][j].grid(alpha=0.3)
+        ax[k][0].legend(fontsize=6, ncol=2)
+    fig.suptitle("The segregation under refinement per variant (2D drums, E 10 kPa, chi 0.2, the scenes' flow; "
+                 "one H200); the targets: 3 %, 0.02", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(a.png, dpi=110)
+    print("wrote %s" % a.png)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="what", required=True)
+    c = sub.add_parser("commands")
+    c.add_argument("--sphseg", default="local/sphseg_gpu")
+    c.add_argument("--out", default="out/seg_refine", help="the runs' root where $OUT is not set (the device sets it)")
+    c.add_argument("--script", help="write the script here (default: stdout)")
+    c.add_argument("--tiny", action="store_true", help="every run at dr 2 mm for 0.2 s, on the CPU (a local check)")
+    n = sub.add_parser("analyse")
+    n.add_argument("rundir")
+    n.add_argument("--json", required=True)
+    n.add_argument("--rc", type=int, default=0)
+    n.add_argument("--wall", type=float, default=float("nan"))
+    n.add_argument("--log")
+    t = sub.add_parser("table")
+    t.add_argument("files", nargs="+")
+    t.add_argument("--csv", default=CSV)
+    h = sub.add_parser("chart")
+    h.add_argument("--csv", default=CSV)
+    h.add_argument("--png", default=PNG)
+    a = ap.parse_args()
+    {"commands": commands, "analyse": analyse, "table": table, "chart": chart}[a.what](a)
+
+
+if __name__ == "__main__":
+    main()
