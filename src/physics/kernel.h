@@ -15,7 +15,7 @@ HD_INLINE real kernel_alpha(int dim, real h)
 /* W(r) for r >= 0, eq. (3.3). */
 HD_INLINE real kernel_w(real r, real h, real alpha)
 {
-    real q = r / h;
+    real q = r * (R(1.0) / h); /* 1/h: a pair loop's invariant, hoisted (a product, not a division, a pair) */
     if (q >= R(2.0)) return R(0.0);
     real a = R(1.0) - R(0.5) * q;
     real a2 = a * a;
@@ -26,10 +26,10 @@ HD_INLINE real kernel_w(real r, real h, real alpha)
  * x_ij = x_i - x_j; finite at r = 0. dW/dr = -5 alpha q (1 - q/2)^3 / h. */
 HD_INLINE real kernel_f(real r, real h, real alpha)
 {
-    real q = r / h;
+    real q = r * (R(1.0) / h);
     if (q >= R(2.0)) return R(0.0);
     real a = R(1.0) - R(0.5) * q;
-    return -R(5.0) * alpha * a * a * a / (h * h);
+    return (-R(5.0) * alpha / (h * h)) * (a * a * a); /* the constant hoisted out of a pair loop */
 }
 
 #endif

@@ -63,7 +63,7 @@ HD_INLINE real mom_riemann(real eta, real cs, real rho, const real uij[3], const
     if (ux >= 0 || r2 <= 0) return 0;
     real dU = -ux / sqrt_r(r2);
     real beta = wall || eta * dU >= cs ? cs : eta * dU;
-    return -beta * dU / rho;
+    return -beta * dU * (R(1.0) / rho); /* 1/rho hoisted out of the pair loop */
 }
 
 /* The pressure diffusion of particle i from the pair j, Pa/s: the rate
@@ -142,7 +142,7 @@ HD_INLINE void mom_accel_add(real a[3], real m_j, const real si[6], real rho_i, 
 HD_INLINE void mom_accel_add_kgc(real a[3], real m_j, const real si[6], const real sj[6], real rho, real Pi,
                                  const real gradW[3], const real gi[3], const real gj[3])
 {
-    const real c = m_j / (rho * rho), mp = m_j * Pi;
+    const real c = m_j * (R(1.0) / (rho * rho)), mp = m_j * Pi; /* 1/rho^2 hoisted */
     a[0] += c * (si[0] * gi[0] + si[3] * gi[1] + si[4] * gi[2] + sj[0] * gj[0] + sj[3] * gj[1] + sj[4] * gj[2]) +
             mp * gradW[0];
     a[1] += c * (si[3] * gi[0] + si[1] * gi[1] + si[5] * gi[2] + sj[3] * gj[0] + sj[1] * gj[1] + sj[5] * gj[2]) +

@@ -78,7 +78,7 @@ HD_INLINE void shift_pair_add(shift_sums *a, const shift_ctx *c, real r, real r2
                               const real uj[3], const real sj[6], const real ui[3], const real si[6])
 {
     const sph_ctx *k = &c->k;
-    const real t = kernel_w(r, k->h, k->alpha) / c->w_dr, t2 = t * t;
+    const real t = kernel_w(r, k->h, k->alpha) * (R(1.0) / c->w_dr), t2 = t * t; /* 1/w_dr hoisted */
     const real cw = V * (R(1.0) + c->R * t2 * t2) * f, vf = V * f;
     a->div -= vf * r2;
     for (int b = 0; b < 3; ++b) {
