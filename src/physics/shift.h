@@ -103,7 +103,11 @@ HD_INLINE void shift_finish(size_t i, particles_t *p, const shift_ctx *c, real d
     const real D = c->A * k->h * speed * dt;
     const real dr[3] = {-D * a->gc[0], -D * a->gc[1], -D * a->gc[2]};
     if (a->div < c->div_free) return; /* at a free surface: not shifted */
-    for (int d = 0; d < k->dim; ++d) p->x_n[d][i] += (preal)dr[d];
+    for (int d = 0; d < 3; ++d) { /* a fixed trip count: the pointer table indexed statically (a runtime
+                                   * bound put the fused flow pass's particles_t on the stack) */
+        if (d >= k->dim) break;
+        p->x_n[d][i] += (preal)dr[d];
+    }
     for (int d = 0; d < 3; ++d)
         p->v_n[d][i] += a->gu[3 * d] * dr[0] + a->gu[3 * d + 1] * dr[1] + a->gu[3 * d + 2] * dr[2];
     for (int q = 0; q < 6; ++q)
