@@ -144,10 +144,13 @@ SCENE_FLOW = ["Flow:stabilization=riemann", "Flow:bed_damping=1", "Flow:gradient
               "Flow:shifting=fickian", "Segregation:every=auto"]
 # Run:preset's sets that are rows of the planner (src/scene/scene_keys.h holds them; keep the two alike)
 PRESETS = {"fast": {"Material:E": 3e4, "Run:cfl_flow": 0.2}, "converged": {"Material:E": 1e5, "Run:cfl_flow": 0.2}}
-# Run:integrator leapfrog's rate over the predictor-corrector's on the 1.1e7 3D drum, the scenes' flow at E 10 kPa,
-# chi 0.2, single (1.728e8 against 1.029e8 particle-steps/s, one H200, 2026-11-29: docs/performance.md "One
-# evaluation a step", tools/bench/drum_rates.sh); the fast preset runs it (src/scene/scene_preset.c)
-LEAPFROG_RATE = 1.728e8 / 1.029e8
+# Run:integrator leapfrog's rate over the predictor-corrector's with which the rows' hours were measured, on the
+# 1.1e7 3D drum, the scenes' flow at E 10 kPa, chi 0.2, single, one H200 (docs/performance.md "One evaluation a step"
+# and "The flow pass's code", tools/bench/drum_rates.sh): a chain of ratios each measured within one device call,
+# 1.728e8 / 1.029e8 (the leapfrog against the predictor-corrector, 2026-11-29) x 1.888e8 / 1.718e8 (the pair loops'
+# square roots and divisors) x 2.200e8 / 1.890e8 (the fused shift's stack frame); the fast preset runs it
+# (src/scene/scene_preset.c)
+LEAPFROG_RATE = (1.728e8 / 1.029e8) * (1.888e8 / 1.718e8) * (2.200e8 / 1.890e8)
 RAW_DATA_MOVE = "b1945a9"  # the commit that took the studies' raw data out of docs/data (docs/CHANGELOG.md)
 TTS_DRUM = {"dr": 0.00025, "length": 0.1, "particles": 1.12e7}  # the drum the hours were measured on at dr 0.25 mm
 
