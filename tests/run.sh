@@ -54,6 +54,8 @@ run_one house "$PYTHON" -m tests.test_house
 run_one plan "$PYTHON" -m tests.test_plan
 run_one preset bash tests/test_preset.sh "$BUILD/sphseg"
 run_one doc_links "$PYTHON" -m tools.dev.doc_links
+# the per-step pair kernels keep no stack frame (ptxas of gpu/gpu_pairs.cu, about 90 s; a skip without nvcc)
+run_one kernel_frames "$PYTHON" -m tools.dev.kernel_frames --check
 run_one mpi_launch bash tests/test_launch.sh "$BUILD/sphseg"
 run_one mpi_halo_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUILD/tests/test_halo"
 run_one checkpoint_3ranks mpirun --oversubscribe --allow-run-as-root -np 3 "$BUILD/tests/test_checkpoint"
