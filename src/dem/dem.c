@@ -417,8 +417,9 @@ static void dem_forces(dem_t *d, const wall_geom *w, size_t i, double t, double 
     dem_force_int(d, i, Fi, NULL);
     for (int q = 0; q < 3; ++q) F[q] = (double)Fg[q] + Fi[q], T[q] = 0;
     int nk = 0;
+    if (d->motion != DEM_RIGID) /* a rigid body's own contacts cancel in its sums */
     DEM_CELLS_BEGIN(d, x, d->gstart, d->gidx, j)
-        if (j == i || d->motion == DEM_RIGID) continue; /* a rigid body's own contacts cancel in its sums */
+        if (j == i) continue;
         double r[3];
         dem_sep(d, x, d->x[0][j], d->x[1][j], d->x[2][j], r);
         double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
@@ -528,8 +529,9 @@ static void dem_substep(dem_t *d, const wall_geom *w, double t, double dt, doubl
     d->cid = d->cid2, d->cxi = d->cxi2, d->ncon = d->ncon2;
     d->cid2 = ocid, d->cxi2 = ocxi, d->ncon2 = oncon;
     dem_period(d, w); /* a grain that crossed a period comes in from the other side */
-    dem_grid(d, NULL);
-#pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN)
+    if (d->motion != DEM_RIGID) dem_grid(d, NULL);
+    /* a rigid body's grains meet only walls: too little work a DEM step for a team */
+#pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN && d->motion != DEM_RIGID)
     for (long i = 0; i < n; ++i)
         dem_forces(d, w, (size_t)i, t, dt, ocid, ocxi, oncon, &F[3 * i], &T[3 * i], &Fi[3 * i]);
     for (long i = 0; i < n; ++i)
