@@ -23,9 +23,13 @@ values are printed:
     the smoothed eps of the outer layers takes off the drag.
 
 CI case (default): 13 x 13 x 13 dr, a block of 13 x 4 x 13 grains, nu =
-1e-4 m^2/s (eta 0.1 Pa s, Re about 10: steady in 0.15 s) and c_s 5 m/s, so
-that it runs in under a minute; tolerance 3 % on U_s against the smoothed-eps
-analytic, and steady (within 0.5 % over the last 0.02 s). --full runs the
+1e-4 m^2/s (eta 0.1 Pa s, Re about 10: steady in 0.15 s), c_s 5 m/s and the
+leapfrog integrator (one coupling a step), so
+that it runs in about a minute; tolerance 3 % on U_s (the mean over the last
+0.04 s; the full case 0.1 s: the fluid's pressure waves move it by a few
+per cent between snapshots) against the smoothed-eps analytic, and steady
+(the window's two halves within 0.5 %; the full case's water, Re 2500,
+keeps its +-3 % waves: 2 % there, over 0.15 s). --full runs the
 scene as it stands (water, 13 x 13 x 24 dr, the paper's 10 layers; minutes)
 and prints the same lines; --analyse DIR reads a run already made.
 
@@ -46,13 +50,13 @@ from tests.containers import run_scene  # noqa: E402
 
 SCENE = os.path.join(HERE, "..", "inputs", "dem_porous_flow.yml")
 RHO_F, G, D, S, DR = 1000.0, 9.81, 0.004, 0.00533, 0.00533
-TOL, TOL_STEADY = 0.03, 0.005
-CI = {"nu": 1e-4, "ny": 13, "layers": 4,
+TOL = 0.03
+CI = {"nu": 1e-4, "ny": 13, "layers": 4, "window": 0.04, "steady": 0.005,
       "over": ["Material:eta=0.1", "Material:E=30000", "Geometry:height=0.06929",
                "Container:regions=[{shape: fill, level: 0.06929, C: 0}]", "DEM:block_n=[13, 4, 13]",
                "DEM:block_origin=[0.002665, 0.026650, 0.002665]", "Initial:pressure=2000",
-               "Run:t_end=0.16", "Output:dt=0.01"]}
-FULL = {"nu": 1e-6, "ny": 24, "layers": 10, "over": []}
+               "Run:t_end=0.16", "Output:dt=0.01", "Run:integrator=leapfrog"]}
+FULL = {"nu": 1e-6, "ny": 24, "layers": 10, "window": 0.15, "steady": 0.02, "over": []}
 
 
 def drag(eps, u, nu):
@@ -95,18 +99,21 @@ def check(out, case):
     height = case["ny"] * DR
     vbox = (13 * DR) ** 2 * height
     r = rows(out, height)
-    t, u, eps = r[-1]
-    t0, u0, _ = r[-3] if len(r) >= 3 else r[0]
-    layers = np.sort(np.unique(np.round(eps, 4)))
+    t = r[-1][0]
+    win = [x for x in r if x[0] >= t - case["window"] - 1e-9]
+    half = len(win) // 2
+    u = float(np.mean([x[1] for x in win]))
+    u_first, u_last = np.mean([x[1] for x in win[:half]]), np.mean([x[1] for x in win[half:]])
+    eps = np.mean([x[2] for x in win], axis=0)
     ua = analytic(eps, vbox, case["nu"])
     ut = analytic(np.full(len(eps), 1 - math.pi / 6 * D ** 3 / S ** 3), vbox, case["nu"])
-    err, steady = (u - ua) / ua, abs(u - u0) / u
-    ok = abs(err) <= TOL and steady <= TOL_STEADY
-    print("%s porous block %d layers, nu %g: U_s = %.4f m/s at t = %.2f s; analytic with the run's eps at the grains "
-          "(%.4f to %.4f, mean %.4f) %.4f m/s: %+.2f %% (tolerance %.0f %%); with the block's eps 0.779 %.4f m/s: "
-          "%+.2f %%; change over the last %.2f s %.2f %% (tolerance %.1f %%)"
-          % ("ok  " if ok else "FAIL", case["layers"], case["nu"], u, t, eps.min(), eps.max(), eps.mean(), ua,
-             100 * err, 100 * TOL, ut, 100 * (u - ut) / ut, t - t0, 100 * steady, 100 * TOL_STEADY))
+    err, steady = (u - ua) / ua, abs(u_last - u_first) / u
+    ok = abs(err) <= TOL and steady <= case["steady"]
+    print("%s porous block %d layers, nu %g: U_s = %.4f m/s over t = %.3f-%.3f s; analytic with the run's eps at the "
+          "grains (%.4f to %.4f, mean %.4f) %.4f m/s: %+.2f %% (tolerance %.0f %%); with the block's eps 0.779 %.4f m/s: "
+          "%+.2f %%; the window's halves differ by %.2f %% (tolerance %.1f %%)"
+          % ("ok  " if ok else "FAIL", case["layers"], case["nu"], u, win[0][0], t, eps.min(), eps.max(), eps.mean(), ua,
+             100 * err, 100 * TOL, ut, 100 * (u - ut) / ut, 100 * steady, 100 * case["steady"]))
     return ok
 
 
