@@ -176,8 +176,10 @@ static int check_container(struct scene_ctx *c, struct scene *s)
         if (k->regions_count) return scene_fail_at(c, "Container:regions", "needs Geometry:type container");
         return 0;
     }
-    if (!k->walls_count && !(s->geometry.dim == 3 && s->geometry.periodic == PERIODIC_XYZ))
-        return scene_fail_at(c, "Container:walls", "Geometry:type container needs at least one wall (none: periodic xyz, 3D)");
+    /* none: a DEM scene (the CPU's, tested there) periodic along xyz */
+    if (!k->walls_count && !(s->geometry.dim == 3 && s->geometry.periodic == PERIODIC_XYZ && s->dem.d > 0))
+        return scene_fail_at(c, "Container:walls", "Geometry:type container needs at least one wall (none: a 3D scene with "
+                             "DEM grains periodic along xyz)");
     if (!k->regions_count)
         return scene_fail_at(c, "Container:regions", "Geometry:type container needs at least one region of material");
     for (unsigned i = 0; i < k->walls_count; ++i)

@@ -191,7 +191,7 @@ SECTION("Geometry", geometry, scene_geometry)
        "column or container: the axes without walls, where the material continues periodically: none | x | y | xy | z | xz | yz | xyz"
        " (y and z need a container, z needs dim 3); the period is Geometry:width along x, :height along y, :depth along z, from 0,"
        " at least 6 supports 2h (4 in a scene with DEM grains, which runs on the CPU alone; and 2 DEM:d); walls and regions must lie"
-       " within it; a 3D container periodic in z has no end walls; one periodic along xyz may have no wall; default none")
+       " within it; a 3D container periodic in z has no end walls; one with DEM grains periodic along xyz may have no wall; default none")
     KE("Geometry", geometry, scene_geometry, lid, int, on_off, "off",
       "column: on | off: a rigid wall over the material at y = height (a channel between the base and the lid, with the base's slip); default off")
     KF("Geometry", geometry, scene_geometry, runout, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
