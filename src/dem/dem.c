@@ -446,23 +446,6 @@ static void dem_forces(dem_t *d, const wall_geom *w, size_t i, double t, double 
     d->ncon[i] = nk;
 }
 
-/* The inverse of the symmetric 3 x 3 matrix A (row-major) into B, by its
- * cofactors; A is an inertia tensor, positive definite. */
-static void dem_inv3(const double A[9], double B[9])
-{
-    B[0] = A[4] * A[8] - A[5] * A[7], B[1] = A[2] * A[7] - A[1] * A[8], B[2] = A[1] * A[5] - A[2] * A[4];
-    B[3] = A[5] * A[6] - A[3] * A[8], B[4] = A[0] * A[8] - A[2] * A[6], B[5] = A[2] * A[3] - A[0] * A[5];
-    B[6] = A[3] * A[7] - A[4] * A[6], B[7] = A[1] * A[6] - A[0] * A[7], B[8] = A[0] * A[4] - A[1] * A[3];
-    const double det = A[0] * B[0] + A[1] * B[3] + A[2] * B[6];
-    for (int k = 0; k < 9; ++k) B[k] /= det;
-}
-
-/* a x b into c */
-static void dem_cross(const double a[3], const double b[3], double c[3])
-{
-    c[0] = a[1] * b[2] - a[2] * b[1], c[1] = a[2] * b[0] - a[0] * b[2], c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /* DEM:motion rigid: the grains as one rigid body (symplectic Euler as the
  * free grains): its centre (the grains' mean: equal masses) moves by the
  * total force F_i over the total mass; its angular momentum I w grows by the
@@ -470,7 +453,7 @@ static void dem_cross(const double a[3], const double b[3], double c[3])
  * torques on grain i), I = sum m (|r_i|^2 1 - r_i r_i^T) + n I_grain 1 the
  * inertia tensor of the grains as spheres about the centre, at the present
  * positions; then each r_i turns by |w| dt about w (Rodrigues) and v_i = v_c +
- * w x r_i. Across a periodic axis the body (continuous through the period,
+ * w x r_i (the bodies: physics/dem.h). Across a periodic axis the body (continuous through the period,
  * as a laterally periodic block) translates only: its rotation is zero by
  * the lateral symmetry, and its grains' wrapped positions have no one
  * centre. */
@@ -478,42 +461,32 @@ static void dem_rigid_step(dem_t *d, const double *F, const double *T, double dt
 {
     const long n = (long)d->n;
     const double M = d->m * (double)n;
-    double xc[3] = {0, 0, 0}, vc[3] = {0, 0, 0}, Ft[3] = {0, 0, 0}, Tt[3] = {0, 0, 0}, I[9] = {0}, w[3];
+    double xc[3] = {0, 0, 0}, vc[3] = {0, 0, 0};
+    real Tt[3] = {0, 0, 0}, J[9] = {0}, w[3], Ft[3] = {0, 0, 0};
     for (long i = 0; i < n; ++i)
         for (int q = 0; q < 3; ++q) xc[q] += d->x[q][i] / (double)n, vc[q] += d->v[q][i] / (double)n;
-    for (int q = 0; q < 3; ++q) w[q] = n ? d->w[q][0] : 0;
-    /* v_c: the grains' mean velocity less the spin's share sum w x r_i / n (zero: sum r_i = 0) */
+    for (int q = 0; q < 3; ++q) w[q] = (real)(n ? d->w[q][0] : 0);
+    /* v_c: the grains' mean velocity (their spin's share, sum w x r_i / n, is zero) */
     for (long i = 0; i < n; ++i) {
-        const double r[3] = {d->x[0][i] - xc[0], d->x[1][i] - xc[1], d->x[2][i] - xc[2]};
-        double rf[3];
-        dem_cross(r, &F[3 * i], rf);
-        const double rr = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-        for (int q = 0; q < 3; ++q) {
-            Ft[q] += F[3 * i + q], Tt[q] += rf[q] + T[3 * i + q];
-            for (int b = 0; b < 3; ++b) I[3 * q + b] += d->m * ((q == b ? rr : 0.0) - r[q] * r[b]);
-        }
+        const real r[3] = {(real)(d->x[0][i] - xc[0]), (real)(d->x[1][i] - xc[1]), (real)(d->x[2][i] - xc[2])};
+        const double *f = &F[3 * i];
+        Tt[0] += (real)(r[1] * f[2] - r[2] * f[1] + T[3 * i]);
+        Tt[1] += (real)(r[2] * f[0] - r[0] * f[2] + T[3 * i + 1]);
+        Tt[2] += (real)(r[0] * f[1] - r[1] * f[0] + T[3 * i + 2]);
+        for (int q = 0; q < 3; ++q) Ft[q] += (real)f[q];
+        dem_inertia_add((real)d->m, (real)d->I, r, J);
     }
-    for (int q = 0; q < 3; ++q) vc[q] += Ft[q] / M * dt, I[4 * q] += (double)n * d->I;
-    if (!d->per) { /* L = I w + T dt, w = I^-1 L */
-        double L[3], Ii[9];
-        for (int q = 0; q < 3; ++q) L[q] = I[3 * q] * w[0] + I[3 * q + 1] * w[1] + I[3 * q + 2] * w[2] + Tt[q] * dt;
-        dem_inv3(I, Ii);
-        for (int q = 0; q < 3; ++q) w[q] = Ii[3 * q] * L[0] + Ii[3 * q + 1] * L[1] + Ii[3 * q + 2] * L[2];
-    }
-    const double wm = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), th = wm * dt;
-    const double k[3] = {wm > 0 ? w[0] / wm : 0, wm > 0 ? w[1] / wm : 0, wm > 0 ? w[2] / wm : 0};
-    const double c = cos(th), sn = sin(th);
+    for (int q = 0; q < 3; ++q) vc[q] += (double)Ft[q] / M * dt;
+    if (!d->per) dem_spin_update(J, Tt, (real)dt, w);
     for (long i = 0; i < n; ++i) {
-        const double r[3] = {d->x[0][i] - xc[0], d->x[1][i] - xc[1], d->x[2][i] - xc[2]};
-        double kr[3], wr[3], rn[3];
-        dem_cross(k, r, kr);
-        const double kd = k[0] * r[0] + k[1] * r[1] + k[2] * r[2];
-        for (int q = 0; q < 3; ++q) rn[q] = r[q] * c + kr[q] * sn + k[q] * kd * (1 - c);
-        dem_cross(w, rn, wr);
+        const real r[3] = {(real)(d->x[0][i] - xc[0]), (real)(d->x[1][i] - xc[1]), (real)(d->x[2][i] - xc[2])};
+        real rn[3];
+        dem_turn(w, (real)dt, r, rn);
+        const real wr[3] = {w[1] * rn[2] - w[2] * rn[1], w[2] * rn[0] - w[0] * rn[2], w[0] * rn[1] - w[1] * rn[0]};
         for (int q = 0; q < 3; ++q) {
-            d->x[q][i] = xc[q] + vc[q] * dt + rn[q];
-            d->v[q][i] = vc[q] + wr[q];
-            d->w[q][i] = w[q];
+            d->x[q][i] = xc[q] + vc[q] * dt + (double)rn[q];
+            d->v[q][i] = vc[q] + (double)wr[q];
+            d->w[q][i] = (double)w[q];
         }
     }
 }
