@@ -172,10 +172,87 @@ static void test_gamma(void **st)
     }
 }
 
+/* DEM:motion rigid: a dumbbell of two grains 3 d apart along x spinning
+ * about z at w, no force: after time t it has turned by w t (Rodrigues'
+ * turn is exact for a constant w), its grains 3 d apart, each v = w x r. */
+static void test_rigid_spin(void **st)
+{
+    (void)st;
+    wall_geom none;
+    memset(&none, 0, sizeof none);
+    dem_t *d = grains(2, 0.9, 0.3, 0);
+    d->motion = DEM_RIGID;
+    const double a = 0.006, w = 10.0; /* half the separation, m; rad/s */
+    for (int i = 0; i < 2; ++i) {
+        double sx = i ? 1.0 : -1.0;
+        d->x[0][i] = 0.05 + sx * a, d->x[1][i] = 0.05, d->w[2][i] = w;
+        d->v[1][i] = w * sx * a; /* w z x (sx a) x = w sx a y */
+    }
+    for (int s = 0; s < 100; ++s) dem_advance(d, &none, s * 1e-3, 1e-3);
+    double rx = d->x[0][1] - d->x[0][0], ry = d->x[1][1] - d->x[1][0];
+    double ang = atan2(ry, rx), sep = sqrt(rx * rx + ry * ry), turn = fmod(w * 0.1, 2 * M_PI);
+    print_message("rigid spin: turned %.9f rad (w t %.9f), separation %.9e m (%.9e)\n", ang, turn, sep, 2 * a);
+    assert_true(fabs(ang - turn) < 1e-9);
+    assert_true(fabs(sep - 2 * a) < 1e-12);
+    assert_true(fabs(d->x[0][0] + d->x[0][1] - 0.1) < 1e-12); /* the centre stays */
+    dem_free(d);
+}
+
+/* DEM:motion rigid: a tilted dumbbell falls at v0 onto the wall y = 0
+ * without friction; grain 0 alone strikes it. The wall's impulse J (along
+ * y) changes the momentum by J and the angular momentum about the centre
+ * by r_0 x J: dL_z = r_0x dP_y, r_0x the contact's arm (which turns a
+ * little during the contact: 1 %). L_z = I_zz w_z, I_zz = 2 m a^2 + 2 I_grain
+ * for a dumbbell along x. */
+static void test_rigid_impact(void **st)
+{
+    (void)st;
+    wall_geom w = base();
+    dem_t *d = grains(2, 0.9, 0.0, 0);
+    d->motion = DEM_RIGID;
+    const double a = 0.006, tilt = 0.2, v0 = -0.5;
+    for (int i = 0; i < 2; ++i) {
+        double sx = i ? 1.0 : -1.0;
+        d->x[0][i] = 0.05 + sx * a * cos(tilt), d->x[1][i] = 0.0025 + a * sin(tilt) + sx * a * sin(tilt);
+        d->v[1][i] = v0;
+    }
+    const double r0x = d->x[0][0] - 0.5 * (d->x[0][0] + d->x[0][1]);
+    /* 4 ms: grain 0 struck and left; the spin it took brings grain 1 down to the wall 2 ms later */
+    for (int s = 0; s < 40; ++s) dem_advance(d, &w, s * 1e-4, 1e-4);
+    double dP = 2 * d->m * (0.5 * (d->v[1][0] + d->v[1][1]) - v0);
+    double Izz = 2 * d->m * a * a + 2 * d->I, dL = Izz * d->w[2][0];
+    print_message("rigid impact: dP_y %.6e N s, dL_z %.6e N m s, r_0x dP_y %.6e (arm %.4e m), grain 1 %.4e m "
+                  "above the wall\n", dP, dL, r0x * dP, r0x, d->x[1][1]);
+    assert_true(dP > 0 && d->x[1][0] > 0.002 && d->v[1][0] > 0 && d->x[1][1] > 0.002); /* struck, and left the wall */
+    assert_true(fabs(dL - r0x * dP) <= 0.02 * fabs(r0x * dP));
+    dem_free(d);
+}
+
+/* A periodic axis (x, period P): two grains on either side of the seam,
+ * their centres 0.9 d apart through it, meet there: they push each other
+ * apart along x (equal and opposite), and stay inside [0, P). */
+static void test_periodic_contact(void **st)
+{
+    (void)st;
+    wall_geom w;
+    memset(&w, 0, sizeof w);
+    w.periodic = 1, w.period[0] = (real)0.05;
+    dem_t *d = grains(2, 0.9, 0.3, 0);
+    d->x[0][0] = 0.0018, d->x[0][1] = 0.05 - 0.0018, d->x[1][0] = d->x[1][1] = 0.01;
+    dem_advance(d, &w, 0, 1e-3);
+    print_message("periodic contact: v_x %.6e, %.6e m/s; x %.6e, %.6e m\n", d->v[0][0], d->v[0][1], d->x[0][0],
+                  d->x[0][1]);
+    assert_true(d->v[0][0] > 1e-3 && fabs(d->v[0][0] + d->v[0][1]) < 1e-12);
+    for (int i = 0; i < 2; ++i) assert_true(d->x[0][i] >= 0 && d->x[0][i] < 0.05);
+    dem_free(d);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_restitution), cmocka_unit_test(test_resting),
                                        cmocka_unit_test(test_stack),
-                                       cmocka_unit_test(test_rolling), cmocka_unit_test(test_gamma)};
+                                       cmocka_unit_test(test_rolling), cmocka_unit_test(test_gamma),
+                                       cmocka_unit_test(test_rigid_spin), cmocka_unit_test(test_rigid_impact),
+                                       cmocka_unit_test(test_periodic_contact)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -365,7 +365,7 @@ static const char *const bad_files[] = {
     "container_gate_time.yml", "container_turning_segment.yml", "container_name.yml", "container_no_region.yml",
     "container_walls_in_column.yml", "container_post_segment.yml", "periodic_y_column.yml",
     "periodic_y_geostatic.yml", "dem_granular.yml", "dem_outside.yml", "dem_block_n.yml", "dem_spacing.yml",
-    "dem_rest_two_way.yml", "dem_coupling.yml"};
+    "dem_rest_two_way.yml", "dem_coupling.yml", "dem_periodic_short.yml", "container_no_wall.yml"};
 /* (scenes_bad/setup/: errors that only building the particles finds, test_badinput.sh) */
 
 static void test_bad_files(void **state)

@@ -38,6 +38,7 @@ dem_t *dem_alloc(size_t n)
     for (int a = 0; a < 3; ++a) {
         d->x[a] = dem_calloc(n, sizeof(double)), d->v[a] = dem_calloc(n, sizeof(double));
         d->w[a] = dem_calloc(n, sizeof(double)), d->fint[a] = dem_calloc(n, sizeof(double));
+        d->fd[a] = dem_calloc(n, sizeof(double));
         d->uf[a] = dem_calloc(n, sizeof(double));
     }
     d->eps = dem_calloc(n, sizeof(double));
@@ -94,7 +95,7 @@ dem_t *dem_create(const struct scene *sc, double h, double rho_f, double nu, dou
 void dem_free(dem_t *d)
 {
     if (!d) return;
-    for (int a = 0; a < 3; ++a) free(d->x[a]), free(d->v[a]), free(d->w[a]), free(d->fint[a]), free(d->uf[a]);
+    for (int a = 0; a < 3; ++a) free(d->x[a]), free(d->v[a]), free(d->w[a]), free(d->fint[a]), free(d->uf[a]), free(d->fd[a]);
     free(d->eps), free(d->snorm), free(d->id), free(d->ncon), free(d->cid), free(d->cxi);
     free(d->ncon2), free(d->cid2), free(d->cxi2);
     free(d->eps_f), free(d->deps_f);
@@ -153,6 +154,11 @@ static void dem_grid(dem_t *d, const particles_t *p)
                 for (int a = 0; a < 3; ++a) lo[a] = fmin(lo[a], p->x[a][i]), hi[a] = fmax(hi[a], p->x[a][i]);
     d->cell = fmax(2.0 * d->h, (double)d->c.d);
     for (int a = 0; a < 3; ++a) {
+        if (d->per >> a & 1) { /* the period from 0 in whole cells, the last one wider (at least one cell) */
+            double n = floor(d->plen[a] / d->cell);
+            d->lo[a] = 0, d->nc[a] = n < 1 ? 1 : n > 1024 ? 1024 : (int)n;
+            continue;
+        }
         d->lo[a] = lo[a];
         double n = floor((hi[a] - lo[a]) / d->cell) + 1;
         d->nc[a] = n > 1024 ? 1024 : (int)n; /* a grain flung far away shares the edge cells */
@@ -162,19 +168,46 @@ static void dem_grid(dem_t *d, const particles_t *p)
     if (p) dem_bin(d, p->n, p, &d->fstart, &d->fidx, &d->fidx_cap);
 }
 
-/* Loops over the entries of the 27 cells about point x of a binned set. */
+/* The cells about cell c along axis a, from lo to hi: c - 1 to c + 1; along a
+ * periodic axis of fewer than 3 cells, each of its cells once. */
+static void dem_cell_span(const dem_t *d, int a, int c, int *lo, int *hi)
+{
+    *lo = c - 1, *hi = c + 1;
+    if ((d->per >> a & 1) && d->nc[a] < 3) *lo = 0, *hi = d->nc[a] - 1;
+}
+
+/* Cell c along axis a wrapped into the grid (a periodic axis), or -1 when
+ * it lies outside it. */
+static int dem_cell_wrap(const dem_t *d, int a, int c)
+{
+    if (d->per >> a & 1) return ((c % d->nc[a]) + d->nc[a]) % d->nc[a];
+    return c < 0 || c >= d->nc[a] ? -1 : c;
+}
+
+/* r = x - y, the minimum image along the periodic axes (the periods are
+ * over 4 supports 2h and 2 grains: the scene's check). */
+static void dem_sep(const dem_t *d, const double x[3], double y0, double y1, double y2, double r[3])
+{
+    r[0] = x[0] - y0, r[1] = x[1] - y1, r[2] = x[2] - y2;
+    for (int a = 0; a < 3; ++a)
+        if (d->per >> a & 1) r[a] -= d->plen[a] * floor(r[a] / d->plen[a] + 0.5);
+}
+
+/* Loops over the entries of the 27 cells about point x of a binned set
+ * (across a periodic axis, the cells of the other side). */
 #define DEM_CELLS_BEGIN(d, x, start, idx, j)                                                      \
     {                                                                                              \
-        int c0_[3];                                                                                \
+        int c0_[3], lo_[3], hi_[3];                                                                \
         dem_cell(d, x, c0_);                                                                       \
-        for (int cz_ = c0_[2] - 1; cz_ <= c0_[2] + 1; ++cz_)                                       \
-            for (int cy_ = c0_[1] - 1; cy_ <= c0_[1] + 1; ++cy_)                                   \
-                for (int cx_ = c0_[0] - 1; cx_ <= c0_[0] + 1; ++cx_) {                             \
-                    if (cx_ < 0 || cy_ < 0 || cz_ < 0 || cx_ >= d->nc[0] || cy_ >= d->nc[1] ||     \
-                        cz_ >= d->nc[2])                                                           \
-                        continue;                                                                  \
-                    size_t k_ = ((size_t)cz_ * (size_t)d->nc[1] + (size_t)cy_) * (size_t)d->nc[0] + \
-                                (size_t)cx_;                                                       \
+        for (int a_ = 0; a_ < 3; ++a_) dem_cell_span(d, a_, c0_[a_], &lo_[a_], &hi_[a_]);         \
+        for (int cz_ = lo_[2]; cz_ <= hi_[2]; ++cz_)                                               \
+            for (int cy_ = lo_[1]; cy_ <= hi_[1]; ++cy_)                                           \
+                for (int cx_ = lo_[0]; cx_ <= hi_[0]; ++cx_) {                                     \
+                    int wx_ = dem_cell_wrap(d, 0, cx_), wy_ = dem_cell_wrap(d, 1, cy_),            \
+                        wz_ = dem_cell_wrap(d, 2, cz_);                                            \
+                    if (wx_ < 0 || wy_ < 0 || wz_ < 0) continue;                                   \
+                    size_t k_ = ((size_t)wz_ * (size_t)d->nc[1] + (size_t)wy_) * (size_t)d->nc[0] + \
+                                (size_t)wx_;                                                       \
                     for (size_t q_ = (start)[k_]; q_ < (start)[k_ + 1]; ++q_) {                    \
                         size_t j = (idx)[q_];
 #define DEM_CELLS_END \
@@ -200,7 +233,8 @@ static void dem_fluid_fraction(dem_t *d, const particles_t *p, const wall_geom *
     const double x[3] = {p->x[0][a], p->x[1][a], p->x[2][a]}, h = d->h, alpha = kernel_alpha(3, (real)h);
     double s = 0, de = 0;
     DEM_CELLS_BEGIN(d, x, d->gstart, d->gidx, i)
-        double r[3] = {x[0] - d->x[0][i], x[1] - d->x[1][i], x[2] - d->x[2][i]};
+        double r[3];
+        dem_sep(d, x, d->x[0][i], d->x[1][i], d->x[2][i], r);
         double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         if (rr >= 2.0 * h) continue;
         s += d->V * (double)kernel_w((real)rr, (real)h, (real)alpha);
@@ -220,7 +254,8 @@ static void dem_grain_sums(dem_t *d, const particles_t *p, size_t i)
     const double x[3] = {d->x[0][i], d->x[1][i], d->x[2][i]}, h = d->h, alpha = kernel_alpha(3, (real)h);
     double S = 0, E = 0, U[3] = {0, 0, 0};
     DEM_CELLS_BEGIN(d, x, d->fstart, d->fidx, a)
-        double r[3] = {x[0] - p->x[0][a], x[1] - p->x[1][a], x[2] - p->x[2][a]};
+        double r[3];
+        dem_sep(d, x, p->x[0][a], p->x[1][a], p->x[2][a], r);
         double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         if (rr >= 2.0 * h) continue;
         double vw = (double)p->vol[a] * (double)kernel_w((real)rr, (real)h, (real)alpha);
@@ -232,19 +267,29 @@ static void dem_grain_sums(dem_t *d, const particles_t *p, size_t i)
     for (int q = 0; q < 3; ++q) d->uf[q][i] = S > 0 ? U[q] / S : 0.0;
 }
 
-/* The interaction force on grain i (eq. 23) at its velocity now. */
-static void dem_force_int(const dem_t *d, size_t i, double F[3])
+/* The interaction force on grain i (eq. 23) at its velocity now, and its
+ * drag part F_D (eq. 19) into Fd when Fd is not NULL. */
+static void dem_force_int(const dem_t *d, size_t i, double F[3], double *Fd)
 {
     real u[3], FD[3], Fi[3], g[3];
     for (int q = 0; q < 3; ++q) u[q] = (real)(d->uf[q][i] - d->v[q][i]), g[q] = (real)d->g[q];
     dem_drag(d->c.d, (real)d->rho_f, (real)d->nu, (real)d->eps[i], u, FD);
     dem_interaction(FD, (real)d->eps[i], (real)d->V, (real)d->rho_f, g, Fi);
     for (int q = 0; q < 3; ++q) F[q] = (double)Fi[q];
+    if (Fd)
+        for (int q = 0; q < 3; ++q) Fd[q] = (double)FD[q];
 }
 
 /* two_way, fluid particle a (model A of the DEM paper's eq. 6 per unit mass
- * of fluid, rho_bar = eps rho_f): the source -sum_i w_ai F_i / (eps_a rho_f
- * V_a), w_ai = V_a W_ai / sum_b V_b W_bi (eqs. 13-14); div(eps tau) / eps
+ * of fluid, rho_bar = eps rho_f): the source -sum_i w_ai F_D,i / (eps_a
+ * rho_f V_a), w_ai = V_a W_ai / sum_b V_b W_bi (eqs. 13-14, with eq. 24's
+ * drag, as model A takes it: the fluid's -eps grad p carries the pressure's
+ * share, and the grain's -V grad p of eq. 23, F_D / eps - V rho_f g, is
+ * what -eps grad p = eps rho_f g - n F_D gives inside a uniform bed; handing
+ * the fluid all of F_int as well, as model B's -grad p does, counts the
+ * pressure's share twice: at rest the bed's pressure then grows by rho_f g /
+ * eps, not rho_f g, and a settling grain drags the fluid down with it,
+ * docs/validation.md "DEM grains in a fluid"); div(eps tau) / eps
  * less the fluid's own div(tau) (Morris's pair term with the mean
  * (eps_a + eps_b) / 2: + V_b 2 nu f u_ab ((eps_a + eps_b) / (2 eps_a) - 1));
  * -eps grad p / (eps rho_f) is the fluid's own -grad p / rho_f. The
@@ -256,16 +301,18 @@ static void dem_fluid_source(dem_t *d, particles_t *p, size_t a, double visc_nor
     const double ea = d->eps_f[a];
     double acc[3] = {0, 0, 0};
     DEM_CELLS_BEGIN(d, x, d->gstart, d->gidx, i)
-        double r[3] = {x[0] - d->x[0][i], x[1] - d->x[1][i], x[2] - d->x[2][i]};
+        double r[3];
+        dem_sep(d, x, d->x[0][i], d->x[1][i], d->x[2][i], r);
         double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         if (rr >= 2.0 * h || !(d->snorm[i] > 0)) continue;
         double Wc = (double)kernel_w((real)rr, (real)h, (real)alpha) / (d->snorm[i] * ea * d->rho_f);
-        for (int q = 0; q < 3; ++q) acc[q] -= Wc * d->fint[q][i];
+        for (int q = 0; q < 3; ++q) acc[q] -= Wc * d->fd[q][i];
     DEM_CELLS_END
     const double nu2 = 2.0 * d->nu * visc_norm;
     DEM_CELLS_BEGIN(d, x, d->fstart, d->fidx, b)
         if (b == a) continue;
-        double r[3] = {x[0] - p->x[0][b], x[1] - p->x[1][b], x[2] - p->x[2][b]};
+        double r[3];
+        dem_sep(d, x, p->x[0][b], p->x[1][b], p->x[2][b], r);
         double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         double c = 0.5 * (ea + d->eps_f[b]) / ea - 1.0;
         if (rr >= 2.0 * h || c == 0) continue;
@@ -277,9 +324,22 @@ static void dem_fluid_source(dem_t *d, particles_t *p, size_t a, double visc_nor
     for (int q = 0; q < 3; ++q) p->dsig[q][a] -= (real)dp;
 }
 
+/* The fluid's periodic axes and periods (w) into d, and the grains wrapped
+ * into the periods. */
+static void dem_period(dem_t *d, const wall_geom *w)
+{
+    d->per = w->periodic;
+    for (int a = 0; a < 3; ++a) {
+        d->plen[a] = (double)w->period[a];
+        if (!(d->per >> a & 1)) continue;
+        for (size_t i = 0; i < d->n; ++i) d->x[a][i] -= d->plen[a] * floor(d->x[a][i] / d->plen[a]);
+    }
+}
+
 void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double visc_norm)
 {
     (void)t;
+    dem_period(d, w);
     if (p->n > d->eps_cap) {
         free(d->eps_f), free(d->deps_f);
         d->eps_f = dem_calloc(p->n, sizeof(double)), d->deps_f = dem_calloc(p->n, sizeof(double));
@@ -293,9 +353,9 @@ void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double v
 #pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN)
     for (long i = 0; i < ng; ++i) {
         dem_grain_sums(d, p, (size_t)i);
-        double F[3];
-        dem_force_int(d, (size_t)i, F);
-        for (int q = 0; q < 3; ++q) d->fint[q][i] = F[q];
+        double F[3], Fd[3];
+        dem_force_int(d, (size_t)i, F, Fd);
+        for (int q = 0; q < 3; ++q) d->fint[q][i] = F[q], d->fd[q][i] = Fd[q];
     }
     if (d->coupling != DEM_TWO_WAY) return;
 #pragma omp parallel for schedule(dynamic, 64)
@@ -354,12 +414,14 @@ static void dem_forces(dem_t *d, const wall_geom *w, size_t i, double t, double 
     const double D = (double)d->c.d, R = 0.5 * D, x[3] = {d->x[0][i], d->x[1][i], d->x[2][i]};
     real g[3] = {(real)d->g[0], (real)d->g[1], (real)d->g[2]}, Fg[3];
     dem_gravity((real)d->V, g, (real)d->rho_f, d->c.rho, dem_gravity_ramp(t, d->t_damp), Fg);
-    dem_force_int(d, i, Fi);
+    dem_force_int(d, i, Fi, NULL);
     for (int q = 0; q < 3; ++q) F[q] = (double)Fg[q] + Fi[q], T[q] = 0;
     int nk = 0;
+    if (d->motion != DEM_RIGID) /* a rigid body's own contacts cancel in its sums */
     DEM_CELLS_BEGIN(d, x, d->gstart, d->gidx, j)
         if (j == i) continue;
-        double r[3] = {x[0] - d->x[0][j], x[1] - d->x[1][j], x[2] - d->x[2][j]};
+        double r[3];
+        dem_sep(d, x, d->x[0][j], d->x[1][j], d->x[2][j], r);
         double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
         if (rr >= D || !(rr > 0)) continue;
         double n[3] = {r[0] / rr, r[1] / rr, r[2] / rr}, vp[3];
@@ -384,6 +446,51 @@ static void dem_forces(dem_t *d, const wall_geom *w, size_t i, double t, double 
     d->ncon[i] = nk;
 }
 
+/* DEM:motion rigid: the grains as one rigid body (symplectic Euler as the
+ * free grains): its centre (the grains' mean: equal masses) moves by the
+ * total force F_i over the total mass; its angular momentum I w grows by the
+ * total torque about the centre, sum r_i x F_i + T_i (T_i the contacts'
+ * torques on grain i), I = sum m (|r_i|^2 1 - r_i r_i^T) + n I_grain 1 the
+ * inertia tensor of the grains as spheres about the centre, at the present
+ * positions; then each r_i turns by |w| dt about w (Rodrigues) and v_i = v_c +
+ * w x r_i (the bodies: physics/dem.h). Across a periodic axis the body (continuous through the period,
+ * as a laterally periodic block) translates only: its rotation is zero by
+ * the lateral symmetry, and its grains' wrapped positions have no one
+ * centre. */
+static void dem_rigid_step(dem_t *d, const double *F, const double *T, double dt)
+{
+    const long n = (long)d->n;
+    const double M = d->m * (double)n;
+    double xc[3] = {0, 0, 0}, vc[3] = {0, 0, 0};
+    real Tt[3] = {0, 0, 0}, J[9] = {0}, w[3], Ft[3] = {0, 0, 0};
+    for (long i = 0; i < n; ++i)
+        for (int q = 0; q < 3; ++q) xc[q] += d->x[q][i] / (double)n, vc[q] += d->v[q][i] / (double)n;
+    for (int q = 0; q < 3; ++q) w[q] = (real)(n ? d->w[q][0] : 0);
+    /* v_c: the grains' mean velocity (their spin's share, sum w x r_i / n, is zero) */
+    for (long i = 0; i < n; ++i) {
+        const real r[3] = {(real)(d->x[0][i] - xc[0]), (real)(d->x[1][i] - xc[1]), (real)(d->x[2][i] - xc[2])};
+        const double *f = &F[3 * i];
+        Tt[0] += (real)(r[1] * f[2] - r[2] * f[1] + T[3 * i]);
+        Tt[1] += (real)(r[2] * f[0] - r[0] * f[2] + T[3 * i + 1]);
+        Tt[2] += (real)(r[0] * f[1] - r[1] * f[0] + T[3 * i + 2]);
+        for (int q = 0; q < 3; ++q) Ft[q] += (real)f[q];
+        dem_inertia_add((real)d->m, (real)d->I, r, J);
+    }
+    for (int q = 0; q < 3; ++q) vc[q] += (double)Ft[q] / M * dt;
+    if (!d->per) dem_spin_update(J, Tt, (real)dt, w);
+    for (long i = 0; i < n; ++i) {
+        const real r[3] = {(real)(d->x[0][i] - xc[0]), (real)(d->x[1][i] - xc[1]), (real)(d->x[2][i] - xc[2])};
+        real rn[3];
+        dem_turn(w, (real)dt, r, rn);
+        const real wr[3] = {w[1] * rn[2] - w[2] * rn[1], w[2] * rn[0] - w[0] * rn[2], w[0] * rn[1] - w[1] * rn[0]};
+        for (int q = 0; q < 3; ++q) {
+            d->x[q][i] = xc[q] + vc[q] * dt + (double)rn[q];
+            d->v[q][i] = vc[q] + (double)wr[q];
+            d->w[q][i] = (double)w[q];
+        }
+    }
+}
+
 /* One DEM step of length dt from t (symplectic Euler: v, w from the forces
  * at x; then x from the new v). */
 static void dem_substep(dem_t *d, const wall_geom *w, double t, double dt, double *F, double *T, double *Fi)
@@ -394,22 +501,17 @@ static void dem_substep(dem_t *d, const wall_geom *w, double t, double dt, doubl
     int *oncon = d->ncon;
     d->cid = d->cid2, d->cxi = d->cxi2, d->ncon = d->ncon2;
     d->cid2 = ocid, d->cxi2 = ocxi, d->ncon2 = oncon;
-    dem_grid(d, NULL);
-#pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN)
+    dem_period(d, w); /* a grain that crossed a period comes in from the other side */
+    if (d->motion != DEM_RIGID) dem_grid(d, NULL);
+    /* a rigid body's grains meet only walls: too little work a DEM step for a team */
+#pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN && d->motion != DEM_RIGID)
     for (long i = 0; i < n; ++i)
         dem_forces(d, w, (size_t)i, t, dt, ocid, ocxi, oncon, &F[3 * i], &T[3 * i], &Fi[3 * i]);
     for (long i = 0; i < n; ++i)
         for (int q = 0; q < 3; ++q) d->exch[q] += Fi[3 * i + q] * dt;
     if (d->motion == DEM_FIXED) return;
-    if (d->motion == DEM_RIGID) { /* the block translates as one body */
-        double Ft[3] = {0, 0, 0};
-        for (long i = 0; i < n; ++i)
-            for (int q = 0; q < 3; ++q) Ft[q] += F[3 * i + q];
-        for (long i = 0; i < n; ++i)
-            for (int q = 0; q < 3; ++q) {
-                d->v[q][i] += Ft[q] / (d->m * (double)n) * dt;
-                d->x[q][i] += d->v[q][i] * dt;
-            }
+    if (d->motion == DEM_RIGID) {
+        dem_rigid_step(d, F, T, dt);
         return;
     }
 #pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN)
@@ -423,12 +525,17 @@ static void dem_substep(dem_t *d, const wall_geom *w, double t, double dt, doubl
 
 void dem_advance(dem_t *d, const wall_geom *w, double t, double dt)
 {
-    long m = (long)ceil(dt / d->dt);
+    dem_period(d, w);
+    /* fixed grains: their forces (the interaction force at the held fluid) are
+     * the same at each DEM step of the fluid step, so one step of dt gives the
+     * same exchange */
+    long m = d->motion == DEM_FIXED ? 1 : (long)ceil(dt / d->dt);
     if (m < 1) m = 1;
     double h = dt / (double)m;
     double *F = dem_calloc(3 * d->n, sizeof(double)), *T = dem_calloc(3 * d->n, sizeof(double));
     double *Fi = dem_calloc(3 * d->n, sizeof(double));
     for (long k = 0; k < m; ++k) dem_substep(d, w, t + (double)k * h, h, F, T, Fi);
+    dem_period(d, w);
     free(F), free(T), free(Fi);
 }
 

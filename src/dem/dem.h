@@ -22,6 +22,7 @@ typedef struct dem {
     size_t n;             /* grains */
     double *x[3], *v[3], *w[3]; /* centre (m), velocity (m/s), angular velocity (rad/s) */
     double *fint[3];      /* the interaction force of eq. (23) at the last coupling, N */
+    double *fd[3];        /* its drag part, Di Felice's F_D of eq. (19), at the last coupling, N */
     double *uf[3], *eps;  /* fluid velocity (eq. 20's interpolation) and fluid fraction (20) at each grain */
     double *snorm;        /* sum_a V_a W_ai, the denominator of eq. (14) */
     int64_t *id;          /* grain IDs 0..n-1 */
@@ -42,6 +43,8 @@ typedef struct dem {
     /* the coupling's cell grid (cells of at least 2h and d): grains and fluid particles by cell */
     double lo[3], cell;
     int nc[3];
+    int per;              /* the fluid's periodic axes (wall_geom.periodic, bit a: axis a), from dem_couple/advance */
+    double plen[3];       /* their periods from 0, m: minimum images, grains wrapped into [0, plen) */
     size_t *gstart, *gidx, *fstart, *fidx, ncell_cap, fidx_cap;
 } dem_t;
 

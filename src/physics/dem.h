@@ -9,7 +9,9 @@
  *             for the code's kernel (the paper's eq. 17 is the cubic
  *             spline's; here the same integral of the Wendland C2 kernel);
  *   drag      Di Felice's drag (19), (21), (22) and the interaction force
- *             with the pressure gradient (23).
+ *             with the pressure gradient (23);
+ *   rigid     a rigid body of grains (DEM:motion rigid): its inertia
+ *             tensor, spin update and turn.
  * SI units throughout; a grain is a sphere of diameter d (3D and 2D alike:
  * in 2D the grains are spheres whose centres stay in the x-y plane). */
 #ifndef SPHSEG_DEM_H
@@ -149,6 +151,46 @@ HD_INLINE real dem_fraction(real s, real gamma, real eps_min)
 {
     real e = R(1.0) - s / gamma;
     return e < eps_min ? eps_min : e;
+}
+
+/* A rigid body of spheres (DEM:motion rigid): the share of one sphere of
+ * mass m and own moment of inertia I0 (2/5 m r^2) at r from the body's
+ * centre in its inertia tensor, m (|r|^2 1 - r r^T) + I0 1, added to
+ * J[9] (row-major), kg m^2. */
+HD_INLINE void dem_inertia_add(real m, real I0, const real r[3], real J[9])
+{
+    const real rr = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+    for (int q = 0; q < 3; ++q)
+        for (int b = 0; b < 3; ++b) J[3 * q + b] += m * ((q == b ? rr : R(0.0)) - r[q] * r[b]) + (q == b ? I0 : R(0.0));
+}
+
+/* The angular velocity w (rad/s) of a rigid body of inertia tensor J[9]
+ * (positive definite) after its angular momentum J w grew by the torque T
+ * over dt: w <- J^-1 (J w + T dt), J inverted by its cofactors. */
+HD_INLINE void dem_spin_update(const real J[9], const real T[3], real dt, real w[3])
+{
+    real L[3], B[9];
+    for (int q = 0; q < 3; ++q) L[q] = J[3 * q] * w[0] + J[3 * q + 1] * w[1] + J[3 * q + 2] * w[2] + T[q] * dt;
+    B[0] = J[4] * J[8] - J[5] * J[7], B[1] = J[2] * J[7] - J[1] * J[8], B[2] = J[1] * J[5] - J[2] * J[4];
+    B[3] = J[5] * J[6] - J[3] * J[8], B[4] = J[0] * J[8] - J[2] * J[6], B[5] = J[2] * J[3] - J[0] * J[5];
+    B[6] = J[3] * J[7] - J[4] * J[6], B[7] = J[1] * J[6] - J[0] * J[7], B[8] = J[0] * J[4] - J[1] * J[3];
+    const real det = J[0] * B[0] + J[1] * B[3] + J[2] * B[6];
+    for (int q = 0; q < 3; ++q) w[q] = (B[3 * q] * L[0] + B[3 * q + 1] * L[1] + B[3 * q + 2] * L[2]) / det;
+}
+
+/* r turned by the angle |w| dt about w (Rodrigues' formula) into rn: a
+ * point of a rigid body spinning at w, over dt, about its centre. */
+HD_INLINE void dem_turn(const real w[3], real dt, const real r[3], real rn[3])
+{
+    const real wm = (real)sqrt((double)(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]));
+    if (!(wm > 0)) {
+        rn[0] = r[0], rn[1] = r[1], rn[2] = r[2];
+        return;
+    }
+    const real k[3] = {w[0] / wm, w[1] / wm, w[2] / wm}, c = (real)cos((double)(wm * dt)), sn = (real)sin((double)(wm * dt));
+    const real kr[3] = {k[1] * r[2] - k[2] * r[1], k[2] * r[0] - k[0] * r[2], k[0] * r[1] - k[1] * r[0]};
+    const real kd = k[0] * r[0] + k[1] * r[1] + k[2] * r[2];
+    for (int q = 0; q < 3; ++q) rn[q] = r[q] * c + kr[q] * sn + k[q] * kd * (R(1.0) - c);
 }
 
 #endif

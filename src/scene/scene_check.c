@@ -8,6 +8,7 @@
  * located where it was set (scene_fail_at). */
 #define _POSIX_C_SOURCE 200809L
 #include "scene_ctx.h"
+#include "mpi/halo.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -19,8 +20,10 @@
 /* ---- Geometry ------------------------------------------------------------------------ */
 
 /* The dimension for the type, the sizes against dr, the periodic axes and
- * their periods. */
-static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g)
+ * their periods (cpu_only: a scene that runs on the CPU alone, one with
+ * DEM grains). */
+_Static_assert(SCENE_PERIOD_SUPPORTS_CPU >= 2 * HALO_DEPTH, "a period holds the CPU's ghost layers of both sides");
+static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g, int cpu_only)
 {
     char a[32], b[32];
     if (g->dim == 3 && g->type == GEOM_SHEARBOX)
@@ -45,14 +48,15 @@ static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g)
         return scene_fail_at(c, "Geometry:periodic", "y needs Geometry:type container (a column has a base across y)");
     /* a period must hold the ghost layers of both sides (mpi/halo.h): 3 cells
      * of 2h each way on the GPU, so 6 supports; shorter would need images of
-     * images */
+     * images. The CPU's are HALO_DEPTH = 2 cells deep: 4 supports there */
+    const int sup = cpu_only ? SCENE_PERIOD_SUPPORTS_CPU : SCENE_PERIOD_SUPPORTS;
     for (int d = 0; d < 3; ++d) {
         double len = d == 0 ? g->width : d == 1 ? g->height : g->depth;
-        double need = SCENE_PERIOD_SUPPORTS * 2 * g->h_factor * g->dr;
+        double need = sup * 2 * g->h_factor * g->dr;
         if (!(g->periodic & (1u << d)) || len >= need) continue;
         return scene_fail_at(c, d == 0 ? "Geometry:width" : d == 1 ? "Geometry:height" : "Geometry:depth",
-                       "a periodic axis needs a period of at least %d supports 2h = %.4g m, got %.4g",
-                       SCENE_PERIOD_SUPPORTS, need, len);
+                       "a periodic axis needs a period of at least %d supports 2h = %.4g m%s, got %.4g", sup, need,
+                       cpu_only ? " (the CPU's ghosts, a scene with DEM grains)" : "", len);
     }
     if (g->type == GEOM_CONTAINER) return 0; /* its walls and regions: check_container */
     if (g->type == GEOM_DRUM) {
@@ -172,7 +176,10 @@ static int check_container(struct scene_ctx *c, struct scene *s)
         if (k->regions_count) return scene_fail_at(c, "Container:regions", "needs Geometry:type container");
         return 0;
     }
-    if (!k->walls_count) return scene_fail_at(c, "Container:walls", "Geometry:type container needs at least one wall");
+    /* none: a DEM scene (the CPU's, tested there) periodic along xyz */
+    if (!k->walls_count && !(s->geometry.dim == 3 && s->geometry.periodic == PERIODIC_XYZ && s->dem.d > 0))
+        return scene_fail_at(c, "Container:walls", "Geometry:type container needs at least one wall (none: a 3D scene with "
+                             "DEM grains periodic along xyz)");
     if (!k->regions_count)
         return scene_fail_at(c, "Container:regions", "Geometry:type container needs at least one region of material");
     for (unsigned i = 0; i < k->walls_count; ++i)
@@ -261,9 +268,10 @@ static int check_openings(struct scene_ctx *c, const struct scene *s)
     return 0;
 }
 
-/* DEM grains (DEM:d > 0): a Newtonian fluid with computed flow, 3D or 2D,
- * no periodic axis (the grains' images are not made yet), the placement's
- * keys whole and inside the container's extent. */
+/* DEM grains (DEM:d > 0): a Newtonian fluid with computed flow, 3D, the
+ * placement's keys whole and inside the container's extent. A periodic axis
+ * (the coupling and the contacts take minimum images) needs a period of at
+ * least 2 d, so that a grain meets one image of another. */
 static int check_dem(struct scene_ctx *c, struct scene *s)
 {
     struct scene_dem *k = &s->dem;
@@ -276,10 +284,12 @@ static int check_dem(struct scene_ctx *c, struct scene *s)
         return scene_fail_at(c, "Kinematics:velocity", "DEM grains need computed flow, or rest with DEM:coupling one_way");
     if (s->geometry.dim != 3)
         return scene_fail_at(c, "DEM:d", "grains are spheres in a 3D fluid: needs Geometry:dim 3");
-    if (s->geometry.periodic != PERIODIC_NONE)
-        return scene_fail_at(c, "Geometry:periodic", "DEM grains do not cross a periodic axis yet; use walls");
     double ext[3];
     scene_extent(s, ext);
+    for (int a = 0; a < 3; ++a)
+        if ((s->geometry.periodic >> a & 1) && !(ext[a] >= 2.0 * k->d))
+            return scene_fail_at(c, "Geometry:periodic", "DEM grains need a period of at least 2 DEM:d = %.4g m along "
+                                 "%c, got %.4g", 2.0 * k->d, 'x' + a, ext[a]);
     if (k->placement == DEM_BLOCK) {
         for (int a = 0; a < 3; ++a) {
             double n = k->block_n[a];
@@ -305,7 +315,7 @@ int scene_check_special(struct scene_ctx *c, struct scene *s)
 {
     const char *backend = s->run.backend ? s->run.backend : "";
     int vel = s->kinematics.velocity;
-    if (check_geometry(c, &s->geometry) || check_container(c, s) || check_models(c, s) || check_vectors(c, s) ||
+    if (check_geometry(c, &s->geometry, s->dem.d > 0) || check_container(c, s) || check_models(c, s) || check_vectors(c, s) ||
         check_openings(c, s) || check_dem(c, s))
         return -1;
     if (s->geometry.periodic != PERIODIC_NONE && vel != KIN_COMPUTED)

@@ -190,7 +190,8 @@ SECTION("Geometry", geometry, scene_geometry)
     KE("Geometry", geometry, scene_geometry, periodic, unsigned, periodic_axes, "none",
        "column or container: the axes without walls, where the material continues periodically: none | x | y | xy | z | xz | yz | xyz"
        " (y and z need a container, z needs dim 3); the period is Geometry:width along x, :height along y, :depth along z, from 0,"
-       " at least 6 supports 2h; walls and regions must lie within it; a 3D container periodic in z has no end walls; default none")
+       " at least 6 supports 2h (4 in a scene with DEM grains, which runs on the CPU alone; and 2 DEM:d); walls and regions must lie"
+       " within it; a 3D container periodic in z has no end walls; one with DEM grains periodic along xyz may have no wall; default none")
     KE("Geometry", geometry, scene_geometry, lid, int, on_off, "off",
       "column: on | off: a rigid wall over the material at y = height (a channel between the base and the lid, with the base's slip); default off")
     KF("Geometry", geometry, scene_geometry, runout, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
@@ -428,5 +429,5 @@ SECTION("DEM", dem, scene_dem)
     KV("DEM", dem, scene_dem, block_origin, 3, "[0, 0, 0]",
       "block: the centre of its grain of lowest x, y, z, m")
     KE("DEM", dem, scene_dem, motion, enum dem_motion, dem_motions, "free",
-      "free (each grain its own) | rigid (the grains translate as one body: the block of §8) | fixed (held in place: the porous block of §7); default free")
+      "free (each grain its own) | rigid (the grains move as one rigid body, translating and turning: the block of §8; across a periodic axis it translates only) | fixed (held in place: the porous block of §7); default free")
 END_SECTION(dem)
