@@ -429,5 +429,6 @@ SECTION("DEM", dem, scene_dem)
     KV("DEM", dem, scene_dem, block_origin, 3, "[0, 0, 0]",
       "block: the centre of its grain of lowest x, y, z, m")
     KE("DEM", dem, scene_dem, motion, enum dem_motion, dem_motions, "free",
-      "free (each grain its own) | rigid (the grains move as one rigid body, translating and turning: the block of §8; across a periodic axis it translates only) | fixed (held in place: the porous block of §7); default free")
+      "free (each grain its own) | rigid (the grains move as one rigid body, translating and turning: the block "
+      "of §8; across a periodic axis it translates only) | fixed (held in place: the porous block of §7); default free")
 END_SECTION(dem)
