@@ -22,6 +22,9 @@ Each variant changes one existing key against the baseline `base`:
   bd3       Flow:bed_damping=3         the bed's shear-rate noise (what damps it), against 1
   chiD2     Segregation:chi_D=0.0614   twice the physical diffusion: a numerical diffusion that sets the
             error would matter half as much
+  cfl199    Run:cfl_flow=0.199: a step 0.5 % shorter, whose own effect is nil; what it changes is the
+            runs' sensitivity to a perturbation, the floor under which a variant's effect is noise (at
+            dr 2 mm, this machine, the index moves by several % between such runs)
   fill      Geometry:fill moved by one lattice row at dr 1.0 and 0.25 mm (FILL below) so that the
             three beds' areas agree within 0.6 % (base: 5 % EV, 3.2 % EN)
 The initial state is well mixed (C_below = C_above), so its "interface" is the bed's free surface on
@@ -36,9 +39,9 @@ Budget (one H200, double build; rates measured alone in docs/validation.md "Rota
                                    EV fill 115 s (t_end 20 allowed), EV shift05 115 s, EV limnone 115 s
   dr 0.5 mm to 20 s (4e5 steps):   EV base 75 s, EN base 78 s
   dr 1.0 mm to 40 s (4e5 steps):   EV base, EN base, EV fill, EN fill 67 s each
-  variants to 10 s:                EV x 6 at dr 0.5 (37 s each) and 1.0 (17 s), EN shift05 and
-                                   limnone at both: 432 s
-  total about 1.5e3 s of one process alone (up to 1.8e3 where the t_end 20 runs get there), run SLOTS (default 6) at a time on the one GPU within
+  variants to 10 s:                EV x 6 at dr 0.5 (37 s each) and 1.0 (17 s), EN shift05,
+                                   limnone and cfl199 at both, EV cfl199 at both: 540 s
+  total about 1.6e3 s of one process alone (up to 1.8e3 where the t_end 20 runs get there), run SLOTS (default 6) at a time on the one GPU within
   BUDGET (default 470 s) of wall: the runs are small and launch-bound, so they share the GPU, but
   how well is not measured. Every run is therefore started in the order above with
   Run:max_wall_time = the time left less 45 s (it writes a checkpoint and stops cleanly) and one
@@ -89,6 +92,7 @@ VARIANTS = {
     "bd3": ["Flow:bed_damping=3"],
     "chiD2": ["Segregation:chi_D=0.0614"],
     "fill": [],  # Geometry:fill from FILL
+    "cfl199": ["Run:cfl_flow=0.199"],  # after FLOW's 0.2: the noise floor (below)
 }
 # The bed's area is N dr^2 of the lattice points inside R - dr/2 below the fill line (src/sim/setup.c,
 # drum_disc): against the segment's exact area EV 0.9466, 0.9877, 0.9966 and EN 0.9579, 0.9894, 0.9899 at
@@ -100,10 +104,11 @@ FILL = {("EV", 0.001): 0.422857, ("EV", 0.00025): 0.418571, ("EN", 0.001): 0.594
 RUNS = [("EV", "base", 0.00025, 20), ("EN", "base", 0.00025, 10), ("EV", "base", 0.0005, 20),
         ("EV", "base", 0.001, 40), ("EV", "fill", 0.00025, 20), ("EV", "shift05", 0.00025, 10),
         ("EN", "base", 0.0005, 20), ("EN", "base", 0.001, 40), ("EV", "fill", 0.001, 40), ("EN", "fill", 0.001, 40),
-        ("EV", "limnone", 0.00025, 10)] + \
+        ("EV", "cfl199", 0.0005, 10), ("EV", "cfl199", 0.001, 10), ("EV", "limnone", 0.00025, 10)] + \
        [("EV", v, dr, 10) for v in ("shift05", "limnone", "every1", "const", "bd3", "chiD2")
         for dr in (0.0005, 0.001)] + \
-       [("EN", v, dr, 10) for v in ("shift05", "limnone") for dr in (0.0005, 0.001)]
+       [("EN", v, dr, 10) for v in ("shift05", "limnone") for dr in (0.0005, 0.001)] + \
+       [("EN", "cfl199", dr, 10) for dr in (0.0005, 0.001)]
 
 
 def label_of(drum, var, dr):
