@@ -31,25 +31,29 @@ The initial state is well mixed (C_below = C_above), so its "interface" is the b
 the lattice and the wall's gap: the bed's area (its mass) is first order in dr and jumps by a row of
 the fill line (FILL's comment); every run's JSON has the volume at t = 0.
 
-Budget (one H200, double build; rates measured alone in docs/validation.md "Rotating drums": EV
+Budget (one H200, double build). Rates of one run alone (docs/validation.md "Rotating drums"): EV
 8e5 steps in 149 s at dr 0.5 mm = 5.4e3 steps/s, 1.6e6 in 460 s at 0.25 mm = 3.5e3; EN 5.2e3 and
-2.6e3; dr 1.0 mm taken as 6e3, launch-bound). dt = chi 1.5 dr / c_s, c_s = 3.0 m/s at E 10 kPa:
+2.6e3; dr 1.0 mm taken as 6e3 (not measured). dt = chi 1.5 dr / c_s, c_s = 3.0 m/s at E 10 kPa:
 1e-4, 5e-5, 2.5e-5 s at dr 1.0, 0.5, 0.25 mm, so 1e4, 2e4, 4e4 steps per simulated second.
-  dr 0.25 mm to 10 s (4e5 steps):  EV base 115 s (t_end 20 allowed, 230 s), EN base 150 s,
-                                   EV fill 115 s (t_end 20 allowed), EV shift05 115 s, EV limnone 115 s
-  dr 0.5 mm to 20 s (4e5 steps):   EV base 75 s, EN base 78 s
-  dr 1.0 mm to 40 s (4e5 steps):   EV base, EN base, EV fill, EN fill 67 s each
-  variants to 10 s:                EV x 6 at dr 0.5 (37 s each) and 1.0 (17 s), EN shift05,
-                                   limnone and cfl199 at both, EV cfl199 at both: 540 s
-  total about 1.6e3 s of one process alone (up to 1.8e3 where the t_end 20 runs get there), run SLOTS (default 6) at a time on the one GPU within
-  BUDGET (default 470 s) of wall: the runs are small and launch-bound, so they share the GPU, but
-  how well is not measured. Every run is therefore started in the order above with
-  Run:max_wall_time = the time left less 45 s (it writes a checkpoint and stops cleanly) and one
-  that would get under 40 s is skipped: what the call cannot finish comes back as shorter series
-  (the table compares resolutions only at the times both reached). CPU runs are not used: a dr
-  1.0-mm drum runs about 40 steps/s on 2 threads (this development machine), 1e4 steps per second
-  of simulated time. Output under $OUT: one JSON (series, profiles) and the log tail per run, about
-  0.2 MB each; the snapshots are deleted after each analysis.
+Runs side by side on the one GPU gain nothing: the first call (2026-11-29, six at once, BUDGET
+460 s) ran the EN drum at dr 0.25 mm at 378 steps/s (156 417 steps in 414 s, 1.52e7 particle-steps/s)
+beside five others, 6 x 378 = 2.3e3 steps/s in all against 2.6e3 alone: the GPU time-slices the
+processes. So the runs go one at a time (SLOTS 1), each with Run:max_wall_time = the time left of
+BUDGET less 45 s (it writes a checkpoint and stops cleanly); a run that would get under 40 s is
+skipped and leaves NAME.skipped. In RUNS' order, to 10 s, alone:
+  EV base dr 1.0 (1e5 steps, 17 s), 0.5 (2e5, 37 s)                         54 s
+  EV cfl199, fill, every1 at dr 1.0 and 0.5 (fill: 1.0 only)               125 s
+  EV base dr 0.25 (4e5 steps, 115 s)                                        115 s   (294 s so far)
+  EN base dr 1.0, 0.5; EN fill dr 1.0; EN cfl199 dr 1.0, 0.5                130 s   (424 s)
+  EV shift05, limnone, const, bd3, chiD2 at dr 1.0 and 0.5                  270 s
+  the dr 0.25-mm variants (EV fill, shift05; EN base): 115-150 s each
+about 1.1e3 s in all: one call of BUDGET 460 s reaches the EN runs; the rest need a second call
+(BUDGET and a shorter RUNS list by --only). CPU runs are not used: a dr 1.0-mm drum runs about 85
+steps/s on one thread of this development machine, 1e4 steps per simulated second. Output: the
+device returns a limited number of files, so everything under $OUT/res (one JSON of series and
+profiles and the log tail per run, about 0.2 MB each) is packed into $OUT/seg_refine_res.tgz and
+the run folders are deleted (the snapshots after each analysis). Unpack with
+tar xzf seg_refine_res.tgz (it holds res/).
 
 analyse (on the device, numpy, h5py, PyYAML; scipy's cKDTree where present, else a grid): per
 snapshot, through tools.analysis.drum_analysis.Drum: dynamic angle, surface speed on the
@@ -101,14 +105,13 @@ VARIANTS = {
 # EV 0.9909, (0.9877), 0.9854; EN 0.9866, (0.9894), (0.9899); where no fill is given it is base's run.
 FILL = {("EV", 0.001): 0.422857, ("EV", 0.00025): 0.418571, ("EN", 0.001): 0.594286}
 # (drum, variant, dr m, t_end s), in the order they start (the long ones first; see the budget above)
-RUNS = [("EV", "base", 0.00025, 20), ("EN", "base", 0.00025, 10), ("EV", "base", 0.0005, 20),
-        ("EV", "base", 0.001, 40), ("EV", "fill", 0.00025, 20), ("EV", "shift05", 0.00025, 10),
-        ("EN", "base", 0.0005, 20), ("EN", "base", 0.001, 40), ("EV", "fill", 0.001, 40), ("EN", "fill", 0.001, 40),
-        ("EV", "cfl199", 0.0005, 10), ("EV", "cfl199", 0.001, 10), ("EV", "limnone", 0.00025, 10)] + \
-       [("EV", v, dr, 10) for v in ("shift05", "limnone", "every1", "const", "bd3", "chiD2")
-        for dr in (0.0005, 0.001)] + \
-       [("EN", v, dr, 10) for v in ("shift05", "limnone") for dr in (0.0005, 0.001)] + \
-       [("EN", "cfl199", dr, 10) for dr in (0.0005, 0.001)]
+RUNS = [("EV", "base", 0.001, 10), ("EV", "base", 0.0005, 10),
+        ("EV", "cfl199", 0.001, 10), ("EV", "cfl199", 0.0005, 10), ("EV", "fill", 0.001, 10),
+        ("EV", "every1", 0.001, 10), ("EV", "every1", 0.0005, 10), ("EV", "base", 0.00025, 10),
+        ("EN", "base", 0.001, 10), ("EN", "base", 0.0005, 10), ("EN", "fill", 0.001, 10),
+        ("EN", "cfl199", 0.001, 10), ("EN", "cfl199", 0.0005, 10)] + \
+       [("EV", v, dr, 10) for v in ("shift05", "limnone", "const", "bd3", "chiD2") for dr in (0.001, 0.0005)] + \
+       [("EV", "fill", 0.00025, 10), ("EV", "shift05", 0.00025, 10), ("EN", "base", 0.00025, 10)]
 
 
 def label_of(drum, var, dr):
@@ -118,19 +121,19 @@ def label_of(drum, var, dr):
 # ---------------------------------------------------------------- commands
 
 def commands(a):
-    runs = RUNS
+    runs = [r for r in RUNS if not a.only or label_of(*r[:3]) in a.only]
     if a.tiny:  # the local check: dr 2 mm, 0.2 s, snapshots every 0.1 s, every run once
         runs = [(d, v, 0.002, 0.2) for d, v in dict.fromkeys((d, v) for d, v, _, _ in RUNS)]
         FILL.update({("EV", 0.002): 0.43, ("EN", 0.002): 0.6})
     lines = ["#!/bin/bash",
              "# seg_refine: issue 57 item 1, one device call (written by python3 -m tools.studies.seg_refine "
              "commands). Run from the repository root:",
-             "#   OUT=... SLOTS=6 BUDGET=470 bash THIS   (defaults below)",
+             "#   OUT=... BUDGET=460 bash THIS   (defaults below)",
              "set -u",
              "SPHSEG=${SPHSEG:-%s}" % a.sphseg,
              "OUT=${OUT:-%s}" % a.out,
-             "SLOTS=${SLOTS:-%d}" % (2 if a.tiny else 6),
-             "BUDGET=${BUDGET:-%d}" % (3000 if a.tiny else 470),
+             "SLOTS=${SLOTS:-1}  # one GPU: runs side by side gain nothing (the docstring's budget)",
+             "BUDGET=${BUDGET:-%d}" % (3000 if a.tiny else 460),
              "BACKEND=${BACKEND:-%s}" % ("cpu" if a.tiny else "gpu"),
              "PY=${PY:-python3}",
              "export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1}",
@@ -161,7 +164,10 @@ def commands(a):
         lines.append('while [ "$(jobs -rp | wc -l)" -ge "$SLOTS" ]; do wait -n; done')
         lines.append("one %s inputs/drum_2d_%s.yml %s &" % (lab, drum, " ".join("-P '%s'" % k for k in keys)))
         lines.append("sleep 1")
-    lines += ["wait", 'echo "all done at $(( $(date +%s) - T0 )) s"', 'ls "$OUT/res" | wc -l', 'du -sh "$OUT"']
+    lines += ["wait", 'echo "all done at $(( $(date +%s) - T0 )) s"',
+              '# the device returns a limited number of files: one archive',
+              'tar czf "$OUT/seg_refine_res.tgz" -C "$OUT" res && rm -rf "$OUT/res" "$OUT/runs"',
+              'ls -l "$OUT"']
     text = "\n".join(lines) + "\n"
     if a.script:
         with open(a.script, "w") as f:
@@ -440,6 +446,7 @@ def main():
     c.add_argument("--sphseg", default="local/sphseg_gpu")
     c.add_argument("--out", default="out/seg_refine", help="the runs' root where $OUT is not set (the device sets it)")
     c.add_argument("--script", help="write the script here (default: stdout)")
+    c.add_argument("--only", nargs="+", help="only these runs (labels such as EV_base_dr0.25)")
     c.add_argument("--tiny", action="store_true", help="every run at dr 2 mm for 0.2 s, on the CPU (a local check)")
     n = sub.add_parser("analyse")
     n.add_argument("rundir")
