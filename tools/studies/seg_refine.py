@@ -25,6 +25,8 @@ Each variant changes one existing key against the baseline `base`:
   cfl199    Run:cfl_flow=0.199: a step 0.5 % shorter, whose own effect is nil; what it changes is the
             runs' sensitivity to a perturbation, the floor under which a variant's effect is noise (at
             dr 2 mm, this machine, the index moves by several % between such runs)
+  area      Geometry:fill_by=area: the fill line raised until the bed's area is the segment's (within
+            2e-4 at every dr; tests/validate_fill_area.py)
   fill      Geometry:fill moved by one lattice row at dr 1.0 and 0.25 mm (FILL below) so that the
             three beds' areas agree within 0.6 % (base: 5 % EV, 3.2 % EN)
 The initial state is well mixed (C_below = C_above), so its "interface" is the bed's free surface on
@@ -42,12 +44,13 @@ processes. So the runs go one at a time (SLOTS 1), each with Run:max_wall_time =
 BUDGET less 45 s (it writes a checkpoint and stops cleanly); a run that would get under 40 s is
 skipped and leaves NAME.skipped. In RUNS' order, to 10 s, alone:
   EV base dr 1.0 (1e5 steps, 17 s), 0.5 (2e5, 37 s)                         54 s
-  EV cfl199, fill, every1 at dr 1.0 and 0.5 (fill: 1.0 only)               125 s
-  EV base dr 0.25 (4e5 steps, 115 s)                                        115 s   (294 s so far)
-  EN base dr 1.0, 0.5; EN fill dr 1.0; EN cfl199 dr 1.0, 0.5                130 s   (424 s)
+  EV cfl199, area, every1 at dr 1.0 and 0.5                                162 s
+  EV base dr 0.25 (4e5 steps, 115 s)                                        115 s   (331 s so far)
+  EN base, area, cfl199 at dr 1.0 and 0.5                                   165 s   (496 s)
   EV shift05, limnone, const, bd3, chiD2 at dr 1.0 and 0.5                  270 s
-  the dr 0.25-mm variants (EV fill, shift05; EN base): 115-150 s each
-about 1.1e3 s in all: one call of BUDGET 460 s reaches the EN runs; the rest need a second call
+  EV and EN fill at dr 1.0                                                   34 s
+  the dr 0.25-mm variants (EV area, fill, shift05; EN base): 115-150 s each
+about 1.3e3 s in all: one call of BUDGET 460 s reaches the first EN runs; the rest need a second call
 (BUDGET and a shorter RUNS list by --only). CPU runs are not used: a dr 1.0-mm drum runs about 85
 steps/s on one thread of this development machine, 1e4 steps per simulated second. Output: the
 device returns a limited number of files, so everything under $OUT/res (one JSON of series and
@@ -96,7 +99,8 @@ VARIANTS = {
     "bd3": ["Flow:bed_damping=3"],
     "chiD2": ["Segregation:chi_D=0.0614"],
     "fill": [],  # Geometry:fill from FILL
-    "cfl199": ["Run:cfl_flow=0.199"],  # after FLOW's 0.2: the noise floor (below)
+    "cfl199": ["Run:cfl_flow=0.199"],
+    "area": ["Geometry:fill_by=area"],  # the bed's area the segment's at every dr  # after FLOW's 0.2: the noise floor (below)
 }
 # The bed's area is N dr^2 of the lattice points inside R - dr/2 below the fill line (src/sim/setup.c,
 # drum_disc): against the segment's exact area EV 0.9466, 0.9877, 0.9966 and EN 0.9579, 0.9894, 0.9899 at
@@ -106,12 +110,14 @@ VARIANTS = {
 FILL = {("EV", 0.001): 0.422857, ("EV", 0.00025): 0.418571, ("EN", 0.001): 0.594286}
 # (drum, variant, dr m, t_end s), in the order they start (the long ones first; see the budget above)
 RUNS = [("EV", "base", 0.001, 10), ("EV", "base", 0.0005, 10),
-        ("EV", "cfl199", 0.001, 10), ("EV", "cfl199", 0.0005, 10), ("EV", "fill", 0.001, 10),
+        ("EV", "cfl199", 0.001, 10), ("EV", "cfl199", 0.0005, 10), ("EV", "area", 0.001, 10),
+        ("EV", "area", 0.0005, 10),
         ("EV", "every1", 0.001, 10), ("EV", "every1", 0.0005, 10), ("EV", "base", 0.00025, 10),
-        ("EN", "base", 0.001, 10), ("EN", "base", 0.0005, 10), ("EN", "fill", 0.001, 10),
+        ("EN", "base", 0.001, 10), ("EN", "base", 0.0005, 10), ("EN", "area", 0.001, 10), ("EN", "area", 0.0005, 10),
         ("EN", "cfl199", 0.001, 10), ("EN", "cfl199", 0.0005, 10)] + \
        [("EV", v, dr, 10) for v in ("shift05", "limnone", "const", "bd3", "chiD2") for dr in (0.001, 0.0005)] + \
-       [("EV", "fill", 0.00025, 10), ("EV", "shift05", 0.00025, 10), ("EN", "base", 0.00025, 10)]
+       [("EV", "fill", 0.001, 10), ("EN", "fill", 0.001, 10), ("EV", "area", 0.00025, 10), ("EV", "fill", 0.00025, 10),
+        ("EV", "shift05", 0.00025, 10), ("EN", "base", 0.00025, 10)]
 
 
 def label_of(drum, var, dr):
