@@ -5,7 +5,7 @@ on the 2D drums, factor by factor.
   python3 -m tools.studies.seg_refine commands [--sphseg BIN] [--out DIR] [--script FILE] [--tiny]
   bash FILE                                                  (one device call: runs, analyses, deletes snapshots)
   python3 -m tools.studies.seg_refine analyse RUNDIR --json FILE [--rc RC] [--log LOG]   (the script calls it)
-  python3 -m tools.studies.seg_refine table FILE.json... [--csv docs/data/drum/seg_refine.csv]
+  python3 -m tools.studies.seg_refine table FILE.json... [--csv docs/data/drum/seg_refine.csv] [--effects CSV]
   python3 -m tools.studies.seg_refine chart [--csv ...] [--png docs/data/drum/seg_refine.png]
 
 The runs. The scenes (inputs/drum_2d_EV.yml, drum_2d_EN.yml) with their flow (riemann, bed damping 1,
@@ -402,10 +402,46 @@ def table(a):
             r["index_fine"], r["index_change_pct"], r.get("C_rms", float("nan")), r.get("gdot_rel_rms", float("nan")),
             "%.2f" % r["order_index"] if "order_index" in r else "", "%.2f" % r["share_index"]
             if "share_index" in r else ""))
-    vols = sorted({(d, dr): r["series"][0]["volume"] for (d, v, dr), r in runs.items()
+    if a.effects:
+        effects(runs, a.effects)
+    vols = sorted({(d, dr): r["series"][0]["volume"] for (d, v, dr), r in runs.items() if v == "base"
                    if r["series"] and r["series"][0]["t"] == 0}.items())
     if vols:
         print("bed volume at t = 0 (m^2 per m): " + ", ".join("%s dr %g: %.6e" % (d, dr, v) for (d, dr), v in vols))
+
+
+def effects(runs, path):
+    """Each variant against base at the same drum and dr: the index (%), the mid-chord speed (%) and the RMS
+    of the mid-chord C profiles' difference, per time both reached."""
+    rows = []
+    for (drum, var, dr), r in sorted(runs.items()):
+        b = runs.get((drum, "base", dr))
+        if var == "base" or b is None or b is r:
+            continue
+        for t in sorted(set(r["t_series"]) & set(b["t_series"])):
+            if t <= 0:
+                continue
+            s, sb = r["t_series"][t], b["t_series"][t]
+            row = {"drum": drum, "variant": var, "dr_mm": dr, "t_s": t, "index_base": sb["index"],
+                   "index": s["index"], "index_vs_base_pct": 100 * (s["index"] / sb["index"] - 1),
+                   "speed_vs_base_pct": 100 * (s["speed"] / sb["speed"] - 1),
+                   "area_vs_base_pct": 100 * (r["series"][0]["volume"] / b["series"][0]["volume"] - 1)}
+            k = "%g" % t
+            if k in r["profiles"] and k in b["profiles"]:
+                row["C_rms_vs_base"] = prof_rms(b["profiles"][k], r["profiles"][k], "C")[0]
+            rows.append(row)
+    fields = ["drum", "variant", "dr_mm", "t_s", "index_base", "index", "index_vs_base_pct", "C_rms_vs_base",
+              "speed_vs_base_pct", "area_vs_base_pct"]
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fields)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("%.4g" % r[k] if isinstance(r.get(k), float) else r.get(k, "")) for k in fields})
+    print("wrote %s (%d rows)" % (path, len(rows)))
+    for r in rows:
+        print("%-3s %-8s dr %-4g t %4g  index %+6.1f %%  C rms %.4f  speed %+5.1f %%  area %+5.1f %%" % (
+            r["drum"], r["variant"], r["dr_mm"], r["t_s"], r["index_vs_base_pct"], r.get("C_rms_vs_base", float("nan")),
+            r["speed_vs_base_pct"], r["area_vs_base_pct"]))
 
 
 def chart(a):
@@ -463,6 +499,7 @@ def main():
     t = sub.add_parser("table")
     t.add_argument("files", nargs="+")
     t.add_argument("--csv", default=CSV)
+    t.add_argument("--effects", help="also write each variant against base at the same dr to this CSV")
     h = sub.add_parser("chart")
     h.add_argument("--csv", default=CSV)
     h.add_argument("--png", default=PNG)
