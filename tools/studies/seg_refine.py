@@ -6,7 +6,7 @@ on the 2D drums, factor by factor.
   bash FILE                                                  (one device call: runs, analyses, deletes snapshots)
   python3 -m tools.studies.seg_refine analyse RUNDIR --json FILE [--rc RC] [--log LOG]   (the script calls it)
   python3 -m tools.studies.seg_refine table FILE.json... [--csv docs/data/drum/seg_refine.csv] [--effects CSV]
-  python3 -m tools.studies.seg_refine chart [--csv ...] [--png docs/data/drum/seg_refine.png]
+  python3 -m tools.studies.seg_refine chart [--csv ...] [--effects CSV] [--png docs/data/drum/seg_refine.png]
 
 The runs. The scenes (inputs/drum_2d_EV.yml, drum_2d_EN.yml) with their flow (riemann, bed damping 1,
 the corrected gradient, Fickian shifting, C in windows `every auto`) at E 10 kPa, chi 0.2, the
@@ -445,37 +445,51 @@ def effects(runs, path):
 
 
 def chart(a):
+    """Left: the index change per refinement step, per drum and variant; right (with --effects): each
+    variant against base at the same dr, the runs a step 0.5 % off (cfl199, cfl201) drawn as the noise."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     rows = list(csv.DictReader(open(a.csv)))
-    drums = sorted({r["drum"] for r in rows})
-    fig, ax = plt.subplots(len(drums), 2, figsize=(11, 4 * len(drums)), squeeze=False)
+    eff = list(csv.DictReader(open(a.effects))) if a.effects else []
+    drums = sorted({r["drum"] for r in rows} | {r["drum"] for r in eff})
+    ncol = 2 if eff else 1
+    fig, ax = plt.subplots(len(drums), ncol, figsize=(6 * ncol, 3.8 * len(drums)), squeeze=False)
     for k, drum in enumerate(drums):
         rs = [r for r in rows if r["drum"] == drum]
         for var in sorted({r["variant"] for r in rs}, key=lambda v: (v != "base", v)):
-            vs = [r for r in rs if r["variant"] == var]
-            for pair, mk in (("2->1", "^:"), ("1->0.5", "o-"), ("0.5->0.25", "s--")):
-                c, f = map(float, pair.split("->"))
-                p = sorted((r for r in vs if float(r["dr_coarse_mm"]) == c and float(r["dr_fine_mm"]) == f),
+            for r0 in sorted({(r["dr_coarse_mm"], r["dr_fine_mm"]) for r in rs if r["variant"] == var}):
+                p = sorted((r for r in rs if r["variant"] == var and (r["dr_coarse_mm"], r["dr_fine_mm"]) == r0),
                            key=lambda r: float(r["t_s"]))
-                if not p:
-                    continue
-                t = [float(r["t_s"]) for r in p]
-                ax[k][0].plot(t, [float(r["index_change_pct"]) for r in p], mk, label="%s, dr %s mm" % (var, pair),
-                              lw=2.5 if var == "base" else 1, ms=4)
-                ax[k][1].plot(t, [float(r["C_rms"] or "nan") for r in p], mk, label="%s, dr %s mm" % (var, pair),
-                              lw=2.5 if var == "base" else 1, ms=4)
-        ax[k][0].axhspan(-3, 3, color="0.9")
-        ax[k][1].axhline(0.02, color="0.5", ls=":")
-        ax[k][0].set_ylabel("%s: segregation index change, %%" % drum)
-        ax[k][1].set_ylabel("%s: mid-chord C profile RMS difference" % drum)
-        for j in (0, 1):
-            ax[k][j].set_xlabel("t, s")
-            ax[k][j].grid(alpha=0.3)
-        ax[k][0].legend(fontsize=6, ncol=2)
-    fig.suptitle("The segregation under refinement per variant (2D drums, E 10 kPa, chi 0.2, the scenes' flow; "
-                 "one H200); the targets: 3 %, 0.02", fontsize=9)
+                ax[k][0].plot([float(r["t_s"]) for r in p], [float(r["index_change_pct"]) for r in p],
+                              "o-" if var == "base" else "s--", lw=2.5 if var == "base" else 1, ms=4,
+                              label="%s, dr %s -> %s mm" % (var, *r0))
+        ax[k][0].axhspan(-3, 3, color="0.92", zorder=0)
+        ax[k][0].set_ylabel("%s: index change per refinement, %%" % drum)
+        ax[k][0].set_xlabel("t, s")
+        ax[k][0].grid(alpha=0.3)
+        ax[k][0].legend(fontsize=7)
+        if not eff:
+            continue
+        es = [r for r in eff if r["drum"] == drum]
+        for dr in sorted({r["dr_mm"] for r in es}, key=float):
+            noise = [r for r in es if r["dr_mm"] == dr and r["variant"].startswith("cfl")]
+            ts = sorted({float(r["t_s"]) for r in noise})
+            if ts:
+                lo = [min([0.0] + [float(r["index_vs_base_pct"]) for r in noise if float(r["t_s"]) == t]) for t in ts]
+                hi = [max([0.0] + [float(r["index_vs_base_pct"]) for r in noise if float(r["t_s"]) == t]) for t in ts]
+                ax[k][1].fill_between(ts, lo, hi, alpha=0.15, label="step 0.5 %% off (noise), dr %s mm" % dr)
+            for var in sorted({r["variant"] for r in es if r["dr_mm"] == dr and not r["variant"].startswith("cfl")}):
+                p = sorted((r for r in es if r["dr_mm"] == dr and r["variant"] == var), key=lambda r: float(r["t_s"]))
+                ax[k][1].plot([float(r["t_s"]) for r in p], [float(r["index_vs_base_pct"]) for r in p], "o-", ms=4,
+                              label="%s, dr %s mm" % (var, dr))
+        ax[k][1].axhline(0, color="0.5", lw=0.8)
+        ax[k][1].set_ylabel("%s: index against base at the same dr, %%" % drum)
+        ax[k][1].set_xlabel("t, s")
+        ax[k][1].grid(alpha=0.3)
+        ax[k][1].legend(fontsize=7)
+    fig.suptitle("2D drums, E 10 kPa, chi 0.2, the scenes' flow: the segregation index under refinement and "
+                 "against each factor (%s)" % a.machine, fontsize=9)
     fig.tight_layout()
     fig.savefig(a.png, dpi=110)
     print("wrote %s" % a.png)
@@ -503,6 +517,8 @@ def main():
     h = sub.add_parser("chart")
     h.add_argument("--csv", default=CSV)
     h.add_argument("--png", default=PNG)
+    h.add_argument("--effects", help="the table's --effects CSV: a second column of panels")
+    h.add_argument("--machine", default="development machine", help="the runs' machine, for the title")
     a = ap.parse_args()
     {"commands": commands, "analyse": analyse, "table": table, "chart": chart}[a.what](a)
 
