@@ -26,7 +26,7 @@ Each variant changes one existing key against the baseline `base`:
             runs' sensitivity to a perturbation, the floor under which a variant's effect is noise (at
             dr 2 mm, this machine, the index moves by several % between such runs)
   area      Geometry:fill_by=area: the fill line raised until the bed's area is the segment's (within
-            2e-4 at every dr; tests/validate_fill_area.py)
+            one particle at every dr: 1.4e-3 at dr 2 mm, 1.5e-4 at 1-0.25 mm; tests/validate_fill_area.py)
   fill      Geometry:fill moved by one lattice row at dr 1.0 and 0.25 mm (FILL below) so that the
             three beds' areas agree within 0.6 % (base: 5 % EV, 3.2 % EN)
 The initial state is well mixed (C_below = C_above), so its "interface" is the bed's free surface on
