@@ -24,7 +24,7 @@ Each variant changes one existing key against the baseline `base`:
             error would matter half as much
   cfl199    Run:cfl_flow=0.199: a step 0.5 % shorter, whose own effect is nil; what it changes is the
             runs' sensitivity to a perturbation, the floor under which a variant's effect is noise (at
-            dr 2 mm, this machine, the index moves by several % between such runs)
+            dr 2 mm, development machine, 0.199 and 0.201 move the index by up to 5.2 % EV, 2.6 % EN)
   area      Geometry:fill_by=area: the fill line raised until the bed's area is the segment's (within
             one particle at every dr: 1.4e-3 at dr 2 mm, 1.5e-4 at 1-0.25 mm; tests/validate_fill_area.py)
   fill      Geometry:fill moved by one lattice row at dr 1.0 and 0.25 mm (FILL below) so that the
@@ -51,8 +51,8 @@ skipped and leaves NAME.skipped. In RUNS' order, to 10 s, alone:
   EV and EN fill at dr 1.0                                                   34 s
   the dr 0.25-mm variants (EV area, fill, shift05; EN base): 115-150 s each
 about 1.3e3 s in all: one call of BUDGET 460 s reaches the first EN runs; the rest need a second call
-(BUDGET and a shorter RUNS list by --only). CPU runs are not used: a dr 1.0-mm drum runs about 85
-steps/s on one thread of this development machine, 1e4 steps per simulated second. Output: the
+(BUDGET and a shorter RUNS list by --only). CPU runs are not used: a dr 1.0-mm drum runs 30-55
+steps/s on one thread of the (shared) development machine, 1e4 steps per simulated second. Output: the
 device returns a limited number of files, so everything under $OUT/res (one JSON of series and
 profiles and the log tail per run, about 0.2 MB each) is packed into $OUT/seg_refine_res.tgz and
 the run folders are deleted (the snapshots after each analysis). Unpack with
@@ -63,17 +63,18 @@ snapshot, through tools.analysis.drum_analysis.Drum: dynamic angle, surface spee
 mid-chord, segregation index, C range, the mid-chord profiles (speed, shear rate, C; 120 points),
 the material's volume, the bed's shear-rate noise (the volume-weighted mean shear rate of particles
 that move with the drum to within 5 % of the wall speed and lie more than 2h from the wall and the
-surface line, and its share of the bed's sum of V gdot, which drives the segregation flux there)
+surface line, and the bed's share of the material's sum of V gdot C (1 - C), the segregation flux's drive)
 and the particle disorder (interior particles, up to 3000 of them: the nearest neighbour's
 distance over dr, mean and standard deviation, and the standard deviation of the kernel sum
 sum_j V_j W_ij).
 
 table: per drum and variant, at each time both resolutions reached, the index change and the RMS
-of the mid-chord C profiles' difference (on d_mc / R over the shorter profile) for dr 1.0 -> 0.5
-and 0.5 -> 0.25 mm, the shear-rate profile's relative RMS change, the observed order where three
+of the mid-chord C profiles' difference (on d_mc / R over the shorter profile) for dr 2 -> 1,
+1.0 -> 0.5 and 0.5 -> 0.25 mm, the shear-rate profile's relative RMS change, the observed order where three
 resolutions meet, and the factor's share: 1 - |change with the variant| / |change of base| at the
 same pair and time (1: switching the factor removes the resolution change; 0: no effect; negative:
-the variant changes more).
+the variant changes more). --effects: each variant against base at the same drum and dr (index,
+mid-chord speed, the C profile's RMS, the bed's area), per time.
 chart: the index against dr per variant, and the index change per refinement step.
 """
 import argparse
