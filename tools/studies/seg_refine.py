@@ -75,7 +75,8 @@ resolutions meet, and the factor's share: 1 - |change with the variant| / |chang
 same pair and time (1: switching the factor removes the resolution change; 0: no effect; negative:
 the variant changes more). --effects: each variant against base at the same drum and dr (index,
 mid-chord speed, the C profile's RMS, the bed's area), per time.
-chart: the index against dr per variant, and the index change per refinement step.
+chart: the index change per refinement step per variant, and with --effects each variant against base
+at the same dr beside the noise runs (cfl199, cfl201).
 """
 import argparse
 import csv
