@@ -466,6 +466,8 @@ def chart(a):
                 ax[k][0].plot([float(r["t_s"]) for r in p], [float(r["index_change_pct"]) for r in p],
                               "o-" if var == "base" else "s--", lw=2.5 if var == "base" else 1, ms=4,
                               label="%s, dr %s -> %s mm" % (var, *r0))
+        if not rs:
+            ax[k][0].text(0.5, 0.5, "no pair of resolutions measured", ha="center", transform=ax[k][0].transAxes)
         ax[k][0].axhspan(-3, 3, color="0.92", zorder=0)
         ax[k][0].set_ylabel("%s: index change per refinement, %%" % drum)
         ax[k][0].set_xlabel("t, s")
