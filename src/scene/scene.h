@@ -11,6 +11,9 @@ enum seg_flux { SEG_FLUX_SYMMETRIC = 0, SEG_FLUX_ASYMMETRIC = 1 };
 enum seg_model { SEG_MODEL_CONSTANT = 0, SEG_MODEL_SHEAR_RATE = 1 };
 enum flow_background { FLOW_BACKGROUND_MOMENTUM = 0, FLOW_BACKGROUND_EXCLUDED = 1 };
 enum geom_type { GEOM_SHEARBOX = 0, GEOM_COLUMN = 1, GEOM_DRUM = 2, GEOM_CONTAINER = 3 };
+/* Geometry:fill_by (a drum's material, src/sim/setup.c): the lattice below the fill line, or the fill line
+ * moved so that the material's area is the segment's. */
+enum fill_by { FILL_LATTICE = 0, FILL_AREA = 1 };
 /* Geometry:periodic, one bit per axis (bit d: axis d). */
 enum periodic_axes {
     PERIODIC_NONE = 0, PERIODIC_X = 1, PERIODIC_Y = 2, PERIODIC_XY = 3, PERIODIC_Z = 4, PERIODIC_XZ = 5,

@@ -149,10 +149,44 @@ static void setup_box(sim_t *s)
  * material leak through the corner; volume dr^3. */
 typedef struct drum_layout {
     double dr, vol, R, H, split; /* spacing, particle volume, radius, surface, C split height (m) */
+    double oy;                   /* the lattice's rows at (j + 1/2) dr + oy (m): 0, or aligned to H (fill_by area) */
     long nh, nl, nz, nend;       /* lattice half-width, rings, material planes, end-wall planes */
     int dim;
     const struct scene_initial *ini;
 } drum_layout;
+
+/* About the number of lattice points of one plane (r <= R - dr/2, y <= H, rows at (j + 1/2) dr + oy),
+ * row by row: the points (i + 1/2) dr with |x| <= w are 2 floor(w / dr + 1/2) of them (drum_disc's own
+ * test may differ by a point where one lies on the circle to round-off: it places the material). */
+static long drum_plane_count(const drum_layout *d)
+{
+    long n = 0;
+    double rc = d->R - 0.5 * d->dr;
+    for (long j = -d->nh; j < d->nh; ++j) {
+        double y = (j + 0.5) * d->dr + d->oy;
+        if (y <= d->H && fabs(y) <= rc) n += 2 * (long)floor(sqrt(rc * rc - y * y) / d->dr + 0.5);
+    }
+    return n;
+}
+
+/* Geometry:fill_by area: the fill line H' and the rows with it (the top row at H' - dr/2), H' from H - dr
+ * to H + 3 dr in steps of dr/512, the one whose plane's N dr^2 is nearest the area of the segment of the
+ * drum (radius R) below H (the first such). The wall's gap of dr/2 then costs no material: the bed holds
+ * the segment's area, its surface that much higher. */
+static void drum_fill_area(drum_layout *d)
+{
+    double R = d->R, H = d->H, hr = fmax(-1.0, fmin(1.0, H / R));
+    double A = R * R * (M_PI - acos(hr)) + H * sqrt(fmax(0.0, R * R - H * H)), target = A / (d->dr * d->dr);
+    double H0 = H, best = INFINITY, bestH = H, bestoy = 0;
+    for (int k = 0; k <= 4 * 512; ++k) {
+        double He = H0 - d->dr + k * d->dr / 512;
+        d->H = He;
+        d->oy = He - d->dr * ceil(He / d->dr); /* in (-dr, 0]: the row j = ceil(He/dr) - 1 lies at He - dr/2 */
+        double miss = fabs((double)drum_plane_count(d) - target);
+        if (miss < best) best = miss, bestH = d->H, bestoy = d->oy;
+    }
+    d->H = bestH + 1e-9 * d->dr, d->oy = bestoy; /* the top row's test y <= H not at the mercy of rounding */
+}
 
 static drum_layout drum_layout_of(const struct scene *sc)
 {
@@ -165,6 +199,8 @@ static drum_layout drum_layout_of(const struct scene *sc)
     d.nz = d.dim == 3 ? lround(g->length / d.dr) : 1;
     d.nend = d.dim == 3 ? d.nl : 0;
     d.ini = &sc->initial;
+    d.oy = 0;
+    if (g->fill_by == FILL_AREA) drum_fill_area(&d);
     return d;
 }
 
@@ -182,7 +218,7 @@ static size_t drum_disc(particles_t *p, size_t k, const drum_layout *d, double z
 {
     for (long j = -d->nh; j < d->nh; ++j)
         for (long i = -d->nh; i < d->nh; ++i) {
-            double x = (i + 0.5) * d->dr, y = (j + 0.5) * d->dr;
+            double x = (i + 0.5) * d->dr, y = (j + 0.5) * d->dr + d->oy;
             if (!(sqrt(x * x + y * y) <= d->R - 0.5 * d->dr && y <= d->H)) continue;
             if (p) drum_put(p, k, x, y, z, KIND_MATERIAL, d);
             k++;

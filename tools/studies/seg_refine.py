@@ -5,8 +5,8 @@ on the 2D drums, factor by factor.
   python3 -m tools.studies.seg_refine commands [--sphseg BIN] [--out DIR] [--script FILE] [--tiny]
   bash FILE                                                  (one device call: runs, analyses, deletes snapshots)
   python3 -m tools.studies.seg_refine analyse RUNDIR --json FILE [--rc RC] [--log LOG]   (the script calls it)
-  python3 -m tools.studies.seg_refine table FILE.json... [--csv docs/data/drum/seg_refine.csv]
-  python3 -m tools.studies.seg_refine chart [--csv ...] [--png docs/data/drum/seg_refine.png]
+  python3 -m tools.studies.seg_refine table FILE.json... [--csv docs/data/drum/seg_refine.csv] [--effects CSV]
+  python3 -m tools.studies.seg_refine chart [--csv ...] [--effects CSV] [--png docs/data/drum/seg_refine.png]
 
 The runs. The scenes (inputs/drum_2d_EV.yml, drum_2d_EN.yml) with their flow (riemann, bed damping 1,
 the corrected gradient, Fickian shifting, C in windows `every auto`) at E 10 kPa, chi 0.2, the
@@ -22,49 +22,61 @@ Each variant changes one existing key against the baseline `base`:
   bd3       Flow:bed_damping=3         the bed's shear-rate noise (what damps it), against 1
   chiD2     Segregation:chi_D=0.0614   twice the physical diffusion: a numerical diffusion that sets the
             error would matter half as much
+  cfl199    Run:cfl_flow=0.199: a step 0.5 % shorter, whose own effect is nil; what it changes is the
+            runs' sensitivity to a perturbation, the floor under which a variant's effect is noise (at
+            dr 2 mm, development machine, 0.199 and 0.201 move the index by up to 5.2 % EV, 2.6 % EN)
+  area      Geometry:fill_by=area: the fill line raised until the bed's area is the segment's (within
+            one particle at every dr: 1.4e-3 at dr 2 mm, 1.5e-4 at 1-0.25 mm; tests/validate_fill_area.py)
   fill      Geometry:fill moved by one lattice row at dr 1.0 and 0.25 mm (FILL below) so that the
             three beds' areas agree within 0.6 % (base: 5 % EV, 3.2 % EN)
 The initial state is well mixed (C_below = C_above), so its "interface" is the bed's free surface on
 the lattice and the wall's gap: the bed's area (its mass) is first order in dr and jumps by a row of
 the fill line (FILL's comment); every run's JSON has the volume at t = 0.
 
-Budget (one H200, double build; rates measured alone in docs/validation.md "Rotating drums": EV
+Budget (one H200, double build). Rates of one run alone (docs/validation.md "Rotating drums"): EV
 8e5 steps in 149 s at dr 0.5 mm = 5.4e3 steps/s, 1.6e6 in 460 s at 0.25 mm = 3.5e3; EN 5.2e3 and
-2.6e3; dr 1.0 mm taken as 6e3, launch-bound). dt = chi 1.5 dr / c_s, c_s = 3.0 m/s at E 10 kPa:
+2.6e3; dr 1.0 mm taken as 6e3 (not measured). dt = chi 1.5 dr / c_s, c_s = 3.0 m/s at E 10 kPa:
 1e-4, 5e-5, 2.5e-5 s at dr 1.0, 0.5, 0.25 mm, so 1e4, 2e4, 4e4 steps per simulated second.
-  dr 0.25 mm to 10 s (4e5 steps):  EV base 115 s (t_end 20 allowed, 230 s), EN base 150 s,
-                                   EV fill 115 s (t_end 20 allowed), EV shift05 115 s, EV limnone 115 s
-  dr 0.5 mm to 20 s (4e5 steps):   EV base 75 s, EN base 78 s
-  dr 1.0 mm to 40 s (4e5 steps):   EV base, EN base, EV fill, EN fill 67 s each
-  variants to 10 s:                EV x 6 at dr 0.5 (37 s each) and 1.0 (17 s), EN shift05 and
-                                   limnone at both: 432 s
-  total about 1.5e3 s of one process alone (up to 1.8e3 where the t_end 20 runs get there), run SLOTS (default 6) at a time on the one GPU within
-  BUDGET (default 470 s) of wall: the runs are small and launch-bound, so they share the GPU, but
-  how well is not measured. Every run is therefore started in the order above with
-  Run:max_wall_time = the time left less 45 s (it writes a checkpoint and stops cleanly) and one
-  that would get under 40 s is skipped: what the call cannot finish comes back as shorter series
-  (the table compares resolutions only at the times both reached). CPU runs are not used: a dr
-  1.0-mm drum runs about 40 steps/s on 2 threads (this development machine), 1e4 steps per second
-  of simulated time. Output under $OUT: one JSON (series, profiles) and the log tail per run, about
-  0.2 MB each; the snapshots are deleted after each analysis.
+Runs side by side on the one GPU gain nothing: the first call (2026-11-29, six at once, BUDGET
+460 s) ran the EN drum at dr 0.25 mm at 378 steps/s (156 417 steps in 414 s, 1.52e7 particle-steps/s)
+beside five others, 6 x 378 = 2.3e3 steps/s in all against 2.6e3 alone: the GPU time-slices the
+processes. So the runs go one at a time (SLOTS 1), each with Run:max_wall_time = the time left of
+BUDGET less 45 s (it writes a checkpoint and stops cleanly); a run that would get under 40 s is
+skipped and leaves NAME.skipped. In RUNS' order, to 10 s, alone:
+  EV base dr 1.0 (1e5 steps, 17 s), 0.5 (2e5, 37 s)                         54 s
+  EV cfl199, area, every1 at dr 1.0 and 0.5                                162 s
+  EV base dr 0.25 (4e5 steps, 115 s)                                        115 s   (331 s so far)
+  EN base, area, cfl199 at dr 1.0 and 0.5                                   165 s   (496 s)
+  EV shift05, limnone, const, bd3, chiD2 at dr 1.0 and 0.5                  270 s
+  EV and EN fill at dr 1.0                                                   34 s
+  the dr 0.25-mm variants (EV area, fill, shift05; EN base): 115-150 s each
+about 1.3e3 s in all: one call of BUDGET 460 s reaches the first EN runs; the rest need a second call
+(BUDGET and a shorter RUNS list by --only). CPU runs are not used: a dr 1.0-mm drum runs 30-55
+steps/s on one thread of the (shared) development machine, 1e4 steps per simulated second. Output: the
+device returns a limited number of files, so everything under $OUT/res (one JSON of series and
+profiles and the log tail per run, about 0.2 MB each) is packed into $OUT/seg_refine_res.tgz and
+the run folders are deleted (the snapshots after each analysis). Unpack with
+tar xzf seg_refine_res.tgz (it holds res/).
 
 analyse (on the device, numpy, h5py, PyYAML; scipy's cKDTree where present, else a grid): per
 snapshot, through tools.analysis.drum_analysis.Drum: dynamic angle, surface speed on the
 mid-chord, segregation index, C range, the mid-chord profiles (speed, shear rate, C; 120 points),
 the material's volume, the bed's shear-rate noise (the volume-weighted mean shear rate of particles
 that move with the drum to within 5 % of the wall speed and lie more than 2h from the wall and the
-surface line, and its share of the bed's sum of V gdot, which drives the segregation flux there)
+surface line, and the bed's share of the material's sum of V gdot C (1 - C), the segregation flux's drive)
 and the particle disorder (interior particles, up to 3000 of them: the nearest neighbour's
 distance over dr, mean and standard deviation, and the standard deviation of the kernel sum
 sum_j V_j W_ij).
 
 table: per drum and variant, at each time both resolutions reached, the index change and the RMS
-of the mid-chord C profiles' difference (on d_mc / R over the shorter profile) for dr 1.0 -> 0.5
-and 0.5 -> 0.25 mm, the shear-rate profile's relative RMS change, the observed order where three
+of the mid-chord C profiles' difference (on d_mc / R over the shorter profile) for dr 2 -> 1,
+1.0 -> 0.5 and 0.5 -> 0.25 mm, the shear-rate profile's relative RMS change, the observed order where three
 resolutions meet, and the factor's share: 1 - |change with the variant| / |change of base| at the
 same pair and time (1: switching the factor removes the resolution change; 0: no effect; negative:
-the variant changes more).
-chart: the index against dr per variant, and the index change per refinement step.
+the variant changes more). --effects: each variant against base at the same drum and dr (index,
+mid-chord speed, the C profile's RMS, the bed's area), per time.
+chart: the index change per refinement step per variant, and with --effects each variant against base
+at the same dr beside the noise runs (cfl199, cfl201).
 """
 import argparse
 import csv
@@ -89,6 +101,8 @@ VARIANTS = {
     "bd3": ["Flow:bed_damping=3"],
     "chiD2": ["Segregation:chi_D=0.0614"],
     "fill": [],  # Geometry:fill from FILL
+    "cfl199": ["Run:cfl_flow=0.199"],
+    "area": ["Geometry:fill_by=area"],  # the bed's area the segment's at every dr  # after FLOW's 0.2: the noise floor (below)
 }
 # The bed's area is N dr^2 of the lattice points inside R - dr/2 below the fill line (src/sim/setup.c,
 # drum_disc): against the segment's exact area EV 0.9466, 0.9877, 0.9966 and EN 0.9579, 0.9894, 0.9899 at
@@ -97,13 +111,15 @@ VARIANTS = {
 # EV 0.9909, (0.9877), 0.9854; EN 0.9866, (0.9894), (0.9899); where no fill is given it is base's run.
 FILL = {("EV", 0.001): 0.422857, ("EV", 0.00025): 0.418571, ("EN", 0.001): 0.594286}
 # (drum, variant, dr m, t_end s), in the order they start (the long ones first; see the budget above)
-RUNS = [("EV", "base", 0.00025, 20), ("EN", "base", 0.00025, 10), ("EV", "base", 0.0005, 20),
-        ("EV", "base", 0.001, 40), ("EV", "fill", 0.00025, 20), ("EV", "shift05", 0.00025, 10),
-        ("EN", "base", 0.0005, 20), ("EN", "base", 0.001, 40), ("EV", "fill", 0.001, 40), ("EN", "fill", 0.001, 40),
-        ("EV", "limnone", 0.00025, 10)] + \
-       [("EV", v, dr, 10) for v in ("shift05", "limnone", "every1", "const", "bd3", "chiD2")
-        for dr in (0.0005, 0.001)] + \
-       [("EN", v, dr, 10) for v in ("shift05", "limnone") for dr in (0.0005, 0.001)]
+RUNS = [("EV", "base", 0.001, 10), ("EV", "base", 0.0005, 10),
+        ("EV", "cfl199", 0.001, 10), ("EV", "cfl199", 0.0005, 10), ("EV", "area", 0.001, 10),
+        ("EV", "area", 0.0005, 10),
+        ("EV", "every1", 0.001, 10), ("EV", "every1", 0.0005, 10), ("EV", "base", 0.00025, 10),
+        ("EN", "base", 0.001, 10), ("EN", "base", 0.0005, 10), ("EN", "area", 0.001, 10), ("EN", "area", 0.0005, 10),
+        ("EN", "cfl199", 0.001, 10), ("EN", "cfl199", 0.0005, 10)] + \
+       [("EV", v, dr, 10) for v in ("shift05", "limnone", "const", "bd3", "chiD2") for dr in (0.001, 0.0005)] + \
+       [("EV", "fill", 0.001, 10), ("EN", "fill", 0.001, 10), ("EV", "area", 0.00025, 10), ("EV", "fill", 0.00025, 10),
+        ("EV", "shift05", 0.00025, 10), ("EN", "base", 0.00025, 10)]
 
 
 def label_of(drum, var, dr):
@@ -113,19 +129,19 @@ def label_of(drum, var, dr):
 # ---------------------------------------------------------------- commands
 
 def commands(a):
-    runs = RUNS
+    runs = [r for r in RUNS if not a.only or label_of(*r[:3]) in a.only]
     if a.tiny:  # the local check: dr 2 mm, 0.2 s, snapshots every 0.1 s, every run once
         runs = [(d, v, 0.002, 0.2) for d, v in dict.fromkeys((d, v) for d, v, _, _ in RUNS)]
         FILL.update({("EV", 0.002): 0.43, ("EN", 0.002): 0.6})
     lines = ["#!/bin/bash",
              "# seg_refine: issue 57 item 1, one device call (written by python3 -m tools.studies.seg_refine "
              "commands). Run from the repository root:",
-             "#   OUT=... SLOTS=6 BUDGET=470 bash THIS   (defaults below)",
+             "#   OUT=... BUDGET=460 bash THIS   (defaults below)",
              "set -u",
              "SPHSEG=${SPHSEG:-%s}" % a.sphseg,
              "OUT=${OUT:-%s}" % a.out,
-             "SLOTS=${SLOTS:-%d}" % (2 if a.tiny else 6),
-             "BUDGET=${BUDGET:-%d}" % (3000 if a.tiny else 470),
+             "SLOTS=${SLOTS:-1}  # one GPU: runs side by side gain nothing (the docstring's budget)",
+             "BUDGET=${BUDGET:-%d}" % (3000 if a.tiny else 460),
              "BACKEND=${BACKEND:-%s}" % ("cpu" if a.tiny else "gpu"),
              "PY=${PY:-python3}",
              "export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1}",
@@ -156,7 +172,10 @@ def commands(a):
         lines.append('while [ "$(jobs -rp | wc -l)" -ge "$SLOTS" ]; do wait -n; done')
         lines.append("one %s inputs/drum_2d_%s.yml %s &" % (lab, drum, " ".join("-P '%s'" % k for k in keys)))
         lines.append("sleep 1")
-    lines += ["wait", 'echo "all done at $(( $(date +%s) - T0 )) s"', 'ls "$OUT/res" | wc -l', 'du -sh "$OUT"']
+    lines += ["wait", 'echo "all done at $(( $(date +%s) - T0 )) s"',
+              '# the device returns a limited number of files: one archive',
+              'tar czf "$OUT/seg_refine_res.tgz" -C "$OUT" res && rm -rf "$OUT/res" "$OUT/runs"',
+              'ls -l "$OUT"']
     text = "\n".join(lines) + "\n"
     if a.script:
         with open(a.script, "w") as f:
@@ -385,44 +404,96 @@ def table(a):
             r["index_fine"], r["index_change_pct"], r.get("C_rms", float("nan")), r.get("gdot_rel_rms", float("nan")),
             "%.2f" % r["order_index"] if "order_index" in r else "", "%.2f" % r["share_index"]
             if "share_index" in r else ""))
-    vols = sorted({(d, dr): r["series"][0]["volume"] for (d, v, dr), r in runs.items()
+    if a.effects:
+        effects(runs, a.effects)
+    vols = sorted({(d, dr): r["series"][0]["volume"] for (d, v, dr), r in runs.items() if v == "base"
                    if r["series"] and r["series"][0]["t"] == 0}.items())
     if vols:
         print("bed volume at t = 0 (m^2 per m): " + ", ".join("%s dr %g: %.6e" % (d, dr, v) for (d, dr), v in vols))
 
 
+def effects(runs, path):
+    """Each variant against base at the same drum and dr: the index (%), the mid-chord speed (%) and the RMS
+    of the mid-chord C profiles' difference, per time both reached."""
+    rows = []
+    for (drum, var, dr), r in sorted(runs.items()):
+        b = runs.get((drum, "base", dr))
+        if var == "base" or b is None or b is r:
+            continue
+        for t in sorted(set(r["t_series"]) & set(b["t_series"])):
+            if t <= 0:
+                continue
+            s, sb = r["t_series"][t], b["t_series"][t]
+            row = {"drum": drum, "variant": var, "dr_mm": dr, "t_s": t, "index_base": sb["index"],
+                   "index": s["index"], "index_vs_base_pct": 100 * (s["index"] / sb["index"] - 1),
+                   "speed_vs_base_pct": 100 * (s["speed"] / sb["speed"] - 1),
+                   "area_vs_base_pct": 100 * (r["series"][0]["volume"] / b["series"][0]["volume"] - 1)}
+            k = "%g" % t
+            if k in r["profiles"] and k in b["profiles"]:
+                row["C_rms_vs_base"] = prof_rms(b["profiles"][k], r["profiles"][k], "C")[0]
+            rows.append(row)
+    fields = ["drum", "variant", "dr_mm", "t_s", "index_base", "index", "index_vs_base_pct", "C_rms_vs_base",
+              "speed_vs_base_pct", "area_vs_base_pct"]
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fields)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("%.4g" % r[k] if isinstance(r.get(k), float) else r.get(k, "")) for k in fields})
+    print("wrote %s (%d rows)" % (path, len(rows)))
+    for r in rows:
+        print("%-3s %-8s dr %-4g t %4g  index %+6.1f %%  C rms %.4f  speed %+5.1f %%  area %+5.1f %%" % (
+            r["drum"], r["variant"], r["dr_mm"], r["t_s"], r["index_vs_base_pct"], r.get("C_rms_vs_base", float("nan")),
+            r["speed_vs_base_pct"], r["area_vs_base_pct"]))
+
+
 def chart(a):
+    """Left: the index change per refinement step, per drum and variant; right (with --effects): each
+    variant against base at the same dr, the runs a step 0.5 % off (cfl199, cfl201) drawn as the noise."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     rows = list(csv.DictReader(open(a.csv)))
-    drums = sorted({r["drum"] for r in rows})
-    fig, ax = plt.subplots(len(drums), 2, figsize=(11, 4 * len(drums)), squeeze=False)
+    eff = list(csv.DictReader(open(a.effects))) if a.effects else []
+    drums = sorted({r["drum"] for r in rows} | {r["drum"] for r in eff})
+    ncol = 2 if eff else 1
+    fig, ax = plt.subplots(len(drums), ncol, figsize=(6 * ncol, 3.8 * len(drums)), squeeze=False)
     for k, drum in enumerate(drums):
         rs = [r for r in rows if r["drum"] == drum]
         for var in sorted({r["variant"] for r in rs}, key=lambda v: (v != "base", v)):
-            vs = [r for r in rs if r["variant"] == var]
-            for pair, mk in (("2->1", "^:"), ("1->0.5", "o-"), ("0.5->0.25", "s--")):
-                c, f = map(float, pair.split("->"))
-                p = sorted((r for r in vs if float(r["dr_coarse_mm"]) == c and float(r["dr_fine_mm"]) == f),
+            for r0 in sorted({(r["dr_coarse_mm"], r["dr_fine_mm"]) for r in rs if r["variant"] == var}):
+                p = sorted((r for r in rs if r["variant"] == var and (r["dr_coarse_mm"], r["dr_fine_mm"]) == r0),
                            key=lambda r: float(r["t_s"]))
-                if not p:
-                    continue
-                t = [float(r["t_s"]) for r in p]
-                ax[k][0].plot(t, [float(r["index_change_pct"]) for r in p], mk, label="%s, dr %s mm" % (var, pair),
-                              lw=2.5 if var == "base" else 1, ms=4)
-                ax[k][1].plot(t, [float(r["C_rms"] or "nan") for r in p], mk, label="%s, dr %s mm" % (var, pair),
-                              lw=2.5 if var == "base" else 1, ms=4)
-        ax[k][0].axhspan(-3, 3, color="0.9")
-        ax[k][1].axhline(0.02, color="0.5", ls=":")
-        ax[k][0].set_ylabel("%s: segregation index change, %%" % drum)
-        ax[k][1].set_ylabel("%s: mid-chord C profile RMS difference" % drum)
-        for j in (0, 1):
-            ax[k][j].set_xlabel("t, s")
-            ax[k][j].grid(alpha=0.3)
-        ax[k][0].legend(fontsize=6, ncol=2)
-    fig.suptitle("The segregation under refinement per variant (2D drums, E 10 kPa, chi 0.2, the scenes' flow; "
-                 "one H200); the targets: 3 %, 0.02", fontsize=9)
+                ax[k][0].plot([float(r["t_s"]) for r in p], [float(r["index_change_pct"]) for r in p],
+                              "o-" if var == "base" else "s--", lw=2.5 if var == "base" else 1, ms=4,
+                              label="%s, dr %s -> %s mm" % (var, *r0))
+        if not rs:
+            ax[k][0].text(0.5, 0.5, "no pair of resolutions measured", ha="center", transform=ax[k][0].transAxes)
+        ax[k][0].axhspan(-3, 3, color="0.92", zorder=0)
+        ax[k][0].set_ylabel("%s: index change per refinement, %%" % drum)
+        ax[k][0].set_xlabel("t, s")
+        ax[k][0].grid(alpha=0.3)
+        ax[k][0].legend(fontsize=7)
+        if not eff:
+            continue
+        es = [r for r in eff if r["drum"] == drum]
+        for dr in sorted({r["dr_mm"] for r in es}, key=float):
+            noise = [r for r in es if r["dr_mm"] == dr and r["variant"].startswith("cfl")]
+            ts = sorted({float(r["t_s"]) for r in noise})
+            if ts:
+                lo = [min([0.0] + [float(r["index_vs_base_pct"]) for r in noise if float(r["t_s"]) == t]) for t in ts]
+                hi = [max([0.0] + [float(r["index_vs_base_pct"]) for r in noise if float(r["t_s"]) == t]) for t in ts]
+                ax[k][1].fill_between(ts, lo, hi, alpha=0.15, label="step 0.5 %% off (noise), dr %s mm" % dr)
+            for var in sorted({r["variant"] for r in es if r["dr_mm"] == dr and not r["variant"].startswith("cfl")}):
+                p = sorted((r for r in es if r["dr_mm"] == dr and r["variant"] == var), key=lambda r: float(r["t_s"]))
+                ax[k][1].plot([float(r["t_s"]) for r in p], [float(r["index_vs_base_pct"]) for r in p], "o-", ms=4,
+                              label="%s, dr %s mm" % (var, dr))
+        ax[k][1].axhline(0, color="0.5", lw=0.8)
+        ax[k][1].set_ylabel("%s: index against base at the same dr, %%" % drum)
+        ax[k][1].set_xlabel("t, s")
+        ax[k][1].grid(alpha=0.3)
+        ax[k][1].legend(fontsize=7)
+    fig.suptitle("2D drums, E 10 kPa, chi 0.2, the scenes' flow: the segregation index under refinement and "
+                 "against each factor (%s)" % a.machine, fontsize=9)
     fig.tight_layout()
     fig.savefig(a.png, dpi=110)
     print("wrote %s" % a.png)
@@ -435,6 +506,7 @@ def main():
     c.add_argument("--sphseg", default="local/sphseg_gpu")
     c.add_argument("--out", default="out/seg_refine", help="the runs' root where $OUT is not set (the device sets it)")
     c.add_argument("--script", help="write the script here (default: stdout)")
+    c.add_argument("--only", nargs="+", help="only these runs (labels such as EV_base_dr0.25)")
     c.add_argument("--tiny", action="store_true", help="every run at dr 2 mm for 0.2 s, on the CPU (a local check)")
     n = sub.add_parser("analyse")
     n.add_argument("rundir")
@@ -445,9 +517,12 @@ def main():
     t = sub.add_parser("table")
     t.add_argument("files", nargs="+")
     t.add_argument("--csv", default=CSV)
+    t.add_argument("--effects", help="also write each variant against base at the same dr to this CSV")
     h = sub.add_parser("chart")
     h.add_argument("--csv", default=CSV)
     h.add_argument("--png", default=PNG)
+    h.add_argument("--effects", help="the table's --effects CSV: a second column of panels")
+    h.add_argument("--machine", default="development machine", help="the runs' machine, for the title")
     a = ap.parse_args()
     {"commands": commands, "analyse": analyse, "table": table, "chart": chart}[a.what](a)
 
