@@ -117,6 +117,31 @@ def run_scene(sphseg, scene, out, over, extra=()):
     return r.stdout
 
 
+def case_main(scene, ci, full, check, full_help):
+    """The command line of a validation with a CI size and a full size (the
+    DEM block cases): --sphseg and --work run the scene at the CI size (or
+    the full one with --full) and check it; --analyse DIR checks a run
+    already made. check(out, case) returns True when the case passes; the
+    script exits 0 or 1 by it."""
+    import argparse
+    import os
+    import sys
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--sphseg")
+    ap.add_argument("--work")
+    ap.add_argument("--full", action="store_true", help=full_help)
+    ap.add_argument("--analyse", help="a run's output folder, read only (with --full: checked as the full case)")
+    a = ap.parse_args()
+    case = full if a.full else ci
+    out = a.analyse
+    if not out:
+        if not (a.sphseg and a.work):
+            sys.exit("--sphseg and --work, or --analyse DIR")
+        out = os.path.join(a.work, "full" if a.full else "ci")
+        run_scene(a.sphseg, scene, out, case["over"] + ["Run:progress_s=1e9"], extra=["--overwrite"])
+    sys.exit(0 if check(out, case) else 1)
+
+
 def run_column(sphseg, out, over, extra=(), backend=None):
     """sphseg inputs/column_2d.yml -o out with the overrides over (and
     extra arguments, --backend when given); exits the script with FAIL and

@@ -39,7 +39,6 @@ scene as it stands (10 layers; minutes); --analyse DIR reads a run made.
 
   python3 -m tests.validate_dem_block --sphseg build/sphseg --work /tmp/vdb
 """
-import argparse
 import glob
 import math
 import os
@@ -50,7 +49,7 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, ".."))
-from tests.containers import run_scene  # noqa: E402
+from tests.containers import case_main  # noqa: E402
 
 SCENE = os.path.join(HERE, "..", "inputs", "dem_block_settling.yml")
 RHO_F, RHO_S, NU, G, D, DR, H = 1000.0, 1200.0, 1e-6, 9.81, 0.004, 0.00533, 0.008
@@ -140,20 +139,7 @@ def check(out, case):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--sphseg")
-    ap.add_argument("--work")
-    ap.add_argument("--full", action="store_true", help="the scene as it stands (10 layers; minutes)")
-    ap.add_argument("--analyse", help="a run's output folder, read only (with --full: the scene's t_damp)")
-    a = ap.parse_args()
-    case = FULL if a.full else CI
-    out = a.analyse
-    if not out:
-        if not (a.sphseg and a.work):
-            sys.exit("--sphseg and --work, or --analyse DIR")
-        out = os.path.join(a.work, "full" if a.full else "ci")
-        run_scene(a.sphseg, SCENE, out, case["over"] + ["Run:progress_s=1e9"], extra=["--overwrite"])
-    sys.exit(0 if check(out, case) else 1)
+    case_main(SCENE, CI, FULL, check, "the scene as it stands (10 layers; minutes)")
 
 
 if __name__ == "__main__":

@@ -182,7 +182,7 @@ HD_INLINE void dem_spin_update(const real J[9], const real T[3], real dt, real w
  * point of a rigid body spinning at w, over dt, about its centre. */
 HD_INLINE void dem_turn(const real w[3], real dt, const real r[3], real rn[3])
 {
-    const real wm = (real)sqrt((double)(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]));
+    const real wm = sqrt_r(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
     if (!(wm > 0)) {
         rn[0] = r[0], rn[1] = r[1], rn[2] = r[2];
         return;
