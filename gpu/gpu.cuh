@@ -149,7 +149,9 @@ typedef struct gpu {
     bound_sums *sums;   /* the classification's support sums between its two sweeps, where it runs every
                          * step (the HCSR schemes, s->hcsr); NULL otherwise: the second sweep gathers
                          * them again (gpu_classify; a snapshot's classes, the conservative scheme) */
-    unsigned *nl, *ncnt, nl_cap; /* neighbour list (grid_view), rebuilt with the cells */
+    unsigned *nl, *ncnt, nl_cap; /* neighbour list (grid_view), rebuilt with the cells; nl_cap entries a
+                         * particle: 0 until the first build, then the largest count + 1/16 (gpu_list) */
+    unsigned nl_est;    /* the setup's estimate of nl_cap (grid_list_est): the form's choice, gpu_form_fits */
     int nbr_form;       /* the list's form (GRID_NBR_*, SPHSEG_GPU_NBR): nl holds 4-byte entries, 2-byte
                          * ones (list16), or is NULL (cells) */
     real *xb[3];        /* positions at the last build */

@@ -103,7 +103,7 @@ void gpu_reserve(gpu_t *g, size_t need, size_t keep)
         g->xb[d] = (real *)dev_alloc(cap * sizeof(real));
         CK(cudaMemset(g->xb[d], 0, cap * sizeof(real)));
     }
-    g->nl = gpu_nl_esize(g) ? (unsigned *)dev_alloc(cap * g->nl_cap * gpu_nl_esize(g)) : NULL;
+    g->nl = gpu_nl_esize(g) && g->nl_cap ? (unsigned *)dev_alloc(cap * g->nl_cap * gpu_nl_esize(g)) : NULL;
     g->ncnt = (unsigned *)dev_alloc(cap * sizeof(unsigned));
     g->amag = (real *)dev_alloc(cap * sizeof(real));
     CK(cudaMemset(g->amag, 0, cap * sizeof(real)));
@@ -163,12 +163,12 @@ size_t gpu_spare_bytes(const particles_t *p)
 
 /* The neighbour pass's form where SPHSEG_GPU_NBR names none: the 4-byte
  * list (the fastest) where the run fits the device's free memory with it,
- * else the 16-bit list (on the 1.1e7 3D drum, single, leapfrog: 0.84 of the
- * list's rate at 0.68 of its peak memory), else no list (cells: 0.28 of the
- * rate, 0.35 of the memory; docs/performance.md "Neighbour pass"). All three
+ * else the 16-bit list (on the 1.1e7 3D drum, single, leapfrog: 0.92 of the
+ * list's rate at 0.69 of its bytes a particle), else no list (cells: 0.28 of
+ * the rate, 0.37 of the bytes; docs/performance.md "Neighbour pass"). All three
  * meet a particle's neighbours in the same order: the same bits. The room
- * left: 10 % of the free memory and 15 % of the particles for growth;
- * GPU_SCRATCH_EST bytes a particle for the keys, counts and sums (52 B
+ * left: 10 % of the free memory and 15 % of the particles for growth; the
+ * list's width as grid_list_est expects it; GPU_SCRATCH_EST bytes a particle for the keys, counts and sums (52 B
  * measured, single). Ranks sharing a device each see it as at their start. */
 #define GPU_SCRATCH_EST 96.0
 static int gpu_form_fits(const gpu_t *g, const particles_t *h, size_t n)
@@ -177,8 +177,8 @@ static int gpu_form_fits(const gpu_t *g, const particles_t *h, size_t n)
     CK(cudaMemGetInfo(&fr, &tot));
     const double base = (double)(part_store_bytes(h) + gpu_spare_bytes(h)) + GPU_SCRATCH_EST;
     const double room = 0.9 * (double)fr / (1.15 * (double)n + 1024.0);
-    if (base + 4.0 * g->nl_cap <= room) return GRID_NBR_LIST;
-    if (base + 2.0 * g->nl_cap <= room) return GRID_NBR_LIST16;
+    if (base + 4.0 * g->nl_est <= room) return GRID_NBR_LIST;
+    if (base + 2.0 * g->nl_est <= room) return GRID_NBR_LIST16;
     return GRID_NBR_CELLS;
 }
 
@@ -207,7 +207,8 @@ gpu_t *gpu_get(sim_t *s)
     g->nbr_form = tuning_get()->gpu_nbr;
     if (g->nbr_form < 0)
         error_exit(2, "SPHSEG_GPU_NBR=%s: expected list, list16 or cells", tuning_get()->gpu_nbr_text);
-    g->nl_cap = grid_list_cap(h->dim, (1 + 0.5 * skin) * (double)(s->seg.k.h / s->seg.k.dr));
+    g->nl_est = grid_list_est(h->dim, (1 + 0.5 * skin) * (double)(s->seg.k.h / s->seg.k.dr));
+    g->nl_cap = 0; /* the list is sized at the first build, from the counts (gpu_list) */
     if (!tuning_get()->gpu_nbr_text) g->nbr_form = gpu_form_fits(g, h, n);
     if (s->halo) {
         g->hx = (dhalo *)calloc(1, sizeof *g->hx);
@@ -222,11 +223,11 @@ gpu_t *gpu_get(sim_t *s)
      * the bits, depend on the team size, which must not follow the rank count */
     g->team = gpu_team_size(h->dim, (size_t)comm_sum_ll((long long)n));
     message("gpu: device %d of %d, %s, %.1f GiB; %zu MiB of particle arrays (the run's fields and the "
-            "permutation's spares), %zu MiB of neighbour list (SPHSEG_GPU_NBR %s: %u per particle of %zu bytes, "
-            "skin %.3g h%s), %d threads per particle in neighbour loops%s%s", g->dev, ndev, prop.name,
+            "permutation's spares), about %zu MiB of neighbour list (SPHSEG_GPU_NBR %s: %u per particle of %zu "
+            "bytes estimated, sized at the first build; skin %.3g h%s), %d threads per particle in neighbour loops%s%s", g->dev, ndev, prop.name,
             (double)prop.totalGlobalMem / (1u << 30), n * (part_store_bytes(h) + gpu_spare_bytes(h)) >> 20,
-            (n * g->nl_cap * gpu_nl_esize(g)) >> 20,
-            g->nbr_form == GRID_NBR_LIST16 ? "list16" : g->nbr_form == GRID_NBR_CELLS ? "cells" : "list", g->nl_cap,
+            (n * g->nl_est * gpu_nl_esize(g)) >> 20,
+            g->nbr_form == GRID_NBR_LIST16 ? "list16" : g->nbr_form == GRID_NBR_CELLS ? "cells" : "list", g->nl_est,
             gpu_nl_esize(g), skin, tuning_get()->gpu_nbr_text ? "" : "; the fastest form that fits", g->team,
             !g->hx                  ? ""
             : g->hx->cuda_aware     ? "; halo: packed on the device, CUDA-aware MPI on device buffers"

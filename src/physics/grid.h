@@ -318,10 +318,25 @@ HD_INLINE unsigned grid_list_fill_ranked(const grid_view *g, real *const *x, siz
 /* List capacity for smoothing length h = h_dr * dr: the lattice count in
  * the support (pi (2 h_dr)^2 in 2D, 4/3 pi (2 h_dr)^3 in 3D) with 30 %
  * room for compression, rounded up to 8 (48 in 2D, 160 in 3D at h = 1.5 dr). */
+HD_INLINE double grid_lattice_count(int dim, double h_dr)
+{
+    double r = 2 * h_dr;
+    return dim == 3 ? 4.0 / 3.0 * M_PI * r * r * r : M_PI * r * r;
+}
 HD_INLINE unsigned grid_list_cap(int dim, double h_dr)
 {
-    double r = 2 * h_dr, n = dim == 3 ? 4.0 / 3.0 * M_PI * r * r * r : M_PI * r * r;
-    unsigned c = (unsigned)(1.3 * n + 8);
+    unsigned c = (unsigned)(1.3 * grid_lattice_count(dim, h_dr) + 8);
+    return (c + 7) / 8 * 8;
+}
+
+/* The GPU list's width to expect (its form's choice, gpu_form_fits): the
+ * lattice count with 15 % room, rounded up to 8. The width a build sets is
+ * the largest count + 1/16 (gpu/gpu_nbr.cu gpu_list): 144 for a lattice
+ * count of 131 on the 3D drum, 1.1 of it (one H200, 2026-11-29,
+ * tools/bench/drum_rates.sh; docs/performance.md "Neighbour pass"). */
+HD_INLINE unsigned grid_list_est(int dim, double h_dr)
+{
+    unsigned c = (unsigned)(1.15 * grid_lattice_count(dim, h_dr) + 0.999);
     return (c + 7) / 8 * 8;
 }
 

@@ -7,6 +7,7 @@ on the 2D drums, factor by factor.
   python3 -m tools.studies.seg_refine analyse RUNDIR --json FILE [--rc RC] [--log LOG]   (the script calls it)
   python3 -m tools.studies.seg_refine table FILE.json... [--csv docs/data/drum/seg_refine.csv] [--effects CSV]
   python3 -m tools.studies.seg_refine chart [--csv ...] [--effects CSV] [--png docs/data/drum/seg_refine.png]
+  python3 -m tools.studies.seg_refine profiles FILE.json... [--times 6 10] [--png ...]   (base's C and shear-rate profiles)
 
 The runs. The scenes (inputs/drum_2d_EV.yml, drum_2d_EN.yml) with their flow (riemann, bed damping 1,
 the corrected gradient, Fickian shifting, C in windows `every auto`) at E 10 kPa, chi 0.2, the
@@ -119,7 +120,8 @@ RUNS = [("EV", "base", 0.001, 10), ("EV", "base", 0.0005, 10),
         ("EN", "cfl199", 0.001, 10), ("EN", "cfl199", 0.0005, 10)] + \
        [("EV", v, dr, 10) for v in ("shift05", "limnone", "const", "bd3", "chiD2") for dr in (0.001, 0.0005)] + \
        [("EV", "fill", 0.001, 10), ("EN", "fill", 0.001, 10), ("EV", "area", 0.00025, 10), ("EV", "fill", 0.00025, 10),
-        ("EV", "shift05", 0.00025, 10), ("EN", "base", 0.00025, 10)]
+        ("EV", "shift05", 0.00025, 10), ("EN", "base", 0.00025, 10), ("EV", "const", 0.00025, 10),
+        ("EV", "bd3", 0.00025, 10)]
 
 
 def label_of(drum, var, dr):
@@ -351,6 +353,8 @@ def table(a):
             if dr != f or (drum, var, c) not in runs:
                 continue
             rc = runs[(drum, var, c)]
+            if var != "base" and rc["var"] == r["var"] == "base":
+                continue  # a fill variant whose line stays at both ends: base's own row
             for t in sorted(set(r["t_series"]) & set(rc["t_series"])):
                 if t <= 0:
                     continue
@@ -499,6 +503,39 @@ def chart(a):
     print("wrote %s" % a.png)
 
 
+def profiles(a):
+    """The base runs' mid-chord profiles of C and of the shear rate at each dr (rows: drums; columns: the
+    times asked, C above the shear rate), from the runs' JSONs."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    runs = {k: r for k, r in load(a.files).items() if k[1] == "base"}
+    drums = sorted({k[0] for k in runs})
+    fig, ax = plt.subplots(2 * len(drums), len(a.times), figsize=(4.2 * len(a.times), 3.2 * 2 * len(drums)),
+                           squeeze=False, sharex=True)
+    for k, drum in enumerate(drums):
+        for m, t in enumerate(a.times):
+            key = "%g" % t
+            for (d_, _, dr), r in sorted(runs.items(), key=lambda kv: -kv[0][2]):
+                if d_ != drum or key not in r["profiles"]:
+                    continue
+                p = r["profiles"][key]
+                for row, q, lab in ((2 * k, "C", "C"), (2 * k + 1, "gdot", "shear rate, 1/s")):
+                    ax[row][m].plot(p["d"], p[q], lw=1.5, label="dr %g mm" % dr)
+                    ax[row][m].set_ylabel("%s: %s" % (drum, lab))
+            for row in (2 * k, 2 * k + 1):
+                ax[row][m].set_title("%s, t = %g s" % (drum, t), fontsize=9)
+                ax[row][m].grid(alpha=0.3)
+                ax[row][m].legend(fontsize=7)
+    for m in range(len(a.times)):
+        ax[-1][m].set_xlabel("depth below the surface on the mid-chord, d / R")
+    fig.suptitle("2D drums, E 10 kPa, chi 0.2, the scenes' flow: mid-chord profiles under refinement (%s)"
+                 % a.machine, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(a.png, dpi=100)
+    print("wrote %s" % a.png)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="what", required=True)
@@ -523,8 +560,13 @@ def main():
     h.add_argument("--png", default=PNG)
     h.add_argument("--effects", help="the table's --effects CSV: a second column of panels")
     h.add_argument("--machine", default="development machine", help="the runs' machine, for the title")
+    f = sub.add_parser("profiles")
+    f.add_argument("files", nargs="+")
+    f.add_argument("--times", type=float, nargs="+", default=[6.0, 10.0])
+    f.add_argument("--png", default=PNG.replace(".png", "_profiles.png"))
+    f.add_argument("--machine", default="development machine", help="the runs' machine, for the title")
     a = ap.parse_args()
-    {"commands": commands, "analyse": analyse, "table": table, "chart": chart}[a.what](a)
+    {"commands": commands, "analyse": analyse, "table": table, "chart": chart, "profiles": profiles}[a.what](a)
 
 
 if __name__ == "__main__":
