@@ -104,9 +104,9 @@ int gpu_plans(const sim_t *s, int h, int id)
 }
 
 /* (p: g->d, or g->d reading the window's mean shear rate as gdot) */
-static void gpu_seg_coeffs(sim_t *s, gpu_t *g, particles_t p, size_t a, size_t b)
+static void gpu_seg_coeffs(sim_t *s, gpu_t *g, particles_t p, size_t a, size_t b, int mean = 0)
 {
-    seg_ctx c = s->seg;
+    const seg_ctx c = mean ? seg_ctx_mean(s->seg) : s->seg;
     each(g, b - a, [=] __device__(size_t k) {
         size_t i = a + k;
         if (p.kind[i] == KIND_MATERIAL) seg_coeffs(i, &p, &c);
@@ -277,7 +277,7 @@ void gpu_conc_step(sim_t *s, double a, int last)
     prof_begin(g->st);
     for (int stage = 0; stage < 2; ++stage)
         for (int k = 0; k < m->n[HOOK_CONC_STEP]; ++k) switch (m->ids[HOOK_CONC_STEP][k]) {
-            case ST_WIN_COEFFS: gpu_seg_coeffs(s, g, q, 0, g->n + g->ng); break;
+            case ST_WIN_COEFFS: gpu_seg_coeffs(s, g, q, 0, g->n + g->ng, 1); break;
             case ST_WIN_DCDT: gpu_dcdt(s, g, q, sel_all()); break;
             case ST_WIN_ADVANCE: {
                 const real as = (real)(stage ? a : 0.5 * a);

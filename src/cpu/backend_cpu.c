@@ -55,12 +55,12 @@ typedef struct cpu_call {
 } cpu_call;
 
 /* V, Q, D of ghosts too (neighbours read them), from the shear rate of q. */
-static void cpu_seg_coeffs(sim_t *s, particles_t *q)
+static void cpu_seg_coeffs(const seg_ctx *c, particles_t *q)
 {
     const long ng = (long)(q->n + q->ng);
 #pragma omp parallel for schedule(static)
     for (long i = 0; i < ng; ++i)
-        if (q->kind[i] == KIND_MATERIAL) seg_coeffs((size_t)i, q, &s->seg);
+        if (q->kind[i] == KIND_MATERIAL) seg_coeffs((size_t)i, q, c);
 }
 
 static void cpu_dcdt(sim_t *s, particles_t *q)
@@ -183,7 +183,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
             if (p->kind[i] == KIND_DUMMY) flow_wall((size_t)i, p, &cpu_of(s)->grid.view, &s->flow);
         return 1;
     case ST_FLOW: cpu_flow_rates(s); return 1;
-    case ST_SEG_COEFFS: cpu_seg_coeffs(s, p); return 1;
+    case ST_SEG_COEFFS: cpu_seg_coeffs(&s->seg, p); return 1;
     case ST_DCDT: cpu_dcdt(s, p); return 1;
     case ST_SAVE:
 #pragma omp parallel for schedule(static)
@@ -210,7 +210,11 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
     }
     case ST_WIN_RENORM: cpu_renorm(s, 0); return 1;
     case ST_WIN_BOUNDS: cpu_win_bounds(s, &q, c->out); return 1;
-    case ST_WIN_COEFFS: cpu_seg_coeffs(s, &q); return 1;
+    case ST_WIN_COEFFS: {
+        const seg_ctx mc = seg_ctx_mean(s->seg);
+        cpu_seg_coeffs(&mc, &q);
+        return 1;
+    }
     case ST_WIN_DCDT: cpu_dcdt(s, &q); return 1;
     case ST_WIN_ADVANCE: {
         const real as = (real)(c->half ? c->a : 0.5 * c->a);

@@ -73,12 +73,7 @@ typedef struct flow_ctx {
  * layer, whose mu(I) >= mu_s puts it on its cone), so the rheology alone
  * sets the flow. Monaghan's pair term (mom_av) vanishes on a rigid rotation
  * (u_ij . x_ij = 0), so the bed's turning with the drum is not damped. */
-HD_INLINE real flow_bed_q(const real s[6], real k)
-{
-    const real p = stress_pressure(s);
-    if (!(p > 0)) return R(1.0);
-    return sqrt_r(stress_J2(s)) / (k * p);
-}
+HD_INLINE real flow_bed_q(const real s[6], real k) { return stress_static_q(s, k); }
 
 /* The pressure diffusion's coefficient flow_ctx.pdiff (mom_pdiff) from the
  * bulk modulus K, the density rho, the sound speed cs and the kernel's h:

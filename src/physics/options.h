@@ -31,6 +31,12 @@ enum seg_scheme { SEG_SCHEME_PAPER = 0, SEG_SCHEME_DIRECT = 1, SEG_SCHEME_CONSER
  * (seg_kern.h seg_flux_donor), which keeps C in [0, 1]. */
 enum seg_limiter { SEG_LIMITER_NONE = 0, SEG_LIMITER_DONOR = 1 };
 
+/* Segregation:shear_rate. total: eq. (2.7)'s gdot of the whole strain rate
+ * (the paper's); yielded: gdot where the stress is on or past the static
+ * yield cone (stress_static_q >= 1), 0 inside it, where the bed deforms
+ * elastically and does not flow (seg_drive_gdot, seg_kern.h). */
+enum seg_gdot { SEG_GDOT_TOTAL = 0, SEG_GDOT_YIELDED = 1 };
+
 /* Kinematics:velocity. rest and oscillatory_shear prescribe the velocity
  * (no momentum or stress solved, physics/kin.h); computed solves the
  * granular flow (momentum 3.9, stress 2.16). */

@@ -12,6 +12,8 @@ typedef struct seg_params {
     real chi_V, chi_D; /* eq. (2.7), dimensionless */
     real d_small, d_large; /* grain diameters, m */
     real ghat[3];      /* unit vector along gravity */
+    int gdot_yielded;  /* Segregation:shear_rate yielded: gdot only where stress_static_q >= 1 */
+    real k_static;     /* the static yield cone's slope k(mu_s) of Material:yield (stress_yield_k) */
 } seg_params;
 
 /* F(C) = A C (1 - C)(1 - kappa C), eqs. (2.8)-(2.9). */

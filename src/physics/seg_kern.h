@@ -10,6 +10,7 @@
 #include "options.h"
 #include "seg.h"
 #include "sph.h"
+#include "stress.h"
 
 typedef struct seg_ctx {
     sph_ctx k;
@@ -18,6 +19,13 @@ typedef struct seg_ctx {
     int renorm; /* conservative scheme: symmetric renormalisation on/off */
     int limiter; /* conservative scheme: enum seg_limiter (options.h) */
 } seg_ctx;
+
+/* The context for seg_coeffs at a window's mean shear rate (gated as summed). */
+HD_INLINE seg_ctx seg_ctx_mean(seg_ctx c)
+{
+    c.sp.gdot_yielded = 0;
+    return c;
+}
 
 /* The three contributions to dC/dt, 1/s: segregation, diffusion, CSR source. */
 typedef struct seg_rate {
@@ -58,11 +66,26 @@ HD_INLINE int seg_c1_solve(seg_c1 *s, int dim, const real ghat[3], real out[2])
     return 0;
 }
 
+/* The shear rate gd of material particle i as eq. (2.7) takes it
+ * (Segregation:shear_rate): gd itself (total), or gd where i's stress is on
+ * or past the static yield cone and 0 strictly inside it (yielded: the bed,
+ * which turns with the drum and deforms elastically, does not segregate;
+ * docs/seg_refine.md measures the shear rate that SPH reads there). */
+HD_INLINE real seg_drive_gdot(const seg_params *sp, const particles_t *p, size_t i, real gd)
+{
+    if (!sp->gdot_yielded) return gd;
+    real s[6];
+    for (int q = 0; q < 6; ++q) s[q] = p->sig[q][i];
+    return stress_static_q(s, sp->k_static) >= R(1.0) ? gd : R(0.0);
+}
+
 /* Per-particle coefficients V, Q = V F and D, computed once per rate
- * evaluation so that pair loops only read them. */
+ * evaluation so that pair loops only read them. With concentration windows
+ * the caller's gdot is the window's mean, gated step by step as it was
+ * summed (step_advance): the caller clears sp.gdot_yielded (seg_ctx_mean). */
 HD_INLINE void seg_coeffs(size_t i, const particles_t *p, const seg_ctx *c)
 {
-    real C = p->C[i], gd = p->gdot[i];
+    real C = p->C[i], gd = seg_drive_gdot(&c->sp, p, i, p->gdot[i]);
     p->segV[i] = seg_V(&c->sp, C, gd);
     p->segQ[i] = p->segV[i] * seg_F(&c->sp, C);
     p->segD[i] = seg_D(&c->sp, C, gd);

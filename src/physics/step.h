@@ -129,11 +129,12 @@ HD_INLINE void step_save(size_t i, const particles_t *p, int flow_on, int seg_on
  * C before it moves). With the concentration in windows (seg_on 0 then),
  * the shear rate of the last rate evaluation adds w gdot to the window's
  * integral (w: the corrector's dt, 0 in the predictor): the midpoint rule
- * for the integral of gdot over the window. */
+ * for the integral of gdot over the window; gdot as eq. (2.7) takes it
+ * (seg_drive_gdot: the stress read is that evaluation's). */
 HD_INLINE void step_advance(size_t i, particles_t *p, real a, const flow_ctx *c, int flow_on, int seg_on, real w)
 {
     if (p->kind[i] != KIND_MATERIAL) return;
-    if (w > 0) p->gsum[i] += w * p->gdot[i];
+    if (w > 0) p->gsum[i] += w * seg_drive_gdot(&c->sp, p, i, p->gdot[i]);
     if (flow_on) flow_advance(i, p, a, c);
     if (seg_on) p->C[i] = p->C_n[i] + (creal)a * p->dCdt[i];
 }

@@ -196,6 +196,18 @@ HD_INLINE int stress_return_map(real s[6], real kmu)
 /* The slope k of the yield cone sqrt(J2) = k p for friction mu (above). */
 HD_INLINE real stress_yield_k(int yield, real mu) { return yield == YIELD_MU_I ? mu : stress_kmu(mu); }
 
+/* sqrt(J2) / (k p) for the static cone's slope k = k(mu_s): under 1 strictly
+ * inside it (the stress of an unyielded, elastic point, whatever the rate,
+ * as mu(I) >= mu_s), 1 and over on or past it; 1 where p <= 0 (the apex, a
+ * free surface's grains). The bed damping's weight (flow.h) and
+ * Segregation:shear_rate yielded (seg_kern.h) read it. */
+HD_INLINE real stress_static_q(const real s[6], real k)
+{
+    const real p = stress_pressure(s);
+    if (!(p > 0)) return R(1.0);
+    return sqrt_r(stress_J2(s)) / (k * p);
+}
+
 /* The return mapping of Material:yield `yield` at friction mu = mu(I), in
  * place, with the returns of stress_return_map (0 elastic, 1 returned, 2
  * apex) and its tension cut-off (a trial p <= 0 goes to the apex sigma = 0).

@@ -213,6 +213,9 @@ static int check_models(struct scene_ctx *c, const struct scene *s)
                              "computed needs Geometry:type column or drum (the shear box's walls are prescribed)");
     if (!s->segregation.enabled && vel != KIN_COMPUTED && !(s->dem.d > 0)) /* DEM grains are solved */
         return scene_fail_at(c, "Segregation:enabled", "off with prescribed velocity leaves nothing to solve");
+    if (s->segregation.shear_rate == SEG_GDOT_YIELDED && vel != KIN_COMPUTED)
+        return scene_fail_at(c, "Segregation:shear_rate", "yielded needs Kinematics:velocity computed (a prescribed flow "
+                             "has no stress to tell the yielded grains)");
     if (!(s->grains.d_small < s->grains.d_large))
         return scene_fail_at(c, "Grains:d_large", "must be larger than Grains:d_small");
     return 0;

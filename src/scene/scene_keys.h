@@ -41,6 +41,7 @@ static const cyaml_strval_t seg_models[] = {{"constant", SEG_MODEL_CONSTANT},
 static const cyaml_strval_t seg_schemes[] = {
     {"paper", SEG_SCHEME_PAPER}, {"direct", SEG_SCHEME_DIRECT}, {"conservative", SEG_SCHEME_CONSERVATIVE}};
 static const cyaml_strval_t seg_limiters[] = {{"none", SEG_LIMITER_NONE}, {"donor", SEG_LIMITER_DONOR}};
+static const cyaml_strval_t seg_gdots[] = {{"total", SEG_GDOT_TOTAL}, {"yielded", SEG_GDOT_YIELDED}};
 static const cyaml_strval_t flow_shiftings[] = {{"off", SHIFT_OFF}, {"fickian", SHIFT_FICKIAN}};
 static const cyaml_strval_t flow_backgrounds[] = {{"momentum", FLOW_BACKGROUND_MOMENTUM},
                                                    {"excluded", FLOW_BACKGROUND_EXCLUDED}};
@@ -252,6 +253,10 @@ SECTION("Segregation", segregation, scene_segregation)
        "none | donor: conservative scheme only. donor caps each pair's segregation flux Q_i + Q_j at 2 A (V_i + V_j) min(C_u, 1 - C_d)"
        " (u gives small grains, d takes them) and bounds dt with a wave speed of at least A V, so C stays in [0, 1];"
        " none leaves the flux uncapped (C may leave [0, 1]); default donor (docs/method.md, \"Bounded C\")")
+    KE("Segregation", segregation, scene_segregation, shear_rate, enum seg_gdot, seg_gdots, "total",
+       "total | yielded: the shear rate of eq. (2.7)'s V and D; total, the whole strain rate's (the paper's); yielded, that"
+       " shear rate where the stress is on or past the static yield cone (sqrt(J2) >= k(mu_s) p, or p <= 0) and 0 inside it,"
+       " where the bed deforms elastically and does not flow; default total (docs/seg_refine.md)")
     KF("Segregation", segregation, scene_segregation, drift_tol, OPT, "1e-3", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "relative drift of sum C_i V_i that triggers a warning; default 1e-3")
     KS("Segregation", segregation, scene_segregation, every, 0, CYAML_UNLIMITED, "auto",

@@ -594,6 +594,8 @@ static seg_params seg_params_of(const struct scene *sc)
     const double *gv = sc->physics.gravity;
     double gn = sqrt(gv[0] * gv[0] + gv[1] * gv[1] + gv[2] * gv[2]);
     for (int d = 0; d < 3; ++d) sp.ghat[d] = (real)(gv[d] / gn);
+    sp.gdot_yielded = g->shear_rate == SEG_GDOT_YIELDED;
+    sp.k_static = stress_yield_k((int)sc->material.yield, (real)sc->material.mu_s);
     return sp;
 }
 

@@ -23,6 +23,8 @@ Each variant changes one existing key against the baseline `base`:
   bd3       Flow:bed_damping=3         the bed's shear-rate noise (what damps it), against 1
   chiD2     Segregation:chi_D=0.0614   twice the physical diffusion: a numerical diffusion that sets the
             error would matter half as much
+  yielded   Segregation:shear_rate=yielded: eq. (2.7)'s shear rate only where the stress is on or past
+            the static yield cone, 0 in the elastic bed (whose SPH shear rate grows as 1/dr)
   cfl199    Run:cfl_flow=0.199: a step 0.5 % shorter, whose own effect is nil; what it changes is the
             runs' sensitivity to a perturbation, the floor under which a variant's effect is noise (at
             dr 2 mm, development machine, 0.199 and 0.201 move the index by up to 5.2 % EV, 2.6 % EN)
@@ -103,6 +105,7 @@ VARIANTS = {
     "chiD2": ["Segregation:chi_D=0.0614"],
     "fill": [],  # Geometry:fill from FILL
     "cfl199": ["Run:cfl_flow=0.199"],
+    "yielded": ["Segregation:shear_rate=yielded"],  # eq. (2.7)'s gdot only where the stress is on the static cone
     "area": ["Geometry:fill_by=area"],  # the bed's area the segment's at every dr  # after FLOW's 0.2: the noise floor (below)
 }
 # The bed's area is N dr^2 of the lattice points inside R - dr/2 below the fill line (src/sim/setup.c,
@@ -121,7 +124,8 @@ RUNS = [("EV", "base", 0.001, 10), ("EV", "base", 0.0005, 10),
        [("EV", v, dr, 10) for v in ("shift05", "limnone", "const", "bd3", "chiD2") for dr in (0.001, 0.0005)] + \
        [("EV", "fill", 0.001, 10), ("EN", "fill", 0.001, 10), ("EV", "area", 0.00025, 10), ("EV", "fill", 0.00025, 10),
         ("EV", "shift05", 0.00025, 10), ("EN", "base", 0.00025, 10), ("EV", "const", 0.00025, 10),
-        ("EV", "bd3", 0.00025, 10)]
+        ("EV", "bd3", 0.00025, 10)] + \
+       [(d, "yielded", dr, 10) for d in ("EV", "EN") for dr in (0.001, 0.0005, 0.00025)]
 
 
 def label_of(drum, var, dr):
