@@ -188,7 +188,7 @@ void report_start(sim_t *s, const outputs *o, const run_cli *c)
                      sc->flow.shepard_every, sc->flow.shepard_every * sc->run.cfl_flow);
         char kg[96] = "";
         if (s->flow.kgc)
-            snprintf(kg, sizeof kg, ", corrected kernel gradient (blended to I below det M = %.3g)",
+            snprintf(kg, sizeof kg, ", corrected kernel gradient (blended to I below d = %.3g)",
                      (double)s->flow.kgc_det);
         message("flow: c_s = %.4g m/s, h/c_s = %.3g s, %s, %s%s", (double)s->flow.cs,
                 (double)(s->seg.k.h / s->flow.cs), sh, stab_text(sc, st, sizeof st), kg);

@@ -157,11 +157,35 @@ HD_INLINE void flow_wall(size_t d, particles_t *p, const grid_view *g, const flo
     flow_wall_team(d, p, g, c, 0, 1);
 }
 
+/* The largest eigenvalue of the symmetric 3x3 m (xx, yy, zz, xy, xz, yz),
+ * by the trigonometric form of the characteristic cubic (Smith 1961). */
+HD_INLINE real flow_sym_eig_max(const real m[6])
+{
+    const real q = (m[0] + m[1] + m[2]) / R(3.0);
+    const real off = m[3] * m[3] + m[4] * m[4] + m[5] * m[5];
+    const real d0 = m[0] - q, d1 = m[1] - q, d2 = m[2] - q;
+    const real p2 = d0 * d0 + d1 * d1 + d2 * d2 + R(2.0) * off;
+    if (!(p2 > 0)) return q;
+    const real pp = sqrt_r(p2 / R(6.0)), ip = R(1.0) / pp;
+    const real b0 = d0 * ip, b1 = d1 * ip, b2 = d2 * ip, b3 = m[3] * ip, b4 = m[4] * ip, b5 = m[5] * ip;
+    real r = R(0.5) * (b0 * (b1 * b2 - b5 * b5) - b3 * (b3 * b2 - b5 * b4) + b4 * (b3 * b5 - b1 * b4));
+    r = r < R(-1.0) ? R(-1.0) : (r > R(1.0) ? R(1.0) : r);
+    return q + R(2.0) * pp * (real)cos(acos((double)r) / 3.0);
+}
+
 /* Flow:gradient_correction: B_i from the summed moment m (xx, yy, zz, xy,
- * xz, yz) of M_i = sum_j V_j x_ji (x) grad_i W_ij, into p->B. Where det M_i
- * >= det0, B_i = M_i^-1; below it B_i = w M_i^-1 + (1 - w) I, w = det M_i /
- * det0, which stays bounded as det M_i -> 0 (w M^-1 = adj(M) / det0), the
- * blend SPHinXsys uses; det M_i <= 0 (no neighbours) gives I. */
+ * xz, yz) of M_i = sum_j V_j x_ji (x) grad_i W_ij, into p->B. The measure of
+ * how far the support is cut is the product of M_i's two smallest principal
+ * moments: det M_i in 2D, det M_i / lambda_max(M_i) in 3D. So a support cut
+ * in the x-y plane alone (a flat free surface, a wall, anything uniform
+ * along z) gets the 2D measure in 3D, the out-of-plane moment (the tangential
+ * one, 0.75 under a flat surface at h = 1.5 dr) not counted; det M_i alone
+ * would count it and blend a 3D surface more than the same surface in 2D
+ * (w 0.47 against 0.62 in the top row; tests/test_flow.c test_kgc_plane_strain).
+ * Where the measure d >= det0, B_i = M_i^-1; below it B_i = w M_i^-1 +
+ * (1 - w) I, w = d / det0, which stays bounded as det M_i -> 0 (w M^-1 =
+ * adj(M) / (det0 lambda_max) in 3D, adj(M) / det0 in 2D), the blend
+ * SPHinXsys uses; det M_i <= 0 (no neighbours) gives I. */
 HD_INLINE void flow_kgc_store(size_t i, const particles_t *p, int dim, const real m[6], real det0)
 {
     real b[6] = {1, 1, 1, 0, 0, 0}, adj[6] = {0, 0, 0, 0, 0, 0}, det;
@@ -174,8 +198,10 @@ HD_INLINE void flow_kgc_store(size_t i, const particles_t *p, int dim, const rea
         det = m[0] * adj[0] + m[3] * adj[3] + m[4] * adj[4];
     }
     if (det > 0) {
-        const real w = det >= det0 ? R(1.0) : det / det0; /* w M^-1 = (w / det) adj */
-        const real a = det >= det0 ? R(1.0) / det : R(1.0) / det0;
+        const real lmax = dim == 2 ? R(1.0) : flow_sym_eig_max(m);
+        const real d = dim == 2 ? det : det / lmax; /* the product of the two smallest moments */
+        const real w = d >= det0 ? R(1.0) : d / det0;
+        const real a = d >= det0 ? R(1.0) / det : R(1.0) / (det0 * lmax); /* w M^-1 = (w / det) adj */
         for (int q = 0; q < 6; ++q) b[q] = a * adj[q] + (R(1.0) - w) * (q < dim ? R(1.0) : R(0.0));
         if (dim == 2) b[2] = 1, b[4] = b[5] = 0;
     }

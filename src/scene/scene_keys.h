@@ -350,10 +350,13 @@ SECTION("Flow", flow, scene_flow)
     KE("Flow", flow, scene_flow, gradient_correction, unsigned, on_off, "off",
        "on | off: the corrected kernel gradient B_i grad W_ij, B_i = M_i^-1, M_i = sum_j V_j x_ji (x) grad_i W_ij (Randles &"
        " Libersky 1996; Bonet & Lok 1999), in the velocity gradient (3.14) and the stress divergence (3.9); blended toward I where"
-       " det M_i < Flow:gradient_correction_det; use with Flow:shifting fickian; default off, the paper's (docs/method.md)")
+       " the product of M_i's two smallest principal moments < Flow:gradient_correction_det; use with Flow:shifting fickian;"
+       " default off, the paper's (docs/method.md)")
     KF("Flow", flow, scene_flow, gradient_correction_det, OPT, "0.6", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
-       "Flow:gradient_correction on, -: below this det M_i the correction is blended toward the identity (w = det M_i / this);"
-       " det M = 1 in the bulk, about 0.25 under a flat 2D free surface; default 0.6 (docs/method.md)")
+       "Flow:gradient_correction on, -: below this d_i, the product of M_i's two smallest principal moments (det M_i in 2D,"
+       " det M_i / its largest eigenvalue in 3D, so a 3D state uniform along z blends as in 2D), the correction is blended"
+       " toward the identity (w = d_i / this); d = 1 in the bulk, 0.37 in the top row of a flat free surface at h = 1.5 dr;"
+       " default 0.6 (docs/method.md)")
     KF("Flow", flow, scene_flow, damping, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "velocity damping -zeta u added to (3.9), 1/s, for settling (dynamic relaxation); default 0")
     KF("Flow", flow, scene_flow, damping_until, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
