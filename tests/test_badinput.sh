@@ -69,6 +69,8 @@ check override_unknown_key "-P Run:foo=1: Run:foo: unknown key" "$good" -P Run:f
 check override_unknown_section "-P Foo:dr=1: Foo: unknown section" "$good" -P Foo:dr=1
 check override_malformed "-P Geometry:dr: malformed override" "$good" -P Geometry:dr
 check override_range "-P Geometry:dr=-1: Geometry:dr: must be > 0" "$good" -P Geometry:dr=-1
+check yielded_prescribed "-P Segregation:shear_rate=yielded: Segregation:shear_rate: yielded needs Kinematics:velocity computed" \
+    "$good" -P Segregation:shear_rate=yielded
 check memory_need "-P Geometry:dr=1e-7: Geometry:dr: 1e-07 m gives" "$good" -P Geometry:dr=1e-7
 # issue 55: the key most likely mistyped is the one named (a size set by -P, not dr)
 drum2d=$(dirname "$here")/inputs/drum_2d_EV.yml
