@@ -154,8 +154,12 @@ static void nlist_follow(nlist *L, const size_t *perm, int dim)
             if (c > cap) continue; /* overflowed: this particle scans the cells */
             const unsigned *a = src + o * cap;
             unsigned *b = dst + (size_t)k * cap;
-            for (unsigned e = 0; e < c; ++e) {
-                const unsigned v = inv[a[e]];
+            unsigned down = 0; /* entries below the one before them (a gather loop, then the sort if any) */
+            for (unsigned e = 0; e < c; ++e) b[e] = inv[a[e]];
+            for (unsigned e = 1; e < c; ++e) down |= b[e] < b[e - 1];
+            if (!down) continue;
+            for (unsigned e = 1; e < c; ++e) {
+                const unsigned v = b[e];
                 unsigned m = e;
                 for (; m > 0 && b[m - 1] > v; --m) b[m] = b[m - 1];
                 b[m] = v;

@@ -13,8 +13,8 @@
  * cell's run in store order). Bodies skip a neighbour beyond the support
  * before anything else (r^2 >= support2), so a list that holds every
  * particle within 2h, in the scan's order, gives the scan's sums bit for bit.
- * It is built again (from the cell scan) when a particle has moved skin/2
- * since the last build, when the store changed outside a sort (a drain,
+ * It is built again (from the cells that the ball of 2h + skin touches,
+ * grid_list_fill_reach) when a particle has moved skin/2 since the last build, when the store changed outside a sort (a drain,
  * a load balance: nlist_forget), and at every prepare of a run with a halo
  * (several ranks, periodic axes), whose ghosts are made afresh at every
  * prepare. */
