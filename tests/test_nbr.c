@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "testutil.h"
+#include "cpu/nlist.h"
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -462,12 +463,97 @@ static void test_forms_overflow(void **st)
     part_free(&p);
 }
 
+/* The CPU's Verlet list (src/cpu/nlist.h, GRID_NBR_ROWS) against the cell
+ * scan it replaces: after each sort of the store (nbr_build), with the
+ * rows built from the cells or following the sort (renamed through its
+ * permutation and put back in index order), every particle meets the same
+ * neighbours within the support, in the same order, as the plain cell scan
+ * of that sort; particles move under half the skin between sorts (the rows
+ * follow) and then past it (they are built again). ghosts: a part of the
+ * store is ghosts (several ranks), whose rows are built at every sort.
+ * lattice: the particles a hair off a lattice of dr = h / 1.5 (the scenes'),
+ * where pairs lie 2h apart across cell faces: a pair within the list's
+ * radius at a build but two cells apart, which the later scan meets,
+ * must be in the rows.
+ * Reference: the cell scan (NBR_BEGIN without a list). */
+static void check_rows(int dim, int ghosts, int lattice)
+{
+    const size_t side = dim == 3 ? 17 : 55, n = dim == 3 ? side * side * side : side * side;
+    const double dr = 1.0 / (double)side, h = lattice ? 1.5 * dr : dim == 3 ? 0.04 : 0.012, skin = 0.1 * h;
+    particles_t p = {0};
+    part_alloc(&p, dim, n);
+    srand(77u + (unsigned)dim);
+    for (size_t k = 0; k < n; ++k) {
+        double x[3];
+        for (int d = 0; d < 3; ++d) { /* on the lattice, a hair off (pairs 2h apart, cells' faces), or anywhere */
+            const size_t m = d == 0 ? k % side : d == 1 ? k / side % side : k / (side * side);
+            x[d] = lattice ? ((double)m + 0.5) * dr + 0.02 * dr * (2.0 * rand() / RAND_MAX - 1) : rand() / (double)RAND_MAX;
+        }
+        tu_put(&p, x[0], x[1], dim == 3 ? x[2] : 0, k % 4 ? KIND_MATERIAL : KIND_DUMMY, 1.0);
+        p.id[k] = (int64_t)((k * 7919u) % n);
+    }
+    if (ghosts) p.ng = n / 3, p.n = n - p.ng; /* the last third: ghosts */
+    const size_t nt = p.n + p.ng;
+    const real s2 = (real)(4 * h * h);
+    nbr_grid g = {0};
+    nlist L;
+    nbr_build(&g, &p, (real)(2 * h), NULL);
+    nlist_init(&L, &p, h, h / 1.5, 0.1);
+    assert_true(L.on);
+    nlist_update(&L, &g, &p, 0);
+    size_t *seq = malloc(nt * sizeof *seq), resorted = 0, met = 0;
+    for (int round = 0; round < 12; ++round) {
+        /* rounds 0-4 and 6-10: a step of skin/12 at most along each axis; round 5: past the skin */
+        const double step = round == 5 ? 2 * skin : skin / 12;
+        for (size_t k = 0; k < nt; ++k)
+            for (int d = 0; d < dim; ++d) p.x[d][k] += (real)(step * (2.0 * rand() / RAND_MAX - 1));
+        nbr_build(&g, &p, (real)(2 * h), NULL);
+        for (size_t k = 0; k < nt; ++k) resorted += g.perm[k] != k;
+        nlist_update(&L, &g, &p, 0);
+        assert_int_equal(g.view.form, GRID_NBR_ROWS);
+        grid_view cv = g.view;
+        cv.form = GRID_NBR_LIST, cv.nl = cv.ncnt = NULL;
+        for (size_t i = 0; i < nt; ++i) {
+            size_t m = 0, k = 0;
+            NBR_BEGIN(&cv, p.x, i, j)
+                real xij[3];
+                if (grid_pair(dim, p.x, i, j, xij) < s2) seq[m++] = j;
+            NBR_END
+            NBR_BEGIN(&g.view, p.x, i, j)
+                real xij[3];
+                if (grid_pair(dim, p.x, i, j, xij) < s2) {
+                    assert_true(k < m);
+                    assert_int_equal(seq[k++], j);
+                }
+            NBR_END
+            assert_int_equal(k, m);
+            met += m;
+        }
+    }
+    assert_true(met > 10 * nt); /* real neighbours to meet */
+    assert_true(resorted > 0);  /* the sorts moved particles in the store */
+    if (ghosts) {
+        assert_int_equal(L.follows, 0); /* ghosts are made afresh: every sort builds */
+    } else {
+        assert_true(L.follows >= 8); /* the rows followed the sorts between builds */
+        assert_true(L.builds >= 2 && L.builds <= 4); /* and were built again past the skin */
+    }
+    free(seq);
+    nlist_free(&L);
+    nbr_free(&g);
+    part_free(&p);
+}
+
+static void test_rows_2d(void **st) { (void)st; check_rows(2, 0, 0); check_rows(2, 1, 0); check_rows(2, 0, 1); }
+static void test_rows_3d(void **st) { (void)st; check_rows(3, 0, 0); check_rows(3, 1, 0); check_rows(3, 0, 1); }
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_nbr_2d), cmocka_unit_test(test_nbr_3d),
                                        cmocka_unit_test(test_nbr_permutes_fields), cmocka_unit_test(test_list_2d),
                                        cmocka_unit_test(test_list_3d), cmocka_unit_test(test_nbr_parallel_order),
                                        cmocka_unit_test(test_nbr_canonical_order), cmocka_unit_test(test_forms_2d),
-                                       cmocka_unit_test(test_forms_3d), cmocka_unit_test(test_forms_overflow)};
+                                       cmocka_unit_test(test_forms_3d), cmocka_unit_test(test_forms_overflow),
+                                       cmocka_unit_test(test_rows_2d), cmocka_unit_test(test_rows_3d)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

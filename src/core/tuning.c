@@ -6,10 +6,10 @@
 #include "error.h"
 
 /* The settings' names, and their values as read (NULL: not set). */
-enum { T_PROFILE, T_TEAM, T_NBR, T_WALLSKIP, T_OVERLAP, T_HOSTX, T_IPC, T_CUDA_AWARE, T_SKEW, T_N };
+enum { T_PROFILE, T_TEAM, T_NBR, T_WALLSKIP, T_OVERLAP, T_HOSTX, T_IPC, T_CUDA_AWARE, T_SKEW, T_CPU_NBR, T_N };
 static const char *const tuning_names[T_N] = {"SPHSEG_GPU_PROFILE", "SPHSEG_GPU_TEAM",  "SPHSEG_GPU_NBR", "SPHSEG_GPU_WALLSKIP",
                                               "SPHSEG_GPU_OVERLAP", "SPHSEG_GPU_HOSTX", "SPHSEG_GPU_IPC",
-                                              "SPHSEG_CUDA_AWARE", "SPHSEG_BALANCE_SKEW"};
+                                              "SPHSEG_CUDA_AWARE", "SPHSEG_BALANCE_SKEW", "SPHSEG_CPU_NBR"};
 static const char *tuning_raw[T_N];
 
 /* Set and not empty. */
@@ -30,6 +30,13 @@ static int nbr_of(const char *e)
 {
     if (!is_set(e) || !strcmp(e, "list")) return 0;
     return !strcmp(e, "list16") ? 1 : !strcmp(e, "cells") ? 2 : -1;
+}
+
+/* "list" 0 (or not set), "cells" 2; else -1. */
+static int cpu_nbr_of(const char *e)
+{
+    if (!is_set(e) || !strcmp(e, "list")) return 0;
+    return !strcmp(e, "cells") ? 2 : -1;
 }
 
 /* "R:F", R a rank >= 0 and F a finite factor > 0; else *rank = -2. */
@@ -63,6 +70,8 @@ const tuning *tuning_get(void)
                  .cuda_aware = !is_zero(r[T_CUDA_AWARE]),
                  .gpu_team_text = is_set(r[T_TEAM]) ? r[T_TEAM] : NULL,
                  .gpu_nbr_text = is_set(r[T_NBR]) ? r[T_NBR] : NULL,
+                 .cpu_nbr = cpu_nbr_of(r[T_CPU_NBR]),
+                 .cpu_nbr_text = is_set(r[T_CPU_NBR]) ? r[T_CPU_NBR] : NULL,
                  .skew_text = is_set(r[T_SKEW]) ? r[T_SKEW] : NULL};
     skew_of(r[T_SKEW], &t.skew_rank, &t.skew_factor);
     read = 1;

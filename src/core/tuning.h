@@ -22,9 +22,12 @@ typedef struct tuning {
                        * cut moves, the answer does not beyond round-off); -1: not set (default); -2: set to
                        * something else (skew_text; settings_check refuses it) */
     double skew_factor;
+    int cpu_nbr;      /* SPHSEG_CPU_NBR: the CPU's neighbour pass, 0 list (or unset: the list where it fits in
+                       * half the free memory, src/cpu/nlist.c), 2 cells; -1: set to something else (refused) */
     const char *skew_text; /* SPHSEG_BALANCE_SKEW as set, or NULL */
     const char *gpu_team_text; /* SPHSEG_GPU_TEAM as set, or NULL */
     const char *gpu_nbr_text;  /* SPHSEG_GPU_NBR as set, or NULL */
+    const char *cpu_nbr_text;  /* SPHSEG_CPU_NBR as set, or NULL */
 } tuning;
 
 /* The settings, read from the environment at the first call. */

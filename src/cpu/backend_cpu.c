@@ -10,6 +10,7 @@
 #include "bound.h"
 #include "core/error.h"
 #include "nbr.h"
+#include "nlist.h"
 #include "sim/sim.h"
 #include "sim/stages.h"
 
@@ -17,10 +18,15 @@
  * 10 us, so a chunk is far above the cost of taking it. */
 #define CPU_CHUNK 32
 
-/* The CPU backend's own state (s->be_data): the sorted cell list and the
- * boundary classification's work arrays, allocated at the first call. */
+/* The CPU backend's own state (s->be_data): the sorted cell list, the
+ * Verlet list over it (nlist.h: every neighbour loop walks it through
+ * grid.view) and the boundary classification's work arrays, allocated at
+ * the first call. */
 typedef struct cpu_state {
     nbr_grid grid;
+    nlist list;
+    int list_init;
+    long steps0; /* s->step at the first call (the list's log) */
     bound_work bw;
 } cpu_state;
 
@@ -151,12 +157,20 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
 #pragma omp parallel for schedule(static)
         for (long i = 0; i < n; ++i) step_place((size_t)i, p, s->flow_on, &s->flow.w, &s->kin, c->t);
         return 1;
-    case ST_EXCHANGE:
+    case ST_EXCHANGE: { /* the ghosts (made afresh: a halo's runs build the list at every prepare), the sort,
+                         * the Verlet list built or following the sort (nlist.h) */
+        cpu_state *cs = cpu_of(s);
         if (s->halo) halo_exchange(s->halo, p);
-        if (s->halo) nbr_set_period(&cpu_of(s)->grid, s->halo->per, s->halo->plo, s->halo->plen);
-        nbr_build(&cpu_of(s)->grid, p, R(2.0) * s->seg.k.h, s->halo ? s->halo->origin : NULL);
-        if (s->halo) halo_sorted(s->halo, cpu_of(s)->grid.perm, p->n + p->ng);
+        if (s->halo) nbr_set_period(&cs->grid, s->halo->per, s->halo->plo, s->halo->plen);
+        nbr_build(&cs->grid, p, R(2.0) * s->seg.k.h, s->halo ? s->halo->origin : NULL);
+        if (s->halo) halo_sorted(s->halo, cs->grid.perm, p->n + p->ng);
+        if (!cs->list_init) {
+            nlist_init(&cs->list, p, (double)s->seg.k.h, (double)s->seg.k.dr, s->sc->run.list_skin);
+            cs->list_init = 1, cs->steps0 = s->step;
+        }
+        nlist_update(&cs->list, &cs->grid, p, s->halo != NULL);
         return 1;
+    }
     case ST_CLASSIFY: /* the ghosts an owned particle reads hold their whole support here and
                        * classify themselves alike; the refresh (from_owner) makes them the
                        * owner's values bit for bit whatever the summation order. Without psi in
@@ -331,7 +345,12 @@ static long cpu_check(sim_t *s)
 
 static void cpu_to_host(sim_t *s) { (void)s; }
 
-static void cpu_from_host(sim_t *s) { (void)s; }
+/* The store was changed on the host (a drain, a load balance): the list's
+ * rows no longer name its particles. */
+static void cpu_from_host(sim_t *s)
+{
+    if (s->be_data) nlist_forget(&cpu_of(s)->list);
+}
 
 static void cpu_finish(sim_t *s)
 {
@@ -339,11 +358,16 @@ static void cpu_finish(sim_t *s)
     if (!c) return;
     /* the memory line (issue 56): the store's fields and the backend's per-particle scratch */
     const size_t cl = c->grid.cap_part ? 2 * sizeof(size_t) + sizeof(uint64_t) : 0, /* key, perm, rank */
-        bc = c->bw.cap_part ? sizeof(bound_sums) + 1 : 0;                              /* sums, classes */
+        bc = c->bw.cap_part ? sizeof(bound_sums) + 1 : 0,                              /* sums, classes */
+        vl = nlist_bytes(&c->list);                                                    /* the Verlet list */
     message("cpu memory: store %zu bytes a particle (%d of %d fields), scratch %zu bytes a particle (cell list %zu, "
-            "classification %zu), rank 0", part_store_bytes(&s->p), __builtin_popcount(s->p.fields),
-            __builtin_popcount(part_fields_all()), cl + bc, cl, bc);
+            "neighbour list %zu, classification %zu), rank 0", part_store_bytes(&s->p), __builtin_popcount(s->p.fields),
+            __builtin_popcount(part_fields_all()), cl + vl + bc, cl, vl, bc);
+    if (c->list.on)
+        message("cpu: %ld neighbour-list builds, %ld sorts followed, in %ld steps (Run:list_skin %.3g h), rank 0",
+                c->list.builds, c->list.follows, s->step - c->steps0, c->list.skin / (double)s->seg.k.h);
     nbr_free(&c->grid);
+    nlist_free(&c->list);
     bound_free(&c->bw);
     free(c);
     s->be_data = NULL;

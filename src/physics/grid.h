@@ -17,10 +17,12 @@ typedef struct grid_view {
     /* Ghost particles (mpi/halo.h) are sorted apart, after the owned ones:
      * cell c holds [start[c], end[c]) and [gstart[c], gend[c]). NULL: none. */
     const size_t *gstart, *gend;
-    /* Optional neighbour list (the GPU backend; NULL on the CPU): the
-     * particles within the support of i, in the order the cell scan meets
-     * them, entry q at nl[q * nl_stride + i]; ncnt[i] of them. A particle
-     * with more than nl_cap falls back to the cell scan. */
+    /* Optional neighbour list (NULL: the cell scan): the particles within
+     * the support of i, in the order the cell scan meets them, ncnt[i] of
+     * them; entry q at nl[q * nl_stride + i] (the GPU's columns), or at
+     * nl[i * nl_stride + q] in the form GRID_NBR_ROWS (the CPU's rows,
+     * src/cpu/nlist.h). A particle with more than nl_cap falls back to the
+     * cell scan. */
     const unsigned *nl, *ncnt;
     size_t nl_stride;
     unsigned nl_cap;
@@ -31,7 +33,9 @@ typedef struct grid_view {
      * GRID_NBR_CELLS, no list: the cell scan of the build, owned and ghost
      * runs merged by rk, the particles within sqrt(list2) at the build's
      * positions xb. Both take i's cell from xb (the cell it was sorted
-     * into). GRID_NBR_LIST (0): the list nl, or the plain cell scan. */
+     * into). GRID_NBR_LIST (0): the list nl, or the plain cell scan.
+     * GRID_NBR_ROWS: the CPU's list nl in rows (above); its fallback is
+     * the plain cell scan, as GRID_NBR_LIST's. */
     int form;
     const unsigned short *nl16;
     real *xb[3];
@@ -39,7 +43,7 @@ typedef struct grid_view {
     real list2;
 } grid_view;
 
-enum { GRID_NBR_LIST = 0, GRID_NBR_LIST16 = 1, GRID_NBR_CELLS = 2 };
+enum { GRID_NBR_LIST = 0, GRID_NBR_LIST16 = 1, GRID_NBR_CELLS = 2, GRID_NBR_ROWS = 3 };
 
 /* A 16-bit entry: the slot s of the neighbour's cell among i's 3^d cells
  * (the scan's order, dz, dy, dx ascending; bits 11-15) and its offset in
@@ -128,7 +132,8 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
     {                                                                                  \
         const int frm_ = (g)->form;                                                    \
         int c0_[3];                                                                    \
-        if (frm_ == GRID_NBR_LIST) grid_cell_coords((g), (x)[0], (x)[1], (x)[2], (i), c0_); \
+        const int row_ = frm_ == GRID_NBR_ROWS;                                        \
+        if (frm_ == GRID_NBR_LIST || row_) grid_cell_coords((g), (x)[0], (x)[1], (x)[2], (i), c0_); \
         else grid_cell_coords((g), (g)->xb[0], (g)->xb[1], (g)->xb[2], (i), c0_);      \
         const int zr_ = (g)->dim == 3 ? 1 : 0;                                         \
         const int l16_ = (g)->nl16 != NULL && (g)->ncnt[i] <= (g)->nl_cap;             \
@@ -158,6 +163,7 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
                  q_ < b_; q_ = ex_ ? grid_ex_next(&xs_, (g), (lane), (nlanes)) : q_ + (size_t)(nlanes)) { \
                 const size_t j = !lst_ ? q_                                            \
                                  : l16_ ? grid_dec16((g), &dc_, c0_, (g)->nl16[q_ * (g)->nl_stride + (i)]) \
+                                 : row_ ? (size_t)(g)->nl[(i) * (g)->nl_stride + q_]   \
                                         : (size_t)(g)->nl[q_ * (g)->nl_stride + (i)];
 
 #define NBR_END                                                                        \
@@ -267,6 +273,45 @@ HD_INLINE unsigned grid_list_fill(const grid_view *g, real *const *x, size_t i, 
         if (c < cap) nl[(size_t)c * stride + i] = (unsigned)j;
         ++c;
     NBR_END
+    return c;
+}
+
+/* The CPU's Verlet row of particle i (GRID_NBR_ROWS; src/cpu/nlist.h): the
+ * particles within `reach` (reach^2 = list2, past the support by the skin),
+ * at most cap of them stored in row. The cells of edge 2h that the ball of
+ * radius reach about i touches (its 3^d cells, and where the ball passes
+ * their faces, the next ones out: a neighbour within reach may lie two
+ * cells away), in ascending cell index, each cell's owned run then its
+ * ghost run: the cell scan's order for the particles both meet. Returns
+ * how many there are (stored or not). */
+HD_INLINE unsigned grid_list_fill_reach(const grid_view *g, real *const *x, size_t i, real reach, real list2,
+                                        unsigned *row, unsigned cap)
+{
+    int c0[3], a[3] = {0, 0, 0}, b[3] = {0, 0, 0};
+    grid_cell_coords(g, x[0], x[1], x[2], i, c0);
+    const real rm = reach * R(1.000001); /* past the rounding of the cells' bounds */
+    for (int d = 0; d < g->dim; ++d) {
+        const real xi = x[d][i];
+        int lo = (int)floor((double)((xi - rm - g->lo[d]) * g->inv_cell)) - g->off[d];
+        int hi = (int)floor((double)((xi + rm - g->lo[d]) * g->inv_cell)) - g->off[d];
+        lo = lo > c0[d] - 1 ? c0[d] - 1 : lo, hi = hi < c0[d] + 1 ? c0[d] + 1 : hi;
+        a[d] = lo < 0 ? 0 : lo, b[d] = hi >= g->nc[d] ? g->nc[d] - 1 : hi;
+    }
+    unsigned c = 0;
+    for (int cz = a[2]; cz <= b[2]; ++cz)
+        for (int cy = a[1]; cy <= b[1]; ++cy)
+            for (int cx = a[0]; cx <= b[0]; ++cx) {
+                const size_t cell = grid_cell_index(g, cx, cy, cz);
+                for (int part = 0; part < (g->gstart ? 2 : 1); ++part) {
+                    const size_t s = part ? g->gstart[cell] : g->start[cell], e = part ? g->gend[cell] : g->end[cell];
+                    for (size_t j = s; j < e; ++j) {
+                        real xij[3];
+                        if (grid_pair(g->dim, x, i, j, xij) >= list2) continue;
+                        if (c < cap) row[c] = (unsigned)j;
+                        ++c;
+                    }
+                }
+            }
     return c;
 }
 

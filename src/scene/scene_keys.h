@@ -156,11 +156,12 @@ SECTION("Run", run, scene_run)
     KF("Run", run, scene_run, max_wall_time, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "wall s: write a checkpoint and stop (exit 0) before the next step would pass it (src/output/checkpoint.h); default 0 = no limit")
     KF("Run", run, scene_run, list_skin, OPT, "0.1", 0, 1, LO_OPEN, ALWAYS,
-      "Verlet skin of the GPU backend's neighbour lists, in units of h: a list reaches 2h + skin and is rebuilt "
+      "Verlet skin of the neighbour lists, in units of h: a list reaches 2h + skin and is rebuilt "
       "once a particle may have moved skin/2; a larger skin means fewer rebuilds (each an exchange on several "
       "ranks) and longer lists (0.1 was the fastest on one GPU and on two: docs/performance.md); at "
       "most 1 (ghosts are 3 cells of 2h "
-      "deep); results differ at round-off only; the CPU backend builds its lists every stage; default 0.1")
+      "deep); on the GPU results differ at round-off only; the CPU backend's list gives the same bits for any skin "
+      "(on several ranks or periodic axes it is built at every stage); default 0.1")
     KS("Run", run, scene_run, backend, 0, CYAML_UNLIMITED, "auto",
       "\"auto\" (default: gpu when built with CUDA and a device is present) | \"cpu\" | \"gpu\"")
     KE("Run", run, scene_run, preset, enum run_preset, run_presets, "none",
