@@ -39,17 +39,18 @@ void nlist_init(nlist *L, const particles_t *p, double h, double dr, double skin
     L->skin = skin_h * h;
     const double sup = 2 * h + L->skin;
     L->list2 = sup * sup;
-    L->cap = grid_list_cap(p->dim, (1 + 0.5 * skin_h) * h / dr); /* the GPU's rule (gpu_setup.cu) */
+    const unsigned est = grid_list_est(p->dim, (1 + 0.5 * skin_h) * h / dr); /* the fit test's width */
+    L->cap = 0; /* the first build counts and sizes the rows (nlist_build), as the GPU's list */
     const int want = tuning_get()->cpu_nbr; /* 0 list (the default), 2 cells */
     if (want < 0) error_exit(2, "SPHSEG_CPU_NBR=%s: expected list or cells", tuning_get()->cpu_nbr_text);
     L->on = want == 0;
-    const double need = (double)(p->n + p->ng) * (double)nlist_part_bytes(L->cap), have = nlist_free_memory();
+    const double need = (double)(p->n + p->ng) * (double)nlist_part_bytes(est), have = nlist_free_memory();
     const char *why = want ? "SPHSEG_CPU_NBR=cells" : "";
     if (L->on && need > 0.5 * have) L->on = 0, why = "the list would not fit in half the free memory";
     if (L->on && 2.0 * (double)(p->n + p->ng) >= 4294967295.0) L->on = 0, why = "4-byte entries: too many particles";
     if (L->on)
-        message("cpu: neighbour pass: Verlet list within 2h + %.3g h (Run:list_skin), %u entries a particle, "
-                "%.1f MiB", skin_h, L->cap, need / 1048576.0);
+        message("cpu: neighbour pass: Verlet list within 2h + %.3g h (Run:list_skin), about %u entries a particle "
+                "(sized at the first build), %.1f MiB", skin_h, est, need / 1048576.0);
     else
         message("cpu: neighbour pass: the cells (%s; the list would take %.1f MiB, %.1f MiB free)", why,
                 need / 1048576.0, have / 1048576.0);
@@ -85,8 +86,9 @@ static void nlist_reserve(nlist *L, size_t n, int rows)
 }
 
 /* Every row from the cells of g (grid_list_fill_reach), at the positions
- * now; a row too short for the densest particle grows the rows
- * (by a quarter over it) and the build runs again. */
+ * now; a row too short for the densest particle grows the rows to its
+ * count + 1/16, rounded up to 8 (the GPU's rule, gpu_list), and the build
+ * runs again: the first build, with rows of 0, counts and sizes them. */
 static void nlist_build(nlist *L, const nbr_grid *g, particles_t *p)
 {
     const size_t nt = p->n + p->ng;
@@ -102,7 +104,7 @@ static void nlist_build(nlist *L, const nbr_grid *g, particles_t *p)
             most = cnt[i] > most ? cnt[i] : most;
         }
         if (most <= L->cap) break;
-        L->cap = (most + most / 4 + 7) / 8 * 8;
+        L->cap = (most + most / 16 + 7) / 8 * 8;
         nlist_reserve(L, nt, 1);
     }
     for (int d = 0; d < p->dim; ++d) memcpy(L->xb[d], p->x[d], nt * sizeof(real));

@@ -374,7 +374,8 @@ HD_INLINE unsigned grid_list_cap(int dim, double h_dr)
     return (c + 7) / 8 * 8;
 }
 
-/* The GPU list's width to expect (its form's choice, gpu_form_fits): the
+/* The list's width to expect (the GPU's form choice, gpu_form_fits; the CPU's
+ * fit test, nlist_init): the
  * lattice count with 15 % room, rounded up to 8. The width a build sets is
  * the largest count + 1/16 (gpu/gpu_nbr.cu gpu_list): 144 for a lattice
  * count of 131 on the 3D drum, 1.1 of it (one H200, 2026-11-29,
