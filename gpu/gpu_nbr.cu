@@ -153,7 +153,7 @@ static void gpu_list(gpu_t *g, int dim, real list2, size_t n, const unsigned *rk
         }
         if (most <= cap) break;
         if (g->nl) CK(cudaFree(g->nl));
-        g->nl_cap = (most + most / 16 + 7) / 8 * 8;
+        g->nl_cap = grid_list_width(most);
         g->nl = (unsigned *)dev_alloc(g->cap * g->nl_cap * gpu_nl_esize(g));
     }
     for (int d = 0; d < dim; ++d)

@@ -168,8 +168,9 @@ size_t gpu_spare_bytes(const particles_t *p)
  * the rate, 0.37 of the bytes; docs/performance.md "Neighbour pass"). All three
  * meet a particle's neighbours in the same order: the same bits. The room
  * left: 10 % of the free memory and 15 % of the particles for growth; the
- * list's width as grid_list_est expects it; GPU_SCRATCH_EST bytes a particle for the keys, counts and sums (52 B
- * measured, single). Ranks sharing a device each see it as at their start. */
+ * list's width as grid_list_est expects it; GPU_SCRATCH_EST bytes a particle
+ * for the keys, counts and sums (52 B measured, single). Ranks sharing a
+ * device each see it as at their start. */
 #define GPU_SCRATCH_EST 96.0
 static int gpu_form_fits(const gpu_t *g, const particles_t *h, size_t n)
 {

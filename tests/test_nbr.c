@@ -82,6 +82,27 @@ static void test_nbr_permutes_fields(void **st)
  * bit-identical; a particle with more neighbours than the capacity falls
  * back to the cell scan; the lanes of a team (NBR_BEGIN_T) share the visits
  * out. Reference: the cell scan itself. */
+/* The pairs within sqrt(s2) of particle i that view ref meets, into seq, and
+ * that view v meets the same ones in the same order; returns their count. */
+static size_t same_pairs(const grid_view *ref, const grid_view *v, real *const *x, int dim, size_t i, real s2,
+                         size_t *seq)
+{
+    size_t m = 0, k = 0;
+    NBR_BEGIN(ref, x, i, j)
+        real xij[3];
+        if (grid_pair(dim, x, i, j, xij) < s2) seq[m++] = j;
+    NBR_END
+    NBR_BEGIN(v, x, i, j)
+        real xij[3];
+        if (grid_pair(dim, x, i, j, xij) < s2) {
+            assert_true(k < m);
+            assert_int_equal(seq[k++], j);
+        }
+    NBR_END
+    assert_int_equal(k, m);
+    return m;
+}
+
 static void check_list(int dim, unsigned cap)
 {
     const size_t n = 2000;
@@ -101,21 +122,9 @@ static void check_list(int dim, unsigned cap)
     lv.nl = nl, lv.ncnt = cnt, lv.nl_stride = n, lv.nl_cap = cap;
     size_t *seq = malloc(n * sizeof *seq), over = 0;
     for (size_t i = 0; i < n; ++i) {
-        size_t m = 0, k = 0;
-        NBR_BEGIN(&g.view, p.x, i, j)
-            real xij[3];
-            if (grid_pair(dim, p.x, i, j, xij) < s2) seq[m++] = j;
-        NBR_END
+        const size_t m = same_pairs(&g.view, &lv, p.x, dim, i, s2, seq);
         assert_int_equal(m, cnt[i]);
         over += cnt[i] > cap;
-        NBR_BEGIN(&lv, p.x, i, j)
-            real xij[3];
-            if (grid_pair(dim, p.x, i, j, xij) < s2) {
-                assert_true(k < m);
-                assert_int_equal(seq[k++], j);
-            }
-        NBR_END
-        assert_int_equal(k, m);
         /* teams (hd.h): lane l of T meets every T-th entry of each segment
          * from the l-th on; between them the lanes meet each neighbour of
          * the scan exactly once, each lane in the scan's order */
@@ -514,20 +523,7 @@ static void check_rows(int dim, int ghosts, int lattice)
         grid_view cv = g.view;
         cv.form = GRID_NBR_LIST, cv.nl = cv.ncnt = NULL;
         for (size_t i = 0; i < nt; ++i) {
-            size_t m = 0, k = 0;
-            NBR_BEGIN(&cv, p.x, i, j)
-                real xij[3];
-                if (grid_pair(dim, p.x, i, j, xij) < s2) seq[m++] = j;
-            NBR_END
-            NBR_BEGIN(&g.view, p.x, i, j)
-                real xij[3];
-                if (grid_pair(dim, p.x, i, j, xij) < s2) {
-                    assert_true(k < m);
-                    assert_int_equal(seq[k++], j);
-                }
-            NBR_END
-            assert_int_equal(k, m);
-            met += m;
+            met += same_pairs(&cv, &g.view, p.x, dim, i, s2, seq);
         }
     }
     assert_true(met > 10 * nt); /* real neighbours to meet */

@@ -13,7 +13,7 @@
  *    its neighbours' positive;
  *  - it is isotropic: the deviatoric stress rate is the elastic one (zero
  *    at rest);
- *  - riemann's bed damping (Flow:bed_damping, flow.h flow_bed_q): a particle
+ *  - riemann's bed damping (Flow:bed_damping, stress.h stress_static_q): a particle
  *    moving through a bed far inside the yield cone is slowed by it (its
  *    acceleration against the motion grows), not at all when the stress is
  *    on the cone (the flowing layer) or where p <= 0; a rigid rotation of the

@@ -100,7 +100,7 @@ CASES = [
     # stress and kind
     # (plain: without the bed damping the scene sets, which drum_EV_bed covers)
     ("drum_EV_riemann", "drum_2d_EV.yml", 800, DRUM + PLAIN + ["Flow:stabilization=riemann", "Flow:bed_damping=0"], "migrate"),
-    # riemann's bed damping (physics/flow.h flow_bed_q): reads the ghosts' stress on both sides of the pair
+    # riemann's bed damping (physics/stress.h stress_static_q): reads the ghosts' stress on both sides of the pair
     ("drum_EV_bed", "drum_2d_EV.yml", 400, DRUM + PLAIN + ["Flow:stabilization=riemann", "Flow:bed_damping=1"], None),
     # the first-order stress filter (Flow:stress_filter mls, flow.h flow_shepard_team): the ghosts' stress
     # and position in its moments

@@ -104,7 +104,7 @@ static void nlist_build(nlist *L, const nbr_grid *g, particles_t *p)
             most = cnt[i] > most ? cnt[i] : most;
         }
         if (most <= L->cap) break;
-        L->cap = (most + most / 16 + 7) / 8 * 8;
+        L->cap = grid_list_width(most);
         nlist_reserve(L, nt, 1);
     }
     for (int d = 0; d < p->dim; ++d) memcpy(L->xb[d], p->x[d], nt * sizeof(real));

@@ -41,7 +41,10 @@ typedef struct flow_ctx {
     real alpha_av; /* Monaghan coefficient of (3.10), monaghan only; 0 switches it off */
     real eta_r;    /* riemann: the limiter's eta (Zhang, Hu & Adams 2017: 3) */
     real bed_alpha; /* riemann: Flow:bed_damping, Monaghan's alpha on unyielded material pairs
-                     * (flow_bed_q); 0 = off */
+                     * (stress_static_q q < 1), weighted by 1 - max(q_i, q_j): full in a bed at rest
+                     * far inside the static cone, none at or past yield (the flowing layer), so the
+                     * rheology alone sets the flow; mom_av vanishes on a rigid rotation, so the bed's
+                     * turning with the drum is not damped; 0 = off */
     real bed_k;     /* the static yield cone's slope k(mu_s) of Material:yield (stress_yield_k) */
     int filter_mls; /* Flow:stress_filter mls: the first-order filter (flow_shepard_team); 0 = Shepard (3.12) */
     int kgc;        /* Flow:gradient_correction on: B_i grad W in the velocity gradient and the stress
@@ -64,16 +67,6 @@ typedef struct flow_ctx {
     real p_back;    /* Flow:background_pressure excluded (Newtonian fluid): 2 p0 / rho^2, added to the pair's
                      * Pi of (3.9), which then sees sigma + p0 I: a uniform p0 exerts no force; else 0 */
 } flow_ctx;
-
-/* How near particle i's stress is to the static yield cone sqrt(J2) = k p
- * (k = k(mu_s), flow_ctx.bed_k): q = sqrt(J2) / (k p), 1 at p <= 0 (a free
- * surface, tension). The bed damping (Flow:bed_damping) weights a material
- * pair by 1 - max(q_i, q_j) where that is positive: full in a bed at rest
- * far inside the cone, none in material at or past yield (the flowing
- * layer, whose mu(I) >= mu_s puts it on its cone), so the rheology alone
- * sets the flow. Monaghan's pair term (mom_av) vanishes on a rigid rotation
- * (u_ij . x_ij = 0), so the bed's turning with the drum is not damped. */
-HD_INLINE real flow_bed_q(const real s[6], real k) { return stress_static_q(s, k); }
 
 /* The pressure diffusion's coefficient flow_ctx.pdiff (mom_pdiff) from the
  * bulk modulus K, the density rho, the sound speed cs and the kernel's h:
@@ -157,22 +150,6 @@ HD_INLINE void flow_wall(size_t d, particles_t *p, const grid_view *g, const flo
     flow_wall_team(d, p, g, c, 0, 1);
 }
 
-/* The largest eigenvalue of the symmetric 3x3 m (xx, yy, zz, xy, xz, yz),
- * by the trigonometric form of the characteristic cubic (Smith 1961). */
-HD_INLINE real flow_sym_eig_max(const real m[6])
-{
-    const real q = (m[0] + m[1] + m[2]) / R(3.0);
-    const real off = m[3] * m[3] + m[4] * m[4] + m[5] * m[5];
-    const real d0 = m[0] - q, d1 = m[1] - q, d2 = m[2] - q;
-    const real p2 = d0 * d0 + d1 * d1 + d2 * d2 + R(2.0) * off;
-    if (!(p2 > 0)) return q;
-    const real pp = sqrt_r(p2 / R(6.0)), ip = R(1.0) / pp;
-    const real b0 = d0 * ip, b1 = d1 * ip, b2 = d2 * ip, b3 = m[3] * ip, b4 = m[4] * ip, b5 = m[5] * ip;
-    real r = R(0.5) * (b0 * (b1 * b2 - b5 * b5) - b3 * (b3 * b2 - b5 * b4) + b4 * (b3 * b5 - b1 * b4));
-    r = r < R(-1.0) ? R(-1.0) : (r > R(1.0) ? R(1.0) : r);
-    return q + R(2.0) * pp * (real)cos(acos((double)r) / 3.0);
-}
-
 /* Flow:gradient_correction: B_i from the summed moment m (xx, yy, zz, xy,
  * xz, yz) of M_i = sum_j V_j x_ji (x) grad_i W_ij, into p->B. The measure of
  * how far the support is cut is the product of M_i's two smallest principal
@@ -198,10 +175,14 @@ HD_INLINE void flow_kgc_store(size_t i, const particles_t *p, int dim, const rea
         det = m[0] * adj[0] + m[3] * adj[3] + m[4] * adj[4];
     }
     if (det > 0) {
-        const real lmax = dim == 2 ? R(1.0) : flow_sym_eig_max(m);
-        const real d = dim == 2 ? det : det / lmax; /* the product of the two smallest moments */
-        const real w = d >= det0 ? R(1.0) : d / det0;
-        const real a = d >= det0 ? R(1.0) / det : R(1.0) / (det0 * lmax); /* w M^-1 = (w / det) adj */
+        /* d, the product of the two smallest moments, is at least det0 (w = 1) where
+         * det >= det0 tr M in 3D (lambda_max <= tr M): the eigenvalue (a cos and an
+         * acos) is taken only where the support may be cut */
+        real w = R(1.0), a = R(1.0) / det; /* w M^-1 = (w / det) adj */
+        if (dim == 2 ? det < det0 : det < det0 * (m[0] + m[1] + m[2])) {
+            const real lmax = dim == 2 ? R(1.0) : linalg_sym_eig_max(m), d = det / lmax;
+            if (d < det0) w = d / det0, a = R(1.0) / (det0 * lmax);
+        }
         for (int q = 0; q < 6; ++q) b[q] = a * adj[q] + (R(1.0) - w) * (q < dim ? R(1.0) : R(0.0));
         if (dim == 2) b[2] = 1, b[4] = b[5] = 0;
     }
@@ -255,7 +236,7 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
      * distance test by SPH_EARLY_LOADS (hd.h) */
     const real xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]}, ui[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
     const real pi = stress_pressure(si);
-    const real qi = c->bed_alpha > 0 ? flow_bed_q(si, c->bed_k) : R(1.0);
+    const real qi = c->bed_alpha > 0 ? stress_static_q(si, c->bed_k) : R(1.0);
     real pd = R(0.0); /* the pressure diffusion, Pa/s (riemann, delta) */
     real Bi[6] = {1, 1, 1, 0, 0, 0}; /* Flow:gradient_correction (kgc: the caller's c->kgc) */
     if (kgc)
@@ -284,7 +265,7 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
             if (c->stab == STAB_RIEMANN)
                 Pi = mom_riemann(c->eta_r, c->cs, c->rho, uij, xij, r2, p->kind[j] != KIND_MATERIAL);
             if (c->bed_alpha > 0 && qi < R(1.0) && p->kind[j] == KIND_MATERIAL) {
-                const real qj = flow_bed_q(sj, c->bed_k), w = R(1.0) - (qi > qj ? qi : qj);
+                const real qj = stress_static_q(sj, c->bed_k), w = R(1.0) - (qi > qj ? qi : qj);
                 if (w > 0) Pi += w * mom_av(c->bed_alpha, c->cs, k->h, c->rho, c->rho, uij, xij);
             }
             /* the pressure difference less its hydrostatic part rho g.x_ji (Fourtakas et al.

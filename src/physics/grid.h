@@ -360,24 +360,25 @@ HD_INLINE unsigned grid_list_fill_ranked(const grid_view *g, real *const *x, siz
     return grid_list_fill_form(g, x, i, support2, nl, NULL, stride, cap, rk);
 }
 
-/* List capacity for smoothing length h = h_dr * dr: the lattice count in
- * the support (pi (2 h_dr)^2 in 2D, 4/3 pi (2 h_dr)^3 in 3D) with 30 %
- * room for compression, rounded up to 8 (48 in 2D, 160 in 3D at h = 1.5 dr). */
+/* The lattice count in the support for smoothing length h = h_dr * dr:
+ * pi (2 h_dr)^2 in 2D, 4/3 pi (2 h_dr)^3 in 3D. */
 HD_INLINE double grid_lattice_count(int dim, double h_dr)
 {
     double r = 2 * h_dr;
     return dim == 3 ? 4.0 / 3.0 * M_PI * r * r * r : M_PI * r * r;
 }
+
+/* A list capacity with 30 % room for compression, rounded up to 8 (48 in 2D,
+ * 160 in 3D at h = 1.5 dr): the tests' (tests/test_nbr.c). */
 HD_INLINE unsigned grid_list_cap(int dim, double h_dr)
 {
     unsigned c = (unsigned)(1.3 * grid_lattice_count(dim, h_dr) + 8);
     return (c + 7) / 8 * 8;
 }
 
-/* The list's width to expect (the GPU's form choice, gpu_form_fits; the CPU's
- * fit test, nlist_init): the
- * lattice count with 15 % room, rounded up to 8. The width a build sets is
- * the largest count + 1/16 (gpu/gpu_nbr.cu gpu_list): 144 for a lattice
+/* The list's width to expect (the GPU's form choice, gpu_form_fits; the
+ * CPU's fit test, nlist_init): the lattice count with 15 % room, rounded up
+ * to 8. The width a build sets is grid_list_width (below): 144 for a lattice
  * count of 131 on the 3D drum, 1.1 of it (one H200, 2026-11-29,
  * tools/bench/drum_rates.sh; docs/performance.md "Neighbour pass"). */
 HD_INLINE unsigned grid_list_est(int dim, double h_dr)
@@ -385,5 +386,10 @@ HD_INLINE unsigned grid_list_est(int dim, double h_dr)
     unsigned c = (unsigned)(1.15 * grid_lattice_count(dim, h_dr) + 0.999);
     return (c + 7) / 8 * 8;
 }
+
+/* The width a list takes when a build finds `most` entries in its longest
+ * row: most + 1/16, rounded up to 8 (the GPU's gpu_list and the CPU's
+ * nlist_build; it grows, never shrinks). */
+HD_INLINE unsigned grid_list_width(unsigned most) { return (most + most / 16 + 7) / 8 * 8; }
 
 #endif

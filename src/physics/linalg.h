@@ -1,7 +1,8 @@
-/* linalg.h — tiny dense solves for the C1-consistent gradients (App. E), and the
- * product of a symmetric 3x3 tensor with a vector. */
+/* linalg.h — tiny dense solves for the C1-consistent gradients (App. E), the
+ * product of a symmetric 3x3 tensor with a vector and its largest eigenvalue. */
 #ifndef SPHSEG_LINALG_H
 #define SPHSEG_LINALG_H
+#include <math.h>
 #include "../core/hd.h"
 
 /* b = S v, S symmetric stored as (xx, yy, zz, xy, xz, yz): the
@@ -12,6 +13,22 @@ HD_INLINE void linalg_sym_apply(const real S[6], const real v[3], real b[3])
     b[0] = S[0] * v[0] + S[3] * v[1] + S[4] * v[2];
     b[1] = S[3] * v[0] + S[1] * v[1] + S[5] * v[2];
     b[2] = S[4] * v[0] + S[5] * v[1] + S[2] * v[2];
+}
+
+/* The largest eigenvalue of the symmetric 3x3 m (xx, yy, zz, xy, xz, yz),
+ * by the trigonometric form of the characteristic cubic (Smith 1961): the corrected gradient's blend (flow_kgc_store). */
+HD_INLINE real linalg_sym_eig_max(const real m[6])
+{
+    const real q = (m[0] + m[1] + m[2]) / R(3.0);
+    const real off = m[3] * m[3] + m[4] * m[4] + m[5] * m[5];
+    const real d0 = m[0] - q, d1 = m[1] - q, d2 = m[2] - q;
+    const real p2 = d0 * d0 + d1 * d1 + d2 * d2 + R(2.0) * off;
+    if (!(p2 > 0)) return q;
+    const real pp = sqrt_r(p2 / R(6.0)), ip = R(1.0) / pp;
+    const real b0 = d0 * ip, b1 = d1 * ip, b2 = d2 * ip, b3 = m[3] * ip, b4 = m[4] * ip, b5 = m[5] * ip;
+    real r = R(0.5) * (b0 * (b1 * b2 - b5 * b5) - b3 * (b3 * b2 - b5 * b4) + b4 * (b3 * b5 - b1 * b4));
+    r = r < R(-1.0) ? R(-1.0) : (r > R(1.0) ? R(1.0) : r);
+    return q + R(2.0) * pp * (real)cos(acos((double)r) / 3.0);
 }
 
 /* Solve A X = B in place for n <= 4 unknowns and nrhs <= 4 right-hand sides
