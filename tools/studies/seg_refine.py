@@ -25,6 +25,7 @@ Each variant changes one existing key against the baseline `base`:
             error would matter half as much
   yielded   Segregation:shear_rate=yielded: eq. (2.7)'s shear rate only where the stress is on or past
             the static yield cone, 0 in the elastic bed (whose SPH shear rate grows as 1/dr)
+  yieldedE  yielded at Material:E=1e5: the stiffness's share (E x 10), measured against yielded
   cfl199    Run:cfl_flow=0.199: a step 0.5 % shorter, whose own effect is nil; what it changes is the
             runs' sensitivity to a perturbation, the floor under which a variant's effect is noise (at
             dr 2 mm, development machine, 0.199 and 0.201 move the index by up to 5.2 % EV, 2.6 % EN)
@@ -76,7 +77,7 @@ of the mid-chord C profiles' difference (on d_mc / R over the shorter profile) f
 1.0 -> 0.5 and 0.5 -> 0.25 mm, the shear-rate profile's relative RMS change, the observed order where three
 resolutions meet, and the factor's share: 1 - |change with the variant| / |change of base| at the
 same pair and time (1: switching the factor removes the resolution change; 0: no effect; negative:
-the variant changes more). --effects: each variant against base at the same drum and dr (index,
+the variant changes more). --effects: each variant against base (or REF's variant) at the same drum and dr (index,
 mid-chord speed, the C profile's RMS, the bed's area), per time.
 chart: the index change per refinement step per variant, and with --effects each variant against base
 at the same dr beside the noise runs (cfl199, cfl201).
@@ -106,6 +107,7 @@ VARIANTS = {
     "fill": [],  # Geometry:fill from FILL
     "cfl199": ["Run:cfl_flow=0.199"],
     "yielded": ["Segregation:shear_rate=yielded"],  # eq. (2.7)'s gdot only where the stress is on the static cone
+    "yieldedE": ["Segregation:shear_rate=yielded", "Material:E=1e5"],  # E x 10 (after FLOW's 1e4), against yielded
     "area": ["Geometry:fill_by=area"],  # the bed's area the segment's at every dr  # after FLOW's 0.2: the noise floor (below)
 }
 # The bed's area is N dr^2 of the lattice points inside R - dr/2 below the fill line (src/sim/setup.c,
@@ -125,7 +127,10 @@ RUNS = [("EV", "base", 0.001, 10), ("EV", "base", 0.0005, 10),
        [("EV", "fill", 0.001, 10), ("EN", "fill", 0.001, 10), ("EV", "area", 0.00025, 10), ("EV", "fill", 0.00025, 10),
         ("EV", "shift05", 0.00025, 10), ("EN", "base", 0.00025, 10), ("EV", "const", 0.00025, 10),
         ("EV", "bd3", 0.00025, 10)] + \
-       [(d, "yielded", dr, 10) for d in ("EV", "EN") for dr in (0.001, 0.0005, 0.00025)]
+       [(d, "yielded", dr, 10) for d in ("EV", "EN") for dr in (0.001, 0.0005, 0.00025)] + \
+       [(d, "yieldedE", 0.0005, 10) for d in ("EV", "EN")]
+# The variant each is measured against in --effects (base unless named here).
+REF = {"yieldedE": "yielded"}
 
 
 def label_of(drum, var, dr):
@@ -421,18 +426,18 @@ def table(a):
 
 
 def effects(runs, path):
-    """Each variant against base at the same drum and dr: the index (%), the mid-chord speed (%) and the RMS
-    of the mid-chord C profiles' difference, per time both reached."""
+    """Each variant against base (or its REF) at the same drum and dr: the index (%), the mid-chord speed (%)
+    and the RMS of the mid-chord C profiles' difference, per time both reached."""
     rows = []
     for (drum, var, dr), r in sorted(runs.items()):
-        b = runs.get((drum, "base", dr))
+        b = runs.get((drum, REF.get(var, "base"), dr))
         if var == "base" or b is None or b is r:
             continue
         for t in sorted(set(r["t_series"]) & set(b["t_series"])):
             if t <= 0:
                 continue
             s, sb = r["t_series"][t], b["t_series"][t]
-            row = {"drum": drum, "variant": var, "dr_mm": dr, "t_s": t, "index_base": sb["index"],
+            row = {"drum": drum, "variant": var, "ref": REF.get(var, "base"), "dr_mm": dr, "t_s": t, "index_base": sb["index"],
                    "index": s["index"], "index_vs_base_pct": 100 * (s["index"] / sb["index"] - 1),
                    "speed_vs_base_pct": 100 * (s["speed"] / sb["speed"] - 1),
                    "area_vs_base_pct": 100 * (r["series"][0]["volume"] / b["series"][0]["volume"] - 1)}
@@ -440,7 +445,7 @@ def effects(runs, path):
             if k in r["profiles"] and k in b["profiles"]:
                 row["C_rms_vs_base"] = prof_rms(b["profiles"][k], r["profiles"][k], "C")[0]
             rows.append(row)
-    fields = ["drum", "variant", "dr_mm", "t_s", "index_base", "index", "index_vs_base_pct", "C_rms_vs_base",
+    fields = ["drum", "variant", "ref", "dr_mm", "t_s", "index_base", "index", "index_vs_base_pct", "C_rms_vs_base",
               "speed_vs_base_pct", "area_vs_base_pct"]
     with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields)
@@ -494,9 +499,10 @@ def chart(a):
             for var in sorted({r["variant"] for r in es if r["dr_mm"] == dr and not r["variant"].startswith("cfl")}):
                 p = sorted((r for r in es if r["dr_mm"] == dr and r["variant"] == var), key=lambda r: float(r["t_s"]))
                 ax[k][1].plot([float(r["t_s"]) for r in p], [float(r["index_vs_base_pct"]) for r in p], "o-", ms=4,
-                              label="%s, dr %s mm" % (var, dr))
+                              label="%s%s, dr %s mm" % (var, "" if p[0].get("ref", "base") == "base"
+                                                            else " (against %s)" % p[0]["ref"], dr))
         ax[k][1].axhline(0, color="0.5", lw=0.8)
-        ax[k][1].set_ylabel("%s: index against base at the same dr, %%" % drum)
+        ax[k][1].set_ylabel("%s: index against base (or ref) at the same dr, %%" % drum)
         ax[k][1].set_xlabel("t, s")
         ax[k][1].grid(alpha=0.3)
         ax[k][1].legend(fontsize=7)
