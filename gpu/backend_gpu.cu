@@ -75,7 +75,7 @@ static const char *prof_name[P_NPROF] = {"save start, advance, motion", "boundin
                                           "HCSR classification", "dummy walls, renormalisation L",
                                           "flow rates (+seg. coefficients)", "concentration rates", "Shepard filter",
                                           "dt bounds, blow-up check (+sync)", "particle shifting (a neighbour pass)",
-                                          "corrected gradient's moment matrix B"};
+                                          "corrected gradient's moment matrix B", "DEM grains (coupling, DEM steps)"};
 
 static void gpu_to_host(sim_t *s)
 {
@@ -84,6 +84,7 @@ static void gpu_to_host(sim_t *s)
     gpu_download(s, g);
     if (s->halo) hx_resolve(g, s->halo);
     if (s->halo) halo_wrap(s->halo, &s->p); /* periodic axes: the copy written is in the period */
+    if (s->dem) gpu_dem_download(s, g);
 }
 
 /* A load balance moved particles between ranks on the host: take them. */
@@ -173,6 +174,7 @@ static void gpu_finish(sim_t *s)
         for (int k = 0; k < HX_EV; ++k) CK(cudaEventDestroy(x->ev[k]));
         free(x->soff), free(x->roff), free(x->sb), free(x->rb), free(x);
     }
+    gpu_dem_free(g);
     for (size_t k = 0; k < part_narrays(); ++k) CK(cudaFree(part_array_get(&g->d, k))); /* NULL: not held */
     for (int c = 0; c < PSCR_N; ++c) CK(cudaFree(g->pscr[c]));
     void *bufs[] = {g->start, g->end, g->cell_mat, g->cell_type, g->key, g->key2, g->idx, g->idx2,
@@ -195,7 +197,7 @@ extern "C" const struct backend *backend_gpu(int local_rank)
     static const struct backend b = {"gpu",          gpu_prepare,    gpu_rates,  gpu_advance, gpu_conc_begin,
                                       gpu_conc_step,  gpu_save_start, gpu_filter, gpu_bounds,  gpu_check,
                                       gpu_to_host,    gpu_finish,     gpu_from_host, 3,
-                                      gpu_relist};
+                                      gpu_relist,     gpu_dem_couple, gpu_dem_advance};
     g_local_rank = local_rank;
     return &b;
 }

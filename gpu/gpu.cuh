@@ -176,6 +176,7 @@ typedef struct gpu {
     struct box *hbox;   /* pinned host copies */
     double *hres;
     long long *hfirst;
+    struct gpu_dem *dem; /* the DEM grains' device mirror (gpu_dem.cu), made at its first hook; NULL without grains */
 } gpu_t;
 
 extern int g_local_rank; /* backend_gpu(local_rank) (backend_gpu.cu) */
@@ -185,7 +186,7 @@ extern int g_local_rank; /* backend_gpu(local_rank) (backend_gpu.cu) */
  * the total runs slower than without; a table at the end of the run
  * (gpu_finish; the state is defined in backend_gpu.cu). */
 enum { P_MOTION, P_BBOX, P_SORT, P_PERMUTE, P_LIST, P_CLASSIFY, P_WALLS, P_FLOW, P_SEG, P_FILTER, P_BOUNDS_CHECK,
-       P_SHIFT, P_KGC, P_NPROF };
+       P_SHIFT, P_KGC, P_DEM, P_NPROF };
 struct gpu_prof {
     int on;
     cudaEvent_t a, b;
@@ -284,6 +285,12 @@ void ipc_free(dhalo *x);
 /* ---- the exchange at a list build on the device (gpu_exchange.cu) -------- */
 void gpu_device_exchange(sim_t *s, gpu_t *g);
 void hx_sorted(gpu_t *g, const unsigned *perm, size_t n);
+
+/* ---- the DEM grains (gpu_dem.cu) ----------------------------------------- */
+void gpu_dem_couple(sim_t *s, double t);
+void gpu_dem_advance(sim_t *s, double t, double dt);
+void gpu_dem_download(sim_t *s, gpu_t *g);
+void gpu_dem_free(gpu_t *g);
 
 /* ---- the step's hooks (gpu_step.cu) -------------------------------------- */
 void gpu_acc_reduce(gpu_t *g);

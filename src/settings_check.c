@@ -54,18 +54,37 @@ static int check_backend(const char *backend)
 #endif
 }
 
+/* A scene with DEM grains passes the scene's check with periods of
+ * SCENE_PERIOD_SUPPORTS_CPU supports (the CPU's ghosts); the GPU's need
+ * SCENE_PERIOD_SUPPORTS. --backend gpu: refused; auto: the CPU. */
+static void check_dem_period(const struct scene *sc, const char *backend, int *ndev)
+{
+    const struct scene_geometry *g = &sc->geometry;
+    static const char *const key[3] = {"width", "height", "depth"};
+    const double len[3] = {g->width, g->height, g->depth}, need = SCENE_PERIOD_SUPPORTS * 2 * g->h_factor * g->dr;
+    for (int a = 0; a < 3; ++a) {
+        if (!(g->periodic >> a & 1) || len[a] >= need) continue;
+        if (strcmp(backend, "gpu") != 0) {
+            *ndev = 0; /* auto: the CPU, whose ghosts fit */
+            return;
+        }
+        char where[512];
+        input_error("%s: a periodic axis of a scene with DEM grains needs a period of at least %d supports 2h = %.4g m "
+                    "on the GPU backend (its ghosts are 3 cells deep), got %.4g; run it with --backend cpu (4 supports "
+                    "there) or widen the period", scene_key_where(sc, "Geometry", key[a], where, sizeof where),
+                    SCENE_PERIOD_SUPPORTS, need, len[a]);
+    }
+}
+
 int settings_check(const struct scene *sc, const char *backend)
 {
     check_output_counts(sc);
     int ndev = check_backend(backend);
-    if (sc->dem.on) { /* issue 58: the grains' GPU passes and their migration between ranks are not built yet */
+    if (sc->dem.on) { /* issue 58: the grains' migration between ranks is not built yet */
         if (comm_size() > 1)
             input_error("DEM:d: a scene with DEM grains runs on one rank for now (the grains do not cross ranks "
                         "yet); run it without mpirun, or with -np 1");
-        if (!strcmp(backend, "gpu"))
-            input_error("DEM:d: a scene with DEM grains runs on the CPU backend for now (no GPU passes for the "
-                        "grains yet); run it with --backend cpu or auto");
-        ndev = 0; /* auto: the CPU */
+        if (ndev > 0) check_dem_period(sc, backend, &ndev);
     }
     if (sc->parallel.axis == AXIS_Z && sc->geometry.dim == 2)
         input_error("Parallel:axis: z is not an axis of a 2D scene (x or y, or auto)");

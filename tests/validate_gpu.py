@@ -19,6 +19,15 @@ out: the HCSR classification of the paper scheme, the 3D column, the CI-sized
                 steps (measured; the GPU differs by the same 3.6e-6);
   determinism:  the two GPU runs are bit-identical (every dataset).
 
+Scenes with DEM grains (issue 58; src/dem/dem_body.h run by src/dem/dem.c and
+gpu/gpu_dem.cu) compare their /DEM group too: the grains' centres,
+velocities, spins (times d/2, on the velocities' scale), and the fluid's
+fraction and velocity at them, within TOL_DEM of each field's largest
+value (the grains' sums over the fluid and the rigid body's and exchanged
+momentum's sums over the grains run in another order on the GPU; 1e-8, as
+the fluid's), and bit for bit GPU run to run. The periodic DEM scenes run
+at a period of 19 dr, the GPU's 6 supports (src/settings_check.c).
+
 Exits 77 (skipped) where the build has no CUDA backend or no GPU is visible.
 """
 import argparse
@@ -26,6 +35,7 @@ import os
 import subprocess
 import sys
 
+import h5py
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -34,6 +44,23 @@ from tools.analysis import snap  # noqa: E402
 INPUTS = os.path.join(HERE, "..", "inputs")
 TOL = 1e-8
 TOL_C1 = 1e-4
+TOL_DEM = 1e-8
+
+# DEM grains at CI size (the periodic scenes widened to 19 dr, 6 supports, for the GPU's ghosts)
+P19 = 0.10127
+DEM_POROUS = ["Material:eta=0.1", "Material:E=30000", "Initial:pressure=2000", "Run:integrator=leapfrog",
+              "Geometry:width=%g" % P19, "Geometry:depth=%g" % P19, "Geometry:height=%g" % P19,
+              "Container:regions=[{shape: fill, level: %g, C: 0}]" % P19, "DEM:block_n=[19, 4, 19]"]
+DEM_BLOCK = ["Geometry:width=%g" % P19, "Geometry:depth=%g" % P19,
+             "Container:walls=[{name: base, from: [0, 0], to: [%g, 0]}]" % P19,
+             "Container:regions=[{shape: fill, level: 0.09594, C: 0}]", "DEM:block_n=[19, 4, 19]",
+             "DEM:block_origin=[0.002665, 0.046, 0.002665]", "DEM:t_damp=0.03", "Run:integrator=leapfrog"]
+# a rigid body that turns (no periodic axis): the grains' drag differs, so it has a torque
+DEM_RIGID = ["DEM:coupling=two_way", "DEM:motion=rigid", "DEM:placement=block", "DEM:block_n=[3, 2, 2]",
+             "DEM:block_spacing=0.008", "DEM:block_origin=[0.02, 0.06, 0.024]"]
+# free grains that meet: layers 1 um apart on the base, the lowest touching it
+DEM_PILE = ["DEM:d=0.004", "DEM:coupling=two_way", "DEM:placement=block", "DEM:block_n=[6, 3, 6]",
+            "DEM:block_spacing=0.004001", "DEM:block_origin=[0.02, 0.002, 0.02]"]
 
 # name, scene, steps, overrides
 from tests.containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
@@ -124,6 +151,15 @@ CASES = [
                                          "Material:E=1e5", "Walls:rpm=15", "Flow:shepard_every=20",
                                          "Segregation:every=8", "Run:list_skin=0.5"]),
     ("chute_skin", "column_2d.yml", 400, CHUTE + ["Run:list_skin=1"]),
+    # DEM grains (issue 58): one grain one way (the scene as it ships) and two ways; a fixed porous block
+    # (periodic xyz, 1444 grains); a rigid block settling (periodic xz: it translates); a rigid body that
+    # turns; free grains in contact with each other and the base (sub-cycled DEM steps)
+    ("dem_settling", "dem_settling.yml", 60, []),
+    ("dem_settling_2way", "dem_settling.yml", 60, ["DEM:coupling=two_way"]),
+    ("dem_porous", "dem_porous_flow.yml", 40, DEM_POROUS),
+    ("dem_block", "dem_block_settling.yml", 40, DEM_BLOCK),
+    ("dem_rigid_turn", "dem_settling.yml", 60, DEM_RIGID),
+    ("dem_pile", "dem_settling.yml", 60, DEM_PILE),
 ]
 # (Segregation:every = 1: C with the flow in every step; K > 1: in windows of
 # K steps, closed 5-9 times in these runs, the last one left open at
@@ -141,6 +177,27 @@ def last(out):
     return snap.read_snapshot(snap.list_snapshots(out)[-1])
 
 
+def last_dem(out):
+    """The last snapshot's /DEM datasets, or None (no grains)."""
+    with h5py.File(snap.list_snapshots(out)[-1], "r") as f:
+        return {k: f["DEM"][k][()] for k in f["DEM"]} if "DEM" in f else None
+
+
+def dem_difference(c, g):
+    """max over the grains' fields of max|gpu - cpu| / max|cpu| (the spins
+    times d/2 on the velocities' scale)."""
+    worst = 0.0
+    for name in ("Coordinates", "Velocities", "AngularVelocities", "FluidFraction", "FluidVelocity"):
+        a, b = np.asarray(c[name], dtype=float), np.asarray(g[name], dtype=float)
+        ref = a
+        if name == "AngularVelocities":
+            r = 0.5 * np.asarray(c["Diameter"], dtype=float)[:, None]
+            a, b, ref = a * r, b * r, np.asarray(c["Velocities"], dtype=float)
+        scale = max(float(np.max(np.abs(ref))) if ref.size else 0.0, 1e-300)
+        worst = max(worst, float(np.max(np.abs(b - a))) / scale if a.size else 0.0)
+    return worst
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--sphseg", required=True)
@@ -154,7 +211,7 @@ def main():
         sys.exit(77)
     ok = True
     for name, scene, steps, over in cases:
-        res = {}
+        res, dem = {}, {}
         for tag, backend in (("cpu", "cpu"), ("gpu", "gpu"), ("gpu2", "gpu")):
             out = os.path.join(a.work, name + "_" + tag)
             r = run(a.sphseg, scene, out, backend, steps, over)
@@ -162,6 +219,7 @@ def main():
                 print(r.stderr)
                 sys.exit("FAIL %s: sphseg --backend %s exited with %d" % (name, backend, r.returncode))
             res[tag] = last(out)
+            dem[tag] = last_dem(out)
         c, g, g2 = res["cpu"], res["gpu"], res["gpu2"]
         worst = snap.max_field_difference(c, g)
         same_ids = np.array_equal(c["ParticleIDs"], g["ParticleIDs"])
@@ -176,6 +234,17 @@ def main():
         print("%s %-14s GPU run to run: %s" % ("ok  " if not differ else "FAIL", name,
                                                "bit-identical" if not differ else "differ in " + ", ".join(differ)))
         ok &= not differ
+        if dem["cpu"] is not None:
+            dc, dg, dg2 = dem["cpu"], dem["gpu"], dem["gpu2"]
+            dworst = dem_difference(dc, dg) if dg is not None else float("inf")
+            dgood = dg is not None and np.array_equal(dc["ParticleIDs"], dg["ParticleIDs"]) and dworst <= TOL_DEM
+            print("%s %-14s %d grains: max grain field difference %.2e of its scale (tol %.0e)" % (
+                "ok  " if dgood else "FAIL", name, len(dc["ParticleIDs"]), dworst, TOL_DEM))
+            ok &= dgood
+            ddiffer = [k for k in dg if dg2 is None or not np.array_equal(dg[k], dg2[k])]
+            print("%s %-14s GPU grains run to run: %s" % ("ok  " if not ddiffer else "FAIL", name,
+                                                          "bit-identical" if not ddiffer else "differ in " + ", ".join(ddiffer)))
+            ok &= not ddiffer
     sys.exit(0 if ok else 1)
 
 

@@ -373,11 +373,19 @@ static void cpu_finish(sim_t *s)
     s->be_data = NULL;
 }
 
+/* The DEM grains (src/dem/dem.c) on the host store. */
+static void cpu_dem_couple(sim_t *s, double t)
+{
+    dem_couple(s->dem, &s->p, &s->flow.w, t, (double)s->flow.visc_norm);
+}
+
+static void cpu_dem_advance(sim_t *s, double t, double dt) { dem_advance(s->dem, &s->flow.w, t, dt); }
+
 const struct backend *backend_cpu(void)
 {
     static const struct backend b = {"cpu",          cpu_prepare,   cpu_rates,      cpu_advance, cpu_conc_begin,
                                       cpu_conc_step,  cpu_save_start, cpu_filter,     cpu_bounds,  cpu_check,
                                       cpu_to_host,    cpu_finish,     cpu_from_host,  HALO_DEPTH,
-                                      NULL /* relist: every prepare sorts */};
+                                      NULL /* relist: every prepare sorts */, cpu_dem_couple, cpu_dem_advance};
     return &b;
 }

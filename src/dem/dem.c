@@ -1,18 +1,16 @@
 /* dem.c — DEM grains: their store, contacts, sub-cycled motion and the
- * coupling with the SPH fluid (dem.h; the bodies are src/physics/dem.h).
- * OpenMP loops over grains or fluid particles, each writing only its own
- * entries (gather form), so results do not depend on the thread count. */
+ * coupling with the SPH fluid (dem.h): OpenMP loops over grains or fluid
+ * particles calling the bodies of dem_body.h (whose formulas are
+ * src/physics/dem.h's), as the GPU's kernels do (gpu/gpu_dem.cu); each
+ * writes only its own entries (gather form), so results do not depend on
+ * the thread count. */
 #include "dem.h"
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include "core/error.h"
 #include "core/omp_shim.h"
-
-/* The lowest fluid fraction a fluid particle or a grain is given (eq. 15
- * reaches 0 or below where a grain sits on a fluid particle and the kernel
- * is narrower than the grain, h < d; eq. 19 has no meaning there). */
-#define DEM_EPS_MIN 0.1
+#include "dem_body.h"
 /* The DEM step is the contact time over this (usual DEM practice: 20 to 50
  * steps a contact). A numerical choice, measured by tests/test_dem.c: the
  * head-on restitution's error against the clamped spring-dashpot is 1.6 %
@@ -103,21 +101,25 @@ void dem_free(dem_t *d)
     free(d);
 }
 
-/* ---- the cell grid (cells of at least 2h and d) -------------------------------- */
+/* ---- the view and the cell grid (cells of at least 2h and d) ------------------ */
 
-static int dem_fluid(const particles_t *p, size_t a) { return p->kind[a] == KIND_MATERIAL; }
-
-static size_t dem_cell(const dem_t *d, const double x[3], int c[3])
+dem_view dem_view_of(dem_t *d)
 {
+    dem_view v = dem_view_scalars(d);
     for (int a = 0; a < 3; ++a) {
-        int q = (int)floor((x[a] - d->lo[a]) / d->cell);
-        c[a] = q < 0 ? 0 : q >= d->nc[a] ? d->nc[a] - 1 : q;
+        v.x[a] = d->x[a], v.v[a] = d->v[a], v.w[a] = d->w[a];
+        v.fint[a] = d->fint[a], v.fd[a] = d->fd[a], v.uf[a] = d->uf[a];
     }
-    return ((size_t)c[2] * (size_t)d->nc[1] + (size_t)c[1]) * (size_t)d->nc[0] + (size_t)c[0];
+    v.eps = d->eps, v.snorm = d->snorm, v.id = d->id;
+    v.ncon = d->ncon, v.cid = d->cid, v.cxi = d->cxi;
+    v.oncon = d->ncon2, v.ocid = d->cid2, v.ocxi = d->cxi2; /* the spare lists: the last step's in dem_substep */
+    v.eps_f = d->eps_f, v.deps_f = d->deps_f;
+    v.gstart = d->gstart, v.gidx = d->gidx, v.fstart = d->fstart, v.fidx = d->fidx;
+    return v;
 }
 
 /* Counting sort of m points (grains, or the fluid particles of p) into
- * start[ncell + 1] and idx[m]. */
+ * start[ncell + 1] and idx[m]: each cell's in ascending index order. */
 static void dem_bin(dem_t *d, size_t m, const particles_t *p, size_t **start, size_t **idx, size_t *cap)
 {
     size_t ncell = (size_t)d->nc[0] * (size_t)d->nc[1] * (size_t)d->nc[2];
@@ -125,21 +127,39 @@ static void dem_bin(dem_t *d, size_t m, const particles_t *p, size_t **start, si
     if (m > *cap || !*idx) *idx = realloc(*idx, (m ? m : 1) * sizeof(size_t)), *cap = m;
     if (!st || !*idx) error_exit(EXIT_SYSTEM, "out of memory for the DEM cell grid");
     memset(st, 0, (ncell + 1) * sizeof(size_t));
+    const dem_view v = dem_view_scalars(d);
     int c[3];
     for (size_t i = 0; i < m; ++i) {
         if (p && !dem_fluid(p, i)) continue;
-        double x[3] = {p ? p->x[0][i] : d->x[0][i], p ? p->x[1][i] : d->x[1][i], p ? p->x[2][i] : d->x[2][i]};
-        st[dem_cell(d, x, c) + 1]++;
+        double x[3] = {d->x[0][i], d->x[1][i], d->x[2][i]};
+        if (p) dem_fluid_at(&v, p, i, x);
+        st[dem_cell(&v, x, c) + 1]++;
     }
     for (size_t k = 0; k < ncell; ++k) st[k + 1] += st[k];
     size_t *fill = dem_calloc(ncell, sizeof(size_t));
     for (size_t i = 0; i < m; ++i) {
         if (p && !dem_fluid(p, i)) continue;
-        double x[3] = {p ? p->x[0][i] : d->x[0][i], p ? p->x[1][i] : d->x[1][i], p ? p->x[2][i] : d->x[2][i]};
-        size_t k = dem_cell(d, x, c);
+        double x[3] = {d->x[0][i], d->x[1][i], d->x[2][i]};
+        if (p) dem_fluid_at(&v, p, i, x);
+        size_t k = dem_cell(&v, x, c);
         (*idx)[st[k] + fill[k]++] = i;
     }
     free(fill);
+}
+
+void dem_grid_fit(dem_t *d, const double lo[3], const double hi[3])
+{
+    d->cell = fmax(2.0 * d->h, (double)d->c.d);
+    for (int a = 0; a < 3; ++a) {
+        if (d->per >> a & 1) { /* the period from 0 in whole cells, the last one wider (at least one cell) */
+            double n = floor(d->plen[a] / d->cell);
+            d->lo[a] = 0, d->nc[a] = n < 1 ? 1 : n > 1024 ? 1024 : (int)n;
+            continue;
+        }
+        d->lo[a] = lo[a];
+        double n = floor((hi[a] - lo[a]) / d->cell) + 1;
+        d->nc[a] = n > 1024 ? 1024 : (int)n; /* a grain flung far away shares the edge cells */
+    }
 }
 
 /* The grid over the grains and, with p, the fluid particles. */
@@ -152,188 +172,28 @@ static void dem_grid(dem_t *d, const particles_t *p)
         for (size_t i = 0; i < p->n; ++i)
             if (dem_fluid(p, i))
                 for (int a = 0; a < 3; ++a) lo[a] = fmin(lo[a], p->x[a][i]), hi[a] = fmax(hi[a], p->x[a][i]);
-    d->cell = fmax(2.0 * d->h, (double)d->c.d);
-    for (int a = 0; a < 3; ++a) {
-        if (d->per >> a & 1) { /* the period from 0 in whole cells, the last one wider (at least one cell) */
-            double n = floor(d->plen[a] / d->cell);
-            d->lo[a] = 0, d->nc[a] = n < 1 ? 1 : n > 1024 ? 1024 : (int)n;
-            continue;
-        }
-        d->lo[a] = lo[a];
-        double n = floor((hi[a] - lo[a]) / d->cell) + 1;
-        d->nc[a] = n > 1024 ? 1024 : (int)n; /* a grain flung far away shares the edge cells */
-    }
+    dem_grid_fit(d, lo, hi);
     size_t gcap = d->n;
     dem_bin(d, d->n, NULL, &d->gstart, &d->gidx, &gcap);
     if (p) dem_bin(d, p->n, p, &d->fstart, &d->fidx, &d->fidx_cap);
 }
 
-/* The cells about cell c along axis a, from lo to hi: c - 1 to c + 1; along a
- * periodic axis of fewer than 3 cells, each of its cells once. */
-static void dem_cell_span(const dem_t *d, int a, int c, int *lo, int *hi)
-{
-    *lo = c - 1, *hi = c + 1;
-    if ((d->per >> a & 1) && d->nc[a] < 3) *lo = 0, *hi = d->nc[a] - 1;
-}
-
-/* Cell c along axis a wrapped into the grid (a periodic axis), or -1 when
- * it lies outside it. */
-static int dem_cell_wrap(const dem_t *d, int a, int c)
-{
-    if (d->per >> a & 1) return ((c % d->nc[a]) + d->nc[a]) % d->nc[a];
-    return c < 0 || c >= d->nc[a] ? -1 : c;
-}
-
-/* r = x - y, the minimum image along the periodic axes (the periods are
- * over 4 supports 2h and 2 grains: the scene's check). */
-static void dem_sep(const dem_t *d, const double x[3], double y0, double y1, double y2, double r[3])
-{
-    r[0] = x[0] - y0, r[1] = x[1] - y1, r[2] = x[2] - y2;
-    for (int a = 0; a < 3; ++a)
-        if (d->per >> a & 1) r[a] -= d->plen[a] * floor(r[a] / d->plen[a] + 0.5);
-}
-
-/* Loops over the entries of the 27 cells about point x of a binned set
- * (across a periodic axis, the cells of the other side). */
-#define DEM_CELLS_BEGIN(d, x, start, idx, j)                                                      \
-    {                                                                                              \
-        int c0_[3], lo_[3], hi_[3];                                                                \
-        dem_cell(d, x, c0_);                                                                       \
-        for (int a_ = 0; a_ < 3; ++a_) dem_cell_span(d, a_, c0_[a_], &lo_[a_], &hi_[a_]);         \
-        for (int cz_ = lo_[2]; cz_ <= hi_[2]; ++cz_)                                               \
-            for (int cy_ = lo_[1]; cy_ <= hi_[1]; ++cy_)                                           \
-                for (int cx_ = lo_[0]; cx_ <= hi_[0]; ++cx_) {                                     \
-                    int wx_ = dem_cell_wrap(d, 0, cx_), wy_ = dem_cell_wrap(d, 1, cy_),            \
-                        wz_ = dem_cell_wrap(d, 2, cz_);                                            \
-                    if (wx_ < 0 || wy_ < 0 || wz_ < 0) continue;                                   \
-                    size_t k_ = ((size_t)wz_ * (size_t)d->nc[1] + (size_t)wy_) * (size_t)d->nc[0] + \
-                                (size_t)wx_;                                                       \
-                    for (size_t q_ = (start)[k_]; q_ < (start)[k_ + 1]; ++q_) {                    \
-                        size_t j = (idx)[q_];
-#define DEM_CELLS_END \
-    }                 \
-    }                 \
-    }
-
 /* ---- the coupling with the fluid ------------------------------------------------- */
 
-/* Gamma of eq. (16) at x: the nearest wall's (the paper's choice; a corner,
- * where two walls cut the kernel, is not corrected further). */
-static double dem_gamma_at(const dem_t *d, const wall_geom *w, const real x[3])
+void dem_period_set(dem_t *d, const wall_geom *w)
 {
-    double y = INFINITY;
-    for (int k = 0; k < w->n; ++k) y = fmin(y, -(double)wall_prim_depth(&w->prim[k], x));
-    return y == INFINITY ? 1.0 : (double)dem_gamma_wall(3, (real)y, (real)d->h);
-}
-
-/* Fluid particle a: eps_a (15-16) and d eps_a / dt following a, =
- * -sum_i V_i grad_a W_ai . (u_a - v_i). */
-static void dem_fluid_fraction(dem_t *d, const particles_t *p, const wall_geom *w, size_t a)
-{
-    const double x[3] = {p->x[0][a], p->x[1][a], p->x[2][a]}, h = d->h, alpha = kernel_alpha(3, (real)h);
-    double s = 0, de = 0;
-    DEM_CELLS_BEGIN(d, x, d->gstart, d->gidx, i)
-        double r[3];
-        dem_sep(d, x, d->x[0][i], d->x[1][i], d->x[2][i], r);
-        double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-        if (rr >= 2.0 * h) continue;
-        s += d->V * (double)kernel_w((real)rr, (real)h, (real)alpha);
-        double f = (double)kernel_f((real)rr, (real)h, (real)alpha), du = 0;
-        for (int q = 0; q < 3; ++q) du += r[q] * ((double)p->v[q][a] - d->v[q][i]);
-        de -= d->V * f * du;
-    DEM_CELLS_END
-    const real xr[3] = {p->x[0][a], p->x[1][a], p->x[2][a]};
-    d->eps_f[a] = (double)dem_fraction((real)s, (real)dem_gamma_at(d, w, xr), (real)DEM_EPS_MIN);
-    d->deps_f[a] = de;
-}
-
-/* Grain i: eps_i and u_f,i (eq. 20), the denominator of (14), and the
- * interaction force (19-23) at its present velocity. */
-static void dem_grain_sums(dem_t *d, const particles_t *p, size_t i)
-{
-    const double x[3] = {d->x[0][i], d->x[1][i], d->x[2][i]}, h = d->h, alpha = kernel_alpha(3, (real)h);
-    double S = 0, E = 0, U[3] = {0, 0, 0};
-    DEM_CELLS_BEGIN(d, x, d->fstart, d->fidx, a)
-        double r[3];
-        dem_sep(d, x, p->x[0][a], p->x[1][a], p->x[2][a], r);
-        double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-        if (rr >= 2.0 * h) continue;
-        double vw = (double)p->vol[a] * (double)kernel_w((real)rr, (real)h, (real)alpha);
-        S += vw, E += d->eps_f[a] * vw;
-        for (int q = 0; q < 3; ++q) U[q] += (double)p->v[q][a] * vw;
-    DEM_CELLS_END
-    d->snorm[i] = S;
-    d->eps[i] = S > 0 ? fmax(E / S, DEM_EPS_MIN) : 1.0;
-    for (int q = 0; q < 3; ++q) d->uf[q][i] = S > 0 ? U[q] / S : 0.0;
-}
-
-/* The interaction force on grain i (eq. 23) at its velocity now, and its
- * drag part F_D (eq. 19) into Fd when Fd is not NULL. */
-static void dem_force_int(const dem_t *d, size_t i, double F[3], double *Fd)
-{
-    real u[3], FD[3], Fi[3], g[3];
-    for (int q = 0; q < 3; ++q) u[q] = (real)(d->uf[q][i] - d->v[q][i]), g[q] = (real)d->g[q];
-    dem_drag(d->c.d, (real)d->rho_f, (real)d->nu, (real)d->eps[i], u, FD);
-    dem_interaction(FD, (real)d->eps[i], (real)d->V, (real)d->rho_f, g, Fi);
-    for (int q = 0; q < 3; ++q) F[q] = (double)Fi[q];
-    if (Fd)
-        for (int q = 0; q < 3; ++q) Fd[q] = (double)FD[q];
-}
-
-/* two_way, fluid particle a (model A of the DEM paper's eq. 6 per unit mass
- * of fluid, rho_bar = eps rho_f): the source -sum_i w_ai F_D,i / (eps_a
- * rho_f V_a), w_ai = V_a W_ai / sum_b V_b W_bi (eqs. 13-14, with eq. 24's
- * drag, as model A takes it: the fluid's -eps grad p carries the pressure's
- * share, and the grain's -V grad p of eq. 23, F_D / eps - V rho_f g, is
- * what -eps grad p = eps rho_f g - n F_D gives inside a uniform bed; handing
- * the fluid all of F_int as well, as model B's -grad p does, counts the
- * pressure's share twice: at rest the bed's pressure then grows by rho_f g /
- * eps, not rho_f g, and a settling grain drags the fluid down with it,
- * docs/validation.md "DEM grains in a fluid"); div(eps tau) / eps
- * less the fluid's own div(tau) (Morris's pair term with the mean
- * (eps_a + eps_b) / 2: + V_b 2 nu f u_ab ((eps_a + eps_b) / (2 eps_a) - 1));
- * -eps grad p / (eps rho_f) is the fluid's own -grad p / rho_f. The
- * superficial density's continuity D(eps rho)/Dt = -eps rho div u adds
- * dp/dt = -(K / eps_a) D eps_a / Dt to the pressure rate. */
-static void dem_fluid_source(dem_t *d, particles_t *p, size_t a, double visc_norm)
-{
-    const double x[3] = {p->x[0][a], p->x[1][a], p->x[2][a]}, h = d->h, alpha = kernel_alpha(3, (real)h);
-    const double ea = d->eps_f[a];
-    double acc[3] = {0, 0, 0};
-    DEM_CELLS_BEGIN(d, x, d->gstart, d->gidx, i)
-        double r[3];
-        dem_sep(d, x, d->x[0][i], d->x[1][i], d->x[2][i], r);
-        double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-        if (rr >= 2.0 * h || !(d->snorm[i] > 0)) continue;
-        double Wc = (double)kernel_w((real)rr, (real)h, (real)alpha) / (d->snorm[i] * ea * d->rho_f);
-        for (int q = 0; q < 3; ++q) acc[q] -= Wc * d->fd[q][i];
-    DEM_CELLS_END
-    const double nu2 = 2.0 * d->nu * visc_norm;
-    DEM_CELLS_BEGIN(d, x, d->fstart, d->fidx, b)
-        if (b == a) continue;
-        double r[3];
-        dem_sep(d, x, p->x[0][b], p->x[1][b], p->x[2][b], r);
-        double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-        double c = 0.5 * (ea + d->eps_f[b]) / ea - 1.0;
-        if (rr >= 2.0 * h || c == 0) continue;
-        double f = (double)kernel_f((real)rr, (real)h, (real)alpha) * nu2 * (double)p->vol[b] * c;
-        for (int q = 0; q < 3; ++q) acc[q] += f * ((double)p->v[q][a] - (double)p->v[q][b]);
-    DEM_CELLS_END
-    for (int q = 0; q < 3; ++q) p->acc[q][a] += (real)acc[q];
-    const double dp = -d->K / ea * d->deps_f[a]; /* Pa/s; sigma is tension positive */
-    for (int q = 0; q < 3; ++q) p->dsig[q][a] -= (real)dp;
+    d->per = w->periodic;
+    for (int a = 0; a < 3; ++a) d->plen[a] = (double)w->period[a];
 }
 
 /* The fluid's periodic axes and periods (w) into d, and the grains wrapped
  * into the periods. */
 static void dem_period(dem_t *d, const wall_geom *w)
 {
-    d->per = w->periodic;
-    for (int a = 0; a < 3; ++a) {
-        d->plen[a] = (double)w->period[a];
-        if (!(d->per >> a & 1)) continue;
-        for (size_t i = 0; i < d->n; ++i) d->x[a][i] -= d->plen[a] * floor(d->x[a][i] / d->plen[a]);
-    }
+    dem_period_set(d, w);
+    if (!d->per) return;
+    const dem_view v = dem_view_of(d);
+    for (size_t i = 0; i < d->n; ++i) dem_wrap_grain(&v, i);
 }
 
 void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double visc_norm)
@@ -346,104 +206,26 @@ void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double v
         d->eps_cap = p->n;
     }
     dem_grid(d, p);
+    const dem_view v = dem_view_of(d);
+    const particles_t *pc = p;
     const long nf = (long)p->n, ng = (long)d->n, n = ng;
 #pragma omp parallel for schedule(dynamic, 64)
     for (long a = 0; a < nf; ++a)
-        if (dem_fluid(p, (size_t)a)) dem_fluid_fraction(d, p, w, (size_t)a);
+        if (dem_fluid(pc, (size_t)a)) dem_fluid_fraction(&v, pc, w, (size_t)a);
 #pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN)
-    for (long i = 0; i < ng; ++i) {
-        dem_grain_sums(d, p, (size_t)i);
-        double F[3], Fd[3];
-        dem_force_int(d, (size_t)i, F, Fd);
-        for (int q = 0; q < 3; ++q) d->fint[q][i] = F[q], d->fd[q][i] = Fd[q];
-    }
+    for (long i = 0; i < ng; ++i) dem_grain_couple(&v, pc, (size_t)i);
     if (d->coupling != DEM_TWO_WAY) return;
 #pragma omp parallel for schedule(dynamic, 64)
     for (long a = 0; a < nf; ++a)
-        if (dem_fluid(p, (size_t)a)) dem_fluid_source(d, p, (size_t)a, visc_norm);
+        if (dem_fluid(pc, (size_t)a)) dem_fluid_source(&v, pc, (size_t)a, visc_norm);
 }
 
 /* ---- contacts and motion --------------------------------------------------------- */
 
-/* The history of grain i's contact with partner pid in its list before
- * this step (xi[3], zero for a new contact). */
-static void dem_history(const int64_t *cid, const double *cxi, const int *ncon, size_t i,
-                        int64_t pid, real xi[3])
+void dem_overflow_exit(size_t i)
 {
-    xi[0] = xi[1] = xi[2] = 0;
-    for (int k = 0; k < ncon[i]; ++k)
-        if (cid[i * DEM_CMAX + (size_t)k] == pid) {
-            for (int q = 0; q < 3; ++q) xi[q] = (real)cxi[(i * DEM_CMAX + (size_t)k) * 3 + q];
-            return;
-        }
-}
-
-/* One contact of grain i into its new list and its force and torque sums:
- * n from the partner to i, overlap delta, the partner's contact-point
- * velocity vp (its centre's velocity plus its spin's share; a wall's). */
-static void dem_touch(dem_t *d, size_t i, int64_t pid, const double n[3], double delta, const double vp[3],
-                      double dt, const int64_t *ocid, const double *ocxi, const int *oncon, int *nk, double F[3],
-                      double T[3])
-{
-    const double R = 0.5 * (double)d->c.d;
-    real xi[3], nn[3], vrel[3], Fc[3];
-    dem_history(ocid, ocxi, oncon, i, pid, xi);
-    for (int q = 0; q < 3; ++q) nn[q] = (real)n[q];
-    /* contact point of i: x_i - R n, its velocity v_i + w_i x (-R n) */
-    const double wi[3] = {d->w[0][i], d->w[1][i], d->w[2][i]};
-    const double wxn[3] = {wi[1] * n[2] - wi[2] * n[1], wi[2] * n[0] - wi[0] * n[2], wi[0] * n[1] - wi[1] * n[0]};
-    for (int q = 0; q < 3; ++q) vrel[q] = (real)(d->v[q][i] - R * wxn[q] - vp[q]);
-    dem_contact(&d->c, nn, (real)delta, vrel, xi, (real)dt, Fc);
-    for (int q = 0; q < 3; ++q) F[q] += (double)Fc[q];
-    /* torque (-R n) x F */
-    T[0] += -R * (n[1] * (double)Fc[2] - n[2] * (double)Fc[1]);
-    T[1] += -R * (n[2] * (double)Fc[0] - n[0] * (double)Fc[2]);
-    T[2] += -R * (n[0] * (double)Fc[1] - n[1] * (double)Fc[0]);
-    if (*nk >= DEM_CMAX) error_exit(EXIT_NUMERICAL, "DEM grain %zu has more than %d contacts (overlapping grains: a stiffer DEM:kn)", i, DEM_CMAX);
-    d->cid[i * DEM_CMAX + (size_t)*nk] = pid;
-    for (int q = 0; q < 3; ++q) d->cxi[(i * DEM_CMAX + (size_t)*nk) * 3 + q] = (double)xi[q];
-    ++*nk;
-}
-
-/* The force F and torque T on grain i at time t: gravity (3-4), the
- * interaction force (23), and its contacts with grains and walls, whose
- * list and history it rewrites. */
-static void dem_forces(dem_t *d, const wall_geom *w, size_t i, double t, double dt, const int64_t *ocid,
-                       const double *ocxi, const int *oncon, double F[3], double T[3], double Fi[3])
-{
-    const double D = (double)d->c.d, R = 0.5 * D, x[3] = {d->x[0][i], d->x[1][i], d->x[2][i]};
-    real g[3] = {(real)d->g[0], (real)d->g[1], (real)d->g[2]}, Fg[3];
-    dem_gravity((real)d->V, g, (real)d->rho_f, d->c.rho, dem_gravity_ramp(t, d->t_damp), Fg);
-    dem_force_int(d, i, Fi, NULL);
-    for (int q = 0; q < 3; ++q) F[q] = (double)Fg[q] + Fi[q], T[q] = 0;
-    int nk = 0;
-    if (d->motion != DEM_RIGID) /* a rigid body's own contacts cancel in its sums */
-    DEM_CELLS_BEGIN(d, x, d->gstart, d->gidx, j)
-        if (j == i) continue;
-        double r[3];
-        dem_sep(d, x, d->x[0][j], d->x[1][j], d->x[2][j], r);
-        double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-        if (rr >= D || !(rr > 0)) continue;
-        double n[3] = {r[0] / rr, r[1] / rr, r[2] / rr}, vp[3];
-        const double wj[3] = {d->w[0][j], d->w[1][j], d->w[2][j]};
-        /* j's contact point x_j + R n: v_j + w_j x (R n) */
-        vp[0] = d->v[0][j] + R * (wj[1] * n[2] - wj[2] * n[1]);
-        vp[1] = d->v[1][j] + R * (wj[2] * n[0] - wj[0] * n[2]);
-        vp[2] = d->v[2][j] + R * (wj[0] * n[1] - wj[1] * n[0]);
-        dem_touch(d, i, d->id[j], n, D - rr, vp, dt, ocid, ocxi, oncon, &nk, F, T);
-    DEM_CELLS_END
-    for (int k = 0; k < w->n; ++k) {
-        const wall_prim *q = &w->prim[k];
-        if (q->open_at >= 0 && t >= q->open_at) continue; /* an open gate */
-        real xr[3] = {(real)x[0], (real)x[1], (real)x[2]}, nr[3], uw[3];
-        double delta = R + (double)wall_prim_depth(q, xr);
-        if (delta <= 0) continue;
-        wall_prim_normal(q, xr, nr);
-        wall_velocity_at(q, xr, uw);
-        double n[3] = {nr[0], nr[1], nr[2]}, vp[3] = {uw[0], uw[1], uw[2]};
-        dem_touch(d, i, -1 - (int64_t)k, n, delta, vp, dt, ocid, ocxi, oncon, &nk, F, T);
-    }
-    d->ncon[i] = nk;
+    error_exit(EXIT_NUMERICAL, "DEM grain %zu has more than %d contacts (overlapping grains: a stiffer DEM:kn)", i,
+               DEM_CMAX);
 }
 
 /* DEM:motion rigid: the grains as one rigid body (symplectic Euler as the
@@ -453,42 +235,37 @@ static void dem_forces(dem_t *d, const wall_geom *w, size_t i, double t, double 
  * torques on grain i), I = sum m (|r_i|^2 1 - r_i r_i^T) + n I_grain 1 the
  * inertia tensor of the grains as spheres about the centre, at the present
  * positions; then each r_i turns by |w| dt about w (Rodrigues) and v_i = v_c +
- * w x r_i (the bodies: physics/dem.h). Across a periodic axis the body (continuous through the period,
+ * w x r_i (the bodies: dem_body.h, physics/dem.h). Across a periodic axis the body (continuous through the period,
  * as a laterally periodic block) translates only: its rotation is zero by
  * the lateral symmetry, and its grains' wrapped positions have no one
- * centre. */
+ * centre. The sums run over the grains in index order (the GPU's in a fixed
+ * tree: gpu_dem.cu). */
 static void dem_rigid_step(dem_t *d, const double *F, const double *T, double dt)
 {
     const long n = (long)d->n;
     const double M = d->m * (double)n;
+    const dem_view v = dem_view_of(d);
     double xc[3] = {0, 0, 0}, vc[3] = {0, 0, 0};
     real Tt[3] = {0, 0, 0}, J[9] = {0}, w[3], Ft[3] = {0, 0, 0};
     for (long i = 0; i < n; ++i)
         for (int q = 0; q < 3; ++q) xc[q] += d->x[q][i] / (double)n, vc[q] += d->v[q][i] / (double)n;
     for (int q = 0; q < 3; ++q) w[q] = (real)(n ? d->w[q][0] : 0);
     /* v_c: the grains' mean velocity (their spin's share, sum w x r_i / n, is zero) */
-    for (long i = 0; i < n; ++i) {
-        const real r[3] = {(real)(d->x[0][i] - xc[0]), (real)(d->x[1][i] - xc[1]), (real)(d->x[2][i] - xc[2])};
-        const double *f = &F[3 * i];
-        Tt[0] += (real)(r[1] * f[2] - r[2] * f[1] + T[3 * i]);
-        Tt[1] += (real)(r[2] * f[0] - r[0] * f[2] + T[3 * i + 1]);
-        Tt[2] += (real)(r[0] * f[1] - r[1] * f[0] + T[3 * i + 2]);
-        for (int q = 0; q < 3; ++q) Ft[q] += (real)f[q];
-        dem_inertia_add((real)d->m, (real)d->I, r, J);
-    }
+    for (long i = 0; i < n; ++i) dem_rigid_share(&v, (size_t)i, xc, &F[3 * i], &T[3 * i], Tt, Ft, J);
     for (int q = 0; q < 3; ++q) vc[q] += (double)Ft[q] / M * dt;
     if (!d->per) dem_spin_update(J, Tt, (real)dt, w);
-    for (long i = 0; i < n; ++i) {
-        const real r[3] = {(real)(d->x[0][i] - xc[0]), (real)(d->x[1][i] - xc[1]), (real)(d->x[2][i] - xc[2])};
-        real rn[3];
-        dem_turn(w, (real)dt, r, rn);
-        const real wr[3] = {w[1] * rn[2] - w[2] * rn[1], w[2] * rn[0] - w[0] * rn[2], w[0] * rn[1] - w[1] * rn[0]};
-        for (int q = 0; q < 3; ++q) {
-            d->x[q][i] = xc[q] + vc[q] * dt + (double)rn[q];
-            d->v[q][i] = vc[q] + (double)wr[q];
-            d->w[q][i] = (double)w[q];
-        }
-    }
+    for (long i = 0; i < n; ++i) dem_rigid_move(&v, (size_t)i, xc, vc, w, dt);
+}
+
+/* Swap the contact lists: the last step's become the history (cid2, ...),
+ * this step's go to the others. */
+static void dem_lists_swap(dem_t *d)
+{
+    int64_t *ocid = d->cid;
+    double *ocxi = d->cxi;
+    int *oncon = d->ncon;
+    d->cid = d->cid2, d->cxi = d->cxi2, d->ncon = d->ncon2;
+    d->cid2 = ocid, d->cxi2 = ocxi, d->ncon2 = oncon;
 }
 
 /* One DEM step of length dt from t (symplectic Euler: v, w from the forces
@@ -496,17 +273,16 @@ static void dem_rigid_step(dem_t *d, const double *F, const double *T, double dt
 static void dem_substep(dem_t *d, const wall_geom *w, double t, double dt, double *F, double *T, double *Fi)
 {
     const long n = (long)d->n;
-    int64_t *ocid = d->cid; /* last step's lists: the history; this step's go to the spare lists */
-    double *ocxi = d->cxi;
-    int *oncon = d->ncon;
-    d->cid = d->cid2, d->cxi = d->cxi2, d->ncon = d->ncon2;
-    d->cid2 = ocid, d->cxi2 = ocxi, d->ncon2 = oncon;
+    dem_lists_swap(d);
     dem_period(d, w); /* a grain that crossed a period comes in from the other side */
     if (d->motion != DEM_RIGID) dem_grid(d, NULL);
+    const dem_view v = dem_view_of(d);
+    long bad = n; /* the lowest grain whose list overflowed */
     /* a rigid body's grains meet only walls: too little work a DEM step for a team */
-#pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN && d->motion != DEM_RIGID)
+#pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN && d->motion != DEM_RIGID) reduction(min : bad)
     for (long i = 0; i < n; ++i)
-        dem_forces(d, w, (size_t)i, t, dt, ocid, ocxi, oncon, &F[3 * i], &T[3 * i], &Fi[3 * i]);
+        if (dem_forces(&v, w, (size_t)i, t, dt, &F[3 * i], &T[3 * i], &Fi[3 * i]) && i < bad) bad = i;
+    if (bad < n) dem_overflow_exit((size_t)bad);
     for (long i = 0; i < n; ++i)
         for (int q = 0; q < 3; ++q) d->exch[q] += Fi[3 * i + q] * dt;
     if (d->motion == DEM_FIXED) return;
@@ -515,22 +291,22 @@ static void dem_substep(dem_t *d, const wall_geom *w, double t, double dt, doubl
         return;
     }
 #pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN)
-    for (long i = 0; i < n; ++i)
-        for (int q = 0; q < 3; ++q) {
-            d->v[q][i] += F[3 * i + q] / d->m * dt;
-            d->w[q][i] += T[3 * i + q] / d->I * dt;
-            d->x[q][i] += d->v[q][i] * dt;
-        }
+    for (long i = 0; i < n; ++i) dem_move_free(&v, (size_t)i, &F[3 * i], &T[3 * i], dt);
+}
+
+long dem_substeps(const dem_t *d, double dt)
+{
+    /* fixed grains: their forces (the interaction force at the held fluid) are
+     * the same at each DEM step of the fluid step, so one step of dt gives the
+     * same exchange */
+    long m = d->motion == DEM_FIXED ? 1 : (long)ceil(dt / d->dt);
+    return m < 1 ? 1 : m;
 }
 
 void dem_advance(dem_t *d, const wall_geom *w, double t, double dt)
 {
     dem_period(d, w);
-    /* fixed grains: their forces (the interaction force at the held fluid) are
-     * the same at each DEM step of the fluid step, so one step of dt gives the
-     * same exchange */
-    long m = d->motion == DEM_FIXED ? 1 : (long)ceil(dt / d->dt);
-    if (m < 1) m = 1;
+    const long m = dem_substeps(d, dt);
     double h = dt / (double)m;
     double *F = dem_calloc(3 * d->n, sizeof(double)), *T = dem_calloc(3 * d->n, sizeof(double));
     double *Fi = dem_calloc(3 * d->n, sizeof(double));

@@ -71,6 +71,17 @@ void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double v
  * with the drag at the present grain velocity. */
 void dem_advance(dem_t *d, const wall_geom *w, double t, double dt);
 
+/* The pieces of dem_couple and dem_advance that a backend running the
+ * bodies of dem_body.h elsewhere (gpu/gpu_dem.cu) shares with them: the
+ * periods of w into d (not the grains' wrap); the grid's cell, origin and
+ * cell counts from the bounding box lo, hi of what it bins (the periodic
+ * axes from d->per, d->plen); the DEM steps of a fluid step dt; the report
+ * (exit 3) of grain i's contact list overflowing. */
+void dem_period_set(dem_t *d, const wall_geom *w);
+void dem_grid_fit(dem_t *d, const double lo[3], const double hi[3]);
+long dem_substeps(const dem_t *d, double dt);
+void dem_overflow_exit(size_t i);
+
 /* The grains' kinetic energy (translation and rotation), J. */
 double dem_kinetic_energy(const dem_t *d);
 

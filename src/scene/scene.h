@@ -135,8 +135,10 @@ enum { SCENE_ERRLEN = 1024 };
 /* The shortest period of a periodic axis, in supports 2h: the ghost layers
  * (3 cells of 2h on the GPU) of both sides fit in it. */
 enum { SCENE_PERIOD_SUPPORTS = 6 };
-/* The same on the CPU (a scene with DEM grains runs there alone): its
- * ghosts are HALO_DEPTH = 2 cells of 2h deep (mpi/halo.h, scene_check.c). */
+/* The same on the CPU, whose ghosts are HALO_DEPTH = 2 cells of 2h deep
+ * (mpi/halo.h): a scene with DEM grains is checked against it here
+ * (scene_check.c), and against SCENE_PERIOD_SUPPORTS where the GPU runs
+ * it (src/settings_check.c). */
 enum { SCENE_PERIOD_SUPPORTS_CPU = 4 };
 /* The largest Segregation:every a scene may give. */
 enum { SCENE_EVERY_MAX = 1000000 };

@@ -20,8 +20,8 @@
 /* ---- Geometry ------------------------------------------------------------------------ */
 
 /* The dimension for the type, the sizes against dr, the periodic axes and
- * their periods (cpu_only: a scene that runs on the CPU alone, one with
- * DEM grains). */
+ * their periods (cpu_only: against the CPU's ghosts, a scene with DEM
+ * grains; the GPU's rule for it is src/settings_check.c's). */
 _Static_assert(SCENE_PERIOD_SUPPORTS_CPU >= 2 * HALO_DEPTH, "a period holds the CPU's ghost layers of both sides");
 static int check_geometry(struct scene_ctx *c, const struct scene_geometry *g, int cpu_only)
 {

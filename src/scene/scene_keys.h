@@ -199,7 +199,7 @@ SECTION("Geometry", geometry, scene_geometry)
     KE("Geometry", geometry, scene_geometry, periodic, unsigned, periodic_axes, "none",
        "column or container: the axes without walls, where the material continues periodically: none | x | y | xy | z | xz | yz | xyz"
        " (y and z need a container, z needs dim 3); the period is Geometry:width along x, :height along y, :depth along z, from 0,"
-       " at least 6 supports 2h (4 in a scene with DEM grains, which runs on the CPU alone; and 2 DEM:d); walls and regions must lie"
+       " at least 6 supports 2h (a scene with DEM grains: 4 on the CPU backend, 6 on the GPU, and 2 DEM:d); walls and regions must lie"
        " within it; a 3D container periodic in z has no end walls; one with DEM grains periodic along xyz may have no wall; default none")
     KE("Geometry", geometry, scene_geometry, lid, int, on_off, "off",
       "column: on | off: a rigid wall over the material at y = height (a channel between the base and the lid, with the base's slip); default off")
@@ -419,7 +419,7 @@ END_SECTION(container)
  * src/physics/dem.h): present when d > 0. */
 SECTION("DEM", dem, scene_dem)
     KF("DEM", dem, scene_dem, d, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
-      "grain diameter, m; 0 (default): no grains. A scene with grains needs Material:model newtonian, one rank, the CPU backend")
+      "grain diameter, m; 0 (default): no grains. A scene with grains needs Material:model newtonian and one rank (either backend)")
     KF("DEM", dem, scene_dem, rho, OPT, "1200", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "grain density, kg/m^3; default 1200 (the DEM paper's block, §8)")
     KE("DEM", dem, scene_dem, coupling, enum dem_coupling, dem_couplings, "two_way",

@@ -22,12 +22,12 @@ static void step_pc(sim_t *s, double dt, int win)
 {
     const struct backend *be = s->be; /* the state is prepared at t (run start, last step) */
     be->rates(s);
-    if (s->dem) dem_couple(s->dem, &s->p, &s->flow.w, s->t, (double)s->flow.visc_norm);
+    if (s->dem) be->dem_couple(s, s->t);
     be->save_start(s);
     be->advance(s, 0.5 * dt, 0.0);
     be->prepare(s, s->t + 0.5 * dt, 0);
     be->rates(s);
-    if (s->dem) dem_couple(s->dem, &s->p, &s->flow.w, s->t + 0.5 * dt, (double)s->flow.visc_norm);
+    if (s->dem) be->dem_couple(s, s->t + 0.5 * dt);
     be->advance(s, dt, win ? dt : 0.0);
     be->prepare(s, s->t + dt, !win); /* windows classify and renormalise at their close */
 }
@@ -70,7 +70,7 @@ static void step_lf(sim_t *s, double dt, int win)
     if (lf_fresh(s)) {
         be->prepare(s, s->t, !win); /* as a restart's first prepare (run_start): the same bits */
         be->rates(s);
-        if (s->dem) dem_couple(s->dem, &s->p, &s->flow.w, s->t, (double)s->flow.visc_norm);
+        if (s->dem) be->dem_couple(s, s->t);
     }
     /* The shift rides in the midpoint flow pass (flow_rates_body: the same
      * pairs, no pass of its own), from the state there; it moves the saved
@@ -80,7 +80,7 @@ static void step_lf(sim_t *s, double dt, int win)
     be->advance(s, 0.5 * dt, 0.0);
     be->prepare(s, s->t + 0.5 * dt, !win);
     be->rates(s); /* clears shift_due */
-    if (s->dem) dem_couple(s->dem, &s->p, &s->flow.w, s->t + 0.5 * dt, (double)s->flow.visc_norm);
+    if (s->dem) be->dem_couple(s, s->t + 0.5 * dt);
     be->advance(s, dt, win ? dt : 0.0);
     s->kgc_skip = 1; /* B is made again at the next midpoint (or fresh) prepare, before any rates */
     be->prepare(s, s->t + dt, 0);
@@ -94,7 +94,7 @@ void integrate_step(sim_t *s, double dt)
     s->dt = dt; /* this step's, for the shift in save_start (physics/shift.h) */
     if (s->sc->run.integrator == INTEGRATOR_LEAPFROG) step_lf(s, dt, win);
     else step_pc(s, dt, win);
-    if (s->dem) dem_advance(s->dem, &s->flow.w, s->t, dt); /* the grains over the step, the coupling's forces */
+    if (s->dem) s->be->dem_advance(s, s->t, dt); /* the grains over the step, the coupling's forces */
     s->t += dt;
     s->step++;
     if (win) s->win.k++, s->win.T += dt;

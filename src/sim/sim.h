@@ -82,6 +82,17 @@ struct backend {
      * (Parallel:balance_every), on any rank count, as a re-cut does on
      * several: the lists' order, so the sums' bits, follow the builds. */
     void (*relist)(struct sim *s);
+    /* The DEM grains (s->dem; called only when it is not NULL; src/dem/dem.h).
+     * dem_couple: the coupling at the fluid's state of the rates just
+     * evaluated (time t): the fluid fraction at the fluid particles, the
+     * fluid's velocity and fraction at the grains, the interaction forces,
+     * and with DEM:coupling two_way the fluid's source added to acc and dsig
+     * before the advance that uses them. dem_advance: the grains from t over
+     * the fluid step dt in DEM steps. The CPU runs src/dem/dem.c on s->p;
+     * the GPU the same bodies (src/dem/dem_body.h) on its device copies
+     * (gpu/gpu_dem.cu), and its to_host brings the grains up too. */
+    void (*dem_couple)(struct sim *s, double t);
+    void (*dem_advance)(struct sim *s, double t, double dt);
 };
 
 /* The concentration equation in windows of K flow steps (Segregation:every,
