@@ -75,7 +75,8 @@ static const char *prof_name[P_NPROF] = {"save start, advance, motion", "boundin
                                           "HCSR classification", "dummy walls, renormalisation L",
                                           "flow rates (+seg. coefficients)", "concentration rates", "Shepard filter",
                                           "dt bounds, blow-up check (+sync)", "particle shifting (a neighbour pass)",
-                                          "corrected gradient's moment matrix B", "DEM grains (coupling, DEM steps)"};
+                                          "corrected gradient's moment matrix B", "DEM grid (box +sync, sort, starts)",
+                                          "DEM coupling (fraction, drag, source)", "DEM steps (contacts, motion)"};
 
 static void gpu_to_host(sim_t *s)
 {

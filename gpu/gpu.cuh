@@ -186,7 +186,7 @@ extern int g_local_rank; /* backend_gpu(local_rank) (backend_gpu.cu) */
  * the total runs slower than without; a table at the end of the run
  * (gpu_finish; the state is defined in backend_gpu.cu). */
 enum { P_MOTION, P_BBOX, P_SORT, P_PERMUTE, P_LIST, P_CLASSIFY, P_WALLS, P_FLOW, P_SEG, P_FILTER, P_BOUNDS_CHECK,
-       P_SHIFT, P_KGC, P_DEM, P_NPROF };
+       P_SHIFT, P_KGC, P_DEM_GRID, P_DEM_COUPLE, P_DEM_STEP, P_NPROF };
 struct gpu_prof {
     int on;
     cudaEvent_t a, b;

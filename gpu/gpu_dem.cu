@@ -45,7 +45,8 @@ struct gpu_dem {
     size_t *gidx, *fidx, fcap;
     size_t *gstart, *fstart, gcell_cap, fcell_cap;
     double *F, *T, *Fi; /* [3 n] a DEM step's forces, torques, interaction forces */
-    double *exch;       /* [3] the exchanged momentum, N s */
+    double *exch;       /* [3] the exchanged momentum, N s, up to the last fold (gpu_dem_download) */
+    double *xg;         /* [3 n] each grain's share of it since that fold: sum over DEM steps of F_int dt */
     dbox *box_d, *box_h; /* [2] the grains' and the fluid's boxes */
     unsigned long long *dbad, *hbad; /* the lowest grain whose contact list overflowed (n: none) */
 };
@@ -112,6 +113,8 @@ static gpu_dem *gd_get(sim_t *s, gpu_t *g)
     e->F = dalloc<double>(3 * n), e->T = dalloc<double>(3 * n), e->Fi = dalloc<double>(3 * n);
     e->exch = dalloc<double>(3);
     up(e->exch, d->exch, 3, g->st);
+    e->xg = dalloc<double>(3 * n);
+    CK(cudaMemsetAsync(e->xg, 0, 3 * (n ? n : 1) * sizeof(double), g->st));
     e->box_d = dalloc<dbox>(2);
     e->dbad = dalloc<unsigned long long>(1);
     CK(cudaMallocHost((void **)&e->box_h, 2 * sizeof(dbox)));
@@ -211,6 +214,7 @@ static void gd_bin(gpu_t *g, gpu_dem *e, const dem_view &v, const particles_t *p
 static void gd_grid(sim_t *s, gpu_t *g, gpu_dem *e, int fluid)
 {
     dem_t *d = s->dem;
+    prof_begin(g->st);
     const dbox init = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
     auto ig = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), dbox_grain{e->x[0], e->x[1], e->x[2]});
     reduce(g, ig, e->box_d, d->n, dbox_merge(), init);
@@ -233,6 +237,7 @@ static void gd_grid(sim_t *s, gpu_t *g, gpu_dem *e, int fluid)
         const particles_t p = g->d;
         gd_bin(g, e, v, &p, g->n, e->fidx, &e->fstart, &e->fcell_cap);
     }
+    prof_end(g->st, P_DEM_GRID);
 }
 
 /* The coupling at the fluid's state of its last rates (dem.c dem_couple). */
@@ -242,7 +247,6 @@ void gpu_dem_couple(sim_t *s, double t)
     gpu_t *g = gpu_hook(s, 1); /* the fluid's rates are in place; save and advance are not yet held */
     dem_t *d = s->dem;
     gpu_dem *e = gd_get(s, g);
-    prof_begin(g->st);
     gd_period(s, g, e);
     if (g->n > e->eps_cap || !e->eps_f) {
         if (e->eps_f) {
@@ -255,6 +259,7 @@ void gpu_dem_couple(sim_t *s, double t)
         e->eps_cap = g->n;
     }
     gd_grid(s, g, e, 1);
+    prof_begin(g->st);
     const dem_view v = gd_view(d, e);
     const particles_t p = g->d;
     const wall_geom w = s->flow.w;
@@ -267,7 +272,7 @@ void gpu_dem_couple(sim_t *s, double t)
         each(g, g->n, [=] __device__(size_t a) {
             if (dem_fluid(&p, a)) dem_fluid_source(&v, &p, a, vn);
         });
-    prof_end(g->st, P_DEM);
+    prof_end(g->st, P_DEM_COUPLE);
 }
 
 /* Sums of K values over the block's threads in a fixed tree; every thread
@@ -286,8 +291,12 @@ template <class T, int K> __device__ void block_sum(T (*sh)[K], T a[K])
     __syncthreads();
 }
 
-/* The momentum the fluid gave the grains in a DEM step, sum_i F_int,i dt,
- * into exch (dem.c dem_substep; one block). */
+/* The momentum the fluid gave the grains, sum_i x_i dt, added to exch (one
+ * block, a fixed tree). The DEM steps add each grain's F_int dt to its own
+ * x_i (gd_substep); the fold runs when the host reads exch: a sum over the
+ * grains at every DEM step, as the CPU takes it (dem.c dem_substep), would be
+ * a one-block pass a DEM step (docs/dem.md, "Rate"). So the GPU sums over
+ * the steps first, the CPU over the grains: the same total to round-off. */
 __global__ void __launch_bounds__(DEM_RB) k_dem_exch(size_t n, const double *Fi, double dt, double *exch)
 {
     __shared__ double sh[DEM_RB][3];
@@ -337,22 +346,23 @@ static void gd_substep(sim_t *s, gpu_t *g, gpu_dem *e, double t, double dt)
     e->cid2 = oc, e->cxi2 = ox, e->ncon2 = on;
     gd_period(s, g, e); /* a grain that crossed a period comes in from the other side */
     if (d->motion != DEM_RIGID) gd_grid(s, g, e, 0);
+    prof_begin(g->st);
     const dem_view v = gd_view(d, e);
     const wall_geom w = s->flow.w;
     double *F = e->F, *T = e->T, *Fi = e->Fi;
+    double *xg = e->xg;
     unsigned long long *bad = e->dbad;
     each(g, d->n, [=] __device__(size_t i) {
         if (dem_forces(&v, &w, i, t, dt, &F[3 * i], &T[3 * i], &Fi[3 * i])) atomicMin(bad, (unsigned long long)i);
+        for (int q = 0; q < 3; ++q) xg[3 * i + q] += Fi[3 * i + q] * dt;
     });
-    k_dem_exch<<<1, DEM_RB, 0, g->st>>>(d->n, Fi, dt, e->exch);
-    CK(cudaGetLastError());
-    if (d->motion == DEM_FIXED) return;
     if (d->motion == DEM_RIGID) {
         k_dem_rigid<<<1, DEM_RB, 0, g->st>>>(v, F, T, dt);
         CK(cudaGetLastError());
-        return;
+    } else if (d->motion != DEM_FIXED) {
+        each(g, d->n, [=] __device__(size_t i) { dem_move_free(&v, i, &F[3 * i], &T[3 * i], dt); });
     }
-    each(g, d->n, [=] __device__(size_t i) { dem_move_free(&v, i, &F[3 * i], &T[3 * i], dt); });
+    prof_end(g->st, P_DEM_STEP);
 }
 
 /* The grains from t over the fluid step dt (dem.c dem_advance). */
@@ -361,17 +371,16 @@ void gpu_dem_advance(sim_t *s, double t, double dt)
     gpu_t *g = gpu_hook(s, 0); /* the grains only: the fluid is not read */
     dem_t *d = s->dem;
     gpu_dem *e = gd_get(s, g);
-    prof_begin(g->st);
     *e->hbad = (unsigned long long)d->n;
     up(e->dbad, e->hbad, 1, g->st);
     gd_period(s, g, e);
     const long m = dem_substeps(d, dt);
+    d->steps += m;
     const double h = dt / (double)m;
     for (long k = 0; k < m; ++k) gd_substep(s, g, e, t + (double)k * h, h);
     gd_period(s, g, e);
     down(e->hbad, e->dbad, 1, g->st);
     CK(cudaStreamSynchronize(g->st));
-    prof_end(g->st, P_DEM);
     if (*e->hbad < (unsigned long long)d->n) dem_overflow_exit((size_t)*e->hbad);
 }
 
@@ -388,6 +397,9 @@ void gpu_dem_download(sim_t *s, gpu_t *g)
         for (int a = 0; a < 3; ++a) down(hv[k][a], dv[k][a], n, g->st);
     down(d->eps, e->eps, n, g->st), down(d->snorm, e->snorm, n, g->st);
     down(d->ncon, e->ncon, n, g->st), down(d->cid, e->cid, nl, g->st), down(d->cxi, e->cxi, 3 * nl, g->st);
+    k_dem_exch<<<1, DEM_RB, 0, g->st>>>(n, e->xg, 1.0, e->exch); /* the fold */
+    CK(cudaGetLastError());
+    CK(cudaMemsetAsync(e->xg, 0, 3 * (n ? n : 1) * sizeof(double), g->st));
     down(d->exch, e->exch, 3, g->st);
     CK(cudaStreamSynchronize(g->st));
 }
@@ -402,7 +414,7 @@ void gpu_dem_free(gpu_t *g)
     }
     void *bufs[] = {e->eps, e->snorm, e->id, e->cid, e->cid2, e->cxi, e->cxi2, e->ncon, e->ncon2, e->eps_f,
                     e->deps_f, e->key, e->key2, e->vin, e->gidx, e->fidx, e->gstart, e->fstart, e->F, e->T,
-                    e->Fi, e->exch, e->box_d, e->dbad};
+                    e->Fi, e->exch, e->xg, e->box_d, e->dbad};
     for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k)
         if (bufs[k]) CK(cudaFree(bufs[k]));
     CK(cudaFreeHost(e->box_h));

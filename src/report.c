@@ -96,6 +96,9 @@ void report_end(sim_t *s, diag *d, double io)
             "second of the wall less output), max |drift of sum C V| %.3e, %.3f s of the wall in output and "
             "diagnostics (not in the rate), %.3f s in halo exchange", s->step, wall, rate, comm_size(),
             rate / comm_size(), d->max_drift, io, halo);
+    if (s->dem && s->step > d->step0)
+        message("dem: %zu grains, %ld DEM steps in %ld fluid steps (%.1f a fluid step)", s->dem->n, s->dem->steps,
+                s->step - d->step0, (double)s->dem->steps / (double)(s->step - d->step0));
     if (s->win.on && s->win.windows > 0)
         message("concentration: %ld windows of %.1f flow steps on average, %ld midpoint steps of C", s->win.windows,
                 (double)(s->step - d->step0 - s->win.k) / (double)s->win.windows, s->win.substeps);
@@ -192,6 +195,13 @@ void report_start(sim_t *s, const outputs *o, const run_cli *c)
                      (double)s->flow.kgc_det);
         message("flow: c_s = %.4g m/s, h/c_s = %.3g s, %s, %s%s", (double)s->flow.cs,
                 (double)(s->seg.k.h / s->flow.cs), sh, stab_text(sc, st, sizeof st), kg);
+    }
+    if (s->dem) {
+        const dem_t *g = s->dem;
+        static const char *const motion[] = {"free", "rigid", "fixed"};
+        message("dem: %zu grains of d = %.4g m, %.4g kg/m^3, motion %s, %s coupling; DEM step %.3g s (the contact "
+                "time / %d)", g->n, (double)g->c.d, (double)g->c.rho, motion[g->motion],
+                g->coupling == DEM_TWO_WAY ? "two-way" : "one-way", g->dt, (int)DEM_STEPS_PER_CONTACT);
     }
     if (s->flow_on) {
         settings_warn_stabilization(sc);

@@ -11,11 +11,6 @@
 #include "core/error.h"
 #include "core/omp_shim.h"
 #include "dem_body.h"
-/* The DEM step is the contact time over this (usual DEM practice: 20 to 50
- * steps a contact). A numerical choice, measured by tests/test_dem.c: the
- * head-on restitution's error against the clamped spring-dashpot is 1.6 %
- * at e = 0.7 with 20 steps, 0.7 % with 50 (first order). */
-#define DEM_STEPS_PER_CONTACT 50
 /* Loops over fewer grains than this run on one thread: a DEM step of a few
  * grains is shorter than waking a team (measured: one grain in a 2744-particle
  * fluid ran 35 times slower with a team at every DEM step on a loaded
@@ -307,6 +302,7 @@ void dem_advance(dem_t *d, const wall_geom *w, double t, double dt)
 {
     dem_period(d, w);
     const long m = dem_substeps(d, dt);
+    d->steps += m;
     double h = dt / (double)m;
     double *F = dem_calloc(3 * d->n, sizeof(double)), *T = dem_calloc(3 * d->n, sizeof(double));
     double *Fi = dem_calloc(3 * d->n, sizeof(double));

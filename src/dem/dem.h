@@ -15,6 +15,11 @@
 #include "scene/scene.h"
 
 enum { DEM_CMAX = 16 }; /* contacts a grain keeps (12 touch a sphere in the densest packing; walls add 3) */
+/* The DEM step is the contact time over this (usual DEM practice: 20 to 50
+ * steps a contact). A numerical choice, measured by tests/test_dem.c: the
+ * head-on restitution's error against the clamped spring-dashpot is 1.6 %
+ * at e = 0.7 with 20 steps, 0.7 % with 50 (first order). */
+enum { DEM_STEPS_PER_CONTACT = 50 };
 
 typedef struct dem {
     dem_params c;
@@ -33,7 +38,8 @@ typedef struct dem {
     int64_t *cid2;
     double *cxi2;
     double V, m, I;       /* a grain's volume (m^3), mass (kg), moment of inertia (kg m^2) */
-    double dt;            /* the DEM step: the contact time / 20, s */
+    double dt;            /* the DEM step: the contact time / DEM_STEPS_PER_CONTACT, s */
+    long steps;           /* DEM steps taken by this run (the end report) */
     double rho_f, nu, K, h; /* the fluid's density, kinematic viscosity, bulk modulus; the kernel's h */
     double g[3], t_damp;
     double exch[3];       /* the momentum the fluid gave the grains so far, int sum_i F_int dt, N s */
