@@ -227,7 +227,7 @@ static void dem_ghost_keep(dem_t *d, const particles_t *p, const halo_t *h)
     size_t q = 0, nk = 0;
     for (int k = 0; k < h->nnb; ++k)
         for (size_t e = 0; e < h->nrecv[k]; ++e, ++q)
-            if (h->nb[k] != h->rank) d->gkeep[h->recv[q] - p->n] = 1, ++nk;
+            if (h->nb[k] != h->rank && h->recv[q] - p->n < ng) d->gkeep[h->recv[q] - p->n] = 1, ++nk;
     if (!nk) return;
     int64_t *key = dem_calloc(2 * nk, sizeof(int64_t));
     size_t m = 0;
