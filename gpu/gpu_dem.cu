@@ -258,6 +258,7 @@ void gpu_dem_couple(sim_t *s, double t)
         CK(cudaMemsetAsync(e->deps_f, 0, (g->n ? g->n : 1) * sizeof(double), g->st));
         e->eps_cap = g->n;
     }
+    d->nown = g->n; /* one rank: every binned fluid particle is owned */
     gd_grid(s, g, e, 1);
     prof_begin(g->st);
     const dem_view v = gd_view(d, e);

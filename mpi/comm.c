@@ -53,6 +53,53 @@ long long comm_sum_ll(long long x)
     return y;
 }
 
+void comm_sum_rows_ordered(double *x, size_t n, int k)
+{
+    const int size = comm_size();
+    if (size == 1) return;
+    if (k < 1 || k > 8) error_exit(1, "comm_sum_rows_ordered: %d values a row (1 to 8)", k);
+    const size_t w = (size_t)k + 1; /* a record: the row's index, then its values */
+    size_t nz = 0;
+    for (size_t i = 0; i < n; ++i)
+        for (int q = 0; q < k; ++q)
+            if (x[i * (size_t)k + (size_t)q] != 0) {
+                ++nz;
+                break;
+            }
+    double *mine = malloc((nz ? nz : 1) * w * sizeof(double));
+    int *cnt = malloc((size_t)size * sizeof(int)), *dsp = malloc((size_t)size * sizeof(int));
+    if (!mine || !cnt || !dsp) error_exit(1, "out of memory in comm_sum_rows_ordered");
+    size_t m = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const double *r = &x[i * (size_t)k];
+        int any = 0;
+        for (int q = 0; q < k; ++q) any |= r[q] != 0;
+        if (!any) continue;
+        mine[m * w] = (double)i; /* exact below 2^53 rows */
+        for (int q = 0; q < k; ++q) mine[m * w + 1 + (size_t)q] = r[q];
+        ++m;
+    }
+    if (nz * w > 0x7fffffff) error_exit(1, "comm_sum_rows_ordered: %zu rows over the int count of MPI", nz);
+    int c = (int)(nz * w);
+    MPICHECK(MPI_Allgather(&c, 1, MPI_INT, cnt, 1, MPI_INT, MPI_COMM_WORLD));
+    long long tot = 0;
+    for (int r = 0; r < size; ++r) dsp[r] = (int)tot, tot += cnt[r];
+    if (tot > 0x7fffffff) error_exit(1, "comm_sum_rows_ordered: %lld values over the int count of MPI", tot);
+    double *all = malloc((size_t)(tot ? tot : 1) * sizeof(double));
+    unsigned char *seen = calloc(n ? n : 1, 1);
+    if (!all || !seen) error_exit(1, "out of memory in comm_sum_rows_ordered");
+    MPICHECK(MPI_Allgatherv(mine, c, MPI_DOUBLE, all, cnt, dsp, MPI_DOUBLE, MPI_COMM_WORLD));
+    for (size_t i = 0; i < n * (size_t)k; ++i) x[i] = 0;
+    for (long long e = 0; e < tot; e += (long long)w) { /* rank order, then row order */
+        const double *rec = &all[e];
+        const size_t i = (size_t)rec[0];
+        double *r = &x[i * (size_t)k];
+        for (int q = 0; q < k; ++q) r[q] = seen[i] ? r[q] + rec[1 + q] : rec[1 + q];
+        seen[i] = 1;
+    }
+    free(mine), free(cnt), free(dsp), free(all), free(seen);
+}
+
 int comm_local_rank(void)
 {
     MPI_Comm node;

@@ -2,6 +2,7 @@
  * decomposition and halo exchange of later issues live beside this file. */
 #ifndef SPHSEG_COMM_H
 #define SPHSEG_COMM_H
+#include <stddef.h>
 
 int comm_rank(void);
 int comm_size(void);
@@ -22,5 +23,13 @@ double comm_max(double x);
 void comm_max_n(double *x, int n);
 double comm_min(double x);
 long long comm_sum_ll(long long x);
+/* Collective. x: n rows of k doubles (k <= 8), this rank's partial sums;
+ * replaced by their sums over the ranks taken in rank order (a row's first
+ * nonzero partial, then each later rank's added), so every rank gets the
+ * same bits whatever the timing; on one rank x is left as it is. Rows all
+ * zero on a rank are not sent: an MPI_Allgatherv of (row, values) records,
+ * 8 (k + 1) bytes each, every rank receiving every rank's nonzero rows
+ * (the DEM grains' sums over the fluid, src/dem/dem.c). */
+void comm_sum_rows_ordered(double *x, size_t n, int k);
 
 #endif

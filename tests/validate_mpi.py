@@ -23,6 +23,22 @@ are compared particle by particle (matched by ParticleIDs):
   the silo's outlet must take material out of the run, as many particles on
   every rank count (the comparison above also needs the same IDs).
 
+Scenes with DEM grains (issue 58; every rank holds every grain, src/dem/dem.h)
+are alike to round-off, not bit for bit: each grain's sums over the fluid
+are per-rank partials added in rank order, and the source's fluid pairs meet
+the ghosts in another order than the owned particles. Their fluid fields and
+their /DEM group (centres, velocities, spins times d/2, the fluid's fraction
+and velocity at the grains; validate_gpu's dem_difference) must agree within
+TOL_DEM of each field's scale, the contact counts and the boundary classes
+exactly, and the diagnostics' DEM columns (written once, by rank 0) within
+TOL_DEM of the largest kinetic energy and exchanged momentum component. The settling grain falls through
+the 2-rank slab bound (the bounds worked out from the first snapshot as
+mpi/halo.c halo_cut_slabs cuts them) and ends within its support of a
+3-rank bound; the pile of grains in contact is run twice on 3 ranks, and
+the runs must be bit-identical, /DEM and diagnostics.csv included. With
+--backend gpu the DEM cases are skipped (the GPU backend runs grains on one
+rank only: src/settings_check.c).
+
 --backend gpu (default cpu) runs every case, 1, 2 and 3 ranks and the
 repeated run, with sphseg --backend gpu (ranks take devices by local rank;
 on a one-GPU machine they share it) and checks
@@ -59,6 +75,7 @@ import subprocess
 import sys
 import tempfile
 
+import h5py
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -68,6 +85,9 @@ INPUTS = os.path.join(HERE, "..", "inputs")
 TOL = 0.0       # CPU, any scheme, across rank counts: bit-identical (issue 55)
 TOL_GPU = 1e-8  # GPU runs, and the GPU against the CPU
 TOL_C1 = 1e-4   # GPU runs of the paper scheme
+# CPU, DEM grains across rank counts: round-off (largest measured 2.1e-13, dem_pile on 3 ranks, 60 steps,
+# development machine, 2 cores); missing ghost pairs, ghosts counted twice or sums left per rank give 1e-6 or more
+TOL_DEM = 1e-10
 DRUM = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:shepard_every=20"]
 # the "balance" case's ranks: rank 0's measured time counted three times, so that a re-cut must move the
 # bounds. Measured times alone need not: ranks sharing one GPU measure about the same time (one H100,
@@ -75,6 +95,14 @@ DRUM = ["Geometry:dr=0.0025", "Material:E=1e5", "Flow:shepard_every=20"]
 SKEW = {"SPHSEG_BALANCE_SKEW": "0:3"}
 from tests.containers import (CHANNEL, CHUTE, CHUTE_3D, CHUTE_AS_CONTAINER, COLLAPSE, FILM, HOPPER, HOPPER_3D,  # noqa: E402
                         PLAIN, SILO, pick_cases)
+from tests.validate_gpu import DEM_PILE, dem_difference, last_dem  # noqa: E402
+from tests.validate_dem_block import CI as DEM_BLOCK_CI  # noqa: E402
+
+# DEM grains (issue 58): no load balance, so that the slab bounds stay where the first cut put them.
+# The settling grain two ways, denser (2500 kg/m^3) and lower than the scene's, so that it falls through
+# the 2-rank slab bound (y = 0.0506 m) within the steps; slabs along the settling axis
+DEM_SETTLE = ["DEM:coupling=two_way", "DEM:rho=2500", "DEM:at=[0.032, 0.0545, 0.032]", "Parallel:axis=y",
+              "Parallel:balance_every=0"]
 
 # name, scene, steps, overrides, what must happen on several ranks. The drums
 # run their scenes' flow (riemann, bed damping, the corrected gradient and
@@ -148,6 +176,14 @@ CASES = [
     ("column_3d_metis", "column_2d.yml", 30, ["Geometry:dim=3", "Geometry:dr=0.005", "Geometry:width=0.05",
                                               "Geometry:depth=0.05", "Geometry:height=0.1",
                                               "Parallel:method=metis"], None),
+    # DEM grains (must "dem...": compared within TOL_DEM, /DEM included): the settling grain across a slab bound
+    ("dem_settling", "dem_settling.yml", 150, DEM_SETTLE, "dem_cross"),
+    # the rigid block at validate_dem_block's CI size, periodic along x and z: slabs across the period (x:
+    # a neighbour on both sides, its particles through two channels) and along the settling axis (y)
+    ("dem_block_x", "dem_block_settling.yml", 40, DEM_BLOCK_CI["over"] + ["Parallel:axis=x", "Parallel:balance_every=0"], "dem"),
+    ("dem_block_y", "dem_block_settling.yml", 40, DEM_BLOCK_CI["over"] + ["Parallel:axis=y", "Parallel:balance_every=0"], "dem"),
+    # a free pile of 108 grains in contact with each other and the base, slabs across it (x); run twice on 3 ranks
+    ("dem_pile", "dem_settling.yml", 60, DEM_PILE + ["Parallel:axis=x", "Parallel:balance_every=0"], "dem_again"),
 ]
 
 
@@ -226,7 +262,12 @@ def main():
     ran_paper_3 = False
     for name, scene, steps, over, must in cases:
         steps = scaled(steps, a.steps_scale)
+        dem = (must or "").startswith("dem")
+        if gpu and dem:
+            print("skip %-14s DEM grains run on one rank on the GPU backend (src/settings_check.c)" % name)
+            continue
         tol = TOL if not gpu else (TOL_C1 if "Segregation:scheme=paper" in over else TOL_GPU)
+        tol = TOL_DEM if dem else tol
         res, logs = {}, {}
         for np_ in (1, 2, 3):
             out = os.path.join(a.work, "%s_%d" % (name, np_))
@@ -241,6 +282,8 @@ def main():
             if gpu and cls:
                 class_note(name, "%d ranks against 1 rank" % np_, cls, len(res[1]["ParticleIDs"]))
             ok &= good
+        if dem:
+            ok &= dem_checks(a.work, name, scene, steps, over, must, a.sphseg)
         if must == "migrate":
             m = re.search(r"domains: (\d+) particle migrations", logs[3])
             good = m is not None and int(m.group(1)) > 0
@@ -339,6 +382,90 @@ def main():
         else:
             print("outputs kept in %s" % a.work)
     sys.exit(0 if ok else 1)
+
+
+def dem_columns(out):
+    """The DEM columns of out/diagnostics.csv, rows by columns."""
+    rows = [line.split(",") for line in open(os.path.join(out, "diagnostics.csv")).read().split()]
+    cols = [k for k, c in enumerate(rows[0]) if c.startswith("dem_")]
+    return np.array([[float(r[k]) for k in cols] for r in rows[1:]])
+
+
+def slab_bounds(out, axis, size):
+    """The slab bounds along axis of a size-rank run, m, as mpi/halo.c
+    halo_cut_slabs cuts them from the particles of out's first snapshot
+    (every particle one unit of weight; lattice of 2h from the lower corner,
+    slabs at least 2 columns wide)."""
+    s0 = snap.read_snapshot(snap.list_snapshots(out)[0])
+    x = np.asarray(s0["Coordinates"])[:, axis]
+    text = open(os.path.join(out, "used_params.yml")).read()
+    support = 2 * float(re.search(r"\bh_factor: *([0-9.eE+-]+)", text).group(1)) * float(
+        re.search(r"\bdr: *([0-9.eE+-]+)", text).group(1))
+    origin = x.min() - 1e-6 * support
+    w = np.bincount(np.floor((x - origin) / support).astype(int)).astype(float)
+    total, cum, c, bound = w.sum(), 0.0, 0, [0]
+    for r in range(1, size):
+        target = total * r / size
+        while c < len(w) and cum + 0.5 * w[c] < target:
+            cum, c = cum + w[c], c + 1
+        b = min(max(c, (0 if r == 1 else bound[r - 1]) + 2), len(w) - (size - r) * 2)
+        while c < b:
+            cum, c = cum + w[c], c + 1
+        while c > b:
+            cum, c = cum - w[c - 1], c - 1
+        bound.append(b)
+    return [origin + b * support for b in bound[1:]], support
+
+
+def dem_checks(work, name, scene, steps, over, must, sphseg):
+    """The /DEM groups and DEM diagnostics of the 2- and 3-rank runs against
+    the 1-rank run's; dem_cross: the grain fell through the 2-rank bound and
+    ends within its support of a 3-rank one; dem_again: 3 ranks run to run."""
+    ok = True
+    one = last_dem(os.path.join(work, "%s_1" % name))
+    d1 = dem_columns(os.path.join(work, "%s_1" % name))
+    for np_ in (2, 3):
+        out = os.path.join(work, "%s_%d" % (name, np_))
+        many, dn = last_dem(out), dem_columns(out)
+        worst = dem_difference(one, many)
+        con = int(np.sum(one["Contacts"] != many["Contacts"]))
+        dscale = np.max(np.abs(d1), axis=0)  # the energy's; the momentum's components on the largest one's
+        dscale = np.maximum(np.concatenate([dscale[:1], np.repeat(np.max(dscale[1:]), len(dscale) - 1)]), 1e-300)
+        dworst = float(np.max(np.abs(dn - d1) / dscale)) if dn.shape == d1.shape else np.inf
+        good = worst <= TOL_DEM and dworst <= TOL_DEM and con == 0
+        print("%s %-14s %d ranks: /DEM max difference %.2e, diagnostics' DEM columns %.2e (tol %.0e), %d of %d "
+              "grains with other contact counts" % ("ok  " if good else "FAIL", name, np_, worst, dworst, TOL_DEM,
+                                                    con, len(one["Contacts"])))
+        ok &= good
+    if must == "dem_cross":
+        out1 = os.path.join(work, "%s_1" % name)
+        with h5py.File(snap.list_snapshots(out1)[0], "r") as f:
+            ya = float(f["DEM"]["Coordinates"][0, 1])
+        end = last_dem(os.path.join(work, "%s_2" % name))
+        yb = float(end["Coordinates"][0, 1])
+        b2, support = slab_bounds(out1, 1, 2)
+        b3, _ = slab_bounds(out1, 1, 3)
+        reach = support + 0.5 * float(end["Diameter"][0])
+        crossed = ya > b2[0] > yb
+        near = any(abs(yb - b) < reach for b in b3)
+        good = crossed and near
+        print("%s %-14s the grain from y = %.4f to %.4f m: through the 2-rank bound %.4f m: %s; its support "
+              "(%.4f m) over a 3-rank bound (%s): %s" % ("ok  " if good else "FAIL", name, ya, yb, b2[0], crossed,
+                                                        reach, ", ".join("%.4f" % b for b in b3), near))
+        ok &= good
+    if must == "dem_again":
+        out = os.path.join(work, "%s_3_again" % name)
+        run(sphseg, 3, scene, out, steps, over)
+        first, again = last(os.path.join(work, "%s_3" % name)), last(out)
+        g1, g2 = last_dem(os.path.join(work, "%s_3" % name)), last_dem(out)
+        differ = [k for k in first if isinstance(first[k], np.ndarray) and not np.array_equal(first[k], again[k])]
+        differ += ["DEM/" + k for k in g1 if not np.array_equal(g1[k], g2[k])]
+        if not np.array_equal(dem_columns(os.path.join(work, "%s_3" % name)), dem_columns(out)):
+            differ.append("diagnostics' DEM columns")
+        print("%s %-14s 3 ranks run to run: %s" % ("ok  " if not differ else "FAIL", name,
+                                                  "bit-identical" if not differ else "differ in " + ", ".join(differ)))
+        ok &= not differ
+    return ok
 
 
 def res_first(work):

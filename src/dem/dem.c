@@ -10,6 +10,7 @@
 #include <string.h>
 #include "core/error.h"
 #include "core/omp_shim.h"
+#include "mpi/comm.h"
 #include "dem_body.h"
 /* Loops over fewer grains than this run on one thread: a DEM step of a few
  * grains is shorter than waking a team (measured: one grain in a 2744-particle
@@ -43,6 +44,7 @@ dem_t *dem_alloc(size_t n)
     d->ncon2 = dem_calloc(n, sizeof(int));
     d->cid2 = dem_calloc(n * DEM_CMAX, sizeof(int64_t));
     d->cxi2 = dem_calloc(n * DEM_CMAX * 3, sizeof(double));
+    d->gsum = dem_calloc(n * 5, sizeof(double));
     for (size_t i = 0; i < n; ++i) d->id[i] = (int64_t)i, d->eps[i] = 1.0;
     return d;
 }
@@ -91,7 +93,7 @@ void dem_free(dem_t *d)
     for (int a = 0; a < 3; ++a) free(d->x[a]), free(d->v[a]), free(d->w[a]), free(d->fint[a]), free(d->uf[a]), free(d->fd[a]);
     free(d->eps), free(d->snorm), free(d->id), free(d->ncon), free(d->cid), free(d->cxi);
     free(d->ncon2), free(d->cid2), free(d->cxi2);
-    free(d->eps_f), free(d->deps_f);
+    free(d->eps_f), free(d->deps_f), free(d->gkeep), free(d->gsum);
     free(d->gstart), free(d->gidx), free(d->fstart), free(d->fidx);
     free(d);
 }
@@ -113,8 +115,16 @@ dem_view dem_view_of(dem_t *d)
     return v;
 }
 
-/* Counting sort of m points (grains, or the fluid particles of p) into
- * start[ncell + 1] and idx[m]: each cell's in ascending index order. */
+/* Is store entry a of p a fluid particle that the coupling bins: an owned
+ * one, or a ghost that dem_ghost_keep kept? */
+static int dem_binned(const dem_t *d, const particles_t *p, size_t a)
+{
+    return dem_fluid(p, a) && (a < p->n || (a - p->n < d->gkeep_n && d->gkeep[a - p->n]));
+}
+
+/* Counting sort of m points (grains, or the fluid particles of p: owned,
+ * then the ghosts kept) into start[ncell + 1] and idx[m]: each cell's in
+ * ascending index order. */
 static void dem_bin(dem_t *d, size_t m, const particles_t *p, size_t **start, size_t **idx, size_t *cap)
 {
     size_t ncell = (size_t)d->nc[0] * (size_t)d->nc[1] * (size_t)d->nc[2];
@@ -125,7 +135,7 @@ static void dem_bin(dem_t *d, size_t m, const particles_t *p, size_t **start, si
     const dem_view v = dem_view_scalars(d);
     int c[3];
     for (size_t i = 0; i < m; ++i) {
-        if (p && !dem_fluid(p, i)) continue;
+        if (p && !dem_binned(d, p, i)) continue;
         double x[3] = {d->x[0][i], d->x[1][i], d->x[2][i]};
         if (p) dem_fluid_at(&v, p, i, x);
         st[dem_cell(&v, x, c) + 1]++;
@@ -133,7 +143,7 @@ static void dem_bin(dem_t *d, size_t m, const particles_t *p, size_t **start, si
     for (size_t k = 0; k < ncell; ++k) st[k + 1] += st[k];
     size_t *fill = dem_calloc(ncell, sizeof(size_t));
     for (size_t i = 0; i < m; ++i) {
-        if (p && !dem_fluid(p, i)) continue;
+        if (p && !dem_binned(d, p, i)) continue;
         double x[3] = {d->x[0][i], d->x[1][i], d->x[2][i]};
         if (p) dem_fluid_at(&v, p, i, x);
         size_t k = dem_cell(&v, x, c);
@@ -163,14 +173,14 @@ static void dem_grid(dem_t *d, const particles_t *p)
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < d->n; ++i)
         for (int a = 0; a < 3; ++a) lo[a] = fmin(lo[a], d->x[a][i]), hi[a] = fmax(hi[a], d->x[a][i]);
-    if (p)
-        for (size_t i = 0; i < p->n; ++i)
-            if (dem_fluid(p, i))
-                for (int a = 0; a < 3; ++a) lo[a] = fmin(lo[a], p->x[a][i]), hi[a] = fmax(hi[a], p->x[a][i]);
+    const size_t m = p ? p->n + d->gkeep_n : 0;
+    for (size_t i = 0; i < m; ++i)
+        if (dem_binned(d, p, i))
+            for (int a = 0; a < 3; ++a) lo[a] = fmin(lo[a], p->x[a][i]), hi[a] = fmax(hi[a], p->x[a][i]);
     dem_grid_fit(d, lo, hi);
     size_t gcap = d->n;
     dem_bin(d, d->n, NULL, &d->gstart, &d->gidx, &gcap);
-    if (p) dem_bin(d, p->n, p, &d->fstart, &d->fidx, &d->fidx_cap);
+    if (p) dem_bin(d, m, p, &d->fstart, &d->fidx, &d->fidx_cap);
 }
 
 /* ---- the coupling with the fluid ------------------------------------------------- */
@@ -191,24 +201,82 @@ static void dem_period(dem_t *d, const wall_geom *w)
     for (size_t i = 0; i < d->n; ++i) dem_wrap_grain(&v, i);
 }
 
-void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double visc_norm)
+static int dem_id_cmp(const void *a, const void *b)
+{
+    const int64_t *x = a, *y = b; /* (ID, store index) */
+    return x[0] != y[0] ? (x[0] < y[0] ? -1 : 1) : (x[1] > y[1]) - (x[1] < y[1]);
+}
+
+/* Which ghosts of p the coupling bins (d->gkeep): each fluid particle once,
+ * as the grid's minimum images take positions in the period. A ghost from
+ * this rank itself (a periodic image of an owned particle) is left out; of
+ * the copies of another rank's particle (a neighbour on both sides of a
+ * period, or through several shifts) the one of lowest store index is kept.
+ * On one rank (periodic axes only) every ghost is an image of an owned
+ * particle: none is binned, as before there were ranks. */
+static void dem_ghost_keep(dem_t *d, const particles_t *p, const halo_t *h)
+{
+    const size_t ng = h ? p->ng : 0;
+    if (ng > d->gkeep_cap || !d->gkeep) {
+        free(d->gkeep);
+        d->gkeep = dem_calloc(ng, 1), d->gkeep_cap = ng;
+    }
+    d->gkeep_n = ng;
+    if (!ng) return;
+    memset(d->gkeep, 0, ng);
+    size_t q = 0, nk = 0;
+    for (int k = 0; k < h->nnb; ++k)
+        for (size_t e = 0; e < h->nrecv[k]; ++e, ++q)
+            if (h->nb[k] != h->rank && h->recv[q] - p->n < ng) d->gkeep[h->recv[q] - p->n] = 1, ++nk;
+    if (!nk) return;
+    int64_t *key = dem_calloc(2 * nk, sizeof(int64_t));
+    size_t m = 0;
+    for (size_t g = 0; g < ng; ++g)
+        if (d->gkeep[g]) key[2 * m] = p->id[p->n + g], key[2 * m + 1] = (int64_t)g, ++m;
+    qsort(key, m, 2 * sizeof(int64_t), dem_id_cmp);
+    for (size_t k = 1; k < m; ++k)
+        if (key[2 * k] == key[2 * k - 2]) d->gkeep[key[2 * k + 1]] = 0;
+    free(key);
+}
+
+/* The grains' sums over the fluid (eq. 20; over the ranks' owned particles,
+ * in rank order: comm_sum_rows_ordered), then their interaction forces. */
+static void dem_grains_couple(dem_t *d, const dem_view *v, const particles_t *p)
+{
+    const long ng = (long)d->n, n = ng;
+    double *gs = d->gsum;
+#pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN)
+    for (long i = 0; i < ng; ++i) dem_grain_partial(v, p, (size_t)i, &gs[5 * i]);
+    comm_sum_rows_ordered(gs, d->n, 5); /* one rank: as they are */
+#pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN)
+    for (long i = 0; i < ng; ++i) {
+        dem_grain_from_sums(v, (size_t)i, &gs[5 * i]);
+        dem_grain_force(v, (size_t)i);
+    }
+}
+
+void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double visc_norm, const halo_t *halo)
 {
     (void)t;
     dem_period(d, w);
-    if (p->n > d->eps_cap) {
+    const size_t nall = p->n + p->ng;
+    if (nall > d->eps_cap) {
         free(d->eps_f), free(d->deps_f);
-        d->eps_f = dem_calloc(p->n, sizeof(double)), d->deps_f = dem_calloc(p->n, sizeof(double));
-        d->eps_cap = p->n;
+        d->eps_f = dem_calloc(nall, sizeof(double)), d->deps_f = dem_calloc(nall, sizeof(double));
+        d->eps_cap = nall;
     }
+    d->nown = p->n;
+    dem_ghost_keep(d, p, halo);
     dem_grid(d, p);
     const dem_view v = dem_view_of(d);
     const particles_t *pc = p;
-    const long nf = (long)p->n, ng = (long)d->n, n = ng;
+    const long nf = (long)p->n, nb = (long)(p->n + d->gkeep_n);
+    /* the fraction at the ghosts kept too (from the grains, which every rank
+     * holds), for the source's pair term: no exchange */
 #pragma omp parallel for schedule(dynamic, 64)
-    for (long a = 0; a < nf; ++a)
-        if (dem_fluid(pc, (size_t)a)) dem_fluid_fraction(&v, pc, w, (size_t)a);
-#pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN)
-    for (long i = 0; i < ng; ++i) dem_grain_couple(&v, pc, (size_t)i);
+    for (long a = 0; a < nb; ++a)
+        if (dem_binned(d, pc, (size_t)a)) dem_fluid_fraction(&v, pc, w, (size_t)a);
+    dem_grains_couple(d, &v, pc);
     if (d->coupling != DEM_TWO_WAY) return;
 #pragma omp parallel for schedule(dynamic, 64)
     for (long a = 0; a < nf; ++a)

@@ -10,6 +10,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include "core/particles.h"
+#include "mpi/halo.h"
 #include "physics/dem.h"
 #include "physics/wall.h"
 #include "scene/scene.h"
@@ -46,6 +47,10 @@ typedef struct dem {
     double *eps_f;        /* the fluid fraction at each fluid particle (15-16), the last coupling's */
     double *deps_f;       /* its rate following the fluid particle, 1/s */
     size_t eps_cap;
+    size_t nown;          /* the owned fluid particles at the last coupling (p->n) */
+    unsigned char *gkeep; /* several ranks: the ghosts binned (each fluid particle once under the minimum image) */
+    size_t gkeep_n, gkeep_cap; /* ghosts it covers (p->ng with a halo, else 0), allocated */
+    double *gsum;         /* [n][5] a grain's sums over the fluid, partial then over all ranks (dem_grain_partial) */
     /* the coupling's cell grid (cells of at least 2h and d): grains and fluid particles by cell */
     double lo[3], cell;
     int nc[3];
@@ -69,8 +74,12 @@ void dem_derive(dem_t *d, double e);
  * fraction at the fluid particles (15-16) and at the grains (20), the fluid
  * velocity at the grains, the interaction forces (19-23); two_way: the
  * source (14), -eps grad p and div(eps tau) and the superficial density's
- * pressure rate added to the fluid's acc and dsig. t: the time of p. */
-void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double visc_norm);
+ * pressure rate added to the fluid's acc and dsig. t: the time of p.
+ * halo: the ghosts of a run with one (several ranks, or periodic axes),
+ * else NULL. Collective on several ranks: every rank holds every grain
+ * (replicated) and gets the same sums over the fluid (comm_sum_rows_ordered),
+ * so the grains' forces are the same bits on every rank. */
+void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double visc_norm, const halo_t *halo);
 
 /* The grains from t to t + dt in steps of at most d->dt: contacts with
  * each other and the walls w, gravity (3-4), the interaction force (23)

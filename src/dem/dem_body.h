@@ -41,7 +41,8 @@ typedef struct dem_view {
     const int *oncon;     /* the last step's (read: the history) */
     const int64_t *ocid;
     const double *ocxi;
-    double *eps_f, *deps_f; /* at the fluid particles */
+    double *eps_f, *deps_f; /* at the fluid particles (owned, and on several ranks the ghosts binned) */
+    size_t nown;          /* the owned fluid particles [0, nown): a grain's sums take only these */
     double V, m, I, rho_f, nu, K, h, g[3], t_damp;
     double lo[3], cell, plen[3];
     int nc[3], per;
@@ -60,7 +61,7 @@ static inline dem_view dem_view_scalars(const dem_t *d)
     memset(&v, 0, sizeof v);
     v.c = d->c, v.coupling = d->coupling, v.motion = d->motion, v.n = d->n;
     v.V = d->V, v.m = d->m, v.I = d->I, v.rho_f = d->rho_f, v.nu = d->nu, v.K = d->K, v.h = d->h;
-    v.t_damp = d->t_damp, v.cell = d->cell, v.per = d->per;
+    v.t_damp = d->t_damp, v.cell = d->cell, v.per = d->per, v.nown = d->nown;
     for (int a = 0; a < 3; ++a) v.g[a] = d->g[a], v.lo[a] = d->lo[a], v.plen[a] = d->plen[a], v.nc[a] = d->nc[a];
     return v;
 }
@@ -184,12 +185,16 @@ HD_INLINE void dem_fluid_fraction(const dem_view *d, const particles_t *p, const
     d->deps_f[a] = de;
 }
 
-/* Grain i: eps_i and u_f,i (eq. 20), the denominator of (14). */
-HD_INLINE void dem_grain_sums(const dem_view *d, const particles_t *p, size_t i)
+/* Grain i's sums over the owned fluid particles (eq. 20): s[0] = sum V_a
+ * W_ai, s[1] = sum eps_a V_a W_ai, s[2..4] = sum u_a V_a W_ai. On several
+ * ranks each rank's are partial (its own particles), summed over the ranks
+ * before dem_grain_from_sums (dem.c). */
+HD_INLINE void dem_grain_partial(const dem_view *d, const particles_t *p, size_t i, double s[5])
 {
     const double x[3] = {d->x[0][i], d->x[1][i], d->x[2][i]}, h = d->h, alpha = kernel_alpha(3, (real)h);
     double S = 0, E = 0, U[3] = {0, 0, 0};
     DEM_CELLS_BEGIN(d, x, d->fstart, d->fidx, a)
+        if (a >= d->nown) continue; /* a ghost: its owner's rank sums it */
         double r[3];
         dem_sep(d, x, p->x[0][a], p->x[1][a], p->x[2][a], r);
         double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
@@ -198,9 +203,26 @@ HD_INLINE void dem_grain_sums(const dem_view *d, const particles_t *p, size_t i)
         S += vw, E += d->eps_f[a] * vw;
         for (int q = 0; q < 3; ++q) U[q] += (double)p->v[q][a] * vw;
     DEM_CELLS_END
+    s[0] = S, s[1] = E;
+    for (int q = 0; q < 3; ++q) s[2 + q] = U[q];
+}
+
+/* Grain i from its sums over all the fluid s[5] (dem_grain_partial): eps_i
+ * and u_f,i (eq. 20), the denominator of (14). */
+HD_INLINE void dem_grain_from_sums(const dem_view *d, size_t i, const double s[5])
+{
+    const double S = s[0], E = s[1];
     d->snorm[i] = S;
     d->eps[i] = S > 0 ? fmax(E / S, DEM_EPS_MIN) : 1.0;
-    for (int q = 0; q < 3; ++q) d->uf[q][i] = S > 0 ? U[q] / S : 0.0;
+    for (int q = 0; q < 3; ++q) d->uf[q][i] = S > 0 ? s[2 + q] / S : 0.0;
+}
+
+/* Grain i: eps_i and u_f,i (eq. 20), the denominator of (14), on one rank. */
+HD_INLINE void dem_grain_sums(const dem_view *d, const particles_t *p, size_t i)
+{
+    double s[5];
+    dem_grain_partial(d, p, i, s);
+    dem_grain_from_sums(d, i, s);
 }
 
 /* The interaction force on grain i (eq. 23) at its velocity now, and its
@@ -216,32 +238,24 @@ HD_INLINE void dem_force_int(const dem_view *d, size_t i, double F[3], double *F
         for (int q = 0; q < 3; ++q) Fd[q] = (double)FD[q];
 }
 
-/* Grain i at a coupling: its sums over the fluid (dem_grain_sums), then the
- * interaction force and its drag part at its velocity now into fint, fd. */
-HD_INLINE void dem_grain_couple(const dem_view *d, const particles_t *p, size_t i)
+/* Grain i's interaction force and its drag part at its velocity now into
+ * fint, fd (its eps and u_f set). */
+HD_INLINE void dem_grain_force(const dem_view *d, size_t i)
 {
-    dem_grain_sums(d, p, i);
     double F[3], Fd[3];
     dem_force_int(d, i, F, Fd);
     for (int q = 0; q < 3; ++q) d->fint[q][i] = F[q], d->fd[q][i] = Fd[q];
 }
 
-/* two_way, fluid particle a (model A of the DEM paper's eq. 6 per unit mass
- * of fluid, rho_bar = eps rho_f): the source -sum_i w_ai F_D,i / (eps_a
- * rho_f V_a), w_ai = V_a W_ai / sum_b V_b W_bi (eqs. 13-14, with eq. 24's
- * drag, as model A takes it: the fluid's -eps grad p carries the pressure's
- * share, and the grain's -V grad p of eq. 23, F_D / eps - V rho_f g, is
- * what -eps grad p = eps rho_f g - n F_D gives inside a uniform bed; handing
- * the fluid all of F_int as well, as model B's -grad p does, counts the
- * pressure's share twice: at rest the bed's pressure then grows by rho_f g /
- * eps, not rho_f g, and a settling grain drags the fluid down with it,
- * docs/validation.md "DEM grains in a fluid"); div(eps tau) / eps
- * less the fluid's own div(tau) (Morris's pair term with the mean
- * (eps_a + eps_b) / 2: + V_b 2 nu f u_ab ((eps_a + eps_b) / (2 eps_a) - 1));
- * -eps grad p / (eps rho_f) is the fluid's own -grad p / rho_f. The
- * superficial density's continuity D(eps rho)/Dt = -eps rho div u adds
- * dp/dt = -(K / eps_a) D eps_a / Dt to the pressure rate. Added to a's
- * acc and dsig. */
+/* Grain i at a coupling on one rank: its sums over the fluid
+ * (dem_grain_sums), then the interaction force and its drag part at its
+ * velocity now into fint, fd. */
+HD_INLINE void dem_grain_couple(const dem_view *d, const particles_t *p, size_t i)
+{
+    dem_grain_sums(d, p, i);
+    dem_grain_force(d, i);
+}
+
 /* Whether any grain is binned in the 5^3 cells about point x: every grain
  * within 4h of x is (cells of at least 2h). */
 HD_INLINE int dem_grains_near(const dem_view *d, const double x[3])
@@ -259,6 +273,23 @@ HD_INLINE int dem_grains_near(const dem_view *d, const double x[3])
     return 0;
 }
 
+/* two_way, fluid particle a (model A of the DEM paper's eq. 6 per unit mass
+ * of fluid, rho_bar = eps rho_f): the source -sum_i w_ai F_D,i / (eps_a
+ * rho_f V_a), w_ai = V_a W_ai / sum_b V_b W_bi (eqs. 13-14, with eq. 24's
+ * drag, as model A takes it: the fluid's -eps grad p carries the pressure's
+ * share, and the grain's -V grad p of eq. 23, F_D / eps - V rho_f g, is
+ * what -eps grad p = eps rho_f g - n F_D gives inside a uniform bed; handing
+ * the fluid all of F_int as well, as model B's -grad p does, counts the
+ * pressure's share twice: at rest the bed's pressure then grows by rho_f g /
+ * eps, not rho_f g, and a settling grain drags the fluid down with it,
+ * docs/validation.md "DEM grains in a fluid"); div(eps tau) / eps
+ * less the fluid's own div(tau) (Morris's pair term with the mean
+ * (eps_a + eps_b) / 2: + V_b 2 nu f u_ab ((eps_a + eps_b) / (2 eps_a) - 1));
+ * -eps grad p / (eps rho_f) is the fluid's own -grad p / rho_f. The
+ * superficial density's continuity D(eps rho)/Dt = -eps rho div u adds
+ * dp/dt = -(K / eps_a) D eps_a / Dt to the pressure rate. Added to a's
+ * acc and dsig. The pair term's b are the binned fluid particles: on
+ * several ranks the ghosts too, each particle once (dem.c dem_ghost_keep). */
 HD_INLINE void dem_fluid_source(const dem_view *d, const particles_t *p, size_t a, double visc_norm)
 {
     double x[3];

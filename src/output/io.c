@@ -630,23 +630,37 @@ hid_t io_select_rows(hid_t fspace, hid_t mspace, uint64_t start, uint64_t count)
     return dxpl;
 }
 
-/* ---- DEM grains (issue 58; one rank) -------------------------------------------- */
+/* ---- DEM grains (issue 58) -------------------------------------------------------- */
 
 static const dem_t *io_grains; /* io_set_grains: the run's grains, or NULL */
 
 void io_set_grains(const dem_t *d) { io_grains = d; }
 
+/* grp/name, n rows of nc values: every rank holds every grain (the same
+ * bits: src/dem/dem.h), so rank 0 writes them all and the others take part
+ * in the collective write with nothing. */
 static void io_dem_dataset(hid_t grp, const char *name, hid_t ftype, hid_t mtype, const void *buf, size_t n, int nc,
                            const char *desc, const char *units)
 {
-    hsize_t dims[2] = {(hsize_t)n, (hsize_t)nc};
-    hid_t sp, ds;
+    hsize_t dims[2] = {(hsize_t)n, (hsize_t)nc}, mdims[2] = {n ? (hsize_t)n : 1, (hsize_t)nc};
+    hid_t sp, msp, ds, dxpl;
     H5CHECK(sp = H5Screate_simple(nc > 1 ? 2 : 1, dims, NULL));
+    H5CHECK(msp = H5Screate_simple(nc > 1 ? 2 : 1, mdims, NULL));
     H5CHECK(ds = H5Dcreate2(grp, name, ftype, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
-    if (n > 0) H5CHECK(H5Dwrite(ds, mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf));
+    H5CHECK(dxpl = H5Pcreate(H5P_DATASET_XFER));
+    H5CHECK(H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE));
+    if (io_rank() != 0) {
+        H5CHECK(H5Sselect_none(sp));
+        H5CHECK(H5Sselect_none(msp));
+    }
+    char what[80];
+    snprintf(what, sizeof what, "the dataset /DEM/%s", name);
+    if (n > 0) io_write_rows(ds, mtype, msp, sp, dxpl, buf, what);
     io_attr_string(ds, "Description", desc);
     io_attr_string(ds, "Units", units);
+    H5CHECK(H5Pclose(dxpl));
     H5CHECK(H5Dclose(ds));
+    H5CHECK(H5Sclose(msp));
     H5CHECK(H5Sclose(sp));
 }
 
