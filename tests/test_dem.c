@@ -107,6 +107,13 @@ static void test_resting(void **st)
     assert_true(fabs(load - mg) <= 1e-6 * mg);
     assert_true(fabs(delta - mg / 1000) <= 1e-6 * mg / 1000);
     assert_true(d->ncon[0] == 1);
+    /* moving into the wall the dashpot adds to the load, moving away it takes
+     * from it: the contact's force (dem_contact, -gn vn with vn < 0 closing) */
+    const double vz = 1e-3, k0 = 1000 * delta;
+    d->v[1][0] = -vz;
+    assert_true(fabs(dem_wall_load(d, &w, 0) - (k0 + d->c.gn * vz)) <= 1e-9 * k0);
+    d->v[1][0] = vz;
+    assert_true(fabs(dem_wall_load(d, &w, 0) - (k0 - d->c.gn * vz)) <= 1e-9 * k0);
     dem_free(d);
 }
 

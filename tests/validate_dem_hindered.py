@@ -10,7 +10,7 @@ up through it. Its velocity is held to Richardson & Zaki's (1954) law
 
 within 10 % (the issue's), v_t the single grain's terminal velocity with the
 code's drag (eq. 27 at eps = 1, Di Felice's eqs. 19, 21, 22:
-tests/validate_dem_settling.terminal; 0.1205 m/s for d 4 mm, 1200 kg/m^3 in
+terminal() of tests/validate_dem_settling.py; 0.1205 m/s for d 4 mm, 1200 kg/m^3 in
 water, Re_t = 482, n = 2.399). Garside & Al-Dibouni's (1977) continuous form,
 (5.1 - n) / (n - 2.7) = 0.1 Re_t^0.9, and Rowe's (1987), n = (4.7 + 0.41
 Re_t^0.75) / (1 + 0.175 Re_t^0.75), are printed beside (n = 2.789 and 2.467).

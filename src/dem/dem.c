@@ -392,12 +392,15 @@ double dem_wall_load(const dem_t *d, const wall_geom *w, size_t i)
     const double R = 0.5 * (double)d->c.d;
     double load = 0;
     for (int k = 0; k < w->n; ++k) {
-        real xr[3] = {(real)d->x[0][i], (real)d->x[1][i], (real)d->x[2][i]}, nr[3];
+        real xr[3] = {(real)d->x[0][i], (real)d->x[1][i], (real)d->x[2][i]}, nr[3], uw[3];
         double delta = R + (double)wall_prim_depth(&w->prim[k], xr);
         if (delta <= 0) continue;
         wall_prim_normal(&w->prim[k], xr, nr);
-        double vn = d->v[0][i] * nr[0] + d->v[1][i] * nr[1] + d->v[2][i] * nr[2];
-        load += fmax((double)d->c.kn * delta + (double)d->c.gn * vn, 0.0);
+        wall_velocity_at(&w->prim[k], xr, uw);
+        /* dem_contact's normal force: n from the wall to the grain, vn the approach's sign (< 0 closing) */
+        double vn = 0;
+        for (int q = 0; q < 3; ++q) vn += (d->v[q][i] - (double)uw[q]) * (double)nr[q];
+        load += fmax((double)d->c.kn * delta - (double)d->c.gn * vn, 0.0);
     }
     return load;
 }
