@@ -128,15 +128,7 @@ static gpu_dem *gd_get(sim_t *s, gpu_t *g)
 static dem_view gd_view(const dem_t *d, const gpu_dem *e)
 {
     dem_view v = dem_view_scalars(d);
-    for (int a = 0; a < 3; ++a) {
-        v.x[a] = e->x[a], v.v[a] = e->v[a], v.w[a] = e->w[a];
-        v.fint[a] = e->fint[a], v.fd[a] = e->fd[a], v.uf[a] = e->uf[a];
-    }
-    v.eps = e->eps, v.snorm = e->snorm, v.id = e->id;
-    v.ncon = e->ncon, v.cid = e->cid, v.cxi = e->cxi;
-    v.oncon = e->ncon2, v.ocid = e->cid2, v.ocxi = e->cxi2;
-    v.eps_f = e->eps_f, v.deps_f = e->deps_f;
-    v.gstart = e->gstart, v.gidx = e->gidx, v.fstart = e->fstart, v.fidx = e->fidx;
+    DEM_VIEW_ARRAYS(v, e);
     return v;
 }
 

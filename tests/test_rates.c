@@ -36,7 +36,7 @@ static void setup_fixture(fixture *f, int scheme, double V, double D)
     *f = (fixture){0};
     tu_block2d(&f->p, N, N, DR, 3, 3);
     f->c.k = sph_make(2, (real)(1.5 * DR), (real)DR);
-    seg_params sp = {1, 0, 0, (real)V, (real)D, 0, 0, 0.004, 0.008, {0, -1, 0}};
+    seg_params sp = {1, 0, 0, (real)V, (real)D, 0, 0, 0.004, 0.008, {0, -1, 0}, 0, 0};
     f->c.sp = sp;
     f->c.scheme = scheme;
     nbr_build(&f->g, &f->p, R(2.0) * f->c.k.h, NULL);
@@ -271,9 +271,9 @@ static void test_wall_flux_total(void **st)
 static void test_donor_flux(void **st)
 {
     (void)st;
-    seg_params sps[2] = {{1, 0, 1, 0, 0, (real)0.11, (real)0.0307, (real)0.004, (real)0.008, {0, -1, 0}},
+    seg_params sps[2] = {{1, 0, 1, 0, 0, (real)0.11, (real)0.0307, (real)0.004, (real)0.008, {0, -1, 0}, 0, 0},
                          {(real)1.6, (real)0.89, 1, 0, 0, (real)0.11, (real)0.0307, (real)0.004, (real)0.008,
-                          {0, -1, 0}}};
+                          {0, -1, 0}, 0, 0}};
     int capped = 0;
     for (int s = 0; s < 2; ++s)
         for (int a = -1; a <= 21; ++a)

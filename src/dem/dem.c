@@ -103,15 +103,7 @@ void dem_free(dem_t *d)
 dem_view dem_view_of(dem_t *d)
 {
     dem_view v = dem_view_scalars(d);
-    for (int a = 0; a < 3; ++a) {
-        v.x[a] = d->x[a], v.v[a] = d->v[a], v.w[a] = d->w[a];
-        v.fint[a] = d->fint[a], v.fd[a] = d->fd[a], v.uf[a] = d->uf[a];
-    }
-    v.eps = d->eps, v.snorm = d->snorm, v.id = d->id;
-    v.ncon = d->ncon, v.cid = d->cid, v.cxi = d->cxi;
-    v.oncon = d->ncon2, v.ocid = d->cid2, v.ocxi = d->cxi2; /* the spare lists: the last step's in dem_substep */
-    v.eps_f = d->eps_f, v.deps_f = d->deps_f;
-    v.gstart = d->gstart, v.gidx = d->gidx, v.fstart = d->fstart, v.fidx = d->fidx;
+    DEM_VIEW_ARRAYS(v, d);
     return v;
 }
 

@@ -66,6 +66,24 @@ static inline dem_view dem_view_scalars(const dem_t *d)
     return v;
 }
 
+/* The view's arrays from src, a dem_t (host arrays, dem.c) or the GPU's
+ * mirror (device arrays, gpu_dem.cu), whose arrays have dem_t's names: the
+ * lists a DEM step writes (cid, cxi, ncon) and those it reads as the
+ * history (cid2, cxi2, ncon2: the last step's, swapped in dem_substep). One
+ * list of fields for both, so a new array cannot be missed on one side. */
+#define DEM_VIEW_ARRAYS(v, src)                                                                              \
+    do {                                                                                                     \
+        for (int a_ = 0; a_ < 3; ++a_) {                                                                     \
+            (v).x[a_] = (src)->x[a_], (v).v[a_] = (src)->v[a_], (v).w[a_] = (src)->w[a_];                    \
+            (v).fint[a_] = (src)->fint[a_], (v).fd[a_] = (src)->fd[a_], (v).uf[a_] = (src)->uf[a_];          \
+        }                                                                                                    \
+        (v).eps = (src)->eps, (v).snorm = (src)->snorm, (v).id = (src)->id;                                  \
+        (v).ncon = (src)->ncon, (v).cid = (src)->cid, (v).cxi = (src)->cxi;                                  \
+        (v).oncon = (src)->ncon2, (v).ocid = (src)->cid2, (v).ocxi = (src)->cxi2;                            \
+        (v).eps_f = (src)->eps_f, (v).deps_f = (src)->deps_f;                                                \
+        (v).gstart = (src)->gstart, (v).gidx = (src)->gidx, (v).fstart = (src)->fstart, (v).fidx = (src)->fidx; \
+    } while (0)
+
 HD_INLINE int dem_fluid(const particles_t *p, size_t a) { return p->kind[a] == KIND_MATERIAL; }
 
 /* ---- the cell grid (cells of at least 2h and d) -------------------------------- */
