@@ -123,7 +123,7 @@ def cmd_chart(a):
         if a.band:
             ax[k].axhline(a.band, color="g", lw=0.8, ls="--")
             ax[k].annotate(" %g %% of the reference" % (100 * a.band), (min(hours) / 1.4, a.band * 1.1), fontsize=8)
-        ax[k].set_xlabel("GPU-hours per revolution (H100: measured rate)\n3D drum: 1.1e7 particles at dr 0.25 mm unless named")
+        ax[k].set_xlabel("GPU-hours per revolution (measured rate, one H100 or H200: the row's source)\n3D drum: 1.1e7 particles at dr 0.25 mm unless named")
         ax[k].set_ylabel("|relative error| of the %s\n(%s)" % (lab, a.error_note))
         errs = [abs(float(r[col])) for r in rows if r[col].strip()]
         ax[k].set_ylim(1e-3, max([1.5] + [1.5 * e for e in errs]))
@@ -144,6 +144,8 @@ SCENE_FLOW = ["Flow:stabilization=riemann", "Flow:bed_damping=1", "Flow:gradient
               "Flow:shifting=fickian", "Segregation:every=auto"]
 # Run:preset's sets that are rows of the planner (src/scene/scene_keys.h holds them; keep the two alike)
 PRESETS = {"fast": {"Material:E": 3e4, "Run:cfl_flow": 0.2}, "converged": {"Material:E": 1e5, "Run:cfl_flow": 0.2}}
+# and their Run:integrator (a row's is leapfrog where its label says so, else the predictor-corrector)
+PRESET_INTEGRATOR = {"fast": "leapfrog", "converged": "predictor_corrector"}
 # Run:integrator leapfrog's rate over the predictor-corrector's with which the rows' hours were measured, on the
 # 1.1e7 3D drum, the scenes' flow at E 10 kPa, chi 0.2, single, one H200 (docs/performance.md "One evaluation a step"
 # and "The flow pass's code", tools/bench/drum_rates.sh): a chain of ratios each measured within one device call,
@@ -164,7 +166,8 @@ def plan_rows(path):
             continue
         rows.append({"dr": float(m.group(1)) * 1e-3, "E": float(r["E_Pa"]), "chi": float(r["cfl_flow"]),
                      "hours": float(r["gpu_hours_per_rev"]), "speed_err": float(r["speed_err"]),
-                     "seg_err": float(r["seg_err"]), "label": r["label"], "source": r["source"]})
+                     "seg_err": float(r["seg_err"]), "label": r["label"], "source": r["source"],
+                     "integrator": "leapfrog" if "leapfrog" in r["label"] else "predictor_corrector"})
     return rows
 
 
@@ -199,7 +202,10 @@ def cmd_plan(a):
         print("no plan: " + h)
         return 1
     keys = SCENE_FLOW + ["Material:E=%g" % r["E"], "Run:cfl_flow=%g" % r["chi"]]
-    preset = [k for k, v in PRESETS.items() if v["Material:E"] == r["E"] and v["Run:cfl_flow"] == r["chi"]]
+    if r["integrator"] == "leapfrog":
+        keys.append("Run:integrator=leapfrog")
+    preset = [k for k, v in PRESETS.items() if v["Material:E"] == r["E"] and v["Run:cfl_flow"] == r["chi"]
+              and PRESET_INTEGRATOR[k] == r["integrator"]]
     print("settings: " + " ".join("-P " + k for k in keys) + ("  (= -P Run:preset=%s)" % preset[0] if preset else ""))
     print("accuracy: surface speed %+.1f %%, segregation index %+.1f %% at dr %g mm, against the scenes' flow at "
           "dr 0.25 mm, E 0.1 MPa, chi 0.2 (2D EV drum, means of t = 3-5 s)"
@@ -209,9 +215,9 @@ def cmd_plan(a):
         print("  (this is the reference setting itself: its error is 0 by definition; from dr %s mm it moved the speed "
               "by %s)" % (", ".join("%g" % (q["dr"] * 1e3) for q in coarse) or "-",
                           ", ".join("%+.1f %%" % (-100 * q["speed_err"]) for q in coarse) or "-"))
-    print("cost: %.3g GPU-hours per revolution (one H100, single build; measured %.4g h at dr %g mm, scaled by "
-          "(dr_measured / dr)^4)" % (h * a.length / ref["length"], r["hours"], r["dr"] * 1e3))
-    if preset == ["fast"]:
+    print("cost: %.3g GPU-hours per revolution (one GPU, single build, as the source row says; measured %.4g h at dr %g "
+          "mm, scaled by (dr_measured / dr)^4)" % (h * a.length / ref["length"], r["hours"], r["dr"] * 1e3))
+    if r["integrator"] != "leapfrog" and r["E"] == PRESETS["fast"]["Material:E"] and r["chi"] == PRESETS["fast"]["Run:cfl_flow"]:
         print("  with the preset's Run:integrator leapfrog: about %.3g GPU-hours (the hours above over its measured "
               "rate ratio %.2f; accuracy cost within 0.4 %% on the 2D drums, docs/performance.md)"
               % (h * a.length / ref["length"] / LEAPFROG_RATE, LEAPFROG_RATE))
