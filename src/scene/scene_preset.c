@@ -8,14 +8,12 @@
  *              corrected gradient, Fickian shifting) at E 0.1 MPa, chi 0.2:
  *              within 0.9 % (surface speed) and 0.1 % (segregation index) of
  *              the converged drum at dr 0.5 mm;
- *   fast       the same at E 30 kPa: within 2.4 % and 1.7 % at dr 0.5 mm, at
- *              56 % of converged's GPU-hours (docs/performance.md; the rows of
+ *   fast       the same at E 30 kPa with Run:integrator leapfrog: within
+ *              1.9 % and 1.7 % at dr 0.5 mm, 0.76 GPU-hours a revolution of
+ *              the 1.6e6 3D drum, a quarter of converged's (one H200;
+ *              docs/performance.md, "Time to solution"; the rows of
  *              docs/data/gpu/time_to_solution_pair.csv, which
- *              `python3 -m tools.studies.time_to_solution plan` reads), with
- *              Run:integrator leapfrog: 1.68 times the predictor-corrector's
- *              rate on the 1.1e7 3D drum, within 0.4 % of its surface speed
- *              and segregation index on the 2D drums at this preset (means of
- *              t = 4-6 s, one H200; docs/performance.md, "One evaluation a step"). */
+ *              `python3 -m tools.studies.time_to_solution plan` reads). */
 #include <stdlib.h>
 #include <string.h>
 #include "scene_ctx.h"
