@@ -154,8 +154,6 @@ int main(int argc, char **argv)
     integrate_conc_init(&s);
     ckpt_run rs = {0};
     char chosen[4200] = "";
-    if (c.restart && s.dem) /* checkpoints do not carry the grains yet (issue 58) */
-        input_error("--restart: a scene with DEM grains cannot restart yet (checkpoints do not hold the grains)");
     if (c.restart)
         ckpt_read(c.restart, &s, &rs, chosen, sizeof chosen); /* exits 2 on a bad checkpoint */
     else

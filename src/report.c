@@ -96,9 +96,9 @@ void report_end(sim_t *s, diag *d, double io)
             "second of the wall less output), max |drift of sum C V| %.3e, %.3f s of the wall in output and "
             "diagnostics (not in the rate), %.3f s in halo exchange", s->step, wall, rate, comm_size(),
             rate / comm_size(), d->max_drift, io, halo);
-    if (s->dem && s->step > d->step0)
+    if (s->dem && s->step > d->step0) /* the run's, restarts included (a checkpoint carries them) */
         message("dem: %zu grains, %ld DEM steps in %ld fluid steps (%.1f a fluid step)", s->dem->n, s->dem->steps,
-                s->step - d->step0, (double)s->dem->steps / (double)(s->step - d->step0));
+                s->step, (double)s->dem->steps / (double)s->step);
     if (s->win.on && s->win.windows > 0)
         message("concentration: %ld windows of %.1f flow steps on average, %ld midpoint steps of C", s->win.windows,
                 (double)(s->step - d->step0 - s->win.k) / (double)s->win.windows, s->win.substeps);

@@ -7,7 +7,9 @@
  * even contiguous share of the global rows (the restart on another rank
  * count, before the distribution step); the directory gives its newest
  * checkpoint. Every one-bit flip in the seal is refused, a legacy seal
- * (check 0) is taken, a FIFO is refused at once. Runs on any rank count:
+ * (check 0) is taken, a FIFO is refused at once. DEM grains (every rank
+ * holding the same ones): every array of dem_state_get and the scalars
+ * exch and steps come back bit-identical on every rank. Runs on any rank count:
  *   mpirun -np 2 ./test_checkpoint */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
@@ -163,6 +165,8 @@ static int fx_teardown(void **state)
     ckpt_fx *f = *state;
     part_free(&f->a.p);
     part_free(&f->b.p);
+    dem_free(f->a.dem);
+    dem_free(f->b.dem);
     free(f->text);
     scene_free(&f->sc);
     free(f);
@@ -231,6 +235,56 @@ static void test_round_trip(void **state)
     ckpt_run_free(&rb);
     ckpt_run_free(&rc);
     part_free(&c.p);
+}
+
+/* DEM grains (src/dem/dem.h): n of them, the same on every rank (they are
+ * replicated), every array of the state filled with values of (array,
+ * index) that the reader's checks take: IDs 0..n-1, contact counts within
+ * DEM_CMAX, partners another grain or one of the NWALLS walls; the entries
+ * past a grain's count (never read) hold anything. */
+static void fill_grains(dem_t *d)
+{
+    const size_t n = d->n;
+    for (size_t k = 0; k < DEM_STATE_NARRAYS; ++k) {
+        dem_state_array a = dem_state_get(d, k);
+        for (size_t i = 0; i < n * a.per; ++i) {
+            if (a.is_double) ((double *)a.a)[i] = (double)(k + 1) * 1e-3 * (double)i - 0.5 / (double)(k + 1);
+            else if (a.esize == 8) ((int64_t *)a.a)[i] = (int64_t)(1000 * k + i);
+        }
+    }
+    for (size_t i = 0; i < n; ++i) {
+        d->id[i] = (int64_t)i;
+        d->ncon[i] = (int)(i % (DEM_CMAX + 1));
+        for (int c = 0; c < d->ncon[i]; ++c) /* a wall, then the other grains */
+            d->cid[i * DEM_CMAX + (size_t)c] =
+                c == 0 ? -1 - (int64_t)(i % NWALLS) : (int64_t)((i + (size_t)c) % n);
+    }
+    d->exch[0] = 1.25e-3, d->exch[1] = -7.5e-4, d->exch[2] = 3.0e-17;
+    d->steps = 123456789;
+}
+
+static void test_dem_round_trip(void **state)
+{
+    ckpt_fx *f = *state;
+    const size_t n = 37;
+    fill_store(&f->a.p, 10 + (size_t)g_rank);
+    f->a.t = 0.5, f->a.step = 77;
+    f->a.dem = dem_alloc(n);
+    fill_grains(f->a.dem);
+    f->b.dem = dem_alloc(n); /* as setup_contexts makes it from the scene: at rest */
+    ckpt_run ra = {0}, rb = {0};
+    ckpt_write(g_dir, &f->a, &ra, f->text);
+    char path[128], chosen[256];
+    snprintf(path, sizeof path, "%s/checkpoint.h5", g_dir);
+    ckpt_read(path, &f->b, &rb, chosen, sizeof chosen);
+    for (size_t k = 0; k < DEM_STATE_NARRAYS; ++k) {
+        dem_state_array a = dem_state_get(f->a.dem, k), b = dem_state_get(f->b.dem, k);
+        assert_string_equal(a.name, b.name);
+        assert_memory_equal(b.a, a.a, n * a.per * a.esize);
+    }
+    assert_memory_equal(f->b.dem->exch, f->a.dem->exch, sizeof f->a.dem->exch);
+    assert_int_equal(f->b.dem->steps, 123456789);
+    ckpt_run_free(&rb);
 }
 
 /* Rank 0 xors byte k of path with x (then all ranks meet). */
@@ -368,7 +422,9 @@ int main(int argc, char **argv)
     MPI_Bcast(g_dir, sizeof g_dir, MPI_CHAR, 0, MPI_COMM_WORLD);
     const struct CMUnitTest tests[] = {cmocka_unit_test_setup_teardown(test_round_trip, fx_setup, fx_teardown),
                                        cmocka_unit_test_setup_teardown(test_other_rank_count, fx_setup, fx_teardown),
-                                       cmocka_unit_test_setup_teardown(test_seal_bits, fx_setup, fx_teardown)};
+                                       cmocka_unit_test_setup_teardown(test_seal_bits, fx_setup, fx_teardown),
+                                       cmocka_unit_test_setup_teardown(test_dem_round_trip, fx_setup,
+                                                                       fx_teardown)};
     int failed = cmocka_run_group_tests(tests, NULL, NULL), any = 0;
     MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     if (!any && g_rank == 0) {

@@ -23,7 +23,11 @@ A new value the scene check itself refuses (exit 2 naming the key in the
 scene, never reaching the checkpoint) is passed over for the next candidate;
 a key with no candidate left fails. Also: the unedited scene restarts with
 no key named; a wall moved, restarted on 2 ranks, is refused in one line
-from rank 0; a wall added is named by the list's length.
+from rank 0; a wall added is named by the list's length. The DEM section
+(issue 58): a checkpoint of grains (a pile in inputs/dem_settling.yml),
+restarted with each DEM key edited in turn, is refused naming that key (all
+of DEM's keys are state keys: src/output/checkpoint_keys.c); every DEM key
+must reach that check (a value the scene check takes).
 
     /usr/bin/python3 -m tests.test_restart_keys --sphseg build/sphseg --work DIR
 """
@@ -38,6 +42,12 @@ import time
 
 MPI = ["mpirun", "--oversubscribe", "--allow-run-as-root"]
 SCENE, COLUMN = "inputs/hopper_2d.yml", "inputs/column_2d.yml"
+# a pile of DEM grains in the settling box (tests/validate_gpu.py's DEM_PILE), 3 supports coarser; DEM:at
+# (unused by a block) inside the box, so that DEM:placement single passes the scene check
+DEM = "inputs/dem_settling.yml"
+DEM_P = ["-P", "DEM:d=0.004", "-P", "DEM:coupling=two_way", "-P", "DEM:placement=block", "-P", "DEM:block_n=[6, 3, 6]",
+         "-P", "DEM:block_spacing=0.004001", "-P", "DEM:block_origin=[0.02, 0.002, 0.02]",
+         "-P", "DEM:at=[0.032, 0.05, 0.032]"]
 FAILS = []
 RUN = ("Run:", "Output:", "Parallel:")
 MODEL = ("Segregation:", "Flow:", "Grains:", "Outlet:")
@@ -192,6 +202,8 @@ def vector(v):
         ys = list(xs)
         ys[i] = float("%.12g" % (ys[i] + d))
         out.append("[" + ", ".join(fmt(y) for y in ys) + "]")
+    if all(x == int(x) for x in xs):  # whole numbers (DEM:block_n): last, a count one larger
+        out.append("[" + ", ".join(str(int(x) + (i == 0)) for i, x in enumerate(xs)) + "]")
     return out
 
 
@@ -368,6 +380,15 @@ def main():
     print(f"fuzz: {len(jobs)} keys edited one at a time ({counts['state']} state: refused; {counts['model']} model: "
           f"a warning; {counts['run']} run-control: listed); {len(scene_only)} of them no value the scene check "
           f"takes (it refuses them before the checkpoint is read): {', '.join(scene_only)}")
+
+    # DEM grains: every DEM key is a state key, refused by name
+    dem, dtext = make_base(sp, work, "dem", DEM, DEM_P)
+    djobs = [j for j in jobs_for(table, *parse_used(dtext))[0] if j[1].startswith("DEM:")]
+    check("the DEM checkpoint's scene echoes every DEM key", {j[1] for j in djobs} ==
+          {"DEM:" + k for k in table.get("DEM", {})}, str(sorted(j[1] for j in djobs)))
+    for s, c, v, why in fuzz(sp, work, dem + "/checkpoint.h5", dtext, djobs):
+        check(f"DEM checkpoint, {s} -> {c}: refused naming it", v == "ok", str(why))
+    print(f"DEM: {len(djobs)} keys edited one at a time on a checkpoint of grains: refused")
 
     # a wall moved, on 2 ranks: one line, from rank 0
     n = next(e[4] for e in entries if e[2] == 4 and e[1] == "walls")

@@ -53,6 +53,28 @@ bit-identical to the same run done straight through (DESIGN.md: checkpoints
              names another size), a checkpoint of the other precision and one
              of another dimension: exit 2, one line naming the file and the
              problem (tests/test_restart_guard.py has many more).
+  dem_*:     DEM grains (issue 58) in the settling box (inputs/dem_settling.yml,
+             8000 fluid particles), stopped at step 7 with a checkpoint and
+             restarted to step 12 (the Shepard filter every 5 steps: at 10,
+             after the restart), against the straight run: the final
+             snapshot's fluid and /DEM group and the rows after step 7 (the
+             grains' kinetic energy and exchanged momentum among them)
+             bit-identical. dem_settling: one grain, two
+             way. dem_pile: 108 free grains in contact with each other and the
+             base, gravity tilted (DEM_TILT) so that they slide and roll and
+             the tangential springs carry load (the checkpoint must hold
+             grain and wall contacts and springs that are not zero).
+             dem_rigid: a rigid body of 12 grains (DEM:motion rigid) sliding
+             on the base, turning, the gravity ramp (DEM:t_damp) running
+             across the checkpoint, the leapfrog integrator (fresh rates at
+             the filter's step 10). dem_ranks (CPU: the GPU runs grains on one
+             rank): the pile on 2 ranks (slabs across it), restarted on 2
+             ranks bit-identical to the straight 2-rank run, and on 1 rank
+             equal to it to round-off (fluid within TOL of each field's
+             scale, grains within TOL_DEM, contact counts equal). dem_bad: a
+             checkpoint of the pile whose contact count is out of range, one
+             without /DEM, and the scene with DEM:mu changed: exit 2, one
+             line naming the problem.
 
 --backend gpu (default cpu) runs every case with sphseg --backend gpu (ranks
 share the visible GPUs by local rank). A GPU restart builds its Verlet list
@@ -67,7 +89,11 @@ copies the state to the host), and so must the rows a restart keeps from
 before its checkpoint. The GPU's METIS coarse cells are 3 lattice
 cells wide: the edited width is then 2, and a checkpoint without the width
 (read as 2) is cut again. Exits 77 (skipped) where the build has no CUDA
-backend or no GPU is visible.
+backend or no GPU is visible. The /DEM group of a restarted GPU run must
+equal the straight run's to round-off (validate_gpu's dem_difference within
+TOL); dem_ranks is skipped there.
+
+--cases NAME,NAME runs only those cases (default all; the names above).
 """
 import argparse
 import os
@@ -90,9 +116,20 @@ BOX_P = ["Geometry:dr=0.00348", "Run:t_end=13", "Output:dt=3.25", "Run:progress_
 DRUM_P = ["Geometry:dr=0.0025", "Material:E=1e5", "Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.001",
           "Run:progress_s=1e9"]
 COLUMN = os.path.join(HERE, "..", "inputs", "column_2d.yml")
-from tests.containers import CHUTE, PAPER_FLOW, SILO  # noqa: E402  (tests/containers.py)
+from tests.containers import CHUTE, PAPER_FLOW, SILO, pick_cases  # noqa: E402  (tests/containers.py)
 CHUTE_P = CHUTE + ["Parallel:axis=x", "Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.001", "Run:progress_s=1e9"]
 SILO_P = SILO + ["Run:t_end=100", "Output:dt=1e3", "Output:diag_dt=0.002", "Run:progress_s=1e9"]
+from tests.validate_gpu import DEM_PILE, dem_difference, last_dem  # noqa: E402
+DEM_SCENE = os.path.join(HERE, "..", "inputs", "dem_settling.yml")
+DEM_P = ["Output:dt=1e3", "Output:diag_dt=0.001", "Run:progress_s=1e9", "Flow:shepard_every=5"]
+DEM_TILT = "Physics:gravity=[3, -9.81, 1]"  # grains on the base slide and roll: their springs carry load
+DEM_RIGID = ["DEM:coupling=two_way", "DEM:motion=rigid", "DEM:placement=block", "DEM:block_n=[3, 2, 2]",
+             "DEM:block_spacing=0.008", "DEM:block_origin=[0.02, 0.004, 0.024]", DEM_TILT, "DEM:t_damp=0.03",
+             "Run:integrator=leapfrog"]
+DEM_CASES = [("dem_settling", ["DEM:coupling=two_way"]), ("dem_pile", DEM_PILE + [DEM_TILT]),
+             ("dem_rigid", DEM_RIGID)]
+DEM_STOP, DEM_END = 7, 12
+TOL_DEM = 1e-10  # the grains across rank counts (tests/validate_mpi.py's)
 OK = True
 TOL = 1e-8
 AGREE = {"cpu": "bit-identical", "gpu": "equal to round-off"}  # what a restart must reach
@@ -218,22 +255,49 @@ def test_shearbox(args):
     return a
 
 
-def stop_restart(args, name, scene, over, stop, end):
+def dem_agrees(args, a, b):
+    """(good, detail): the /DEM group of the last snapshot in b against a's:
+    every dataset bit-identical on the CPU; on the GPU within TOL
+    (dem_difference) or bit-identical."""
+    da, db = last_dem(a), last_dem(b)
+    if db is None or set(da) != set(db):
+        return False, "no /DEM, or other datasets"
+    d = [k for k in da if not np.array_equal(da[k], db[k])]
+    if not d:
+        return True, "bit-identical"
+    worst = dem_difference(da, db)
+    return args.backend == "gpu" and worst <= TOL, "max difference %.2e of the scale (differs in %s)" % (
+        worst, ", ".join(d))
+
+
+def stop_restart(args, name, scene, over, stop, end, inspect=None, logs=None):
     """Run A straight to step end; run B stopped with a checkpoint at step stop
-    and restarted to end; A's and B's final snapshots, and their diagnostics
-    rows after stop, must agree (bit for bit on the CPU). Returns A's directory."""
+    and restarted to end; A's and B's final snapshots (their /DEM groups too),
+    and their diagnostics rows after stop, must agree (bit for bit on the
+    CPU). inspect(checkpoint path) runs before the restart; logs (a dict), if
+    given, takes A's and the restart's output ("a", "b"). Returns A's
+    directory."""
     a, b = (os.path.join(args.work, name + "_" + x) for x in "ab")
-    sphseg(args, scene, a, over + ["Run:max_steps=%d" % end])
+    r = sphseg(args, scene, a, over + ["Run:max_steps=%d" % end])
+    if logs is not None:
+        logs["a"] = r.stdout + r.stderr
     sphseg(args, scene, b, over + ["Run:max_steps=%d" % stop, "Run:max_wall_time=1e6"])
     h = ckpt_header(os.path.join(b, "checkpoint.h5"))
     check("%s checkpoint at stop" % name, h["Step"] == stop, "step %d" % h["Step"])
+    if inspect:
+        inspect(os.path.join(b, "checkpoint.h5"))
     r = sphseg(args, scene, b, over + ["Run:max_steps=%d" % end], ["--restart", os.path.join(b, "checkpoint.h5")])
+    if logs is not None:
+        logs["b"] = r.stdout + r.stderr
     if args.backend == "gpu":  # the list builds are the restarted run's, and so must be the steps they are counted in
         m = re.search(r"gpu: (\d+) neighbour-list builds in (\d+) steps", r.stdout + r.stderr)
         check("%s restart's list-build report counts its own %d steps" % (name, end - stop),
               bool(m) and int(m.group(2)) == end - stop and int(m.group(1)) > 0, m.group(0) if m else "no report")
     good, how = restart_agrees(args, snap.list_snapshots(a)[-1], snap.list_snapshots(b)[-1])
     check("%s final snapshot %s (step %d)" % (name, AGREE[args.backend], end), good, how)
+    if last_dem(a) is not None:
+        good, how = dem_agrees(args, a, b)
+        check("%s final /DEM %s (step %d)" % (name, AGREE[args.backend], end), good, how)
     ra, _ = rows(a)
     rb, _ = rows(b)
     post = [s for s in ra if s > stop]
@@ -345,6 +409,104 @@ def test_silo(args):
               before[-1], rows_[-1].split(",")[col]))
 
 
+def dem_ckpt(path):
+    """The /DEM group of a checkpoint: attributes, and its contacts as
+    (grain-grain count, wall count, largest |spring|)."""
+    with h5py.File(path, "r") as f:
+        g = f["DEM"]
+        attrs = {k: snap._attr(v) for k, v in g.attrs.items()}
+        cmax = int(attrs["ContactsMax"])
+        nc = g["Contacts"][()]
+        cid = g["ContactPartners"][()].reshape(-1, cmax)
+        xi = g["ContactSprings"][()].reshape(-1, cmax, 3)
+    live = np.arange(cmax)[None, :] < nc[:, None]
+    walls = int(np.sum(live & (cid < 0)))
+    return attrs, int(np.sum(live)) - walls, walls, float(np.max(np.abs(xi[live]))) if live.any() else 0.0
+
+
+def dem_inspect(name, grains, walls):
+    """A check of the checkpoint at the stop: the DEM steps so far, and (for
+    the cases that exercise the contact histories) grain and wall contacts
+    whose springs carry load."""
+    def f(path):
+        attrs, ng, nw, xi = dem_ckpt(path)
+        good = attrs["Steps"] > DEM_STOP and (ng > 0 or not grains) and (nw > 0 or not walls) and (
+            xi > 0 or not (grains or walls))
+        check("%s checkpoint holds the grains' state" % name, good, "%d DEM steps, %d grain and %d wall contacts, "
+              "largest tangential spring %.2e m" % (attrs["Steps"], ng, nw, xi))
+    return f
+
+
+def test_dem(args, name, keys):
+    inspect, logs = dem_inspect(name, name == "dem_pile", name != "dem_settling"), {}
+    stop_restart(args, name, DEM_SCENE, DEM_P + keys, DEM_STOP, DEM_END, inspect, logs)
+    # the end report counts the run's DEM steps, restarts included (the checkpoint carries them)
+    steps = [re.search(r"dem: \d+ grains, (\d+) DEM steps in (\d+) fluid steps", logs[k]) for k in "ab"]
+    check("%s end report: the restart's DEM steps are the straight run's" % name,
+          all(steps) and steps[0].groups() == steps[1].groups() and int(steps[1].group(2)) == DEM_END,
+          " and ".join(m.group(0) if m else "no dem: line" for m in steps))
+
+
+def test_dem_ranks(args):
+    """The pile on 2 ranks, restarted on 2 (bit-identical) and on 1 (round-off)."""
+    if args.backend == "gpu":
+        print("skip dem_ranks: the GPU backend runs grains on one rank (src/settings_check.c)")
+        return
+    over = DEM_P + DEM_PILE + [DEM_TILT, "Parallel:axis=x", "Parallel:balance_every=0"]
+    a, b, c = (os.path.join(args.work, "dem2r_" + x) for x in "abc")
+    sphseg_np(args, 2, DEM_SCENE, a, over + ["Run:max_steps=%d" % DEM_END])
+    sphseg_np(args, 2, DEM_SCENE, b, over + ["Run:max_steps=%d" % DEM_STOP, "Run:max_wall_time=1e6"])
+    shutil.copytree(b, c)
+    ck = ["--restart", os.path.join(b, "checkpoint.h5")]
+    sphseg_np(args, 2, DEM_SCENE, b, over + ["Run:max_steps=%d" % DEM_END], ck)
+    d = same_snapshot(snap.list_snapshots(a)[-1], snap.list_snapshots(b)[-1])
+    good, how = dem_agrees(args, a, b)
+    ra, rb = rows(a)[0], rows(b)[0]
+    post = [s for s in ra if s > DEM_STOP]
+    check("dem pile on 2 ranks, restarted on 2: bit-identical at step %d (fluid, /DEM, rows)" % DEM_END,
+          not d and good and rows_agree(args, ra, rb, post), "fluid differs in %s; /DEM %s" % (d, how))
+    sphseg_np(args, 1, DEM_SCENE, c, over + ["Run:max_steps=%d" % DEM_END], ["--restart",
+                                                                             os.path.join(c, "checkpoint.h5")])
+    fgood, fworst = roundoff(snap.list_snapshots(a)[-1], snap.list_snapshots(c)[-1])
+    da, dc = last_dem(a), last_dem(c)
+    dworst = dem_difference(da, dc)
+    con = int(np.sum(da["Contacts"] != dc["Contacts"]))
+    check("dem pile on 2 ranks, restarted on 1: equal to round-off at step %d" % DEM_END,
+          fgood and dworst <= TOL_DEM and con == 0, "fluid %.2e, grains %.2e of the scale; %d grains with other "
+          "contact counts" % (fworst, dworst, con))
+
+
+def dem_bad(args, name, ckpt, extra, want):
+    out = os.path.join(args.work, "dem_bad_out")
+    cmd = [args.sphseg, DEM_SCENE, "-o", out, "--backend", args.backend, "--restart", ckpt] + sum(
+        [["-P", o] for o in DEM_P + DEM_PILE + [DEM_TILT, "Run:max_steps=%d" % DEM_END] + extra], [])
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    lines = r.stderr.strip().splitlines()
+    check("dem_bad %s" % name, r.returncode == 2 and len(lines) == 1 and want in lines[0] and not os.path.exists(out),
+          "exit %d: %s" % (r.returncode, r.stderr.strip()[-400:]))
+
+
+def test_dem_bad(args):
+    """A pile's checkpoint damaged in its /DEM group (then sealed again), and
+    restarted with a DEM key changed: refused in one line."""
+    b = os.path.join(args.work, "dem_bad")
+    sphseg(args, DEM_SCENE, b, DEM_P + DEM_PILE + [DEM_TILT, "Run:max_steps=3", "Run:max_wall_time=1e6"])
+    ck = os.path.join(b, "checkpoint.h5")
+    dem_bad(args, "DEM:mu changed", ck, ["DEM:mu=0.5"],
+            "1 state-defining key(s) differ: DEM:mu (0.3 in the checkpoint, 0.5 now)")
+    for tag, edit, want in (("contacts", "count", "/DEM/Contacts[5] = 17 is out of range"),
+                            ("nodem", "drop", "holds no DEM grains")):
+        p = ck + "." + tag
+        shutil.copy(ck, p)
+        with h5py.File(p, "r+") as f:
+            if edit == "drop":
+                del f["DEM"]
+            else:
+                f["DEM/Contacts"][5] = 17
+        reseal(p)
+        dem_bad(args, tag, p, [], want)
+
+
 def metis_width(args, a, c, over):
     """METIS parts are coarse cells as wide as the ghost depth, which the
     checkpoint records (/Decomposition CoarseCellWidth). A cut saved with
@@ -442,13 +604,19 @@ def test_badfile(args, box_a):
         bad(args, name, p, want)
 
 
+CASES = ["shearbox", "stopfile", "walltime", "badfile", "drum", "options", "drum_ranks", "chute", "silo"] + [
+    c[0] for c in DEM_CASES] + ["dem_ranks", "dem_bad"]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--sphseg", required=True)
     ap.add_argument("--work", required=True)
     ap.add_argument("--backend", choices=("cpu", "gpu"), default="cpu",
                     help="sphseg backend of every run (default cpu; module docstring)")
+    ap.add_argument("--cases", default=None, help="NAME,NAME: only these cases (module docstring)")
     args = ap.parse_args()
+    cases = [c[0] for c in pick_cases(ap, [(n,) for n in CASES], args.cases)]
     os.makedirs(args.work, exist_ok=True)
     if args.backend == "gpu":
         out = os.path.join(args.work, "probe")
@@ -457,15 +625,20 @@ def main():
         if probe.returncode == 2 and "--backend gpu" in probe.stderr:
             print("SKIP: " + probe.stderr.strip())
             sys.exit(77)
-    box_a = test_shearbox(args)
-    test_stopfile(args, box_a)
-    test_walltime(args)
-    test_badfile(args, box_a)
-    test_drum(args)
-    test_options(args)
-    test_drum_ranks(args)
-    test_chute(args)
-    test_silo(args)
+    box_a = None
+    for name in cases:
+        t0 = time.monotonic()
+        if name in ("shearbox", "stopfile", "badfile") and box_a is None:
+            box_a = test_shearbox(args)  # the straight box run the others compare with
+        if name == "stopfile":
+            test_stopfile(args, box_a)
+        elif name == "badfile":
+            test_badfile(args, box_a)
+        elif name in dict(DEM_CASES):
+            test_dem(args, name, dict(DEM_CASES)[name])
+        elif name != "shearbox":
+            globals()["test_" + name](args)
+        print("     (%s: %.1f s)" % (name, time.monotonic() - t0))
     print("validate_restart:", "PASS" if OK else "FAIL")
     sys.exit(0 if OK else 1)
 

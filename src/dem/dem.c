@@ -6,6 +6,7 @@
  * the thread count. */
 #include "dem.h"
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include "core/error.h"
@@ -96,6 +97,61 @@ void dem_free(dem_t *d)
     free(d->eps_f), free(d->deps_f), free(d->gkeep), free(d->gsum);
     free(d->gstart), free(d->gidx), free(d->fstart), free(d->fidx);
     free(d);
+}
+
+/* ---- the state a checkpoint carries (dem.h) -------------------------------------- */
+
+dem_state_array dem_state_get(dem_t *d, size_t k)
+{
+    static const char *const vec[18] = {/* a dataset per component */
+                                        "CoordinatesX",       "CoordinatesY",       "CoordinatesZ",
+                                        "VelocitiesX",        "VelocitiesY",        "VelocitiesZ",
+                                        "AngularVelocitiesX", "AngularVelocitiesY", "AngularVelocitiesZ",
+                                        "InteractionForceX",  "InteractionForceY",  "InteractionForceZ",
+                                        "DragForceX",         "DragForceY",         "DragForceZ",
+                                        "FluidVelocityX",     "FluidVelocityY",     "FluidVelocityZ"};
+    if (k < 18) {
+        double *const *v[6] = {d->x, d->v, d->w, d->fint, d->fd, d->uf};
+        return (dem_state_array){vec[k], v[k / 3][k % 3], sizeof(double), 1, 1};
+    }
+    switch (k) {
+    case 18: return (dem_state_array){"FluidFraction", d->eps, sizeof(double), 1, 1};
+    case 19: return (dem_state_array){"KernelSum", d->snorm, sizeof(double), 1, 1};
+    case 20: return (dem_state_array){"ParticleIDs", d->id, sizeof(int64_t), 1, 0};
+    case 21: return (dem_state_array){"Contacts", d->ncon, sizeof(int), 1, 0};
+    case 22: return (dem_state_array){"ContactPartners", d->cid, sizeof(int64_t), DEM_CMAX, 0};
+    default: return (dem_state_array){"ContactSprings", d->cxi, sizeof(double), 3 * DEM_CMAX, 1}; /* 23 */
+    }
+}
+
+const char *dem_state_check(const dem_t *d, int nwalls, char *why, size_t len)
+{
+    const size_t n = d->n;
+    for (size_t k = 0; k < DEM_STATE_NARRAYS; ++k) {
+        dem_state_array s = dem_state_get((dem_t *)d, k);
+        const double *a = s.a;
+        for (size_t i = 0; s.is_double && i < n * s.per; ++i)
+            if (!isfinite(a[i]))
+                return snprintf(why, len, "/DEM/%s[%zu] is not finite", s.name, i), why;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        if (d->id[i] != (int64_t)i)
+            return snprintf(why, len, "/DEM/ParticleIDs[%zu] = %lld, not %zu", i, (long long)d->id[i], i),
+                   why;
+        if (d->ncon[i] < 0 || d->ncon[i] > DEM_CMAX)
+            return snprintf(why, len, "/DEM/Contacts[%zu] = %d is out of range [0, %d]", i, d->ncon[i],
+                            DEM_CMAX),
+                   why;
+        for (int c = 0; c < d->ncon[i]; ++c) {
+            int64_t q = d->cid[i * DEM_CMAX + (size_t)c];
+            if (q >= (int64_t)n || q < -(int64_t)nwalls || q == (int64_t)i)
+                return snprintf(why, len, "/DEM/ContactPartners of grain %zu: %lld is neither another grain "
+                                "(0..%zu) nor a wall (-1..-%d)", i, (long long)q, n - 1, nwalls), why;
+        }
+    }
+    if (!isfinite(d->exch[0]) || !isfinite(d->exch[1]) || !isfinite(d->exch[2]) || d->steps < 0)
+        return snprintf(why, len, "/DEM's Exchange or Steps is out of range"), why;
+    return NULL;
 }
 
 /* ---- the view and the cell grid (cells of at least 2h and d) ------------------ */

@@ -40,7 +40,7 @@ typedef struct dem {
     double *cxi2;
     double V, m, I;       /* a grain's volume (m^3), mass (kg), moment of inertia (kg m^2) */
     double dt;            /* the DEM step: the contact time / DEM_STEPS_PER_CONTACT, s */
-    long steps;           /* DEM steps taken by this run (the end report) */
+    long steps;           /* DEM steps taken by the run, restarts included (the end report) */
     double rho_f, nu, K, h; /* the fluid's density, kinematic viscosity, bulk modulus; the kernel's h */
     double g[3], t_damp;
     double exch[3];       /* the momentum the fluid gave the grains so far, int sum_i F_int dt, N s */
@@ -96,6 +96,35 @@ void dem_period_set(dem_t *d, const wall_geom *w);
 void dem_grid_fit(dem_t *d, const double lo[3], const double hi[3]);
 long dem_substeps(const dem_t *d, double dt);
 void dem_overflow_exit(size_t i);
+
+/* The grains' state that a checkpoint carries (src/output/checkpoint.c,
+ * /DEM): every array a later step reads before it writes it, and those the
+ * snapshots show. Centre, velocity and spin (a rigid body's state too: its
+ * centre and velocity are the grains' means, its spin every grain's w, its
+ * inertia tensor made from the positions at each DEM step), IDs, and the
+ * contact lists of the last DEM step with their tangential springs (ncon,
+ * cid, cxi: the next step's history; the spare lists ncon2, cid2, cxi2 are
+ * written before they are read). The coupling's results (fint, fd, uf, eps,
+ * snorm) are made again at the next coupling before a step reads them; they
+ * are carried so that the restored dem_t is the saved one. The scalars
+ * beside them: exch and steps (attributes). Not carried: the fluid
+ * fraction at the fluid particles (eps_f, deps_f), the grid and gsum,
+ * each written at a coupling before it is read; the parameters, from the
+ * scene (its DEM keys must match the checkpoint's). */
+typedef struct dem_state_array {
+    const char *name; /* the dataset's name in /DEM */
+    void *a;          /* d->n * per elements */
+    size_t esize;     /* bytes an element: 8 or 4 */
+    size_t per;       /* elements a grain */
+    int is_double;    /* 1: doubles, 0: signed integers */
+} dem_state_array;
+enum { DEM_STATE_NARRAYS = 24 };
+/* The k-th array of d's state (k < DEM_STATE_NARRAYS), pointing at d's arrays. */
+dem_state_array dem_state_get(dem_t *d, size_t k);
+/* NULL when d's state is one a run can continue from (finite values,
+ * contact counts within DEM_CMAX, partners a grain's ID 0..n-1 or one of
+ * nwalls wall primitives, IDs 0..n-1 in order), else why (in why[len]). */
+const char *dem_state_check(const dem_t *d, int nwalls, char *why, size_t len);
 
 /* The grains' kinetic energy (translation and rotation), J. */
 double dem_kinetic_energy(const dem_t *d);

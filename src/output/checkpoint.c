@@ -180,6 +180,33 @@ static void ckpt_write_particles(hid_t file, const particles_t *p, long long nto
     free(counts);
 }
 
+/* /DEM (a scene with grains): every rank holds every grain, the same bits
+ * (src/dem/dem.h), so rank 0 writes the rows and the others take part with
+ * none, as /Outputs. The arrays of dem_state_get, flat (grain by grain), as
+ * doubles or signed integers of their size; the scalars as attributes. */
+static void ckpt_write_dem(hid_t file, dem_t *d)
+{
+    if (!d) return;
+    hid_t g, ds;
+    const int r0 = comm_rank() == 0;
+    H5CHECK(g = H5Gcreate2(file, "DEM", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    ckpt_attr_int64(g, "Count", (long long)d->n);
+    ckpt_attr_int64(g, "ContactsMax", DEM_CMAX);
+    ckpt_attr_int64(g, "Steps", d->steps);
+    ckpt_attr_double(g, "ExchangeX", d->exch[0]);
+    ckpt_attr_double(g, "ExchangeY", d->exch[1]);
+    ckpt_attr_double(g, "ExchangeZ", d->exch[2]);
+    for (size_t k = 0; k < DEM_STATE_NARRAYS; ++k) {
+        dem_state_array a = dem_state_get(d, k);
+        long long len = (long long)(d->n * a.per);
+        hid_t ft = a.is_double ? H5T_IEEE_F64LE : a.esize == 8 ? H5T_STD_I64LE : H5T_STD_I32LE;
+        hid_t mt = a.is_double ? H5T_NATIVE_DOUBLE : a.esize == 8 ? H5T_NATIVE_INT64 : H5T_NATIVE_INT32;
+        H5CHECK(ds = ckpt_write_rows(g, a.name, ft, mt, a.a, r0 ? len : 0, len, 0));
+        H5CHECK(H5Dclose(ds));
+    }
+    H5CHECK(H5Gclose(g));
+}
+
 /* Rank 0 rotates, between barriers: checkpoint.h5 is hard-linked to
  * checkpoint_prev.h5 (through a temporary name, renamed over the old one),
  * then the new file is renamed over checkpoint.h5. checkpoint.h5 names a
@@ -489,14 +516,18 @@ int ckpt_verify(const char *path, ckpt_seal *seal, char *why, size_t n)
 }
 
 /* The bytes of a checkpoint's datasets, their object headers (1 kB each:
- * one dataset per particle array) and scene text; io_create_file adds a
- * margin for the rest of HDF5's metadata. */
+ * one dataset per particle array and per array of the grains: 684 bytes a
+ * grain) and scene text; io_create_file adds a margin for the rest of
+ * HDF5's metadata. */
 static double ckpt_bytes(const sim_t *s, const ckpt_run *r, long long ntot, const char *scene_text)
 {
     const halo_t *h = s->halo;
     double nv = h && h->method == HALO_METIS ? (double)h->cg_n[0] * h->cg_n[1] * h->cg_n[2] : 0;
+    double grains =
+        s->dem ? (double)s->dem->n * (DEM_CMAX * 32 + 21 * 8 + 4) + 1024.0 * DEM_STATE_NARRAYS : 0;
     return (double)ntot * (double)part_bytes_per_particle() + 16.0 * r->nsnap + 4 * nv +
-           8.0 * (2 * comm_size() + 1) + 1024.0 * (double)part_narrays() + (double)strlen(scene_text ? scene_text : "");
+           8.0 * (2 * comm_size() + 1) + 1024.0 * (double)part_narrays() + grains +
+           (double)strlen(scene_text ? scene_text : "");
 }
 
 double ckpt_write(const char *outdir, const sim_t *s, const ckpt_run *r, const char *scene_text)
@@ -514,6 +545,7 @@ double ckpt_write(const char *outdir, const sim_t *s, const ckpt_run *r, const c
     ckpt_write_run(file, r);
     ckpt_write_decomp(file, s->halo);
     ckpt_write_particles(file, &s->p, ntot, offset);
+    ckpt_write_dem(file, s->dem);
     io_close_file(file);
     ckpt_seal_file(tmp, s);
     ckpt_commit(outdir, tmp);

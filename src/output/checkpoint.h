@@ -45,12 +45,27 @@
  *                 of the particle store (part_array_get), raw bytes as
  *                 unsigned integers of the array's element size (attribute
  *                 ElementBytes), each rank's block contiguous at its offset,
- *                 in the rank's store order.
+ *                 in the rank's store order;
+ *   /DEM          (a scene with DEM grains, src/dem/dem.h) attributes Count
+ *                 (grains), ContactsMax (DEM_CMAX), Steps (DEM steps so
+ *                 far), ExchangeX/Y/Z (the momentum the fluid gave the
+ *                 grains, N s); one dataset per array of dem_state_get, flat
+ *                 grain by grain (Count x its elements a grain: 1, or
+ *                 DEM_CMAX partners, or 3 DEM_CMAX spring components), as
+ *                 8-byte floats or signed integers of the array's size:
+ *                 CoordinatesX/Y/Z, VelocitiesX/Y/Z, AngularVelocitiesX/Y/Z,
+ *                 InteractionForceX/Y/Z, DragForceX/Y/Z, FluidVelocityX/Y/Z,
+ *                 FluidFraction, KernelSum, ParticleIDs, Contacts,
+ *                 ContactPartners, ContactSprings. Written by rank 0 (every
+ *                 rank holds every grain, the same bits), read by every rank.
  *
  * A restart on the same rank count gives every rank its own block back, so
  * the run continues bit-identically; on another rank count each rank takes an
  * even contiguous share of the rows, which the distribution step (mpi/)
- * must then route to the ranks that own the positions. */
+ * must then route to the ranks that own the positions. The grains come back
+ * whole on any rank count (each rank reads them all); on another rank count
+ * their sums over the fluid, added over other ranks, then differ from the
+ * run's to round-off (src/dem/dem.h). */
 #ifndef SPHSEG_CHECKPOINT_H
 #define SPHSEG_CHECKPOINT_H
 #include "sim/sim.h"
@@ -99,7 +114,9 @@ typedef struct ckpt_seal {
 int ckpt_verify(const char *path, ckpt_seal *seal, char *why, size_t n);
 
 /* Collective (src/output/checkpoint_read.c): load the particles (s->p, allocated
- * here) and s->t, step, dt, amax, n_material from file, and r. file may be
+ * here) and s->t, step, dt, amax, n_material from file, the grains' state into
+ * s->dem (made from the scene: a checkpoint without /DEM for a scene with
+ * grains, or with it for one without, is refused), and r. file may be
  * a directory: its newest valid checkpoint (checkpoint.h5 or
  * checkpoint_prev.h5) is taken, and its name written to chosen (a warning
  * says why the other was passed over, unless it is just the older one or
@@ -114,8 +131,8 @@ void ckpt_read(const char *file, sim_t *s, ckpt_run *r, char *chosen, size_t n);
  * scene, key by key (src/output/checkpoint_keys.c), each key of each entry
  * of a list (Container:walls, Container:regions) on its own and the list's
  * length. Keys that define the state (Geometry, Material, Physics, Initial,
- * Kinematics, Walls, Container, and the modules Segregation:enabled, scheme
- * and renormalize) must match: otherwise exit 2, one line from rank 0 naming
+ * Kinematics, Walls, Container, DEM, and the modules Segregation:enabled,
+ * scheme and renormalize) must match: otherwise exit 2, one line from rank 0 naming
  * each one that differs once with both values ("Container:walls:4
  * (hopper_right):to ([0.06, 0] in the checkpoint, [0.061, 0] now)"). Model
  * keys (the other Segregation keys, Grains, Flow, Outlet) that differ are a

@@ -20,6 +20,11 @@
 
 enum ckpt_key_class { KEY_RUN = 0, KEY_MODEL = 1, KEY_STATE = 2 };
 
+/* Run-control and model keys by name; every other key is a state key. So
+ * are all of DEM's: the grains' count and places (d, placement, at, block_*)
+ * make the store the checkpoint fills, and their material and coupling
+ * (rho, kn, kt, e, mu, t_damp, coupling, motion) what its velocities, spins
+ * and tangential springs mean and how the next DEM step reads them. */
 static enum ckpt_key_class ckpt_key_class(const char *name)
 {
     static const char *const run[] = {"Run:", "Output:", "Parallel:"};

@@ -392,6 +392,42 @@ static void ckpt_read_particles(hid_t f, sim_t *s, int dim, long long ntot, int 
     if (s->n_material == 0) ckpt_bad("holds no material particles");
 }
 
+/* ---- DEM grains -------------------------------------------------------------------- */
+
+/* /DEM into s->dem (made by setup_contexts from the scene, whose DEM keys
+ * ckpt_check_scene has compared): every rank reads every grain (they are
+ * replicated, src/dem/dem.h), whatever the rank count that wrote them.
+ * Every rank reads the same bytes, so a problem stops all ranks alike. */
+static void ckpt_read_dem(hid_t f, sim_t *s)
+{
+    htri_t e;
+    H5CHECK(e = H5Lexists(f, "DEM", H5P_DEFAULT));
+    dem_t *d = s->dem;
+    if (!d && !e) return;
+    if (!d) ckpt_bad("holds DEM grains, but the scene %s has none (DEM:d = 0)", s->sc->path);
+    if (!e) ckpt_bad("holds no DEM grains (no group /DEM), but the scene %s has %zu", s->sc->path, d->n);
+    hid_t g = ckpt_group(f, "DEM");
+    long long n = ckpt_get_int(g, "Count", 0, CKPT_MAX_PART);
+    if (n != (long long)d->n) ckpt_bad("holds %lld DEM grains; the scene %s makes %zu", n, s->sc->path, d->n);
+    if (ckpt_get_int(g, "ContactsMax", 1, 1000) != DEM_CMAX)
+        ckpt_bad("its DEM contact lists are not %d long: written by another version of sphseg", DEM_CMAX);
+    d->steps = (long)ckpt_get_int(g, "Steps", 0, 1LL << 62);
+    d->exch[0] = ckpt_get_double(g, "ExchangeX", -HUGE_VAL, HUGE_VAL);
+    d->exch[1] = ckpt_get_double(g, "ExchangeY", -HUGE_VAL, HUGE_VAL);
+    d->exch[2] = ckpt_get_double(g, "ExchangeZ", -HUGE_VAL, HUGE_VAL);
+    for (size_t k = 0; k < DEM_STATE_NARRAYS; ++k) {
+        dem_state_array a = dem_state_get(d, k);
+        long long len = (long long)(d->n * a.per);
+        hid_t ds = ckpt_dataset(g, a.name, a.is_double ? H5T_FLOAT : H5T_INTEGER, a.esize, len);
+        hid_t mt = a.is_double ? H5T_NATIVE_DOUBLE : a.esize == 8 ? H5T_NATIVE_INT64 : H5T_NATIVE_INT32;
+        ckpt_read_rows(ds, mt, a.a, len, 0);
+        H5CHECK(H5Dclose(ds));
+    }
+    H5CHECK(H5Gclose(g));
+    char why[300];
+    if (dem_state_check(d, s->flow.w.n, why, sizeof why)) ckpt_bad("%s", why);
+}
+
 /* ---- run state, decomposition -------------------------------------------------------- */
 
 static void ckpt_read_run(hid_t f, double t, ckpt_run *r)
@@ -474,6 +510,7 @@ void ckpt_read(const char *arg, sim_t *s, ckpt_run *r, char *chosen, size_t n)
     H5CHECK(H5Gclose(g));
     ckpt_read_run(f, s->t, r);
     ckpt_read_particles(f, s, (int)s->sc->geometry.dim, ntot, nranks);
+    ckpt_read_dem(f, s);
     ckpt_read_decomp(f, nranks, r);
     H5CHECK(H5Fclose(f));
     H5Eset_auto2(H5E_DEFAULT, (H5E_auto2_t)H5Eprint2, stderr);
