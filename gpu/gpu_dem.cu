@@ -1,4 +1,4 @@
-/* gpu/gpu_dem.cu — the DEM grains on the device (issue 58; one rank): the
+/* gpu/gpu_dem.cu — the DEM grains on the device (issue 58): the
  * hooks dem_couple and dem_advance of struct backend (src/sim/sim.h) as the
  * CPU's src/dem/dem.c runs them, each loop a kernel calling the same bodies
  * (src/dem/dem_body.h) through a dem_view of device arrays; the scalars
@@ -6,8 +6,10 @@
  *
  * A device mirror of dem_t (gpu_dem) is made at the first hook (after
  * setup) and uploaded then; a scene without grains has none and launches
- * nothing. Fluid particles are the device store's owned ones, [0, g->n),
- * as the CPU's are [0, p.n); their positions are taken in the period
+ * nothing. On several ranks every rank's device holds every grain, as the
+ * CPU's ranks do (src/dem/dem.h). The fluid particles a grain's sums take
+ * are the device store's owned ones, [0, g->n), as the CPU's are [0, p.n);
+ * their positions are taken in the period
  * (dem_fluid_at: the device store wraps them only at list builds). The
  * coupling's cell grid: the bounding box of what it bins (a CUB min/max
  * reduction, read back: the host fits the grid as the CPU does,
@@ -45,6 +47,7 @@ struct gpu_dem {
     size_t *gidx, *fidx, fcap;
     size_t *gstart, *fstart, gcell_cap, fcell_cap;
     double *F, *T, *Fi; /* [3 n] a DEM step's forces, torques, interaction forces */
+    double *gsum;       /* [5 n] several ranks: the grains' partial sums over the fluid (dem_grain_partial) */
     double *exch;       /* [3] the exchanged momentum, N s, up to the last fold (gpu_dem_download) */
     double *xg;         /* [3 n] each grain's share of it since that fold: sum over DEM steps of F_int dt */
     dbox *box_d, *box_h; /* [2] the grains' and the fluid's boxes */
@@ -232,7 +235,13 @@ static void gd_grid(sim_t *s, gpu_t *g, gpu_dem *e, int fluid)
     prof_end(g->st, P_DEM_GRID);
 }
 
-/* The coupling at the fluid's state of its last rates (dem.c dem_couple). */
+/* The coupling at the fluid's state of its last rates (dem.c dem_couple):
+ * the fraction at every fluid particle of the store, owned and ghosts (the
+ * source's pair term walks the flow pass's neighbours, g->view), the
+ * grains' sums over the owned ones, then the forces and the source. On
+ * several ranks each grain's sums are partial: read back, added over the
+ * ranks in rank order as the CPU's (comm_sum_rows_ordered), sent back, so
+ * that every rank's replicated grains take the same forces. */
 void gpu_dem_couple(sim_t *s, double t)
 {
     (void)t;
@@ -240,30 +249,47 @@ void gpu_dem_couple(sim_t *s, double t)
     dem_t *d = s->dem;
     gpu_dem *e = gd_get(s, g);
     gd_period(s, g, e);
-    if (g->n > e->eps_cap || !e->eps_f) {
+    const size_t nall = g->n + g->ng;
+    if (nall > e->eps_cap || !e->eps_f) {
         if (e->eps_f) {
             CK(cudaFree(e->eps_f));
             CK(cudaFree(e->deps_f));
         }
-        e->eps_f = dalloc<double>(g->n), e->deps_f = dalloc<double>(g->n);
-        CK(cudaMemsetAsync(e->eps_f, 0, (g->n ? g->n : 1) * sizeof(double), g->st));
-        CK(cudaMemsetAsync(e->deps_f, 0, (g->n ? g->n : 1) * sizeof(double), g->st));
-        e->eps_cap = g->n;
+        e->eps_f = dalloc<double>(nall), e->deps_f = dalloc<double>(nall);
+        CK(cudaMemsetAsync(e->eps_f, 0, (nall ? nall : 1) * sizeof(double), g->st));
+        CK(cudaMemsetAsync(e->deps_f, 0, (nall ? nall : 1) * sizeof(double), g->st));
+        e->eps_cap = nall;
     }
-    d->nown = g->n; /* one rank: every binned fluid particle is owned */
+    d->nown = g->n; /* a grain's sums take the owned fluid particles */
     gd_grid(s, g, e, 1);
     prof_begin(g->st);
     const dem_view v = gd_view(d, e);
     const particles_t p = g->d;
     const wall_geom w = s->flow.w;
+    const grid_view gv = g->view;
     const double vn = (double)s->flow.visc_norm;
-    each(g, g->n, [=] __device__(size_t a) {
+    each(g, nall, [=] __device__(size_t a) {
         if (dem_fluid(&p, a)) dem_fluid_fraction(&v, &p, &w, a);
     });
-    each(g, d->n, [=] __device__(size_t i) { dem_grain_couple(&v, &p, i); });
+    if (!s->halo || comm_size() == 1) {
+        each(g, d->n, [=] __device__(size_t i) { dem_grain_couple(&v, &p, i); });
+    } else {
+        const size_t n = d->n;
+        if (!e->gsum) e->gsum = dalloc<double>(5 * n);
+        double *gs = e->gsum;
+        each(g, n, [=] __device__(size_t i) { dem_grain_partial(&v, &p, i, &gs[5 * i]); });
+        down(d->gsum, gs, 5 * n, g->st);
+        CK(cudaStreamSynchronize(g->st));
+        comm_sum_rows_ordered(d->gsum, n, 5);
+        up(gs, d->gsum, 5 * n, g->st);
+        each(g, n, [=] __device__(size_t i) {
+            dem_grain_from_sums(&v, i, &gs[5 * i]);
+            dem_grain_force(&v, i);
+        });
+    }
     if (d->coupling == DEM_TWO_WAY)
         each(g, g->n, [=] __device__(size_t a) {
-            if (dem_fluid(&p, a)) dem_fluid_source(&v, &p, a, vn);
+            if (dem_fluid(&p, a)) dem_fluid_source(&v, &p, &gv, a, vn);
         });
     prof_end(g->st, P_DEM_COUPLE);
 }
@@ -407,7 +433,7 @@ void gpu_dem_free(gpu_t *g)
     }
     void *bufs[] = {e->eps, e->snorm, e->id, e->cid, e->cid2, e->cxi, e->cxi2, e->ncon, e->ncon2, e->eps_f,
                     e->deps_f, e->key, e->key2, e->vin, e->gidx, e->fidx, e->gstart, e->fstart, e->F, e->T,
-                    e->Fi, e->exch, e->xg, e->box_d, e->dbad};
+                    e->Fi, e->gsum, e->exch, e->xg, e->box_d, e->dbad};
     for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k)
         if (bufs[k]) CK(cudaFree(bufs[k]));
     CK(cudaFreeHost(e->box_h));

@@ -80,12 +80,6 @@ int settings_check(const struct scene *sc, const char *backend)
 {
     check_output_counts(sc);
     int ndev = check_backend(backend);
-    if (sc->dem.on && ndev > 0 && comm_size() > 1) { /* issue 58: the GPU's grain sums are not combined over ranks */
-        if (!strcmp(backend, "gpu"))
-            input_error("DEM:d: a scene with DEM grains runs on one rank on the GPU backend for now; run it with "
-                        "--backend cpu on several ranks, or with -np 1");
-        ndev = 0; /* auto: the CPU */
-    }
     if (sc->dem.on && ndev > 0) check_dem_period(sc, backend, &ndev);
     if (sc->parallel.axis == AXIS_Z && sc->geometry.dim == 2)
         input_error("Parallel:axis: z is not an axis of a 2D scene (x or y, or auto)");

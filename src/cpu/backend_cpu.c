@@ -376,7 +376,7 @@ static void cpu_finish(sim_t *s)
 /* The DEM grains (src/dem/dem.c) on the host store. */
 static void cpu_dem_couple(sim_t *s, double t)
 {
-    dem_couple(s->dem, &s->p, &s->flow.w, t, (double)s->flow.visc_norm, s->halo);
+    dem_couple(s->dem, &s->p, &cpu_of(s)->grid.view, &s->flow.w, t, (double)s->flow.visc_norm);
 }
 
 static void cpu_dem_advance(sim_t *s, double t, double dt) { dem_advance(s->dem, &s->flow.w, t, dt); }

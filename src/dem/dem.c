@@ -94,7 +94,7 @@ void dem_free(dem_t *d)
     for (int a = 0; a < 3; ++a) free(d->x[a]), free(d->v[a]), free(d->w[a]), free(d->fint[a]), free(d->uf[a]), free(d->fd[a]);
     free(d->eps), free(d->snorm), free(d->id), free(d->ncon), free(d->cid), free(d->cxi);
     free(d->ncon2), free(d->cid2), free(d->cxi2);
-    free(d->eps_f), free(d->deps_f), free(d->gkeep), free(d->gsum);
+    free(d->eps_f), free(d->deps_f), free(d->gsum);
     free(d->gstart), free(d->gidx), free(d->fstart), free(d->fidx);
     free(d);
 }
@@ -164,11 +164,9 @@ dem_view dem_view_of(dem_t *d)
 }
 
 /* Is store entry a of p a fluid particle that the coupling bins: an owned
- * one, or a ghost that dem_ghost_keep kept? */
-static int dem_binned(const dem_t *d, const particles_t *p, size_t a)
-{
-    return dem_fluid(p, a) && (a < p->n || (a - p->n < d->gkeep_n && d->gkeep[a - p->n]));
-}
+ * one (a grain's sums, eq. 20, take each rank's own; the source's pair term
+ * walks the flow pass's neighbours, ghosts included: dem_fluid_source)? */
+static int dem_binned(const particles_t *p, size_t a) { return a < p->n && dem_fluid(p, a); }
 
 /* Counting sort of m points (grains, or the fluid particles of p: owned,
  * then the ghosts kept) into start[ncell + 1] and idx[m]: each cell's in
@@ -183,7 +181,7 @@ static void dem_bin(dem_t *d, size_t m, const particles_t *p, size_t **start, si
     const dem_view v = dem_view_scalars(d);
     int c[3];
     for (size_t i = 0; i < m; ++i) {
-        if (p && !dem_binned(d, p, i)) continue;
+        if (p && !dem_binned(p, i)) continue;
         double x[3] = {d->x[0][i], d->x[1][i], d->x[2][i]};
         if (p) dem_fluid_at(&v, p, i, x);
         st[dem_cell(&v, x, c) + 1]++;
@@ -191,7 +189,7 @@ static void dem_bin(dem_t *d, size_t m, const particles_t *p, size_t **start, si
     for (size_t k = 0; k < ncell; ++k) st[k + 1] += st[k];
     size_t *fill = dem_calloc(ncell, sizeof(size_t));
     for (size_t i = 0; i < m; ++i) {
-        if (p && !dem_binned(d, p, i)) continue;
+        if (p && !dem_binned(p, i)) continue;
         double x[3] = {d->x[0][i], d->x[1][i], d->x[2][i]};
         if (p) dem_fluid_at(&v, p, i, x);
         size_t k = dem_cell(&v, x, c);
@@ -221,9 +219,9 @@ static void dem_grid(dem_t *d, const particles_t *p)
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < d->n; ++i)
         for (int a = 0; a < 3; ++a) lo[a] = fmin(lo[a], d->x[a][i]), hi[a] = fmax(hi[a], d->x[a][i]);
-    const size_t m = p ? p->n + d->gkeep_n : 0;
+    const size_t m = p ? p->n : 0;
     for (size_t i = 0; i < m; ++i)
-        if (dem_binned(d, p, i))
+        if (dem_binned(p, i))
             for (int a = 0; a < 3; ++a) lo[a] = fmin(lo[a], p->x[a][i]), hi[a] = fmax(hi[a], p->x[a][i]);
     dem_grid_fit(d, lo, hi);
     size_t gcap = d->n;
@@ -249,44 +247,6 @@ static void dem_period(dem_t *d, const wall_geom *w)
     for (size_t i = 0; i < d->n; ++i) dem_wrap_grain(&v, i);
 }
 
-static int dem_id_cmp(const void *a, const void *b)
-{
-    const int64_t *x = a, *y = b; /* (ID, store index) */
-    return x[0] != y[0] ? (x[0] < y[0] ? -1 : 1) : (x[1] > y[1]) - (x[1] < y[1]);
-}
-
-/* Which ghosts of p the coupling bins (d->gkeep): each fluid particle once,
- * as the grid's minimum images take positions in the period. A ghost from
- * this rank itself (a periodic image of an owned particle) is left out; of
- * the copies of another rank's particle (a neighbour on both sides of a
- * period, or through several shifts) the one of lowest store index is kept.
- * On one rank (periodic axes only) every ghost is an image of an owned
- * particle: none is binned, as before there were ranks. */
-static void dem_ghost_keep(dem_t *d, const particles_t *p, const halo_t *h)
-{
-    const size_t ng = h ? p->ng : 0;
-    if (ng > d->gkeep_cap || !d->gkeep) {
-        free(d->gkeep);
-        d->gkeep = dem_calloc(ng, 1), d->gkeep_cap = ng;
-    }
-    d->gkeep_n = ng;
-    if (!ng) return;
-    memset(d->gkeep, 0, ng);
-    size_t q = 0, nk = 0;
-    for (int k = 0; k < h->nnb; ++k)
-        for (size_t e = 0; e < h->nrecv[k]; ++e, ++q)
-            if (h->nb[k] != h->rank && h->recv[q] - p->n < ng) d->gkeep[h->recv[q] - p->n] = 1, ++nk;
-    if (!nk) return;
-    int64_t *key = dem_calloc(2 * nk, sizeof(int64_t));
-    size_t m = 0;
-    for (size_t g = 0; g < ng; ++g)
-        if (d->gkeep[g]) key[2 * m] = p->id[p->n + g], key[2 * m + 1] = (int64_t)g, ++m;
-    qsort(key, m, 2 * sizeof(int64_t), dem_id_cmp);
-    for (size_t k = 1; k < m; ++k)
-        if (key[2 * k] == key[2 * k - 2]) d->gkeep[key[2 * k + 1]] = 0;
-    free(key);
-}
-
 /* The grains' sums over the fluid (eq. 20; over the ranks' owned particles,
  * in rank order: comm_sum_rows_ordered), then their interaction forces. */
 static void dem_grains_couple(dem_t *d, const dem_view *v, const particles_t *p)
@@ -303,7 +263,7 @@ static void dem_grains_couple(dem_t *d, const dem_view *v, const particles_t *p)
     }
 }
 
-void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double visc_norm, const halo_t *halo)
+void dem_couple(dem_t *d, particles_t *p, const grid_view *g, const wall_geom *w, double t, double visc_norm)
 {
     (void)t;
     dem_period(d, w);
@@ -314,21 +274,21 @@ void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double v
         d->eps_cap = nall;
     }
     d->nown = p->n;
-    dem_ghost_keep(d, p, halo);
     dem_grid(d, p);
     const dem_view v = dem_view_of(d);
     const particles_t *pc = p;
-    const long nf = (long)p->n, nb = (long)(p->n + d->gkeep_n);
-    /* the fraction at the ghosts kept too (from the grains, which every rank
-     * holds), for the source's pair term: no exchange */
+    const long nf = (long)p->n, na = (long)nall;
+    /* the fraction at the ghosts too (from the grains, which every rank holds;
+     * a periodic image's at its place in the period), for the source's pair
+     * term: no exchange */
 #pragma omp parallel for schedule(dynamic, 64)
-    for (long a = 0; a < nb; ++a)
-        if (dem_binned(d, pc, (size_t)a)) dem_fluid_fraction(&v, pc, w, (size_t)a);
+    for (long a = 0; a < na; ++a)
+        if (dem_fluid(pc, (size_t)a)) dem_fluid_fraction(&v, pc, w, (size_t)a);
     dem_grains_couple(d, &v, pc);
     if (d->coupling != DEM_TWO_WAY) return;
 #pragma omp parallel for schedule(dynamic, 64)
     for (long a = 0; a < nf; ++a)
-        if (dem_fluid(pc, (size_t)a)) dem_fluid_source(&v, pc, (size_t)a, visc_norm);
+        if (dem_fluid(pc, (size_t)a)) dem_fluid_source(&v, pc, g, (size_t)a, visc_norm);
 }
 
 /* ---- contacts and motion --------------------------------------------------------- */

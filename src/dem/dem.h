@@ -10,7 +10,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include "core/particles.h"
-#include "mpi/halo.h"
+#include "physics/grid.h"
 #include "physics/dem.h"
 #include "physics/wall.h"
 #include "scene/scene.h"
@@ -44,12 +44,10 @@ typedef struct dem {
     double rho_f, nu, K, h; /* the fluid's density, kinematic viscosity, bulk modulus; the kernel's h */
     double g[3], t_damp;
     double exch[3];       /* the momentum the fluid gave the grains so far, int sum_i F_int dt, N s */
-    double *eps_f;        /* the fluid fraction at each fluid particle (15-16), the last coupling's */
+    double *eps_f;        /* the fluid fraction at each fluid particle (15-16), owned and ghosts, the last coupling's */
     double *deps_f;       /* its rate following the fluid particle, 1/s */
     size_t eps_cap;
     size_t nown;          /* the owned fluid particles at the last coupling (p->n) */
-    unsigned char *gkeep; /* several ranks: the ghosts binned (each fluid particle once under the minimum image) */
-    size_t gkeep_n, gkeep_cap; /* ghosts it covers (p->ng with a halo, else 0), allocated */
     double *gsum;         /* [n][5] a grain's sums over the fluid, partial then over all ranks (dem_grain_partial) */
     /* the coupling's cell grid (cells of at least 2h and d): grains and fluid particles by cell */
     double lo[3], cell;
@@ -75,11 +73,12 @@ void dem_derive(dem_t *d, double e);
  * velocity at the grains, the interaction forces (19-23); two_way: the
  * source (14), -eps grad p and div(eps tau) and the superficial density's
  * pressure rate added to the fluid's acc and dsig. t: the time of p.
- * halo: the ghosts of a run with one (several ranks, or periodic axes),
- * else NULL. Collective on several ranks: every rank holds every grain
- * (replicated) and gets the same sums over the fluid (comm_sum_rows_ordered),
- * so the grains' forces are the same bits on every rank. */
-void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double visc_norm, const halo_t *halo);
+ * g: the flow pass's neighbour walk of p (the source's pair term walks a
+ * fluid particle's neighbours there, ghosts included). Collective on
+ * several ranks: every rank holds every grain (replicated) and gets the
+ * same sums over the fluid (comm_sum_rows_ordered), so the grains' forces
+ * are the same bits on every rank. */
+void dem_couple(dem_t *d, particles_t *p, const grid_view *g, const wall_geom *w, double t, double visc_norm);
 
 /* The grains from t to t + dt in steps of at most d->dt: contacts with
  * each other and the walls w, gravity (3-4), the interaction force (23)

@@ -19,6 +19,7 @@
 #include "core/particles.h"
 #include "dem.h"
 #include "physics/dem.h"
+#include "physics/grid.h"
 #include "physics/kernel.h"
 #include "physics/wall.h"
 
@@ -41,7 +42,7 @@ typedef struct dem_view {
     const int *oncon;     /* the last step's (read: the history) */
     const int64_t *ocid;
     const double *ocxi;
-    double *eps_f, *deps_f; /* at the fluid particles (owned, and on several ranks the ghosts binned) */
+    double *eps_f, *deps_f; /* at the fluid particles, owned and ghosts */
     size_t nown;          /* the owned fluid particles [0, nown): a grain's sums take only these */
     double V, m, I, rho_f, nu, K, h, g[3], t_damp;
     double lo[3], cell, plen[3];
@@ -306,9 +307,12 @@ HD_INLINE int dem_grains_near(const dem_view *d, const double x[3])
  * -eps grad p / (eps rho_f) is the fluid's own -grad p / rho_f. The
  * superficial density's continuity D(eps rho)/Dt = -eps rho div u adds
  * dp/dt = -(K / eps_a) D eps_a / Dt to the pressure rate. Added to a's
- * acc and dsig. The pair term's b are the binned fluid particles: on
- * several ranks the ghosts too, each particle once (dem.c dem_ghost_keep). */
-HD_INLINE void dem_fluid_source(const dem_view *d, const particles_t *p, size_t a, double visc_norm)
+ * acc and dsig. The pair term's b are a's fluid neighbours in the flow
+ * pass's own walk g (its Verlet list or cells, owned and ghosts: a periodic
+ * image and another rank's particle as the flow pass meets them), in the
+ * flow pass's order on either backend. */
+HD_INLINE void dem_fluid_source(const dem_view *d, const particles_t *p, const grid_view *g, size_t a,
+                                double visc_norm)
 {
     double x[3];
     dem_fluid_at(d, p, a, x);
@@ -329,16 +333,16 @@ HD_INLINE void dem_fluid_source(const dem_view *d, const particles_t *p, size_t 
         for (int q = 0; q < 3; ++q) acc[q] -= Wc * d->fd[q][i];
     DEM_CELLS_END
     const double nu2 = 2.0 * d->nu * visc_norm;
-    DEM_CELLS_BEGIN(d, x, d->fstart, d->fidx, b)
-        if (b == a) continue;
-        double r[3];
-        dem_sep(d, x, p->x[0][b], p->x[1][b], p->x[2][b], r);
-        double rr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-        double c = 0.5 * (ea + d->eps_f[b]) / ea - 1.0;
+    const real xa[3] = {p->x[0][a], p->x[1][a], p->x[2][a]};
+    NBR_BEGIN(g, p->x, a, b)
+        if (b == a || !dem_fluid(p, b)) continue;
+        real xab[3];
+        const double rr = sqrt((double)grid_pair_xi(g->dim, xa, p->x, b, xab));
+        const double c = 0.5 * (ea + d->eps_f[b]) / ea - 1.0;
         if (rr >= 2.0 * h || c == 0) continue;
         double f = (double)kernel_f((real)rr, (real)h, (real)alpha) * nu2 * (double)p->vol[b] * c;
         for (int q = 0; q < 3; ++q) acc[q] += f * ((double)p->v[q][a] - (double)p->v[q][b]);
-    DEM_CELLS_END
+    NBR_END
     for (int q = 0; q < 3; ++q) p->acc[q][a] += (real)acc[q];
     const double dp = -d->K / ea * d->deps_f[a]; /* Pa/s; sigma is tension positive */
     for (int q = 0; q < 3; ++q) p->dsig[q][a] -= (real)dp;

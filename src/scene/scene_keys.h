@@ -419,7 +419,7 @@ END_SECTION(container)
  * src/physics/dem.h): present when d > 0. */
 SECTION("DEM", dem, scene_dem)
     KF("DEM", dem, scene_dem, d, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
-      "grain diameter, m; 0 (default): no grains. A scene with grains needs Material:model newtonian; it runs on any number of ranks on the CPU backend, on one rank on the GPU")
+      "grain diameter, m; 0 (default): no grains. A scene with grains needs Material:model newtonian; it runs on any number of ranks on either backend")
     KF("DEM", dem, scene_dem, rho, OPT, "1200", 0, INFINITY, LO_OPEN | HI_OPEN, ALWAYS,
       "grain density, kg/m^3; default 1200 (the DEM paper's block, §8)")
     KE("DEM", dem, scene_dem, coupling, enum dem_coupling, dem_couplings, "two_way",

@@ -10,7 +10,8 @@
 # and the per-stage profile (SPHSEG_GPU_PROFILE=1).
 #   tools/bench/dem_rate.sh OUT STEPS BINARY [BACKEND]      (BACKEND gpu, default, or cpu)
 #   NAME=label (default grains) and EXTRA='-P DEM:coupling=one_way ...' change the grains' run;
-#   ONLY=grains skips the fluid alone. Rows are appended to OUT/dem_rate.csv and OUT/logs.txt.
+#   ONLY=grains skips the fluid alone; LAUNCH='mpirun -np 2' runs each on several ranks (one GPU a rank).
+#   Rows are appended to OUT/dem_rate.csv and OUT/logs.txt.
 set -uo pipefail
 export OMP_NUM_THREADS=${OMP_NUM_THREADS:-16}
 out=${1:?usage: dem_rate.sh OUT STEPS BINARY [BACKEND]}; steps=${2:?}; bin=${3:?}; backend=${4:-gpu}
@@ -29,7 +30,8 @@ specs=("${NAME:-grains}:0.002"); [ "${ONLY:-}" = grains ] || specs+=(fluid:0)
 for spec in "${specs[@]}"; do
     IFS=: read -r name d <<< "$spec"
     more=(); [ "$d" != 0 ] && more=("${extra[@]}")
-    SPHSEG_GPU_PROFILE=1 "$bin" inputs/dem_block_settling.yml -o "$tmp/run" --overwrite --backend "$backend" \
+    read -r -a launch <<< "${LAUNCH:-}"
+    SPHSEG_GPU_PROFILE=1 "${launch[@]}" "$bin" inputs/dem_block_settling.yml -o "$tmp/run" --overwrite --backend "$backend" \
         "${S[@]}" -P DEM:d="$d" "${more[@]}" > "$tmp/log" 2>&1
     rc=$?
     { echo "=== $name (DEM:d $d): rc $rc"; cat "$tmp/log"; } >> "$out/logs.txt"
