@@ -1,6 +1,7 @@
 /* gpu/gpu_dem.cu — the DEM grains on the device (issue 58; one rank): the
- * hooks dem_couple and dem_advance of struct backend (src/sim/sim.h) as the
- * CPU's src/dem/dem.c runs them, each loop a kernel calling the same bodies
+ * stage ST_DEM_COUPLE (the hook dem_couple, gpu_step.cu gpu_dem_hook) and the
+ * hook dem_advance of struct backend (src/sim/sim.h) as the CPU's
+ * src/dem/dem.c runs them, each loop a kernel calling the same bodies
  * (src/dem/dem_body.h) through a dem_view of device arrays; the scalars
  * (parameters, periods, the grid's extent) are the host's dem_t's.
  *
@@ -232,7 +233,8 @@ static void gd_grid(sim_t *s, gpu_t *g, gpu_dem *e, int fluid)
     prof_end(g->st, P_DEM_GRID);
 }
 
-/* The coupling at the fluid's state of its last rates (dem.c dem_couple). */
+/* The coupling at the fluid's state of its last rates (dem.c dem_couple):
+ * the stage ST_DEM_COUPLE (the ghosts' volumes: its refresh, gpu_dem_hook). */
 void gpu_dem_couple(sim_t *s, double t)
 {
     (void)t;
@@ -240,6 +242,7 @@ void gpu_dem_couple(sim_t *s, double t)
     dem_t *d = s->dem;
     gpu_dem *e = gd_get(s, g);
     gd_period(s, g, e);
+    const int two = d->coupling == DEM_TWO_WAY;
     if (g->n > e->eps_cap || !e->eps_f) {
         if (e->eps_f) {
             CK(cudaFree(e->eps_f));
@@ -258,7 +261,9 @@ void gpu_dem_couple(sim_t *s, double t)
     const wall_geom w = s->flow.w;
     const double vn = (double)s->flow.visc_norm;
     each(g, g->n, [=] __device__(size_t a) {
-        if (dem_fluid(&p, a)) dem_fluid_fraction(&v, &p, &w, a);
+        if (!dem_fluid(&p, a)) return;
+        dem_fluid_fraction(&v, &p, &w, a);
+        if (two) dem_fluid_volume(&v, &p, a);
     });
     each(g, d->n, [=] __device__(size_t i) { dem_grain_couple(&v, &p, i); });
     if (d->coupling == DEM_TWO_WAY)

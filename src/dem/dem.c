@@ -262,12 +262,19 @@ void dem_couple(dem_t *d, particles_t *p, const wall_geom *w, double t, double v
     dem_grid(d, p);
     const dem_view v = dem_view_of(d);
     const particles_t *pc = p;
+    const int two = d->coupling == DEM_TWO_WAY;
     const long nf = (long)p->n, nb = (long)(p->n + d->gkeep_n);
     /* the fraction at the ghosts kept too (from the grains, which every rank
-     * holds), for the source's pair term: no exchange */
+     * holds), for the source's pair term: no exchange; two ways, the volume
+     * phi / eps of each, a kept ghost's from the phi it carries, before the
+     * sums read them (the other ghosts take their owners': the stage's
+     * refresh, src/sim/stage_table.h) */
 #pragma omp parallel for schedule(dynamic, 64)
     for (long a = 0; a < nb; ++a)
-        if (dem_binned(d, pc, (size_t)a)) dem_fluid_fraction(&v, pc, w, (size_t)a);
+        if (dem_binned(d, pc, (size_t)a)) {
+            dem_fluid_fraction(&v, pc, w, (size_t)a);
+            if (two) dem_fluid_volume(&v, pc, (size_t)a);
+        }
     dem_grains_couple(d, &v, pc);
     if (d->coupling != DEM_TWO_WAY) return;
 #pragma omp parallel for schedule(dynamic, 64)
