@@ -287,7 +287,7 @@ void gpu_device_exchange(sim_t *s, gpu_t *g);
 void hx_sorted(gpu_t *g, const unsigned *perm, size_t n);
 
 /* ---- the DEM grains (gpu_dem.cu) ----------------------------------------- */
-void gpu_dem_couple(sim_t *s, double t);
+void gpu_dem_couple(sim_t *s, double t); /* the stage ST_DEM_COUPLE (gpu_dem_hook runs it) */
 void gpu_dem_advance(sim_t *s, double t, double dt);
 void gpu_dem_download(sim_t *s, gpu_t *g);
 void gpu_dem_free(gpu_t *g);
@@ -298,6 +298,7 @@ int gpu_plans(const sim_t *s, int h, int id);
 void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t);
 void gpu_prepare(sim_t *s, double t, int classify);
 void gpu_rates(sim_t *s);
+void gpu_dem_hook(sim_t *s, double t);
 void gpu_save_start(sim_t *s);
 void gpu_advance(sim_t *s, double a, double w);
 void gpu_conc_begin(sim_t *s, double T, double out[STEP_NBOUNDS]);

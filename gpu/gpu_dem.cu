@@ -1,6 +1,7 @@
 /* gpu/gpu_dem.cu — the DEM grains on the device (issue 58): the
- * hooks dem_couple and dem_advance of struct backend (src/sim/sim.h) as the
- * CPU's src/dem/dem.c runs them, each loop a kernel calling the same bodies
+ * stage ST_DEM_COUPLE (the hook dem_couple, gpu_step.cu gpu_dem_hook) and the
+ * hook dem_advance of struct backend (src/sim/sim.h) as the CPU's
+ * src/dem/dem.c runs them, each loop a kernel calling the same bodies
  * (src/dem/dem_body.h) through a dem_view of device arrays; the scalars
  * (parameters, periods, the grid's extent) are the host's dem_t's.
  *
@@ -236,12 +237,13 @@ static void gd_grid(sim_t *s, gpu_t *g, gpu_dem *e, int fluid)
 }
 
 /* The coupling at the fluid's state of its last rates (dem.c dem_couple):
- * the fraction at every fluid particle of the store, owned and ghosts (the
- * source's pair term walks the flow pass's neighbours, g->view), the
- * grains' sums over the owned ones, then the forces and the source. On
- * several ranks each grain's sums are partial: read back, added over the
- * ranks in rank order as the CPU's (comm_sum_rows_ordered), sent back, so
- * that every rank's replicated grains take the same forces. */
+ * the stage ST_DEM_COUPLE. The fraction (and two ways the volume phi / eps)
+ * at every fluid particle of the store, owned and ghosts (the source's pair
+ * term walks the flow pass's neighbours, g->view), the grains' sums over
+ * the owned ones, then the forces and the source. On several ranks each
+ * grain's sums are partial: read back, added over the ranks in rank order
+ * as the CPU's (comm_sum_rows_ordered), sent back, so that every rank's
+ * replicated grains take the same forces. */
 void gpu_dem_couple(sim_t *s, double t)
 {
     (void)t;
@@ -249,6 +251,7 @@ void gpu_dem_couple(sim_t *s, double t)
     dem_t *d = s->dem;
     gpu_dem *e = gd_get(s, g);
     gd_period(s, g, e);
+    const int two = d->coupling == DEM_TWO_WAY;
     const size_t nall = g->n + g->ng;
     if (nall > e->eps_cap || !e->eps_f) {
         if (e->eps_f) {
@@ -269,7 +272,9 @@ void gpu_dem_couple(sim_t *s, double t)
     const grid_view gv = g->view;
     const double vn = (double)s->flow.visc_norm;
     each(g, nall, [=] __device__(size_t a) {
-        if (dem_fluid(&p, a)) dem_fluid_fraction(&v, &p, &w, a);
+        if (!dem_fluid(&p, a)) return;
+        dem_fluid_fraction(&v, &p, &w, a);
+        if (two) dem_fluid_volume(&v, &p, a);
     });
     if (!s->halo || comm_size() == 1) {
         each(g, d->n, [=] __device__(size_t i) { dem_grain_couple(&v, &p, i); });

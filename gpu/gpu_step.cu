@@ -163,6 +163,24 @@ void gpu_rates(sim_t *s)
     gpu_settle(s, g);
 }
 
+/* struct backend's dem_couple (the DEM grains, after each rates): its
+ * stage, gpu_dem.cu's, then the ghosts' volumes (two ways) from their
+ * owners: the ghosts are kept until the next list build. */
+void gpu_dem_hook(sim_t *s, double t)
+{
+    const stage_sched *m = gpu_sched(s);
+    for (int k = 0; k < m->n[HOOK_DEM]; ++k) switch (m->ids[HOOK_DEM][k]) {
+        case ST_DEM_COUPLE: {
+            gpu_dem_couple(s, t);
+            gpu_t *g = gpu_get(s);
+            const uint32_t f = m->refresh[1][ST_DEM_COUPLE];
+            if (s->halo && f) gpu_refresh(s, g, fields_tab(g, f, 1));
+            break;
+        }
+        default: error_exit(1, "backend_gpu: stage %d has no body in the DEM coupling", m->ids[HOOK_DEM][k]);
+        }
+}
+
 /* save_start and advance only note what to do: the per-particle updates
  * run in one kernel with the next prepare's wall or kinematic motion
  * (integrate_step calls save_start, advance, prepare in a row), or alone

@@ -23,7 +23,10 @@
  *    trimmed 2D list; every field's bit together gives the whole store in
  *    its order (the field table, src/core/fields.h, makes both); FLD_SEGC
  *    is segV, segQ, segD;
- *  - every field refreshed is one the ghosts carry. */
+ *  - every field refreshed is one the ghosts carry;
+ *  - the DEM grains' coupling: its own hook; two ways phi held and carried
+ *    by ghosts, the ghosts' vol (and, kept, phi) refreshed after it where a
+ *    stage reads them before an exchange; nothing else changed. */
 #include "testutil.h"
 #include "sim/stages.h"
 
@@ -81,6 +84,36 @@ static void test_plans(void **st)
     for (int keep = 0; keep < 2; ++keep) assert_int_equal(stage_refresh_after(ST_KGC, DRUM | SF_KGC, keep), 0);
     assert_int_equal(stage_ghost_fields(DRUM | SF_KGC), stage_ghost_fields(DRUM) | FLD_B);
     assert_int_equal(stage_moving_fields(DRUM | SF_KGC), stage_moving_fields(DRUM));
+    /* DEM grains: the coupling, its own hook after each rates; two ways it writes the owned fluid particles'
+     * volume phi / eps (and the binned ghosts', from the phi they carry: a ghost field); the other ghosts
+     * take their owners' where a stage reads them before an exchange: the shift in the save, and on a
+     * backend that keeps its ghosts the next prepare (vol) and coupling (phi) */
+    int dem[] = {ST_DEM_COUPLE};
+    expect_plan(HOOK_DEM, COLUMN | SF_DEM, dem, 1);
+    expect_plan(HOOK_DEM, COLUMN | SF_DEM | SF_DEM2, dem, 1);
+    expect_plan(HOOK_DEM, COLUMN, dem, 0);
+    expect_plan(HOOK_DEM, DRUM | SF_WIN, dem, 0);
+    const unsigned two = COLUMN | SF_DEM | SF_DEM2;
+    for (int h = 0; h < HOOK_N; ++h) {
+        const stage *rows[ST_N];
+        if (h != HOOK_DEM) assert_int_equal(stage_plan(h, two, rows), stage_plan(h, COLUMN, rows));
+    }
+    assert_int_equal(stage_ghost_fields(COLUMN | SF_DEM), stage_ghost_fields(COLUMN));
+    assert_int_equal(stage_ghost_fields(two), stage_ghost_fields(COLUMN) | FLD_PHI);
+    assert_int_equal(stage_store_fields(COLUMN | SF_DEM), stage_store_fields(COLUMN));
+    assert_int_equal(stage_store_fields(two), stage_store_fields(COLUMN) | FLD_PHI);
+    assert_int_equal(stage_moving_fields(two), stage_moving_fields(COLUMN));
+    for (int id = 0; id < ST_N; ++id)
+        for (int keep = 0; keep < 2; ++keep)
+            if (id != ST_DEM_COUPLE)
+                assert_int_equal(stage_refresh_after(id, two, keep), stage_refresh_after(id, COLUMN, keep));
+    assert_int_equal(stage_refresh_after(ST_DEM_COUPLE, two, 0), 0);
+    assert_int_equal(stage_refresh_after(ST_DEM_COUPLE, two | SF_SHIFT, 0), FLD_VOL);
+    assert_int_equal(stage_refresh_after(ST_DEM_COUPLE, two, 1), FLD_VOL | FLD_PHI);
+    for (int keep = 0; keep < 2; ++keep)
+        assert_int_equal(stage_refresh_after(ST_DEM_COUPLE, COLUMN | SF_DEM, keep), 0);
+    for (unsigned f = 0; f <= SF_ALL; ++f)
+        if (!(f & SF_DEM2)) assert_int_equal(stage_store_fields(f) & FLD_PHI, 0);
 }
 
 static void test_ghost_fields(void **st)
@@ -209,7 +242,7 @@ static void test_store_fields(void **st)
 {
     (void)st;
     const uint32_t xr = POS_REMAINDER ? 0 : FLD_XR; /* double: x is the position, xr never read */
-    for (unsigned f = 0; f < 128; ++f) {
+    for (unsigned f = 0; f <= SF_ALL; ++f) {
         const uint32_t have = stage_store_fields(f);
         assert_int_equal(named(f, 0) & ~xr & ~have, 0);                /* every named field held */
         assert_int_equal(have & ~(named(f, 0) | STAGE_STORE_BASE | stage_ghost_fields(f)), 0); /* and no other */
@@ -223,7 +256,7 @@ static void test_store_fields(void **st)
     const uint32_t want_flow = FLD_DSIG | FLD_ACC | FLD_VN | FLD_SIGN | FLD_B;
     assert_int_equal(seg_own & want_seg, want_seg); /* the table names them as the segregation's own */
     assert_int_equal(flow_own & want_flow, want_flow);
-    for (unsigned f = 0; f < 128; ++f) {
+    for (unsigned f = 0; f <= SF_ALL; ++f) {
         if (!(f & SF_SEG) && !(f & SF_WIN)) assert_int_equal(stage_store_fields(f) & seg_own, 0);
         if (!(f & SF_FLOW)) assert_int_equal(stage_store_fields(f) & flow_own, 0);
         if (!(f & SF_KGC)) assert_int_equal(stage_store_fields(f) & FLD_B, 0);

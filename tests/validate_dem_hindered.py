@@ -16,7 +16,8 @@ water, Re_t = 482, n = 2.399). Garside & Al-Dibouni's (1977) continuous form,
 Re_t^0.75) / (1 + 0.175 Re_t^0.75), are printed beside (n = 2.789 and 2.467).
 
 v: the mean downward velocity of the interior grains over a window in
-which it is steady (the means of the window's halves within 2 %), before the
+which it is steady (the means of the window's halves within 2 %: its first and
+last n // 2 snapshots, the middle one of an odd count left out), before the
 block nears the base. The grains of the block's top and bottom K layers
 are left out: their fluid fraction (eq. 20, the kernel's smoothing over 2h,
 and eq. 15's again) takes in the clear fluid beyond the block, so they see
@@ -144,8 +145,8 @@ def check(out, eps, n, layers, h, t0, t1):
     r = interior(out, n, layers, k)
     w = r[(r[:, 0] >= t0 - 1e-9) & (r[:, 0] <= t1 + 1e-9)]
     v, e_in, uf = w[:, 1].mean(), w[:, 2].mean(), w[:, 3].mean()
-    half = len(w) // 2
-    steady = abs(w[:half, 1].mean() - w[half:, 1].mean()) / v
+    half = len(w) // 2  # halves of equal length: an odd count's middle snapshot in neither
+    steady = abs(w[:half, 1].mean() - w[len(w) - half:, 1].mean()) / v
     amp = (w[:, 1].max() - w[:, 1].min()) / (2 * v)  # the oscillation with the water column's (printed)
     vt = terminal(D, 1.0)
     re = vt * D / NU

@@ -31,7 +31,8 @@
     F(x,      X,      real,    3, VEC) /* position, m */                                                    \
     F(X0,     X0,     real,    3, ALL) /* reference (initial) position, m, for prescribed kinematics */     \
     F(v,      V,      real,    3, VEC) /* velocity, m/s */                                                  \
-    F(vol,    VOL,    real,    1, ALL) /* volume m_i/rho_i, m^d */                                          \
+    F(vol,    VOL,    real,    1, ALL) /* volume m_i/rho_i, m^d (beside DEM grains, two ways: phi / eps, \
+                                        * rho the superficial density eps rho_f) */                      \
     F(C,      C,      creal,   1, ALL) /* small-grain concentration, - (double in both precisions: hd.h) */ \
     F(C_n,    CN,     creal,   1, ALL) /* C at the start of the step (predictor-corrector) */               \
     F(dCdt,   DCDT,   creal,   1, ALL) /* concentration rate, 1/s */                                        \
@@ -63,7 +64,11 @@
     F(wall,   WALL,   uint8_t, 1, ALL) /* a dummy's wall (enum wall_id, src/physics/wall.h), set by     \
                                         * setup; 0 for material */                                       \
     F(B,      B,      real,    6, ALL) /* Flow:gradient_correction: the kernel gradient's correction     \
-                                        * B_i (flow_kgc_store), symmetric; unused when off */
+                                        * B_i (flow_kgc_store), symmetric; unused when off */            \
+    F(phi,    PHI,    real,    1, ALL) /* DEM grains, two ways: a fluid particle's fluid volume eps V,   \
+                                        * m^d, fixed (its mass of fluid over rho_f); 0 until its first   \
+                                        * coupling sets it (dem_fluid_volume), which then gives vol =    \
+                                        * phi / eps at each */
 /* clang-format on */
 
 /* The member's declarator for n components: type *member PART_FIELD_DIMS(n). */

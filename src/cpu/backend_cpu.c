@@ -52,7 +52,7 @@ static void cpu_refresh(sim_t *s, uint32_t fields)
 
 /* What a hook's call brings to its stages. */
 typedef struct cpu_call {
-    double t;       /* prepare: the time */
+    double t;       /* prepare, the DEM coupling: the time */
     int classify;   /* prepare: 1 classify (HCSR schemes), 2 classify whatever the scheme, 0 not */
     double a, w;    /* advance: step and window weight; a window's midpoint stage: its length */
     int half;       /* a window's midpoint stage: 0 the half step, 1 the full one */
@@ -236,6 +236,9 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         for (long i = 0; i < n; ++i) step_conc_advance((size_t)i, p, as, c->half);
         return 1;
     }
+    case ST_DEM_COUPLE: /* the owned fluid particles; the fraction and volume at every ghost too */
+        dem_couple(s->dem, p, &cpu_of(s)->grid.view, &s->flow.w, c->t, (double)s->flow.visc_norm);
+        return 1;
     case ST_SHEPARD: cpu_shepard(s); return 1;
     case ST_SHEPARD_STORE:
 #pragma omp parallel for schedule(static)
@@ -373,10 +376,11 @@ static void cpu_finish(sim_t *s)
     s->be_data = NULL;
 }
 
-/* The DEM grains (src/dem/dem.c) on the host store. */
+/* The DEM grains (src/dem/dem.c) on the host store: the coupling, a stage. */
 static void cpu_dem_couple(sim_t *s, double t)
 {
-    dem_couple(s->dem, &s->p, &cpu_of(s)->grid.view, &s->flow.w, t, (double)s->flow.visc_norm);
+    cpu_call c = {.t = t};
+    cpu_hook(s, HOOK_DEM, &c);
 }
 
 static void cpu_dem_advance(sim_t *s, double t, double dt) { dem_advance(s->dem, &s->flow.w, t, dt); }

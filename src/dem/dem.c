@@ -277,13 +277,18 @@ void dem_couple(dem_t *d, particles_t *p, const grid_view *g, const wall_geom *w
     dem_grid(d, p);
     const dem_view v = dem_view_of(d);
     const particles_t *pc = p;
+    const int two = d->coupling == DEM_TWO_WAY;
     const long nf = (long)p->n, na = (long)nall;
     /* the fraction at the ghosts too (from the grains, which every rank holds;
      * a periodic image's at its place in the period), for the source's pair
-     * term: no exchange */
+     * term: no exchange; two ways, the volume phi / eps of each, a ghost's
+     * from the phi it carries, before the sums read them */
 #pragma omp parallel for schedule(dynamic, 64)
     for (long a = 0; a < na; ++a)
-        if (dem_fluid(pc, (size_t)a)) dem_fluid_fraction(&v, pc, w, (size_t)a);
+        if (dem_fluid(pc, (size_t)a)) {
+            dem_fluid_fraction(&v, pc, w, (size_t)a);
+            if (two) dem_fluid_volume(&v, pc, (size_t)a);
+        }
     dem_grains_couple(d, &v, pc);
     if (d->coupling != DEM_TWO_WAY) return;
 #pragma omp parallel for schedule(dynamic, 64)

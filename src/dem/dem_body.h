@@ -204,6 +204,23 @@ HD_INLINE void dem_fluid_fraction(const dem_view *d, const particles_t *p, const
     d->deps_f[a] = de;
 }
 
+/* two_way, fluid particle a (owned or ghost) after its eps_a (dem_fluid_fraction):
+ * the space it represents, vol_a = phi_a / eps_a. Locally averaged SPH: its
+ * mass of fluid rho_f phi_a is fixed and its density is the superficial
+ * eps_a rho_f, whose continuity the source's pressure rate -(K / eps) D eps /
+ * Dt is; so every fluid sum (the pressure force, the velocity gradient, the
+ * grains' eq. 20, the source's pair term) reads the space the particle
+ * holds beside the grains, as its neighbours spread apart where grains come
+ * in. phi_a = eps_a vol_a at its first coupling (phi 0 before: the field's
+ * allocation), so vol_a keeps its value then and the particle's fluid is
+ * what lay outside the grains at the start. m^3. */
+HD_INLINE void dem_fluid_volume(const dem_view *d, const particles_t *p, size_t a)
+{
+    const double e = d->eps_f[a];
+    if (!(p->phi[a] > 0)) p->phi[a] = (real)(e * (double)p->vol[a]);
+    p->vol[a] = (real)((double)p->phi[a] / e);
+}
+
 /* Grain i's sums over the owned fluid particles (eq. 20): s[0] = sum V_a
  * W_ai, s[1] = sum eps_a V_a W_ai, s[2..4] = sum u_a V_a W_ai. On several
  * ranks each rank's are partial (its own particles), summed over the ranks

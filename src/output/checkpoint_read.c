@@ -268,6 +268,12 @@ static void ckpt_check_seal_header(const ckpt_seal *seal, const sim_t *s)
                             "by name)" : "");
 }
 
+/* The particle arrays the checkpoint holds (its /Header NumArrays): fewer
+ * than this build's where it was written before the field table's last
+ * rows were added (phi, issue 58); those rows are read only where this
+ * run holds them (ckpt_read_particles). */
+static size_t ckpt_file_arrays;
+
 /* Check what must match this build (exit 2) and the scene (checkpoint_keys.c). */
 static void ckpt_check_header(hid_t g, const sim_t *s)
 {
@@ -285,9 +291,10 @@ static void ckpt_check_header(hid_t g, const sim_t *s)
         ckpt_bad("holds a %lldD run; the scene %s is %uD: Geometry:dim (%lld in the checkpoint, %u now)", dim,
                  s->sc->path, s->sc->geometry.dim, dim, s->sc->geometry.dim);
     long long na = ckpt_get_int(g, "NumArrays", 1, 1000);
-    if (na != (long long)part_narrays())
-        ckpt_bad("its particle store has %lld arrays, this build's %zu: written by another version of sphseg",
+    if (na > (long long)part_narrays())
+        ckpt_bad("its particle store has %lld arrays, this build's %zu: written by a later version of sphseg",
                  na, part_narrays());
+    ckpt_file_arrays = (size_t)na;
     char *stored = ckpt_get_string(g, "Scene");
     ckpt_check_scene(ckpt_file, stored, s->sc);
     free(stored);
@@ -363,14 +370,18 @@ static void ckpt_read_particles(hid_t f, sim_t *s, int dim, long long ntot, int 
     ckpt_my_rows(g, nranks_file, ntot, &n, &offset);
     hid_t d[256];
     if (part_narrays() > 256) error_exit(EXIT_SYSTEM, "ckpt_read_particles: more than 256 arrays");
-    for (size_t k = 0; k < part_narrays(); ++k) { /* every shape before any allocation */
+    const uint32_t fields = stage_store_fields(stage_flags(s)); /* this run's: the others are not read */
+    for (size_t k = ckpt_file_arrays; k < part_narrays(); ++k)   /* an earlier version's file */
+        if (fields >> part_array_field(k) & 1u)
+            ckpt_bad("its particle store has %zu arrays, this build's %zu, and this run needs array %zu: written "
+                     "by an earlier version of sphseg", ckpt_file_arrays, part_narrays(), k);
+    for (size_t k = 0; k < ckpt_file_arrays; ++k) { /* every shape before any allocation */
         char name[24];
         snprintf(name, sizeof name, "%02zu", k);
         d[k] = ckpt_dataset(g, name, H5T_INTEGER, part_array_esize(k), ntot);
         if (ckpt_get_int(d[k], "ElementBytes", 1, 8) != (long long)part_array_esize(k))
             ckpt_bad("particle array %s has elements of another size: written by another version", name);
     }
-    const uint32_t fields = stage_store_fields(stage_flags(s)); /* this run's: the others are not read */
     double need = (double)n * (double)(part_fields_bytes(fields) + 64);
     double have = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGESIZE);
     if (need > 0.8 * have)
@@ -378,7 +389,7 @@ static void ckpt_read_particles(hid_t f, sim_t *s, int dim, long long ntot, int 
                  need / 1073741824.0, have / 1073741824.0);
     part_alloc_fields(&s->p, dim, (size_t)n, fields);
     s->p.n = (size_t)n;
-    for (size_t k = 0; k < part_narrays(); ++k) {
+    for (size_t k = 0; k < ckpt_file_arrays; ++k) {
         if (part_array_get(&s->p, k))
             ckpt_read_rows(d[k], ckpt_raw_mem(part_array_esize(k)), part_array_get(&s->p, k), n, offset);
         H5CHECK(H5Dclose(d[k]));

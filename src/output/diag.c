@@ -30,6 +30,14 @@ double diag_wall(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* Particle i's mass over rho: vol, or beside DEM grains two ways its fluid
+ * volume phi (vol is then the space it represents, phi / eps: dem_body.h
+ * dem_fluid_volume; phi is set at the first coupling). */
+static double diag_mass_volume(const particles_t *p, size_t i)
+{
+    return p->phi && p->phi[i] > 0 ? (double)p->phi[i] : (double)p->vol[i];
+}
+
 diag_values diag_measure(const sim_t *s)
 {
     const particles_t *p = &s->p;
@@ -41,7 +49,7 @@ diag_values diag_measure(const sim_t *s)
         double v2 = 0;
         for (int d = 0; d < 3; ++d) v2 += (double)p->v[d][i] * p->v[d][i];
         ksum_add(&small, (double)p->C[i] * p->vol[i]);
-        ke += 0.5 * s->sc->physics.rho * p->vol[i] * v2;
+        ke += 0.5 * s->sc->physics.rho * diag_mass_volume(p, i) * v2;
         vmax = fmax(vmax, sqrt(v2));
         cmin = fmin(cmin, p->C[i]);
         cmax = fmax(cmax, p->C[i]);
@@ -140,7 +148,9 @@ void diag_row(diag *d, const sim_t *s)
     double inside_out = v.small_volume + v.small_outflow; /* an outlet's outflow still counts */
     v.drift = d->small0 != 0 ? (inside_out - d->small0) / d->small0 : inside_out;
     d->max_drift = fmax(d->max_drift, fabs(v.drift));
-    if (fabs(v.drift) > s->sc->segregation.drift_tol && !d->warned) {
+    /* the concentration equation's conservation: without it C is held, and
+     * beside DEM grains two ways the volumes follow eps (dem_fluid_volume) */
+    if (s->seg_on && fabs(v.drift) > s->sc->segregation.drift_tol && !d->warned) {
         d->warned = 1;
         if (comm_rank() == 0)
             warning("step %ld, t = %.6g s: relative drift of sum C_i V_i is %.3e, past "

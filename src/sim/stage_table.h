@@ -30,6 +30,7 @@ enum stage_id {
     ST_SHEPARD_STORE, /* flow_shepard_store */
     ST_SHIFT,        /* shift_team: the shift into x_n, with v_n and sig_n carried (physics/shift.h) */
     ST_KGC,          /* flow_kgc_team: the gradient correction B of the material (physics/flow.h) */
+    ST_DEM_COUPLE,   /* dem_couple: the DEM grains' coupling with the fluid (src/dem/dem.c, dem_body.h) */
     ST_N
 };
 #endif
@@ -87,5 +88,14 @@ const stage stage_table[] = {
     {ST_WIN_DCDT, H(HOOK_CONC_STEP), "seg_dCdt", SF_WIN, 0, RANGE_OWNED, NB_CONC, FLD_DCDT, 0, FLD_SEGC},
     {ST_WIN_DCDT, H(HOOK_CONC_STEP), "seg_dCdt", SF_WIN | SF_RENORM, 0, RANGE_OWNED, FLD_L, 0, 0, 0},
     {ST_WIN_ADVANCE, H(HOOK_CONC_STEP), "step_conc_advance", SF_WIN, 0, RANGE_OWNED, 0, FLD_C | FLD_CN, 0, FLD_DCDT},
+    /* the grains' coupling: the fluid fraction at the fluid particles (at the ghosts too, from the grains
+     * every rank holds), the grains' sums over the owned ones' volumes and velocities */
+    {ST_DEM_COUPLE, H(HOOK_DEM), "dem_couple", SF_DEM, 0, RANGE_OWNED, 0, 0, 0, FLD_V | FLD_VOL},
+    /* two ways (computed flow: the scene's check): the owned fluid particles' volume phi / eps (phi set at
+     * the first coupling) and the source into their acc and dsig; the ghosts take their volume from their
+     * own eps and the phi they carry (the source's pair term reads them with their v in this pass), and
+     * their owners' where the plan refreshes it before an exchange */
+    {ST_DEM_COUPLE, H(HOOK_DEM), "dem_couple", SF_FLOW | SF_DEM | SF_DEM2, 0, RANGE_OWNED, FLD_V | FLD_PHI,
+     FLD_VOL | FLD_PHI | FLD_ACC | FLD_DSIG, 0, 0},
 };
 #endif

@@ -9,16 +9,17 @@
 #include "stage_table.h"
 const int stage_table_n = (int)(sizeof stage_table / sizeof stage_table[0]);
 
-/* The hooks in the order a run can call them: two half steps, the filter,
+/* The hooks in the order a run can call them: two half steps (each rates
+ * followed by the DEM grains' coupling, src/sim/integrate.c), the filter,
  * a window's close with its two midpoint stages; then round again. Every
  * reader a run can meet after a writer is in it. A writer that only some
  * runs call (the filter's store) could close a field early for the others;
  * in this table none stands between another writer and its first reader,
  * and tests/test_stages.c holds the derived refreshes to the lists worked
  * out by hand. */
-static const int cycle[] = {HOOK_RATES,   HOOK_SAVE,   HOOK_ADVANCE,    HOOK_PREPARE,   HOOK_RATES,
-                            HOOK_ADVANCE, HOOK_PREPARE, HOOK_FILTER,    HOOK_PREPARE,   HOOK_CONC_BEGIN,
-                            HOOK_CONC_STEP, HOOK_CONC_STEP};
+static const int cycle[] = {HOOK_RATES,   HOOK_DEM,       HOOK_SAVE,      HOOK_ADVANCE, HOOK_PREPARE,
+                            HOOK_RATES,   HOOK_DEM,       HOOK_ADVANCE,   HOOK_PREPARE, HOOK_FILTER,
+                            HOOK_PREPARE, HOOK_CONC_BEGIN, HOOK_CONC_STEP, HOOK_CONC_STEP};
 enum { NCYCLE = (int)(sizeof cycle / sizeof cycle[0]) };
 
 unsigned stage_flags(const struct sim *s)
@@ -31,6 +32,8 @@ unsigned stage_flags(const struct sim *s)
     if (s->hcsr) f |= SF_HCSR;
     if (s->shift.kind != SHIFT_OFF) f |= SF_SHIFT;
     if (s->flow_on && s->flow.kgc) f |= SF_KGC;
+    if (s->dem) f |= SF_DEM;
+    if (s->dem && s->dem->coupling == DEM_TWO_WAY) f |= SF_DEM2;
     return f;
 }
 
@@ -159,7 +162,7 @@ uint32_t stage_moving_fields(unsigned flags)
 
 const stage_sched *stage_schedule(unsigned flags)
 {
-    enum { NF = 128 }; /* seven flags */
+    enum { NF = SF_ALL + 1 }; /* nine flags */
     static stage_sched memo[NF];
     static int done[NF];
     flags &= NF - 1;

@@ -37,11 +37,15 @@ enum stage_flag {
     SF_RENORM = 1u << 3, /* the conservative scheme with renormalisation */
     SF_HCSR = 1u << 4,   /* a scheme that classifies every step (paper, direct) */
     SF_SHIFT = 1u << 5,  /* particle shifting (Flow:shifting fickian) */
-    SF_KGC = 1u << 6     /* the corrected kernel gradient (Flow:gradient_correction on) */
+    SF_KGC = 1u << 6,    /* the corrected kernel gradient (Flow:gradient_correction on) */
+    SF_DEM = 1u << 7,    /* DEM grains (DEM:d > 0; src/dem/) */
+    SF_DEM2 = 1u << 8,   /* their coupling two ways (DEM:coupling two_way) */
+    SF_ALL = (1u << 9) - 1
 };
 
+/* HOOK_DEM: struct backend's dem_couple, after each rates (src/sim/sim.h). */
 enum stage_hook { HOOK_PREPARE, HOOK_RATES, HOOK_SAVE, HOOK_ADVANCE, HOOK_CONC_BEGIN, HOOK_CONC_STEP, HOOK_FILTER,
-                  HOOK_N };
+                  HOOK_DEM, HOOK_N };
 
 /* The particles a stage runs on: the owned ones, or the owned and the
  * ghosts (each ghost from its own support here). */

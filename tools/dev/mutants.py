@@ -200,8 +200,13 @@ MUTANTS = [
      [("cmin = fmin(cmin, p->C[i]);", "cmin = fmax(cmin, p->C[i]);")],
      "the C_min column reports the largest C"),
     ("kinetic_energy_factor", "diagnostics", "src/output/diag.c",
-     [("ke += 0.5 * s->sc->physics.rho * p->vol[i] * v2;", "ke += s->sc->physics.rho * p->vol[i] * v2;")],
+     [("ke += 0.5 * s->sc->physics.rho * diag_mass_volume(p, i) * v2;",
+       "ke += s->sc->physics.rho * diag_mass_volume(p, i) * v2;")],
      "the kinetic energy loses its factor 1/2"),
+    # ---- DEM grains
+    ("dem_volume_fixed", "DEM", "src/dem/dem_body.h",
+     [("p->vol[a] = (real)((double)p->phi[a] / e);", "p->vol[a] = p->vol[a];")],
+     "a fluid particle's volume stays V0 beside the grains (not phi / eps): the packed bed's water 28 % over hydrostatic"),
 ]
 
 
