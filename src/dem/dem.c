@@ -168,9 +168,8 @@ dem_view dem_view_of(dem_t *d)
  * walks the flow pass's neighbours, ghosts included: dem_fluid_source)? */
 static int dem_binned(const particles_t *p, size_t a) { return a < p->n && dem_fluid(p, a); }
 
-/* Counting sort of m points (grains, or the fluid particles of p: owned,
- * then the ghosts kept) into start[ncell + 1] and idx[m]: each cell's in
- * ascending index order. */
+/* Counting sort of m points (grains, or the owned fluid particles of p)
+ * into start[ncell + 1] and idx[m]: each cell's in ascending index order. */
 static void dem_bin(dem_t *d, size_t m, const particles_t *p, size_t **start, size_t **idx, size_t *cap)
 {
     size_t ncell = (size_t)d->nc[0] * (size_t)d->nc[1] * (size_t)d->nc[2];
