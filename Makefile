@@ -89,7 +89,7 @@ LIBS   := $(HDF5_LIBS) $(CYAML_LIBS) $(METIS_LIBS) $(LDLIBS)
 
 CORE_SRC := src/core/error.c src/core/tuning.c src/scene/scene.c src/scene/scene_yaml.c src/scene/scene_walk.c src/scene/scene_check.c src/scene/scene_write.c src/scene/scene_doc.c src/scene/scene_preset.c src/core/particles.c src/cpu/nbr.c src/cpu/nlist.c src/cpu/bound.c src/sim/setup.c src/sim/setup_container.c \
             src/cpu/backend_cpu.c src/sim/integrate.c src/output/diag.c src/output/io.c src/output/checkpoint.c \
-            src/output/checkpoint_read.c src/output/checkpoint_keys.c src/output/outdir.c src/sim/stages.c src/dem/dem.c mpi/comm.c mpi/halo.c mpi/decomp.c
+            src/output/checkpoint_read.c src/output/checkpoint_keys.c src/output/outdir.c src/sim/stages.c src/dem/dem.c src/dem/dem_halo.c mpi/comm.c mpi/halo.c mpi/decomp.c
 CORE_OBJ := $(CORE_SRC:%.c=$(BUILD)/obj/%.o)
 # the driver: the command line, the settings' checks, the run loop and its log (not in the unit tests)
 DRIVER_SRC := src/main.c src/settings_check.c src/run.c src/run_guard.c src/report.c

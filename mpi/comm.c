@@ -100,6 +100,31 @@ void comm_sum_rows_ordered(double *x, size_t n, int k)
     free(mine), free(cnt), free(dsp), free(all), free(seen);
 }
 
+char *comm_exchange_bytes(const char *send, const size_t *soff, size_t *roff)
+{
+    const int size = comm_size();
+    int *sc = malloc(4 * (size_t)size * sizeof(int));
+    if (!sc) error_exit(1, "out of memory in comm_exchange_bytes");
+    int *sd = sc + size, *rc = sc + 2 * size, *rd = sc + 3 * size;
+    for (int r = 0; r < size; ++r) {
+        if (soff[r + 1] - soff[0] > 0x7fffffff)
+            error_exit(1, "comm_exchange_bytes: %zu bytes for one rank, over the int count of MPI", soff[r + 1]);
+        sc[r] = (int)(soff[r + 1] - soff[r]), sd[r] = (int)(soff[r] - soff[0]);
+    }
+    MPICHECK(MPI_Alltoall(sc, 1, MPI_INT, rc, 1, MPI_INT, MPI_COMM_WORLD));
+    size_t tot = 0;
+    roff[0] = 0;
+    for (int r = 0; r < size; ++r) {
+        if (tot > 0x7fffffff) error_exit(1, "comm_exchange_bytes: %zu bytes received, over the int count of MPI", tot);
+        rd[r] = (int)tot, tot += (size_t)rc[r], roff[r + 1] = tot;
+    }
+    char *recv = malloc(tot ? tot : 1);
+    if (!recv) error_exit(1, "out of memory in comm_exchange_bytes (%zu bytes)", tot);
+    MPICHECK(MPI_Alltoallv(send + soff[0], sc, sd, MPI_BYTE, recv, rc, rd, MPI_BYTE, MPI_COMM_WORLD));
+    free(sc);
+    return recv;
+}
+
 int comm_local_rank(void)
 {
     MPI_Comm node;

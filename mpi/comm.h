@@ -31,5 +31,12 @@ long long comm_sum_ll(long long x);
  * 8 (k + 1) bytes each, every rank receiving every rank's nonzero rows
  * (the DEM grains' sums over the fluid, src/dem/dem.c). */
 void comm_sum_rows_ordered(double *x, size_t n, int k);
+/* Collective. Personalised exchange of bytes: send + soff[r] .. send +
+ * soff[r + 1] go to rank r (soff: size + 1 offsets, soff[size] the total);
+ * returns a malloc'd buffer (free it) holding what each rank sent this one,
+ * rank after rank, from offset roff[r] (roff: size + 1 entries, filled in).
+ * On one rank: a copy of send. Counts over 2^31 bytes a rank stop the run
+ * (exit 1). The DEM grains' migration, ghosts and sums (src/dem/dem_halo.c). */
+char *comm_exchange_bytes(const char *send, const size_t *soff, size_t *roff);
 
 #endif

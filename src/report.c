@@ -97,8 +97,14 @@ void report_end(sim_t *s, diag *d, double io)
             "diagnostics (not in the rate), %.3f s in halo exchange", s->step, wall, rate, comm_size(),
             rate / comm_size(), d->max_drift, io, halo);
     if (s->dem && s->step > d->step0) /* the run's, restarts included (a checkpoint carries them) */
-        message("dem: %zu grains, %ld DEM steps in %ld fluid steps (%.1f a fluid step)", s->dem->n, s->dem->steps,
+        message("dem: %zu grains, %ld DEM steps in %ld fluid steps (%.1f a fluid step)", s->dem->ntot, s->dem->steps,
                 s->step, (double)s->dem->steps / (double)s->step);
+    if (s->dem && s->dem->split) { /* the same on every rank: they divide the grains at one coupling */
+        const double no = (double)s->dem->no, ng = (double)(s->dem->n - s->dem->no);
+        message("dem: divided among %d ranks: %.0f to %.0f grains owned and %.0f to %.0f ghosts a rank at the last "
+                "coupling, %lld grain migrations", comm_size(), comm_min(no), comm_max(no), comm_min(ng),
+                comm_max(ng), comm_sum_ll(s->dem->migrated));
+    }
     if (s->win.on && s->win.windows > 0)
         message("concentration: %ld windows of %.1f flow steps on average, %ld midpoint steps of C", s->win.windows,
                 (double)(s->step - d->step0 - s->win.k) / (double)s->win.windows, s->win.substeps);
@@ -200,7 +206,7 @@ void report_start(sim_t *s, const outputs *o, const run_cli *c)
         const dem_t *g = s->dem;
         static const char *const motion[] = {"free", "rigid", "fixed"};
         message("dem: %zu grains of d = %.4g m, %.4g kg/m^3, motion %s, %s coupling; DEM step %.3g s (the contact "
-                "time / %d)", g->n, (double)g->c.d, (double)g->c.rho, motion[g->motion],
+                "time / %d)", g->ntot, (double)g->c.d, (double)g->c.rho, motion[g->motion],
                 g->coupling == DEM_TWO_WAY ? "two-way" : "one-way", g->dt, (int)DEM_STEPS_PER_CONTACT);
     }
     if (s->flow_on) {

@@ -23,10 +23,15 @@ are compared particle by particle (matched by ParticleIDs):
   the silo's outlet must take material out of the run, as many particles on
   every rank count (the comparison above also needs the same IDs).
 
-Scenes with DEM grains (issue 58; every rank holds every grain, src/dem/dem.h)
-are alike to round-off, not bit for bit: each grain's sums over the fluid
-are per-rank partials added in rank order, and the source's fluid pairs meet
-the ghosts in another order than the owned particles. Their fluid fields and
+Scenes with DEM grains (issue 58; the grains divided among the ranks as the
+fluid is, each rank holding ghosts of its neighbours' near its domain,
+src/dem/dem_halo.c) are alike to round-off, not bit for bit: each grain's
+sums over the fluid are per-rank partials added at its owner in rank order,
+a cell's grains are met in another order, and the source's fluid pairs meet
+the ghosts in another order than the owned particles. On 2 ranks no rank
+may own every grain of the block along x and of the pile (the end report's
+"dem: divided among" line), and the single settling grain must change
+owner. Their fluid fields and
 their /DEM group (centres, velocities, spins times d/2, the fluid's fraction
 and velocity at the grains; validate_gpu's dem_difference) must agree within
 TOL_DEM of each field's scale, the contact counts and the boundary classes
@@ -289,6 +294,7 @@ def main():
             ok &= good
         if dem:
             ok &= dem_checks(a.work, name, scene, steps, over, must, a.sphseg, a.backend)
+            ok &= dem_divided(name, logs, len(last_dem(os.path.join(a.work, "%s_1" % name))["Contacts"]))
         if must == "migrate":
             m = re.search(r"domains: (\d+) particle migrations", logs[3])
             good = m is not None and int(m.group(1)) > 0
@@ -420,6 +426,31 @@ def slab_bounds(out, axis, size):
             cum, c = cum - w[c - 1], c - 1
         bound.append(b)
     return [origin + b * support for b in bound[1:]], support
+
+
+def dem_divided(name, logs, ntot):
+    """The grains are divided among the ranks (src/dem/dem_halo.c), from the
+    end report's line: on 2 ranks no rank owns them all (the block along x,
+    the pile); one grain changes owner on 2 ranks, where it falls through the
+    bound. The block settling along y is one layer across the slab axis,
+    which one slab holds on any rank count: printed, not required."""
+    ok = True
+    for np_ in (2, 3):
+        m = re.search(r"dem: divided among %d ranks: (\d+) to (\d+) grains owned and (\d+) to (\d+) ghosts a rank "
+                      r"at the last coupling, (\d+) grain migrations" % np_, logs[np_])
+        if m is None:
+            print("FAIL %-14s %d ranks: no 'dem: divided among' line in the log" % (name, np_))
+            ok = False
+            continue
+        lo, hi, glo, ghi, mig = (int(g) for g in m.groups())
+        if np_ == 3 or name == "dem_block_y":
+            good = True
+        else:
+            good = hi < ntot if ntot > 1 else mig >= 1
+        print("%s %-14s %d ranks: %d to %d of %d grains owned a rank, %d to %d ghosts, %d migrations" % (
+            "ok  " if good else "FAIL", name, np_, lo, hi, ntot, glo, ghi, mig))
+        ok &= good
+    return ok
 
 
 def dem_checks(work, name, scene, steps, over, must, sphseg, backend="cpu"):

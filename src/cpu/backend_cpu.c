@@ -237,7 +237,7 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         return 1;
     }
     case ST_DEM_COUPLE: /* the owned fluid particles; the fraction and volume at every ghost too */
-        dem_couple(s->dem, p, &cpu_of(s)->grid.view, &s->flow.w, c->t, (double)s->flow.visc_norm);
+        dem_couple(s->dem, p, &cpu_of(s)->grid.view, &s->flow.w, c->t, (double)s->flow.visc_norm, s->halo);
         return 1;
     case ST_SHEPARD: cpu_shepard(s); return 1;
     case ST_SHEPARD_STORE:

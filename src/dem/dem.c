@@ -29,7 +29,7 @@ static void *dem_calloc(size_t n, size_t sz)
 dem_t *dem_alloc(size_t n)
 {
     dem_t *d = dem_calloc(1, sizeof *d);
-    d->n = n;
+    d->n = d->no = d->ntot = d->cap = n;
     for (int a = 0; a < 3; ++a) {
         d->x[a] = dem_calloc(n, sizeof(double)), d->v[a] = dem_calloc(n, sizeof(double));
         d->w[a] = dem_calloc(n, sizeof(double)), d->fint[a] = dem_calloc(n, sizeof(double));
@@ -96,6 +96,7 @@ void dem_free(dem_t *d)
     free(d->ncon2), free(d->cid2), free(d->cxi2);
     free(d->eps_f), free(d->deps_f), free(d->gsum);
     free(d->gstart), free(d->gidx), free(d->fstart), free(d->fidx);
+    free(d->soff), free(d->slist), free(d->goff);
     free(d);
 }
 
@@ -246,26 +247,32 @@ static void dem_period(dem_t *d, const wall_geom *w)
     for (size_t i = 0; i < d->n; ++i) dem_wrap_grain(&v, i);
 }
 
-/* The grains' sums over the fluid (eq. 20; over the ranks' owned particles,
- * in rank order: comm_sum_rows_ordered), then their interaction forces. */
+/* The grains' sums over the fluid (eq. 20): this rank's owned particles'
+ * for every grain it holds, added at each grain's owner over the ranks in
+ * rank order (dem_sums_home); then the owned grains' interaction forces,
+ * and their results to the ghosts. */
 static void dem_grains_couple(dem_t *d, const dem_view *v, const particles_t *p)
 {
-    const long ng = (long)d->n, n = ng;
+    const long ng = (long)d->n, no = (long)d->no;
     double *gs = d->gsum;
-#pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN)
+#pragma omp parallel for schedule(static) if (ng >= DEM_OMP_MIN)
     for (long i = 0; i < ng; ++i) dem_grain_partial(v, p, (size_t)i, &gs[5 * i]);
-    comm_sum_rows_ordered(gs, d->n, 5); /* one rank: as they are */
-#pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN)
-    for (long i = 0; i < ng; ++i) {
+    if (d->split) dem_sums_home(d);
+    else comm_sum_rows_ordered(gs, d->n, 5); /* one rank: as they are */
+#pragma omp parallel for schedule(static) if (no >= DEM_OMP_MIN)
+    for (long i = 0; i < no; ++i) {
         dem_grain_from_sums(v, (size_t)i, &gs[5 * i]);
         dem_grain_force(v, (size_t)i);
     }
+    dem_refresh(d, DEM_SEND_COUPLING);
 }
 
-void dem_couple(dem_t *d, particles_t *p, const grid_view *g, const wall_geom *w, double t, double visc_norm)
+void dem_couple(dem_t *d, particles_t *p, const grid_view *g, const wall_geom *w, double t, double visc_norm,
+                const struct halo *h)
 {
     (void)t;
     dem_period(d, w);
+    if (h && comm_size() > 1) dem_exchange(d, h);
     const size_t nall = p->n + p->ng;
     if (nall > d->eps_cap) {
         free(d->eps_f), free(d->deps_f);
@@ -278,10 +285,11 @@ void dem_couple(dem_t *d, particles_t *p, const grid_view *g, const wall_geom *w
     const particles_t *pc = p;
     const int two = d->coupling == DEM_TWO_WAY;
     const long nf = (long)p->n, na = (long)nall;
-    /* the fraction at the ghosts too (from the grains, which every rank holds;
-     * a periodic image's at its place in the period), for the source's pair
-     * term: no exchange; two ways, the volume phi / eps of each, a ghost's
-     * from the phi it carries, before the sums read them */
+    /* the fraction at the ghosts too (from the grains this rank holds, its
+     * own and the ghost grains within the reach of its domain; a periodic
+     * image's at its place in the period), for the source's pair term: no
+     * exchange; two ways, the volume phi / eps of each, a ghost's from the
+     * phi it carries, before the sums read them */
 #pragma omp parallel for schedule(dynamic, 64)
     for (long a = 0; a < na; ++a)
         if (dem_fluid(pc, (size_t)a)) {
@@ -317,16 +325,27 @@ void dem_overflow_exit(size_t i)
  * tree: gpu_dem.cu). */
 static void dem_rigid_step(dem_t *d, const double *F, const double *T, double dt)
 {
-    const long n = (long)d->n;
-    const double M = d->m * (double)n;
+    const long n = (long)d->no; /* split: this rank's grains; the sums over the ranks in rank order */
+    const double nt = (double)d->ntot, M = d->m * nt;
     const dem_view v = dem_view_of(d);
-    double xc[3] = {0, 0, 0}, vc[3] = {0, 0, 0};
+    double c[6] = {0, 0, 0, 0, 0, 0};
     real Tt[3] = {0, 0, 0}, J[9] = {0}, w[3], Ft[3] = {0, 0, 0};
     for (long i = 0; i < n; ++i)
-        for (int q = 0; q < 3; ++q) xc[q] += d->x[q][i] / (double)n, vc[q] += d->v[q][i] / (double)n;
-    for (int q = 0; q < 3; ++q) w[q] = (real)(n ? d->w[q][0] : 0);
+        for (int q = 0; q < 3; ++q) c[q] += d->x[q][i] / nt, c[3 + q] += d->v[q][i] / nt;
+    dem_sum_ranks(d, c, 6);
+    const double xc[3] = {c[0], c[1], c[2]};
+    double vc[3] = {c[3], c[4], c[5]};
+    for (int q = 0; q < 3; ++q) w[q] = (real)(n ? d->w[q][0] : 0); /* every grain's: a rank without grains moves none */
     /* v_c: the grains' mean velocity (their spin's share, sum w x r_i / n, is zero) */
     for (long i = 0; i < n; ++i) dem_rigid_share(&v, (size_t)i, xc, &F[3 * i], &T[3 * i], Tt, Ft, J);
+    if (d->split) {
+        double s[15];
+        for (int q = 0; q < 3; ++q) s[q] = (double)Tt[q], s[3 + q] = (double)Ft[q];
+        for (int q = 0; q < 9; ++q) s[6 + q] = (double)J[q];
+        dem_sum_ranks(d, s, 15);
+        for (int q = 0; q < 3; ++q) Tt[q] = (real)s[q], Ft[q] = (real)s[3 + q];
+        for (int q = 0; q < 9; ++q) J[q] = (real)s[6 + q];
+    }
     for (int q = 0; q < 3; ++q) vc[q] += (double)Ft[q] / M * dt;
     if (!d->per) dem_spin_update(J, Tt, (real)dt, w);
     for (long i = 0; i < n; ++i) dem_rigid_move(&v, (size_t)i, xc, vc, w, dt);
@@ -347,9 +366,10 @@ static void dem_lists_swap(dem_t *d)
  * at x; then x from the new v). */
 static void dem_substep(dem_t *d, const wall_geom *w, double t, double dt, double *F, double *T, double *Fi)
 {
-    const long n = (long)d->n;
+    const long n = (long)d->no; /* the owned grains: the ghosts are their owners' */
     dem_lists_swap(d);
     dem_period(d, w); /* a grain that crossed a period comes in from the other side */
+    dem_refresh(d, DEM_SEND_MOTION);
     if (d->motion != DEM_RIGID) dem_grid(d, NULL);
     const dem_view v = dem_view_of(d);
     long bad = n; /* the lowest grain whose list overflowed */
@@ -358,8 +378,16 @@ static void dem_substep(dem_t *d, const wall_geom *w, double t, double dt, doubl
     for (long i = 0; i < n; ++i)
         if (dem_forces(&v, w, (size_t)i, t, dt, &F[3 * i], &T[3 * i], &Fi[3 * i]) && i < bad) bad = i;
     if (bad < n) dem_overflow_exit((size_t)bad);
-    for (long i = 0; i < n; ++i)
-        for (int q = 0; q < 3; ++q) d->exch[q] += Fi[3 * i + q] * dt;
+    if (!d->split) {
+        for (long i = 0; i < n; ++i)
+            for (int q = 0; q < 3; ++q) d->exch[q] += Fi[3 * i + q] * dt;
+    } else { /* each rank's grains, summed over the ranks in rank order: the same total on every rank */
+        double e[3] = {0, 0, 0};
+        for (long i = 0; i < n; ++i)
+            for (int q = 0; q < 3; ++q) e[q] += Fi[3 * i + q] * dt;
+        dem_sum_ranks(d, e, 3);
+        for (int q = 0; q < 3; ++q) d->exch[q] += e[q];
+    }
     if (d->motion == DEM_FIXED) return;
     if (d->motion == DEM_RIGID) {
         dem_rigid_step(d, F, T, dt);
@@ -394,7 +422,7 @@ void dem_advance(dem_t *d, const wall_geom *w, double t, double dt)
 double dem_kinetic_energy(const dem_t *d)
 {
     double e = 0;
-    for (size_t i = 0; i < d->n; ++i)
+    for (size_t i = 0; i < d->no; ++i)
         for (int q = 0; q < 3; ++q) e += 0.5 * (d->m * d->v[q][i] * d->v[q][i] + d->I * d->w[q][i] * d->w[q][i]);
     return e;
 }

@@ -15,6 +15,8 @@
 #include "physics/wall.h"
 #include "scene/scene.h"
 
+struct halo; /* mpi/halo.h */
+
 enum { DEM_CMAX = 16 }; /* contacts a grain keeps (12 touch a sphere in the densest packing; walls add 3) */
 /* The DEM step is the contact time over this (usual DEM practice: 20 to 50
  * steps a contact). A numerical choice, measured by tests/test_dem.c: the
@@ -25,7 +27,21 @@ enum { DEM_STEPS_PER_CONTACT = 50 };
 typedef struct dem {
     dem_params c;
     int coupling, motion; /* enum dem_coupling, enum dem_motion */
-    size_t n;             /* grains */
+    size_t n;             /* grains held: owned at [0, no), ghosts at [no, n) */
+    size_t no;            /* the grains this rank owns (moves, and writes the contacts of) */
+    size_t ntot;          /* the run's grains, on all ranks */
+    size_t cap;           /* the per-grain arrays' room, grains */
+    /* Several ranks (dem_halo.c): split is 1 once the grains are divided as
+     * the fluid is. Each rank owns the grains whose centre lies in its
+     * domain (the halo's lattice cells) and holds ghosts, copies of other
+     * ranks' grains within DEM_REACH of its domain, at [no, n): those from
+     * rank r at [no + goff[r], no + goff[r + 1]), in that rank's order.
+     * slist[soff[r] .. soff[r + 1]) are the owned grains whose ghosts rank r
+     * holds. split 0: this rank holds every grain (no = n = ntot), one
+     * rank, and every rank until the first coupling divides them. */
+    int split, nrank;
+    size_t *soff, *slist, scap, *goff;
+    long long migrated;   /* grains this rank sent to a new owner (this run's, for the end report) */
     double *x[3], *v[3], *w[3]; /* centre (m), velocity (m/s), angular velocity (rad/s) */
     double *fint[3];      /* the interaction force of eq. (23) at the last coupling, N */
     double *fd[3];        /* its drag part, Di Felice's F_D of eq. (19), at the last coupling, N */
@@ -43,7 +59,8 @@ typedef struct dem {
     long steps;           /* DEM steps taken by the run, restarts included (the end report) */
     double rho_f, nu, K, h; /* the fluid's density, kinematic viscosity, bulk modulus; the kernel's h */
     double g[3], t_damp;
-    double exch[3];       /* the momentum the fluid gave the grains so far, int sum_i F_int dt, N s */
+    double exch[3];       /* the momentum the fluid gave the grains so far, int sum_i F_int dt, N s (split:
+                           * each DEM step's sum over the ranks' grains, the same on every rank) */
     double *eps_f;        /* the fluid fraction at each fluid particle (15-16), owned and ghosts, the last coupling's */
     double *deps_f;       /* its rate following the fluid particle, 1/s */
     size_t eps_cap;
@@ -78,7 +95,8 @@ void dem_derive(dem_t *d, double e);
  * several ranks: every rank holds every grain (replicated) and gets the
  * same sums over the fluid (comm_sum_rows_ordered), so the grains' forces
  * are the same bits on every rank. */
-void dem_couple(dem_t *d, particles_t *p, const grid_view *g, const wall_geom *w, double t, double visc_norm);
+void dem_couple(dem_t *d, particles_t *p, const grid_view *g, const wall_geom *w, double t, double visc_norm,
+                const struct halo *h);
 
 /* The grains from t to t + dt in steps of at most d->dt: contacts with
  * each other and the walls w, gravity (3-4), the interaction force (23)
@@ -125,8 +143,40 @@ dem_state_array dem_state_get(dem_t *d, size_t k);
  * nwalls wall primitives, IDs 0..n-1 in order), else why (in why[len]). */
 const char *dem_state_check(const dem_t *d, int nwalls, char *why, size_t len);
 
-/* The grains' kinetic energy (translation and rotation), J. */
+/* The kinetic energy (translation and rotation) of the grains this rank
+ * owns, J. */
 double dem_kinetic_energy(const dem_t *d);
+
+/* ---- the grains divided among the ranks (dem_halo.c) ---- */
+/* Collective (several ranks, h the fluid's halo). The first call keeps
+ * this rank's own grains of the replicated store; every call sends each owned grain that left
+ * the domain to its new owner with its whole state, contact lists and
+ * springs included, orders the owned by ID, then makes the ghosts: a
+ * copy of each owned grain's centre, velocity and spin for every other
+ * rank owning a lattice cell within DEM_REACH cells of it (a periodic
+ * image's owner too), so that every grain within 2h of a rank's fluid,
+ * owned or ghost, and every contact partner of its grains are there. */
+void dem_exchange(dem_t *d, const struct halo *h);
+enum { DEM_SEND_MOTION = 0, DEM_SEND_COUPLING = 1 };
+/* Collective when split (else nothing). The owners' values into the
+ * ghosts: DEM_SEND_MOTION centre, velocity and spin (each DEM step);
+ * DEM_SEND_COUPLING the coupling's results (fint, fd, uf, eps, snorm). */
+void dem_refresh(dem_t *d, int what);
+/* Collective when split. The grains' partial sums over each rank's fluid
+ * (gsum, 5 a grain, owned and ghosts) added at their owners, over the
+ * ranks in rank order, into the owned rows. */
+void dem_sums_home(dem_t *d);
+/* Collective when split. Of every grain of the run (the ranks' owned, in
+ * ID order), for output and checkpoints:
+ * d itself when not split, else a new store (dem_whole_free). */
+dem_t *dem_whole(dem_t *d);
+void dem_whole_free(const dem_t *d, dem_t *whole);
+/* Collective. The run's grains' kinetic energy, J, and exchanged momentum, N s. */
+void dem_totals(const dem_t *d, double *ke, double exch[3]);
+/* Collective when split: x[0..k) (k <= 16) summed over the ranks in rank order. */
+void dem_sum_ranks(const dem_t *d, double *x, int k);
+/* Room for m grains in every per-grain array (their values kept). */
+void dem_reserve(dem_t *d, size_t m);
 
 /* The normal force the walls w carry from grain i now (overlap and
  * velocity as they are), N. */

@@ -180,8 +180,8 @@ static void ckpt_write_particles(hid_t file, const particles_t *p, long long nto
     free(counts);
 }
 
-/* /DEM (a scene with grains): every rank holds every grain, the same bits
- * (src/dem/dem.h), so rank 0 writes the rows and the others take part with
+/* /DEM (a scene with grains): d is the whole store on every rank
+ * (dem_whole), so rank 0 writes the rows and the others take part with
  * none, as /Outputs. The arrays of dem_state_get, flat (grain by grain), as
  * doubles or signed integers of their size; the scalars as attributes. */
 static void ckpt_write_dem(hid_t file, dem_t *d)
@@ -524,7 +524,7 @@ static double ckpt_bytes(const sim_t *s, const ckpt_run *r, long long ntot, cons
     const halo_t *h = s->halo;
     double nv = h && h->method == HALO_METIS ? (double)h->cg_n[0] * h->cg_n[1] * h->cg_n[2] : 0;
     double grains =
-        s->dem ? (double)s->dem->n * (DEM_CMAX * 32 + 21 * 8 + 4) + 1024.0 * DEM_STATE_NARRAYS : 0;
+        s->dem ? (double)s->dem->ntot * (DEM_CMAX * 32 + 21 * 8 + 4) + 1024.0 * DEM_STATE_NARRAYS : 0;
     return (double)ntot * (double)part_bytes_per_particle() + 16.0 * r->nsnap + 4 * nv +
            8.0 * (2 * comm_size() + 1) + 1024.0 * (double)part_narrays() + grains +
            (double)strlen(scene_text ? scene_text : "");
@@ -545,7 +545,9 @@ double ckpt_write(const char *outdir, const sim_t *s, const ckpt_run *r, const c
     ckpt_write_run(file, r);
     ckpt_write_decomp(file, s->halo);
     ckpt_write_particles(file, &s->p, ntot, offset);
-    ckpt_write_dem(file, s->dem);
+    dem_t *whole = dem_whole(s->dem); /* collective: every grain, on every rank */
+    ckpt_write_dem(file, whole);
+    dem_whole_free(s->dem, whole);
     io_close_file(file);
     ckpt_seal_file(tmp, s);
     ckpt_commit(outdir, tmp);

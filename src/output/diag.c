@@ -156,13 +156,14 @@ void diag_row(diag *d, const sim_t *s)
             warning("step %ld, t = %.6g s: relative drift of sum C_i V_i is %.3e, past "
                     "Segregation:drift_tol = %.3g", s->step, s->t, v.drift, s->sc->segregation.drift_tol);
     }
+    double dke = 0, dex[3] = {0, 0, 0};
+    if (s->dem) dem_totals(s->dem, &dke, dex); /* collective: the grains are divided among the ranks */
     if (!d->f) return;
     int bad = fprintf(d->f, "%ld,%.17g,%.17g,%lld,%.17g,%.17g,%.17g,%.17g,%.6f,%.17g,%.17g,%lld,%.17g", s->step,
                       s->t, s->dt, v.n_material, v.small_volume, v.drift, v.kinetic_energy, v.max_speed,
                       diag_wall() - d->wall0, v.C_min, v.C_max, v.n_outflow, v.small_outflow) < 0;
-    if (s->dem) /* the grains (one rank): kinetic energy, J; momentum the fluid gave them so far, N s */
-        bad |= fprintf(d->f, ",%.17g,%.17g,%.17g,%.17g", dem_kinetic_energy(s->dem), s->dem->exch[0], s->dem->exch[1],
-                       s->dem->exch[2]) < 0;
+    if (s->dem) /* the grains: kinetic energy, J; momentum the fluid gave them so far, N s */
+        bad |= fprintf(d->f, ",%.17g,%.17g,%.17g,%.17g", dke, dex[0], dex[1], dex[2]) < 0;
     bad |= fputc('\n', d->f) == EOF;
     diag_check(d, bad || fflush(d->f) != 0, "a row");
 }

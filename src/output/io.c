@@ -636,9 +636,9 @@ static const dem_t *io_grains; /* io_set_grains: the run's grains, or NULL */
 
 void io_set_grains(const dem_t *d) { io_grains = d; }
 
-/* grp/name, n rows of nc values: every rank holds every grain (the same
- * bits: src/dem/dem.h), so rank 0 writes them all and the others take part
- * in the collective write with nothing. */
+/* grp/name, n rows of nc values: every rank holds every grain (the whole
+ * store, dem_whole), so rank 0 writes them all and the others take part in
+ * the collective write with nothing. */
 static void io_dem_dataset(hid_t grp, const char *name, hid_t ftype, hid_t mtype, const void *buf, size_t n, int nc,
                            const char *desc, const char *units)
 {
@@ -718,7 +718,11 @@ int io_write_snapshot(const char *outdir, int index, const particles_t *p, doubl
     hid_t file = io_create_file(tmp, 0, (double)ntot * row + text);
     io_write_header(file, p->dim, time, step, ntot, scene_text, walls, code_version);
     io_write_particles(file, p, ntot);
-    if (io_grains) io_write_dem(file, io_grains);
+    if (io_grains) { /* every grain of the run, on every rank (dem_whole: collective) */
+        dem_t *whole = dem_whole((dem_t *)io_grains);
+        io_write_dem(file, whole);
+        dem_whole_free(io_grains, whole);
+    }
     io_close_file(file);
     io_commit(tmp, path, 1);
     io_forget_tmp();
