@@ -76,7 +76,9 @@ static const char *prof_name[P_NPROF] = {"save start, advance, motion", "boundin
                                           "flow rates (+seg. coefficients)", "concentration rates", "Shepard filter",
                                           "dt bounds, blow-up check (+sync)", "particle shifting (a neighbour pass)",
                                           "corrected gradient's moment matrix B", "DEM grid (box +sync, sort, starts)",
-                                          "DEM coupling (fraction, drag, source)", "DEM steps (contacts, motion)"};
+                                          "DEM coupling (fraction, drag, source)", "DEM steps (contacts, motion)",
+                                          "DEM exchange (ranks: read-back, MPI, upload)",
+                                          "DEM ghost refreshes, sums home (ranks)"};
 
 static void gpu_to_host(sim_t *s)
 {

@@ -186,7 +186,7 @@ extern int g_local_rank; /* backend_gpu(local_rank) (backend_gpu.cu) */
  * the total runs slower than without; a table at the end of the run
  * (gpu_finish; the state is defined in backend_gpu.cu). */
 enum { P_MOTION, P_BBOX, P_SORT, P_PERMUTE, P_LIST, P_CLASSIFY, P_WALLS, P_FLOW, P_SEG, P_FILTER, P_BOUNDS_CHECK,
-       P_SHIFT, P_KGC, P_DEM_GRID, P_DEM_COUPLE, P_DEM_STEP, P_NPROF };
+       P_SHIFT, P_KGC, P_DEM_GRID, P_DEM_COUPLE, P_DEM_STEP, P_DEM_XCHG, P_DEM_REFRESH, P_NPROF };
 struct gpu_prof {
     int on;
     cudaEvent_t a, b;
@@ -215,6 +215,15 @@ static inline double now(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* A stage of host work (the DEM grains' exchanges on several ranks: their
+ * read-backs, MPI and uploads), timed on the host's clock from t0. */
+static inline void prof_host(int k, double t0)
+{
+    if (!prof.on) return;
+    prof.ms[k] += 1e3 * (now() - t0);
+    prof.calls[k]++;
 }
 
 /* Pass selections: everything (one rank, or right after a build), the

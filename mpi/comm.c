@@ -125,6 +125,22 @@ char *comm_exchange_bytes(const char *send, const size_t *soff, size_t *roff)
     return recv;
 }
 
+void comm_exchange_known(const char *send, const size_t *soff, char *recv, const size_t *roff)
+{
+    const int size = comm_size();
+    int *sc = malloc(4 * (size_t)size * sizeof(int));
+    if (!sc) error_exit(1, "out of memory in comm_exchange_known");
+    int *sd = sc + size, *rc = sc + 2 * size, *rd = sc + 3 * size;
+    for (int r = 0; r < size; ++r) {
+        if (soff[r + 1] - soff[0] > 0x7fffffff || roff[r + 1] - roff[0] > 0x7fffffff)
+            error_exit(1, "comm_exchange_known: over the int count of MPI");
+        sc[r] = (int)(soff[r + 1] - soff[r]), sd[r] = (int)(soff[r] - soff[0]);
+        rc[r] = (int)(roff[r + 1] - roff[r]), rd[r] = (int)(roff[r] - roff[0]);
+    }
+    MPICHECK(MPI_Alltoallv(send + soff[0], sc, sd, MPI_BYTE, recv + roff[0], rc, rd, MPI_BYTE, MPI_COMM_WORLD));
+    free(sc);
+}
+
 int comm_local_rank(void)
 {
     MPI_Comm node;

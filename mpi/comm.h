@@ -38,5 +38,8 @@ void comm_sum_rows_ordered(double *x, size_t n, int k);
  * On one rank: a copy of send. Counts over 2^31 bytes a rank stop the run
  * (exit 1). The DEM grains' migration, ghosts and sums (src/dem/dem_halo.c). */
 char *comm_exchange_bytes(const char *send, const size_t *soff, size_t *roff);
+/* The same when both ends know the sizes: recv + roff[r] .. roff[r + 1]
+ * from rank r (one MPI_Alltoallv; the DEM ghosts' refreshes). */
+void comm_exchange_known(const char *send, const size_t *soff, char *recv, const size_t *roff);
 
 #endif

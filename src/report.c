@@ -102,8 +102,9 @@ void report_end(sim_t *s, diag *d, double io)
     if (s->dem && s->dem->split) { /* the same on every rank: they divide the grains at one coupling */
         const double no = (double)s->dem->no, ng = (double)(s->dem->n - s->dem->no);
         message("dem: divided among %d ranks: %.0f to %.0f grains owned and %.0f to %.0f ghosts a rank at the last "
-                "coupling, %lld grain migrations", comm_size(), comm_min(no), comm_max(no), comm_min(ng),
-                comm_max(ng), comm_sum_ll(s->dem->migrated));
+                "coupling, %lld grain migrations; %lld exchanges, %lld couplings refreshed the ghosts only",
+                comm_size(), comm_min(no), comm_max(no), comm_min(ng), comm_max(ng), comm_sum_ll(s->dem->migrated),
+                s->dem->exchanges, s->dem->refreshes);
     }
     if (s->win.on && s->win.windows > 0)
         message("concentration: %ld windows of %.1f flow steps on average, %ld midpoint steps of C", s->win.windows,

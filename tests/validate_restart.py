@@ -448,13 +448,14 @@ def test_dem(args, name, keys):
 
 
 def test_dem_ranks(args):
-    """The pile on 2 ranks, restarted on 2 (bit-identical) and on 1 (round-off)."""
-    if args.backend == "gpu":
-        print("skip dem_ranks: the GPU backend runs grains on one rank (src/settings_check.c)")
-        return
+    """The pile on 2 ranks, restarted on 2 (bit-identical) and on 1 (round-off);
+    the grains divided between the 2 ranks (src/dem/dem_halo.c)."""
     over = DEM_P + DEM_PILE + [DEM_TILT, "Parallel:axis=x", "Parallel:balance_every=0"]
     a, b, c = (os.path.join(args.work, "dem2r_" + x) for x in "abc")
-    sphseg_np(args, 2, DEM_SCENE, a, over + ["Run:max_steps=%d" % DEM_END])
+    r = sphseg_np(args, 2, DEM_SCENE, a, over + ["Run:max_steps=%d" % DEM_END])
+    m = re.search(r"dem: divided among 2 ranks: (\d+) to (\d+) grains owned", r.stdout + r.stderr)
+    check("dem pile on 2 ranks: the grains divided (the end report)", m is not None and int(m.group(2)) < 108,
+          m.group(0) if m else "no 'dem: divided among 2 ranks' line")
     sphseg_np(args, 2, DEM_SCENE, b, over + ["Run:max_steps=%d" % DEM_STOP, "Run:max_wall_time=1e6"])
     shutil.copytree(b, c)
     ck = ["--restart", os.path.join(b, "checkpoint.h5")]

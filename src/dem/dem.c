@@ -96,7 +96,8 @@ void dem_free(dem_t *d)
     free(d->ncon2), free(d->cid2), free(d->cxi2);
     free(d->eps_f), free(d->deps_f), free(d->gsum);
     free(d->gstart), free(d->gidx), free(d->fstart), free(d->fidx);
-    free(d->soff), free(d->slist), free(d->goff);
+    free(d->soff), free(d->slist), free(d->goff), free(d->scnt), free(d->gcnt), free(d->bound0);
+    for (int a = 0; a < 3; ++a) free(d->x0[a]);
     free(d);
 }
 
@@ -272,7 +273,10 @@ void dem_couple(dem_t *d, particles_t *p, const grid_view *g, const wall_geom *w
 {
     (void)t;
     dem_period(d, w);
-    if (h && comm_size() > 1) dem_exchange(d, h);
+    if (h && comm_size() > 1) {
+        if (dem_exchange_due(d, h, dem_max_shift(d))) dem_exchange(d, h);
+        else dem_refresh(d, DEM_SEND_GHOSTS);
+    }
     const size_t nall = p->n + p->ng;
     if (nall > d->eps_cap) {
         free(d->eps_f), free(d->deps_f);
@@ -364,7 +368,7 @@ static void dem_lists_swap(dem_t *d)
 
 /* One DEM step of length dt from t (symplectic Euler: v, w from the forces
  * at x; then x from the new v). */
-static void dem_substep(dem_t *d, const wall_geom *w, double t, double dt, double *F, double *T, double *Fi)
+static void dem_substep(dem_t *d, const wall_geom *w, double t, double dt, double *F, double *T, double *Fi, double *ex)
 {
     const long n = (long)d->no; /* the owned grains: the ghosts are their owners' */
     dem_lists_swap(d);
@@ -377,16 +381,13 @@ static void dem_substep(dem_t *d, const wall_geom *w, double t, double dt, doubl
 #pragma omp parallel for schedule(static) if (n >= DEM_OMP_MIN && d->motion != DEM_RIGID) reduction(min : bad)
     for (long i = 0; i < n; ++i)
         if (dem_forces(&v, w, (size_t)i, t, dt, &F[3 * i], &T[3 * i], &Fi[3 * i]) && i < bad) bad = i;
-    if (bad < n) dem_overflow_exit((size_t)bad);
+    if (bad < n) dem_overflow_exit((size_t)d->id[bad]); /* its ID: split, the index is this rank's */
     if (!d->split) {
         for (long i = 0; i < n; ++i)
             for (int q = 0; q < 3; ++q) d->exch[q] += Fi[3 * i + q] * dt;
-    } else { /* each rank's grains, summed over the ranks in rank order: the same total on every rank */
-        double e[3] = {0, 0, 0};
+    } else { /* this rank's grains' sum of the step (dem_exch_steps adds the ranks') */
         for (long i = 0; i < n; ++i)
-            for (int q = 0; q < 3; ++q) e[q] += Fi[3 * i + q] * dt;
-        dem_sum_ranks(d, e, 3);
-        for (int q = 0; q < 3; ++q) d->exch[q] += e[q];
+            for (int q = 0; q < 3; ++q) ex[q] += Fi[3 * i + q] * dt;
     }
     if (d->motion == DEM_FIXED) return;
     if (d->motion == DEM_RIGID) {
@@ -413,10 +414,11 @@ void dem_advance(dem_t *d, const wall_geom *w, double t, double dt)
     d->steps += m;
     double h = dt / (double)m;
     double *F = dem_calloc(3 * d->n, sizeof(double)), *T = dem_calloc(3 * d->n, sizeof(double));
-    double *Fi = dem_calloc(3 * d->n, sizeof(double));
-    for (long k = 0; k < m; ++k) dem_substep(d, w, t + (double)k * h, h, F, T, Fi);
+    double *Fi = dem_calloc(3 * d->n, sizeof(double)), *ex = dem_calloc(3 * (size_t)m, sizeof(double));
+    for (long k = 0; k < m; ++k) dem_substep(d, w, t + (double)k * h, h, F, T, Fi, &ex[3 * k]);
+    dem_exch_steps(d, ex, m);
     dem_period(d, w);
-    free(F), free(T), free(Fi);
+    free(F), free(T), free(Fi), free(ex);
 }
 
 double dem_kinetic_energy(const dem_t *d)

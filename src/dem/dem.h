@@ -41,7 +41,18 @@ typedef struct dem {
      * rank, and every rank until the first coupling divides them. */
     int split, nrank;
     size_t *soff, *slist, scap, *goff;
+    size_t *scnt, *gcnt;  /* of slist's entries for rank r and of the ghosts from r, the first scnt[r] and
+                           * gcnt[r] are the contact tier: within the contact reach, refreshed each DEM step */
     long long migrated;   /* grains this rank sent to a new owner (this run's, for the end report) */
+    long long exchanges;  /* exchanges this run (the end report), and couplings that only refreshed */
+    long long refreshes;
+    /* What the last exchange was made for (dem_exchange_due): the slab bounds and lattice origin,
+     * the owned grains' centres; due: an exchange at the next coupling (set by a checkpoint) */
+    long *bound0;
+    real origin0[3];
+    double *x0[3];
+    size_t x0cap;
+    int due;
     double *x[3], *v[3], *w[3]; /* centre (m), velocity (m/s), angular velocity (rad/s) */
     double *fint[3];      /* the interaction force of eq. (23) at the last coupling, N */
     double *fd[3];        /* its drag part, Di Felice's F_D of eq. (19), at the last coupling, N */
@@ -92,9 +103,11 @@ void dem_derive(dem_t *d, double e);
  * pressure rate added to the fluid's acc and dsig. t: the time of p.
  * g: the flow pass's neighbour walk of p (the source's pair term walks a
  * fluid particle's neighbours there, ghosts included). Collective on
- * several ranks: every rank holds every grain (replicated) and gets the
- * same sums over the fluid (comm_sum_rows_ordered), so the grains' forces
- * are the same bits on every rank. */
+ * several ranks (h the fluid's halo): the grains are divided as the fluid
+ * is (dem_exchange when due, else every ghost refreshed); a grain's sums
+ * over the fluid are each rank's partials, added at its owner in rank
+ * order (dem_sums_home), and the owned grains' forces go to their ghosts
+ * (dem_refresh) before the source reads them. */
 void dem_couple(dem_t *d, particles_t *p, const grid_view *g, const wall_geom *w, double t, double visc_norm,
                 const struct halo *h);
 
@@ -157,11 +170,38 @@ double dem_kinetic_energy(const dem_t *d);
  * image's owner too), so that every grain within 2h of a rank's fluid,
  * owned or ghost, and every contact partner of its grains are there. */
 void dem_exchange(dem_t *d, const struct halo *h);
-enum { DEM_SEND_MOTION = 0, DEM_SEND_COUPLING = 1 };
+/* Collective when split (else 1: the first call divides). Whether the
+ * next coupling must exchange: the fluid's slabs moved (bounds or lattice
+ * origin; METIS parts: always), a checkpoint was written since (so that a
+ * restart exchanges where the straight run does: the same bits), or on any
+ * rank an owned grain moved h / 2 or more since the last exchange (maxdisp,
+ * m: dem_max_shift's, or a backend's own). Until then the reach's cell of
+ * room (2h) holds what each grain and its neighbours may move, and a
+ * coupling refreshes every ghost's centre, velocity and spin instead
+ * (dem_refresh DEM_SEND_GHOSTS). */
+int dem_exchange_due(dem_t *d, const struct halo *h, double maxdisp);
+/* The largest distance an owned grain moved since the last exchange, m. */
+double dem_max_shift(const dem_t *d);
+/* The owned grains (split) whose centre h gives to another rank now: those
+ * dem_exchange would send away (their centres must be current). */
+size_t dem_migrating(const dem_t *d, const struct halo *h);
+enum { DEM_SEND_MOTION = 0, DEM_SEND_COUPLING = 1, DEM_SEND_GHOSTS = 2 };
 /* Collective when split (else nothing). The owners' values into the
- * ghosts: DEM_SEND_MOTION centre, velocity and spin (each DEM step);
- * DEM_SEND_COUPLING the coupling's results (fint, fd, uf, eps, snorm). */
+ * ghosts: DEM_SEND_MOTION centre, velocity and spin (each DEM step) of the
+ * contact tier, the ghosts within d and a cell of room of an owned grain
+ * (the others, held for the fluid's fraction, are not read before the next
+ * exchange); DEM_SEND_COUPLING the coupling's results (fint, fd, uf, eps,
+ * snorm) of every ghost; DEM_SEND_GHOSTS centre, velocity and spin of
+ * every ghost (a coupling without an exchange). */
 void dem_refresh(dem_t *d, int what);
+/* The refresh in pieces, for a backend that packs its own rows (the GPU):
+ * the owned grains whose rows it sends, in the order dem_refresh_swap
+ * takes them (sidx, returns their count), and the ghosts the received rows
+ * go to (ridx, *nrecv of them); sidx holds soff[nrank], ridx n - no. Then,
+ * collective, send[ns][k] to the ghosts' ranks and recv[nrecv][k] back
+ * (k: 11 for DEM_SEND_COUPLING, else 9: dem_refresh's rows). */
+size_t dem_refresh_lists(const dem_t *d, int what, size_t *sidx, size_t *ridx, size_t *nrecv);
+void dem_refresh_swap(const dem_t *d, int what, int k, const double *send, double *recv);
 /* Collective when split. The grains' partial sums over each rank's fluid
  * (gsum, 5 a grain, owned and ghosts) added at their owners, over the
  * ranks in rank order, into the owned rows. */
@@ -173,6 +213,11 @@ dem_t *dem_whole(dem_t *d);
 void dem_whole_free(const dem_t *d, dem_t *whole);
 /* Collective. The run's grains' kinetic energy, J, and exchanged momentum, N s. */
 void dem_totals(const dem_t *d, double *ke, double exch[3]);
+/* Collective when split (else nothing): ex[m][3], each DEM step's
+ * momentum exchanged with this rank's grains, summed over the ranks in
+ * rank order (one reduction for the fluid step), then added to exch step
+ * by step: each step's total the same on every rank and on any timing. */
+void dem_exch_steps(dem_t *d, double *ex, long m);
 /* Collective when split: x[0..k) (k <= 16) summed over the ranks in rank order. */
 void dem_sum_ranks(const dem_t *d, double *x, int k);
 /* Room for m grains in every per-grain array (their values kept). */

@@ -132,11 +132,12 @@ static size_t *dem_offs(int size, size_t **roff)
 
 /* ---- ownership ------------------------------------------------------------------- */
 
-/* The halo's decisions at the grains' reach (the file's comment). */
-static void dem_geom(const dem_t *d, const halo_t *h, halo_geom *g)
+/* The halo's decisions at the grains' reach (the file's comment), or
+ * (contact) at their contact reach: a cell of room and the grains' d. */
+static void dem_geom(const dem_t *d, const halo_t *h, halo_geom *g, int contact)
 {
     halo_geom_of(h, g);
-    const int reach = h->depth + 2 + (int)ceil((double)d->c.d / (double)h->support);
+    const int reach = (contact ? 1 : h->depth + 2) + (int)ceil((double)d->c.d / (double)h->support);
     g->depth = reach;
     for (int a = 0; a < 3; ++a) {
         g->near_lo[a] = h->plo[a] - (real)reach * h->support;
@@ -193,7 +194,9 @@ static void dem_divide(dem_t *d, const halo_geom *g)
     d->split = 1, d->nrank = g->size;
     d->soff = calloc((size_t)g->size + 1, sizeof(size_t));
     d->goff = calloc((size_t)g->size + 1, sizeof(size_t));
-    if (!d->soff || !d->goff) error_exit(EXIT_SYSTEM, "out of memory");
+    d->scnt = calloc((size_t)g->size, sizeof(size_t));
+    d->gcnt = calloc((size_t)g->size, sizeof(size_t));
+    if (!d->soff || !d->goff || !d->scnt || !d->gcnt) error_exit(EXIT_SYSTEM, "out of memory");
 }
 
 /* Owned grains that left the domain to their new owners, with their state. */
@@ -226,34 +229,102 @@ static void dem_migrate(dem_t *d, const halo_geom *g)
     dem_sort_owned(d);
 }
 
-/* Ghost records: ID, centre, velocity, spin. */
-enum { DEM_GHOST_DOUBLES = 10 };
+/* Ghost records: ID, centre, velocity, spin, the contact tier's flag. */
+enum { DEM_GHOST_DOUBLES = 11 };
 
-static void dem_ghosts(dem_t *d, const halo_geom *g)
+/* The ranks other than this one that own a lattice cell within g->depth
+ * cells of owned grain i (a periodic image's owner too), each once. */
+static int dem_targets(const halo_geom *g, const dem_t *d, size_t i, int *out)
+{
+    int codes[HG_MAX_TARGETS], all[HG_MAX_TARGETS], m = 0;
+    long c[3];
+    real x[3];
+    dem_cols(g, d, i, c, x);
+    const int nt = hg_particle_targets(g, x, all, codes);
+    for (int k = 0; k < nt; ++k) {
+        int r = all[k], dup = r == g->rank; /* the grain itself is here: minimum images */
+        for (int q = 0; q < m && !dup; ++q) dup = out[q] == r;
+        if (!dup) out[m++] = r;
+    }
+    return m;
+}
+
+/* Slabs: a grain's targets depend on its lattice column along the slab
+ * axis alone (hg_targets reads only that column; an image across another
+ * periodic axis reaches the same ranks, and this one, which dem_targets
+ * drops), so they are worked out once a column, at its first grain in ID
+ * order. Only the near test of an image across a periodic slab axis reads
+ * the coordinate itself: a grain in the same column on the other side of
+ * that test is still within the reach's cell of room. METIS: per grain. */
+typedef struct dem_memo {
+    long c0, nc; /* the columns held: c0 .. c0 + nc - 1 */
+    int w;       /* room a column */
+    int *n, *r;  /* each column's count (-1: not yet) and ranks */
+} dem_memo;
+
+static void dem_memo_init(dem_memo *m, const halo_geom *g, const dem_t *d)
+{
+    memset(m, 0, sizeof *m);
+    if (g->metis || !d->no) return;
+    long lo = 0, hi = 0;
+    for (size_t i = 0; i < d->no; ++i) {
+        const long c = hg_column(g, g->axis, (real)d->x[g->axis][i]);
+        if (i == 0 || c < lo) lo = c;
+        if (i == 0 || c > hi) hi = c;
+    }
+    m->c0 = lo, m->nc = hi - lo + 1, m->w = 2 * (2 * g->depth + 1) + 2;
+    if (m->nc > 1 << 24) return; /* a grain flung far away: per grain */
+    m->n = malloc((size_t)m->nc * sizeof(int));
+    m->r = malloc((size_t)m->nc * (size_t)m->w * sizeof(int));
+    if (!m->n || !m->r) error_exit(EXIT_SYSTEM, "out of memory");
+    for (long k = 0; k < m->nc; ++k) m->n[k] = -1;
+}
+
+static int dem_targets(const halo_geom *g, const dem_t *d, size_t i, int *out);
+
+static int dem_targets_memo(dem_memo *m, const halo_geom *g, const dem_t *d, size_t i, int *out)
+{
+    if (!m->n) return dem_targets(g, d, i, out);
+    const long k = hg_column(g, g->axis, (real)d->x[g->axis][i]) - m->c0;
+    if (m->n[k] < 0) {
+        const int nt = dem_targets(g, d, i, out);
+        if (nt > m->w) return nt; /* cannot happen: 2 depth + 1 columns, and as many across the period */
+        memcpy(&m->r[k * m->w], out, (size_t)nt * sizeof(int));
+        m->n[k] = nt;
+        return nt;
+    }
+    memcpy(out, &m->r[k * m->w], (size_t)m->n[k] * sizeof(int));
+    return m->n[k];
+}
+
+/* The ghosts: for each other rank, the owned grains within the reach g of
+ * its domain, those within the contact reach gc first (the tier a DEM
+ * step refreshes: they can touch that rank's grains before the next
+ * exchange), each tier in ID order; sent with their centres, velocities
+ * and spins. */
+static void dem_ghosts(dem_t *d, const halo_geom *g, const halo_geom *gc)
 {
     const int size = g->size;
     const size_t no = d->no;
-    int out[HG_MAX_TARGETS], codes[HG_MAX_TARGETS];
-    /* count, then list: each owned grain once for each other rank that wants it */
+    int out[HG_MAX_TARGETS], cout[HG_MAX_TARGETS];
+    size_t *fill = calloc(2 * (size_t)size, sizeof(size_t)), *cfill = fill + size;
+    if (!fill) error_exit(EXIT_SYSTEM, "out of memory");
     memset(d->soff, 0, ((size_t)size + 1) * sizeof(size_t));
+    memset(d->scnt, 0, (size_t)size * sizeof(size_t));
+    dem_memo mg, mc;
+    dem_memo_init(&mg, g, d), dem_memo_init(&mc, gc, d);
     for (int pass = 0; pass < 2; ++pass) {
-        size_t *fill = calloc((size_t)size, sizeof(size_t));
-        if (!fill) error_exit(EXIT_SYSTEM, "out of memory");
         for (size_t i = 0; i < no; ++i) {
-            long c[3];
-            real x[3];
-            dem_cols(g, d, i, c, x);
-            (void)c;
-            int nt = hg_particle_targets(g, x, out, codes);
+            const int nt = dem_targets_memo(&mg, g, d, i, out), nc = dem_targets_memo(&mc, gc, d, i, cout);
             for (int k = 0; k < nt; ++k) {
-                int r = out[k], dup = r == g->rank; /* the grain itself is here: minimum images */
-                for (int q = 0; q < k && !dup; ++q) dup = out[q] == r;
-                if (dup) continue;
-                if (pass == 0) d->soff[r + 1]++;
-                else d->slist[d->soff[r] + fill[r]++] = i;
+                const int r = out[k];
+                int near = 0;
+                for (int q = 0; q < nc && !near; ++q) near = cout[q] == r;
+                if (pass == 0) d->soff[r + 1]++, d->scnt[r] += (size_t)near;
+                else if (near) d->slist[d->soff[r] + cfill[r]++] = i;
+                else d->slist[d->soff[r] + d->scnt[r] + fill[r]++] = i;
             }
         }
-        free(fill);
         if (pass == 1) break;
         for (int r = 0; r < size; ++r) d->soff[r + 1] += d->soff[r];
         if (d->soff[size] > d->scap || !d->slist) {
@@ -262,20 +333,27 @@ static void dem_ghosts(dem_t *d, const halo_geom *g)
             d->scap = d->soff[size];
         }
     }
+    free(fill), free(mg.n), free(mg.r), free(mc.n), free(mc.r);
     const size_t rb = DEM_GHOST_DOUBLES * sizeof(double);
     double *send = dem_xmalloc(d->soff[size] * rb);
-    for (size_t k = 0; k < d->soff[size]; ++k) {
-        const size_t i = d->slist[k];
-        double *r = &send[k * DEM_GHOST_DOUBLES];
-        r[0] = (double)d->id[i]; /* exact below 2^53 grains */
-        for (int a = 0; a < 3; ++a) r[1 + a] = d->x[a][i], r[4 + a] = d->v[a][i], r[7 + a] = d->w[a][i];
-    }
+    for (int q = 0; q < size; ++q)
+        for (size_t k = d->soff[q]; k < d->soff[q + 1]; ++k) {
+            const size_t i = d->slist[k];
+            double *r = &send[k * DEM_GHOST_DOUBLES];
+            r[0] = (double)d->id[i]; /* exact below 2^53 grains */
+            for (int a = 0; a < 3; ++a) r[1 + a] = d->x[a][i], r[4 + a] = d->v[a][i], r[7 + a] = d->w[a][i];
+            r[10] = k - d->soff[q] < d->scnt[q];
+        }
     size_t *roff, *off = dem_offs(size, &roff);
     for (int r = 0; r <= size; ++r) off[r] = d->soff[r] * rb;
     double *recv = (double *)comm_exchange_bytes((const char *)send, off, roff);
     const size_t got = roff[size] / rb;
     dem_reserve(d, no + got);
     for (int r = 0; r <= size; ++r) d->goff[r] = roff[r] / rb;
+    for (int q = 0; q < size; ++q) {
+        d->gcnt[q] = 0;
+        for (size_t k = d->goff[q]; k < d->goff[q + 1]; ++k) d->gcnt[q] += recv[k * DEM_GHOST_DOUBLES + 10] != 0;
+    }
     for (size_t k = 0; k < got; ++k) {
         const double *r = &recv[k * DEM_GHOST_DOUBLES];
         const size_t j = no + k;
@@ -290,44 +368,127 @@ static void dem_ghosts(dem_t *d, const halo_geom *g)
     free(recv), free(send), free(off);
 }
 
+static void dem_exchanged(dem_t *d, const halo_t *h);
+
+size_t dem_migrating(const dem_t *d, const halo_t *h)
+{
+    if (!d->split || !h) return 0;
+    halo_geom g;
+    dem_geom(d, h, &g, 0);
+    size_t m = 0;
+    for (size_t i = 0; i < d->no; ++i) m += dem_owner(&g, d, i) != g.rank;
+    return m;
+}
+
 void dem_exchange(dem_t *d, const halo_t *h)
 {
     if (!h || h->size < 2) return;
-    halo_geom g;
-    dem_geom(d, h, &g);
+    halo_geom g, gc;
+    dem_geom(d, h, &g, 0);
+    dem_geom(d, h, &gc, 1);
     if (!d->split) dem_divide(d, &g);
     else d->n = d->no, dem_migrate(d, &g);
-    dem_ghosts(d, &g);
+    dem_ghosts(d, &g, &gc);
+    dem_exchanged(d, h);
 }
 
 /* ---- refreshes and sums ------------------------------------------------------------ */
 
+int dem_exchange_due(dem_t *d, const halo_t *h, double maxdisp)
+{
+    if (!d->split) return 1;
+    int due = d->due || h->method == HALO_METIS || maxdisp >= 0.5 * d->h || !d->bound0;
+    for (int r = 0; r <= h->size && !due; ++r) due = h->bound[r] != d->bound0[r];
+    for (int a = 0; a < 3 && !due; ++a) due = h->origin[a] != d->origin0[a];
+    return comm_max((double)due) > 0;
+}
+
+double dem_max_shift(const dem_t *d)
+{
+    double m = 0;
+    for (size_t i = 0; i < d->no && d->x0cap >= d->no; ++i) {
+        double r2 = 0;
+        for (int a = 0; a < 3; ++a) {
+            double s = d->x[a][i] - d->x0[a][i];
+            if (d->per >> a & 1) s -= d->plen[a] * floor(s / d->plen[a] + 0.5); /* a grain wrapped across a period */
+            r2 += s * s;
+        }
+        m = fmax(m, r2);
+    }
+    return sqrt(m);
+}
+
+/* What this exchange was made for (dem_exchange_due). */
+static void dem_exchanged(dem_t *d, const halo_t *h)
+{
+    if (!d->bound0) d->bound0 = dem_xmalloc(((size_t)h->size + 1) * sizeof(long));
+    memcpy(d->bound0, h->bound, ((size_t)h->size + 1) * sizeof(long));
+    for (int a = 0; a < 3; ++a) d->origin0[a] = h->origin[a];
+    if (d->no > d->x0cap) {
+        for (int a = 0; a < 3; ++a) {
+            free(d->x0[a]);
+            d->x0[a] = dem_xmalloc(d->cap * sizeof(double));
+        }
+        d->x0cap = d->cap;
+    }
+    for (int a = 0; a < 3; ++a) memcpy(d->x0[a], d->x[a], d->no * sizeof(double));
+    d->due = 0;
+    d->exchanges++;
+}
+
+size_t dem_refresh_lists(const dem_t *d, int what, size_t *sidx, size_t *ridx, size_t *nrecv)
+{
+    const int size = d->nrank, all = what != DEM_SEND_MOTION;
+    size_t ns = 0, nr = 0;
+    for (int r = 0; r < size; ++r) {
+        const size_t s1 = all ? d->soff[r + 1] : d->soff[r] + d->scnt[r];
+        const size_t g1 = all ? d->goff[r + 1] : d->goff[r] + d->gcnt[r];
+        for (size_t k = d->soff[r]; k < s1; ++k) sidx[ns++] = d->slist[k];
+        for (size_t k = d->goff[r]; k < g1; ++k) ridx[nr++] = d->no + k;
+    }
+    *nrecv = nr;
+    return ns;
+}
+
+void dem_refresh_swap(const dem_t *d, int what, int k, const double *send, double *recv)
+{
+    const int size = d->nrank, all = what != DEM_SEND_MOTION;
+    const size_t rb = (size_t)k * sizeof(double);
+    size_t *roff, *off = dem_offs(size, &roff);
+    for (int r = 0; r < size; ++r) { /* both ends know the counts: the lists of the last exchange */
+        off[r + 1] = off[r] + (all ? d->soff[r + 1] - d->soff[r] : d->scnt[r]) * rb;
+        roff[r + 1] = roff[r] + (all ? d->goff[r + 1] - d->goff[r] : d->gcnt[r]) * rb;
+    }
+    comm_exchange_known((const char *)send, off, (char *)recv, roff);
+    free(off);
+}
+
 void dem_refresh(dem_t *d, int what)
 {
     if (!d->split) return;
-    const int size = d->nrank, k = what == DEM_SEND_MOTION ? 9 : 11;
+    const int k = what == DEM_SEND_COUPLING ? 11 : 9;
+    d->refreshes += what == DEM_SEND_GHOSTS;
+    size_t *sidx = dem_xmalloc((d->soff[d->nrank] + d->n - d->no) * sizeof(size_t)), *ridx = sidx + d->soff[d->nrank], nr;
+    const size_t ns = dem_refresh_lists(d, what, sidx, ridx, &nr);
     double *const *vec[3] = {d->x, d->v, d->w}, *const *cpl[3] = {d->fint, d->fd, d->uf};
-    double *send = dem_xmalloc(d->soff[size] * (size_t)k * sizeof(double));
-    for (size_t m = 0; m < d->soff[size]; ++m) {
-        const size_t i = d->slist[m];
+    double *const *const *src = what == DEM_SEND_COUPLING ? cpl : vec;
+    double *send = dem_xmalloc((ns + nr) * (size_t)k * sizeof(double)), *recv = send + ns * (size_t)k;
+    for (size_t m = 0; m < ns; ++m) {
+        const size_t i = sidx[m];
         double *r = &send[m * (size_t)k];
         for (int q = 0; q < 3; ++q)
-            for (int a = 0; a < 3; ++a) r[3 * q + a] = what == DEM_SEND_MOTION ? vec[q][a][i] : cpl[q][a][i];
-        if (what != DEM_SEND_MOTION) r[9] = d->eps[i], r[10] = d->snorm[i];
+            for (int a = 0; a < 3; ++a) r[3 * q + a] = src[q][a][i];
+        if (k == 11) r[9] = d->eps[i], r[10] = d->snorm[i];
     }
-    size_t *roff, *off = dem_offs(size, &roff);
-    for (int r = 0; r <= size; ++r) off[r] = d->soff[r] * (size_t)k * sizeof(double);
-    double *recv = (double *)comm_exchange_bytes((const char *)send, off, roff);
-    if (roff[size] != (d->n - d->no) * (size_t)k * sizeof(double))
-        error_exit(1, "dem_refresh: %zu bytes for %zu ghost grains", roff[size], d->n - d->no);
-    for (size_t m = 0; m < d->n - d->no; ++m) {
-        const size_t j = d->no + m;
+    dem_refresh_swap(d, what, k, send, recv);
+    for (size_t m = 0; m < nr; ++m) {
+        const size_t j = ridx[m];
         const double *r = &recv[m * (size_t)k];
         for (int q = 0; q < 3; ++q)
-            for (int a = 0; a < 3; ++a) (what == DEM_SEND_MOTION ? vec : cpl)[q][a][j] = r[3 * q + a];
-        if (what != DEM_SEND_MOTION) d->eps[j] = r[9], d->snorm[j] = r[10];
+            for (int a = 0; a < 3; ++a) src[q][a][j] = r[3 * q + a];
+        if (k == 11) d->eps[j] = r[9], d->snorm[j] = r[10];
     }
-    free(recv), free(send), free(off);
+    free(send), free(sidx);
 }
 
 void dem_sums_home(dem_t *d)
@@ -355,6 +516,14 @@ void dem_sums_home(dem_t *d)
         }
     }
     free(own), free(recv), free(off);
+}
+
+void dem_exch_steps(dem_t *d, double *ex, long m)
+{
+    if (!d->split) return;
+    comm_sum_rows_ordered(ex, (size_t)m, 3);
+    for (long k = 0; k < m; ++k)
+        for (int q = 0; q < 3; ++q) d->exch[q] += ex[3 * k + q];
 }
 
 void dem_sum_ranks(const dem_t *d, double *x, int k)

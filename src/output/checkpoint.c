@@ -548,6 +548,7 @@ double ckpt_write(const char *outdir, const sim_t *s, const ckpt_run *r, const c
     dem_t *whole = dem_whole(s->dem); /* collective: every grain, on every rank */
     ckpt_write_dem(file, whole);
     dem_whole_free(s->dem, whole);
+    if (s->dem) s->dem->due = 1; /* the next coupling exchanges, as a restart from this file does */
     io_close_file(file);
     ckpt_seal_file(tmp, s);
     ckpt_commit(outdir, tmp);

@@ -56,8 +56,9 @@
  *                 CoordinatesX/Y/Z, VelocitiesX/Y/Z, AngularVelocitiesX/Y/Z,
  *                 InteractionForceX/Y/Z, DragForceX/Y/Z, FluidVelocityX/Y/Z,
  *                 FluidFraction, KernelSum, ParticleIDs, Contacts,
- *                 ContactPartners, ContactSprings. Written by rank 0 (every
- *                 rank holds every grain, the same bits), read by every rank.
+ *                 ContactPartners, ContactSprings. Written by rank 0 from the
+ *                 whole store (dem_whole), read by every rank; the first
+ *                 coupling divides the grains among the ranks.
  *
  * A restart on the same rank count gives every rank its own block back, so
  * the run continues bit-identically; on another rank count each rank takes an

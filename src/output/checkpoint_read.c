@@ -406,8 +406,9 @@ static void ckpt_read_particles(hid_t f, sim_t *s, int dim, long long ntot, int 
 /* ---- DEM grains -------------------------------------------------------------------- */
 
 /* /DEM into s->dem (made by setup_contexts from the scene, whose DEM keys
- * ckpt_check_scene has compared): every rank reads every grain (they are
- * replicated, src/dem/dem.h), whatever the rank count that wrote them.
+ * ckpt_check_scene has compared): every rank reads every grain, whatever
+ * the rank count that wrote them; the first coupling divides them
+ * (dem_exchange, src/dem/dem_halo.c).
  * Every rank reads the same bytes, so a problem stops all ranks alike. */
 static void ckpt_read_dem(hid_t f, sim_t *s)
 {
