@@ -10,16 +10,19 @@
 # and the per-stage profile (SPHSEG_GPU_PROFILE=1).
 #   tools/bench/dem_rate.sh OUT STEPS BINARY [BACKEND]      (BACKEND gpu, default, or cpu)
 #   NAME=label (default grains) and EXTRA='-P DEM:coupling=one_way ...' change the grains' run;
-#   ONLY=grains skips the fluid alone; LAUNCH='mpirun -np 2' runs each on several ranks (one GPU a rank).
+#   ONLY=grains skips the fluid alone; LAUNCH='mpirun -np 2' runs each on several ranks (one GPU a rank);
+#   SCALE=2 widens the box S times along x and z (S^2 times the fluid and the grains: 47 S x 47 x 47 S).
 #   Rows are appended to OUT/dem_rate.csv and OUT/logs.txt.
 set -uo pipefail
 export OMP_NUM_THREADS=${OMP_NUM_THREADS:-16}
 out=${1:?usage: dem_rate.sh OUT STEPS BINARY [BACKEND]}; steps=${2:?}; bin=${3:?}; backend=${4:-gpu}
 mkdir -p "$out"
-L=0.12549 # 47 spacings of 2.67 mm
+S=${SCALE:-1}
+L=$(awk -v s="$S" 'BEGIN { printf "%.5f", 0.12549 * s }') # 47 S spacings of 2.67 mm
+NB=$((47 * S))
 S=(-P Geometry:dr=0.00133 -P Geometry:width=$L -P Geometry:depth=$L
    -P "Container:walls=[{name: base, from: [0, 0], to: [$L, 0]}]" -P "Container:regions=[{shape: fill, level: 0.2, C: 0}]"
-   -P DEM:d=0.002 -P DEM:motion=free -P "DEM:block_n=[47, 47, 47]" -P DEM:block_spacing=0.00267
+   -P DEM:d=0.002 -P DEM:motion=free -P "DEM:block_n=[$NB, 47, $NB]" -P DEM:block_spacing=0.00267
    -P "DEM:block_origin=[0.001335, 0.03, 0.001335]" -P Run:max_steps="$steps" -P Output:snapshots=off
    -P Run:progress_s=1e9 -P Output:diag_dt=1e9)
 csv=$out/dem_rate.csv
