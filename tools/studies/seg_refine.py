@@ -141,6 +141,8 @@ def label_of(drum, var, dr):
 
 def commands(a):
     runs = [r for r in RUNS if not a.only or label_of(*r[:3]) in a.only]
+    if a.t_end:
+        runs = [(d, v, dr, a.t_end) for d, v, dr, _ in runs]
     if a.tiny:  # the local check: dr 2 mm, 0.2 s, snapshots every 0.1 s, every run once
         runs = [(d, v, 0.002, 0.2) for d, v in dict.fromkeys((d, v) for d, v, _, _ in RUNS)]
         FILL.update({("EV", 0.002): 0.43, ("EN", 0.002): 0.6})
@@ -506,20 +508,20 @@ def chart(a):
         ax[k][1].set_xlabel("t, s")
         ax[k][1].grid(alpha=0.3)
         ax[k][1].legend(fontsize=7)
-    fig.suptitle("2D drums, E 10 kPa, chi 0.2, the scenes' flow: the segregation index under refinement and "
-                 "against each factor (%s)" % a.machine, fontsize=9)
+    fig.suptitle("2D drums, E 10 kPa, chi 0.2, the scenes' flow:\nthe segregation index under refinement"
+                 "%s (%s)" % (" and against each factor" if ncol > 1 else "", a.machine), fontsize=9)
     fig.tight_layout()
     fig.savefig(a.png, dpi=110)
     print("wrote %s" % a.png)
 
 
 def profiles(a):
-    """The base runs' mid-chord profiles of C and of the shear rate at each dr (rows: drums; columns: the
-    times asked, C above the shear rate), from the runs' JSONs."""
+    """One variant's runs' (--variant, base by default) mid-chord profiles of C and of the shear rate at
+    each dr (rows: drums; columns: the times asked, C above the shear rate), from the runs' JSONs."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    runs = {k: r for k, r in load(a.files).items() if k[1] == "base"}
+    runs = {k: r for k, r in load(a.files).items() if k[1] == a.variant}
     drums = sorted({k[0] for k in runs})
     fig, ax = plt.subplots(2 * len(drums), len(a.times), figsize=(4.2 * len(a.times), 3.2 * 2 * len(drums)),
                            squeeze=False, sharex=True)
@@ -555,6 +557,8 @@ def main():
     c.add_argument("--script", help="write the script here (default: stdout)")
     c.add_argument("--only", nargs="+", help="only these runs (labels such as EV_base_dr0.25)")
     c.add_argument("--tiny", action="store_true", help="every run at dr 2 mm for 0.2 s, on the CPU (a local check)")
+    c.add_argument("--t_end", type=float, help="run the selected runs to this time, s, instead of RUNS' (the same "
+                   "labels: a longer run's analysis holds the shorter one's times)")
     n = sub.add_parser("analyse")
     n.add_argument("rundir")
     n.add_argument("--json", required=True)
@@ -573,6 +577,7 @@ def main():
     f = sub.add_parser("profiles")
     f.add_argument("files", nargs="+")
     f.add_argument("--times", type=float, nargs="+", default=[6.0, 10.0])
+    f.add_argument("--variant", default="base", help="the variant whose runs are drawn")
     f.add_argument("--png", default=PNG.replace(".png", "_profiles.png"))
     f.add_argument("--machine", default="development machine", help="the runs' machine, for the title")
     a = ap.parse_args()
