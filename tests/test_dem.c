@@ -254,12 +254,28 @@ static void test_periodic_contact(void **st)
     dem_free(d);
 }
 
+/* A rank that holds no grain (split among many ranks) advances nothing:
+ * its grid over nothing is one cell (dem_grid_fit's empty box), not the
+ * cell count of an infinite extent. */
+static void test_no_grains(void **st)
+{
+    (void)st;
+    wall_geom w = base();
+    dem_t *d = grains(0, 0.9, 0.3, -9.81);
+    const double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    dem_grid_fit(d, lo, hi);
+    for (int a = 0; a < 3; ++a) assert_int_equal(d->nc[a], 1);
+    dem_advance(d, &w, 0, 1e-3);
+    assert_true(d->steps > 0);
+    dem_free(d);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_restitution), cmocka_unit_test(test_resting),
                                        cmocka_unit_test(test_stack),
                                        cmocka_unit_test(test_rolling), cmocka_unit_test(test_gamma),
                                        cmocka_unit_test(test_rigid_spin), cmocka_unit_test(test_rigid_impact),
-                                       cmocka_unit_test(test_periodic_contact)};
+                                       cmocka_unit_test(test_periodic_contact), cmocka_unit_test(test_no_grains)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

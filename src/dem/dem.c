@@ -208,6 +208,10 @@ void dem_grid_fit(dem_t *d, const double lo[3], const double hi[3])
             d->lo[a] = 0, d->nc[a] = n < 1 ? 1 : n > 1024 ? 1024 : (int)n;
             continue;
         }
+        if (!(hi[a] >= lo[a])) { /* nothing to bin (a rank holding no grain, between couplings): one cell */
+            d->lo[a] = 0, d->nc[a] = 1;
+            continue;
+        }
         d->lo[a] = lo[a];
         double n = floor((hi[a] - lo[a]) / d->cell) + 1;
         d->nc[a] = n > 1024 ? 1024 : (int)n; /* a grain flung far away shares the edge cells */
