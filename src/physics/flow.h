@@ -37,6 +37,7 @@ typedef struct flow_ctx {
     mat_params m;
     real rho;      /* bulk density, kg/m^3 */
     real cs;       /* elastic sound speed, m/s (3.10, 3.19) */
+    real v_stick;  /* a Coulomb wall's sticking speed (wall_coulomb), m/s: SPHSEG_COULOMB_STICK c_s */
     int stab;      /* Flow:stabilization: STAB_MONAGHAN (the paper's 3.10) | STAB_RIEMANN | STAB_DELTA */
     real alpha_av; /* Monaghan coefficient of (3.10), monaghan only; 0 switches it off */
     real eta_r;    /* riemann: the limiter's eta (Zhang, Hu & Adams 2017: 3) */
@@ -99,6 +100,8 @@ HD_INLINE void flow_wall_set(size_t d, particles_t *p, const flow_ctx *c, const 
          * return mapping applies to the wall stress too */
         if (stress_pressure(sd) <= 0)
             for (int q = 0; q < 6; ++q) sd[q] = 0;
+        const real mu_w = wall_of(&c->w, p->wall[d])->mu_w;
+        if (mu_w > 0) wall_coulomb(&ws, uw, n, mu_w, c->v_stick, ud, sd);
     } else {
         for (int a = 0; a < 3; ++a) ud[a] = uw[a];
         for (int q = 0; q < 6; ++q) sd[q] = 0;

@@ -44,6 +44,7 @@ typedef struct wall_prim {
     int shape;       /* enum wall_shape */
     int move;        /* enum wall_move */
     int slip;        /* 1 free slip (4.2), 0 no slip (4.1) */
+    real mu_w;       /* > 0: Coulomb friction (slip 0 while it sticks; wall_coulomb), the coefficient */
     int bound;       /* 1: material beyond it by more than h has left the container (step_outside);
                       * 0 for a wall with an opening (an outlet's base), a gate, a lid */
     int claim;       /* enum wall_claim */
@@ -238,6 +239,53 @@ HD_INLINE void wall_velocity(const wall_sums *ws, const real uw[3], const real n
     real wn = uw[0] * n[0] + uw[1] * n[1] + uw[2] * n[2];
     real dn = R(2.0) * wn - an; /* normal component of the dummy */
     for (int a = 0; a < 3; ++a) ud[a] = avg[a] - an * n[a] + dn * n[a];
+}
+
+/* A Coulomb wall's sticking speed over the sound speed (flow_ctx.v_stick). */
+#ifndef COULOMB_STICK
+#define COULOMB_STICK 1e-3
+#endif
+
+/* A Coulomb wall (wall_prim.mu_w > 0; Walls:slip coulomb). The traction
+ * the dummy's stress sd puts on the wall, t = sd n (n into the material),
+ * has a normal stress sigma_n = -n.t (compression; none in tension) and a
+ * shear part tau = t - (n.t) n; u_rel is the material's tangential
+ * velocity against the wall's (the Shepard mean of 4.1). It sticks while
+ * |u_rel| <= v_stick and |tau| <= mu_w sigma_n: the no-slip velocity and
+ * the extrapolated stress (4.1, 4.3) stand. Else it slides: the velocity is
+ * free slip's (4.2) and the traction's shear part is set to mu_w sigma_n
+ * along u_rel (kinetic friction, resisting the motion as the static shear
+ * resists the pull), or along tau when the material starts from rest;
+ * sigma_n is kept. v_stick keeps a sliding layer from sticking again while
+ * it moves (a no-slip dummy under a moving layer shears the layer's own
+ * stress up to its yield: friction above mu_w). The decision is each
+ * dummy's, at each evaluation. */
+HD_INLINE void wall_coulomb(const wall_sums *ws, const real uw[3], const real n[3], real mu_w, real v_stick, real ud[3],
+                            real sd[6])
+{
+    const real t[3] = {sd[0] * n[0] + sd[3] * n[1] + sd[4] * n[2], sd[3] * n[0] + sd[1] * n[1] + sd[5] * n[2],
+                       sd[4] * n[0] + sd[5] * n[1] + sd[2] * n[2]};
+    const real tn = t[0] * n[0] + t[1] * n[1] + t[2] * n[2];
+    const real tau[3] = {t[0] - tn * n[0], t[1] - tn * n[1], t[2] - tn * n[2]};
+    const real at = sqrt_r(tau[0] * tau[0] + tau[1] * tau[1] + tau[2] * tau[2]);
+    const real allowed = mu_w * (tn < 0 ? -tn : R(0.0));
+    real ur[3], un = 0;
+    for (int a = 0; a < 3; ++a) ur[a] = (ws->w > 0 ? ws->u[a] / ws->w : R(0.0)) - uw[a];
+    for (int a = 0; a < 3; ++a) un += ur[a] * n[a];
+    for (int a = 0; a < 3; ++a) ur[a] -= un * n[a];
+    const real us = sqrt_r(ur[0] * ur[0] + ur[1] * ur[1] + ur[2] * ur[2]);
+    if (us <= v_stick && !(at > allowed)) return; /* sticks */
+    real e[3] = {0, 0, 0}; /* the kinetic traction's direction */
+    if (us > v_stick)
+        for (int a = 0; a < 3; ++a) e[a] = ur[a] / us;
+    else
+        for (int a = 0; a < 3; ++a) e[a] = tau[a] / at;
+    real dt[3]; /* the shear part's change: allowed e - tau */
+    for (int a = 0; a < 3; ++a) dt[a] = allowed * e[a] - tau[a];
+    sd[0] += R(2.0) * dt[0] * n[0], sd[1] += R(2.0) * dt[1] * n[1], sd[2] += R(2.0) * dt[2] * n[2];
+    sd[3] += dt[0] * n[1] + n[0] * dt[1], sd[4] += dt[0] * n[2] + n[0] * dt[2];
+    sd[5] += dt[1] * n[2] + n[1] * dt[2];
+    wall_velocity(ws, uw, n, 1, ud);
 }
 
 /* Dummy stress (4.3): (sum sigma_m W V - I o sum m g (x) r_dm W) / sum W V. */

@@ -19,7 +19,7 @@ enum periodic_axes {
     PERIODIC_NONE = 0, PERIODIC_X = 1, PERIODIC_Y = 2, PERIODIC_XY = 3, PERIODIC_Z = 4, PERIODIC_XZ = 5,
     PERIODIC_YZ = 6, PERIODIC_XYZ = 7
 };
-enum wall_slip { SLIP_NO = 0, SLIP_FREE = 1 };
+enum wall_slip { SLIP_NO = 0, SLIP_FREE = 1, SLIP_COULOMB = 2 };
 enum rot_dir { ROT_CLOCKWISE = 0, ROT_COUNTERCLOCKWISE = 1 };
 enum init_stress { INIT_STRESS_ZERO = 0, INIT_STRESS_GEOSTATIC = 1 };
 /* Run:preset: a named group of keys (scene_preset.c) */

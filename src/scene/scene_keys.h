@@ -29,7 +29,7 @@ static const cyaml_strval_t geom_types[] = {
     {"shearbox", GEOM_SHEARBOX}, {"column", GEOM_COLUMN}, {"drum", GEOM_DRUM}, {"container", GEOM_CONTAINER}};
 static const cyaml_strval_t kin_types[] = {
     {"rest", KIN_REST}, {"oscillatory_shear", KIN_OSCILLATORY_SHEAR}, {"computed", KIN_COMPUTED}};
-static const cyaml_strval_t slips[] = {{"no_slip", SLIP_NO}, {"free_slip", SLIP_FREE}};
+static const cyaml_strval_t slips[] = {{"no_slip", SLIP_NO}, {"free_slip", SLIP_FREE}, {"coulomb", SLIP_COULOMB}};
 static const cyaml_strval_t rot_dirs[] = {{"clockwise", ROT_CLOCKWISE},
                                           {"counterclockwise", ROT_COUNTERCLOCKWISE}};
 static const cyaml_strval_t init_stresses[] = {{"zero", INIT_STRESS_ZERO},
@@ -93,7 +93,8 @@ ENTRY(cwall, scene_wall, "Container:walls")
     EKE("Container:walls", scene_wall, material, enum cwall_side, cwall_sides,
        "cylinder: inside (a drum) | outside (a post: its dummies are nl rings inside its radius); default inside")
     EKE("Container:walls", scene_wall, slip, enum wall_slip, slips,
-       "no_slip (4.1) | free_slip (4.2); default no_slip")
+       "no_slip (4.1) | free_slip (4.2) | coulomb (no slip until the wall's shear traction reaches Walls:mu_w times "
+       "its normal stress, then sliding at that traction); default no_slip")
     EKE("Container:walls", scene_wall, motion, enum cwall_motion, cwall_motions,
        "fixed | translating | turning (a cylinder, or the ends, about the axis along z through centre); default fixed")
     EKV("Container:walls", scene_wall, velocity, 3,
@@ -375,9 +376,13 @@ END_SECTION(flow)
 /* Rigid walls by dummy particles (paper §4.1). */
 SECTION("Walls", walls, scene_walls)
     KE("Walls", walls, scene_walls, slip, enum wall_slip, slips, "no_slip",
-      "box base and drum wall: no_slip (4.1) | free_slip (4.2); default no_slip")
+      "box base and drum wall: no_slip (4.1) | free_slip (4.2) | coulomb (Coulomb friction Walls:mu_w: no slip while "
+      "the wall's shear traction is below mu_w times its normal stress, else sliding at that traction); default no_slip")
     KE("Walls", walls, scene_walls, side_slip, enum wall_slip, slips, "free_slip",
       "box side walls; default free_slip")
+    KF("Walls", walls, scene_walls, mu_w, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
+      "the wall friction coefficient (tan of the wall friction angle) of every wall whose slip is coulomb, -; >= 0, "
+      "> 0 where a wall is coulomb; default 0")
     KF("Walls", walls, scene_walls, gate_open, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "s: the gate of a column with a runout (Geometry:runout) is removed at this time, >= 0; default 0 (at the start)")
     KF("Walls", walls, scene_walls, rpm, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,

@@ -368,6 +368,8 @@ static void setup_walls(sim_t *s)
 /* Appends a primitive named `name` with the motion of the scene's walls
  * (the box's translation, Walls:velocity); returns it for the caller to
  * shape. */
+real wall_mu(const struct scene *sc, int slip) { return slip == SLIP_COULOMB ? (real)sc->walls.mu_w : R(0.0); }
+
 wall_prim *wall_add_prim(sim_t *s, const char *name, int shape, int slip, int bound, int claim)
 {
     wall_geom *w = &s->flow.w;
@@ -407,19 +409,20 @@ static void walls_box(sim_t *s)
     double dr = g->dr, W = (double)(lround(g->width / dr) + lround(g->runout / dr)) * dr;
     double D = g->dim == 3 ? (double)lround(g->depth / dr) * dr : 0.0, H = (double)lround(g->height / dr) * dr;
     int sb = sc->walls.slip == SLIP_FREE, ss = sc->walls.side_slip == SLIP_FREE;
-    wall_plane(s, "base", sb, !sc->outlet.enabled, WALL_CLAIM_FIRST, 0, 0, 0, 0, 1, 0);
+    const real mb = wall_mu(sc, sc->walls.slip), ms = wall_mu(sc, sc->walls.side_slip);
+    wall_plane(s, "base", sb, !sc->outlet.enabled, WALL_CLAIM_FIRST, 0, 0, 0, 0, 1, 0)->mu_w = mb;
     if (!(g->periodic & PERIODIC_X)) {
-        wall_plane(s, "xlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 1, 0, 0);
-        wall_plane(s, "xhi", ss, 1, WALL_CLAIM_SIDE, W, 0, 0, -1, 0, 0);
+        wall_plane(s, "xlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 1, 0, 0)->mu_w = ms;
+        wall_plane(s, "xhi", ss, 1, WALL_CLAIM_SIDE, W, 0, 0, -1, 0, 0)->mu_w = ms;
     }
     if (g->dim == 3 && !(g->periodic & PERIODIC_Z)) {
-        wall_plane(s, "zlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
-        wall_plane(s, "zhi", ss, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1);
+        wall_plane(s, "zlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1)->mu_w = ms;
+        wall_plane(s, "zhi", ss, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1)->mu_w = ms;
     }
     if (g->runout > 0)
         wall_plane(s, "gate", ss, 0, WALL_CLAIM_NONE, (double)lround(g->width / dr) * dr, 0, 0, -1, 0, 0)->open_at =
             sc->walls.gate_open;
-    if (g->lid) wall_plane(s, "lid", sb, 1, WALL_CLAIM_NONE, 0, H, 0, 0, -1, 0);
+    if (g->lid) wall_plane(s, "lid", sb, 1, WALL_CLAIM_NONE, 0, H, 0, 0, -1, 0)->mu_w = mb;
     s->flow.w.period[0] = (real)W, s->flow.w.period[2] = (real)D;
 }
 
@@ -431,13 +434,15 @@ static void walls_drum(sim_t *s)
     const struct scene *sc = s->sc;
     const struct scene_geometry *g = &sc->geometry;
     int sb = sc->walls.slip == SLIP_FREE;
+    const real mb = wall_mu(sc, sc->walls.slip);
     double omega = sc->walls.rpm * 2.0 * M_PI / 60.0 * (sc->walls.direction == ROT_CLOCKWISE ? -1.0 : 1.0);
     double L = (double)lround(g->length / g->dr) * g->dr;
     wall_prim *q[3] = {wall_add_prim(s, "drum", WALL_CYLINDER, sb, 1, WALL_CLAIM_SIDE), NULL, NULL};
-    q[0]->radius = (real)g->radius;
+    q[0]->radius = (real)g->radius, q[0]->mu_w = mb;
     if (g->dim == 3) {
         q[1] = wall_plane(s, "end_lo", sb, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
         q[2] = wall_plane(s, "end_hi", sb, 1, WALL_CLAIM_SIDE, 0, 0, L, 0, 0, -1);
+        q[1]->mu_w = q[2]->mu_w = mb;
     }
     for (int k = 0; k < 3; ++k)
         if (q[k]) q[k]->move = WALL_ROTATE, q[k]->omega = omega; /* about the z axis, c = 0 */
@@ -483,9 +488,12 @@ char *wall_list(const sim_t *s, int longer, char *buf, size_t n)
     for (int i = 0; i < s->flow.w.n && k < n; ++i) {
         const wall_prim *q = &s->flow.w.prim[i];
         k += (size_t)snprintf(buf + k, n - k, "%s%d %s", i ? ", " : "", i + 1, s->wall_name[i]);
+        char slip[40];
+        if (q->mu_w > 0) snprintf(slip, sizeof slip, "Coulomb mu_w %.4g", (double)q->mu_w);
+        else snprintf(slip, sizeof slip, "%s", q->slip ? "free slip" : "no slip");
         if (longer && k < n)
             k += (size_t)snprintf(buf + k, n - k, " (%s, %s, %s%s)", q->shape == WALL_PLANE ? "plane" : q->outside ? "post" : "cylinder",
-                                  q->slip ? "free slip" : "no slip", move[q->move], q->open_at >= 0 ? ", a gate" : "");
+                                  slip, move[q->move], q->open_at >= 0 ? ", a gate" : "");
     }
     return buf;
 }
@@ -641,6 +649,7 @@ static void flow_ctx_of(const struct scene *sc, const sph_ctx *k, const seg_para
     f->bed_k = stress_yield_k(f->yield, f->m.mu_s);
     f->rho = (real)sc->physics.rho;
     f->cs = stress_sound_speed(f->m.G, f->m.K, f->rho);
+    f->v_stick = (real)(COULOMB_STICK * (double)f->cs); /* a Coulomb wall's sticking speed (wall_coulomb) */
     f->alpha_av = (real)sc->flow.alpha_av;
     f->stab = (int)sc->flow.stabilization;
     f->eta_r = (real)sc->flow.riemann_eta;

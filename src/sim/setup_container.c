@@ -228,6 +228,7 @@ void container_walls(sim_t *s)
             if (w->gate) q->open_at = w->open_at;
         }
         ctr_motion(q, w);
+        q->mu_w = wall_mu(sc, (int)w->slip);
     }
     /* a periodic axis: the period is Geometry:width along x, Geometry:height along y, Geometry:depth along z,
      * from 0, whole dr */
@@ -240,6 +241,7 @@ void container_walls(sim_t *s)
         int ss = ends ? ends->slip == SLIP_FREE : sc->walls.side_slip == SLIP_FREE;
         wall_prim *lo = wall_plane(s, "end_lo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
         wall_prim *hi = wall_plane(s, "end_hi", ss, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1);
+        lo->mu_w = hi->mu_w = wall_mu(sc, ends ? (int)ends->slip : (int)sc->walls.side_slip);
         if (ends) ctr_motion(lo, ends), ctr_motion(hi, ends);
     }
 }

@@ -96,6 +96,9 @@ def lagree_case(a, n, L0=0.02, **extra):
 # the cross-check; the aspect ratios and resolutions the issue asks for (docs/validation.md).
 GLASS_MODELS = {"glass": {}, "const": {"Material:mu_s": 0.5184, "Material:mu_d": 0.5184}}
 GLASS_A = (0.5, 2, 4, 8)
+# The floor with the beads' wall friction angle, 24.8 deg (Kumar's thesis, ch. 4, from Lajeunesse et al.
+# 2004), as a Coulomb wall (Walls:slip coulomb) in place of the scene's no-slip floor.
+COULOMB_FLOOR = {"Walls:slip": "coulomb", "Walls:mu_w": 0.4621}
 GLASS_N = (10, 20, 40)  # L0 / dr
 
 
@@ -117,6 +120,9 @@ def cases(which):
         c += [glass_case(a, n) for n in GLASS_N for a in GLASS_A]
     if which == "lajeunesse_const":
         c += [glass_case(a, n, "const") for n in GLASS_N for a in GLASS_A]
+    if which == "lajeunesse_coulomb":  # the floor with the beads' wall friction, tan 24.8 deg (Kumar's table)
+        c += [glass_case(a, n, m, tag="_cw", **COULOMB_FLOOR) for m in ("glass", "const") for n in GLASS_N
+              for a in GLASS_A]
     if which == "lajeunesse_E":  # the stiffness is numerical: E x 10 at the fastest column
         c += [glass_case(a, n, tag="_E1e6", **{"Material:E": 1e6}) for a, n in ((2, 10), (2, 20), (2, 40), (8, 20))]
     if which in ("full", "aspect"):
@@ -203,7 +209,7 @@ def glass_rows(runs, where):
     """One row per glass-bead run: its final runout and height against Lube et al.'s laws."""
     rows = []
     for n in runs:
-        m = re.fullmatch(r"a([0-9.]+)_(glass|const)_n([0-9]+)(_E1e6)?", n)
+        m = re.fullmatch(r"a([0-9.]+)_(glass|const)_n([0-9]+)(_E1e6)?(_cw)?", n)
         if not m:
             continue
         r, f = runs[n], load(where[n], n)
@@ -212,10 +218,15 @@ def glass_rows(runs, where):
         av, L0 = float(r["a"]), float(r["L0"])
         run, hf = (f["front"][-1] - L0) / L0, f["height_at_wall"][-1] / L0
         creep = (f["front"][-1] - f["front"][-2]) / (f["t"][-1] - f["t"][-2]) * 1e3
-        rows.append(dict(name=n, model=m.group(2), a=av, n=int(m.group(3)), E="1e6" if m.group(4) else "1e5",
+        rows.append(dict(name=n, model=m.group(2), floor="coulomb" if m.group(5) else "no_slip", a=av,
+                         n=int(m.group(3)), E="1e6" if m.group(4) else "1e5",
                          runout=run, lube_runout=float(lube_runout(av)), height=hf, lube_height=float(lube_height(av)),
                          creep_mm_s=creep, wall_s=r["wall_s"], steps=r["steps"], backend=r.get("backend", "")))
-    return sorted(rows, key=lambda q: (q["model"] != "glass", q["E"], q["n"], q["a"]))
+    return sorted(rows, key=lambda q: (q["floor"], q["model"] != "glass", q["E"], q["n"], q["a"]))
+
+
+def glass_label(model, floor):
+    return ("mu(I)" if model == "glass" else "tan 27.4") + (", Coulomb floor" if floor == "coulomb" else "")
 
 
 def glass_report(runs, where, P, docs):
@@ -227,25 +238,27 @@ def glass_report(runs, where, P, docs):
     os.makedirs(docs, exist_ok=True)
     batch.write_csv(os.path.join(docs, "glass.csv"), list(rows[0]), [list(q.values()) for q in rows])
     P("")
-    P("| friction | E (Pa) | a | L0/dr | runout (L_inf - L0)/L0 | Lube 2005 | ratio | H_inf/L0 | Lube 2005 | ratio | "
+    P("| friction (floor: no slip unless Coulomb, tan 24.8) | E (Pa) | a | L0/dr | runout (L_inf - L0)/L0 | Lube 2005 | ratio | "
+      "H_inf/L0 | Lube 2005 | ratio | "
       "front moving at t_end (mm/s) | wall (s) | backend |")
     P("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for q in rows:
         P("| %s | %s | %g | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f | %s | %s |" % (
-            "mu(I)" if q["model"] == "glass" else "tan 27.4", q["E"], q["a"], q["n"], q["runout"], q["lube_runout"],
+            glass_label(q["model"], q["floor"]), q["E"], q["a"], q["n"], q["runout"], q["lube_runout"],
             q["runout"] / q["lube_runout"], q["height"], q["lube_height"], q["height"] / q["lube_height"],
             q["creep_mm_s"], q["wall_s"], q["backend"]))
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.3))
     aa = np.linspace(0.4, 10, 200)
     ax[0].loglog(aa, lube_runout(aa), "k-", label="Lube et al. 2005")
     ax[1].loglog(aa, lube_height(aa), "k-", label="Lube et al. 2005")
-    for k, (model, lab) in enumerate((("glass", "mu(I)"), ("const", "mu = tan 27.4"))):
+    for k, (model, floor) in enumerate((("glass", "no_slip"), ("const", "no_slip"), ("glass", "coulomb"),
+                                        ("const", "coulomb"))):
         for j, nn in enumerate(GLASS_N):
-            sel = [q for q in rows if q["model"] == model and q["n"] == nn and q["E"] == "1e5"]
+            sel = [q for q in rows if q["model"] == model and q["floor"] == floor and q["n"] == nn and q["E"] == "1e5"]
             if not sel:
                 continue
-            st = dict(marker="os"[k], ls="none", color="C%d" % j, mfc="none" if k else "C%d" % j,
-                      label="%s, L0/dr %d" % (lab, nn))
+            st = dict(marker="os^v"[k], ls="none", color="C%d" % j, mfc="none" if k % 2 else "C%d" % j,
+                      label="%s, L0/dr %d" % (glass_label(model, floor), nn))
             ax[0].loglog([q["a"] for q in sel], [q["runout"] for q in sel], **st)
             ax[1].loglog([q["a"] for q in sel], [q["height"] for q in sel], **st)
     for x in ax:
@@ -346,7 +359,8 @@ def cmd_report(a):
 
 
 def main(argv=None):
-    batch.study_main(__doc__, ("aspect", "yield", "resolution", "lagree", "lajeunesse", "lajeunesse_const", "lajeunesse_E"), cases, reduce_done, cmd_report, "collapse", argv=argv)
+    batch.study_main(__doc__, ("aspect", "yield", "resolution", "lagree", "lajeunesse", "lajeunesse_const", "lajeunesse_E",
+                                  "lajeunesse_coulomb"), cases, reduce_done, cmd_report, "collapse", argv=argv)
 
 
 if __name__ == "__main__":
