@@ -37,7 +37,7 @@ typedef struct flow_ctx {
     mat_params m;
     real rho;      /* bulk density, kg/m^3 */
     real cs;       /* elastic sound speed, m/s (3.10, 3.19) */
-    real v_stick;  /* a Coulomb wall's sticking speed (wall_coulomb), m/s: SPHSEG_COULOMB_STICK c_s */
+    real v_stick;  /* a Coulomb wall's sticking speed (wall_coulomb), m/s: COULOMB_STICK c_s (physics/wall.h) */
     int stab;      /* Flow:stabilization: STAB_MONAGHAN (the paper's 3.10) | STAB_RIEMANN | STAB_DELTA */
     real alpha_av; /* Monaghan coefficient of (3.10), monaghan only; 0 switches it off */
     real eta_r;    /* riemann: the limiter's eta (Zhang, Hu & Adams 2017: 3) */
