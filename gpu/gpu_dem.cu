@@ -111,18 +111,24 @@ template <class T> static void down(T *dst, const T *src, size_t n, cudaStream_t
     CK(cudaMemcpyAsync(dst, src, n * sizeof(T), cudaMemcpyDeviceToHost, st));
 }
 
+/* The per-grain device arrays released (gd_arrays' list). */
+static void gd_arrays_free(gpu_dem *e)
+{
+    if (!e->cap) return;
+    for (int a = 0; a < 3; ++a) {
+        void *b[7] = {e->x[a], e->v[a], e->w[a], e->fint[a], e->fd[a], e->uf[a], e->x0[a]};
+        for (int k = 0; k < 7; ++k) CK(cudaFree(b[k]));
+    }
+    void *bufs[] = {e->eps, e->snorm, e->id, e->cid, e->cid2, e->cxi, e->cxi2, e->ncon, e->ncon2,
+                    e->gidx, e->F, e->T, e->Fi, e->xg, e->gsum};
+    for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k) CK(cudaFree(bufs[k]));
+    e->cap = 0;
+}
+
 /* The per-grain device arrays for cap grains (their values not kept). */
 static void gd_arrays(gpu_dem *e, size_t cap)
 {
-    if (e->cap) {
-        for (int a = 0; a < 3; ++a) {
-            void *b[7] = {e->x[a], e->v[a], e->w[a], e->fint[a], e->fd[a], e->uf[a], e->x0[a]};
-            for (int k = 0; k < 7; ++k) CK(cudaFree(b[k]));
-        }
-        void *bufs[] = {e->eps, e->snorm, e->id, e->cid, e->cid2, e->cxi, e->cxi2, e->ncon, e->ncon2,
-                        e->gidx, e->F, e->T, e->Fi, e->xg, e->gsum};
-        for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k) CK(cudaFree(bufs[k]));
-    }
+    gd_arrays_free(e);
     const size_t nl = cap * DEM_CMAX;
     double **dv[6] = {e->x, e->v, e->w, e->fint, e->fd, e->uf};
     for (int k = 0; k < 6; ++k)
@@ -234,21 +240,17 @@ static void gd_xroom(gpu_dem *e, size_t need)
 }
 
 static void gd_refresh(sim_t *s, gpu_t *g, gpu_dem *e, int what);
+static dem_view gd_view(const dem_t *d, const gpu_dem *e);
 
 /* The largest squared distance an owned grain moved since the last
  * exchange (dem_max_shift's, minimum images across the periods). */
 struct dshift {
-    const double *x0, *x1, *x2, *y0, *y1, *y2;
-    int per;
-    double p0, p1, p2;
+    dem_view v;
+    const double *y0, *y1, *y2;
     __device__ double operator()(size_t i) const
     {
-        double s[3] = {x0[i] - y0[i], x1[i] - y1[i], x2[i] - y2[i]}, pl[3] = {p0, p1, p2}, r2 = 0;
-        for (int a = 0; a < 3; ++a) {
-            if (per >> a & 1) s[a] -= pl[a] * floor(s[a] / pl[a] + 0.5);
-            r2 += s[a] * s[a];
-        }
-        return r2;
+        const double *const x0[3] = {y0, y1, y2};
+        return dem_shift2(&v, i, x0);
     }
 };
 struct dmax {
@@ -265,8 +267,7 @@ static void gd_exchange(sim_t *s, gpu_t *g, gpu_dem *e)
         if (d->no) {
             auto it = thrust::make_transform_iterator(
                 thrust::counting_iterator<size_t>(0),
-                dshift{e->x[0], e->x[1], e->x[2], e->x0[0], e->x0[1], e->x0[2], d->per, d->plen[0], d->plen[1],
-                       d->plen[2]});
+                dshift{gd_view(d, e), e->x0[0], e->x0[1], e->x0[2]});
             reduce(g, it, e->rs, d->no, dmax(), 0.0);
             down(&m2, e->rs, 1, g->st);
             CK(cudaStreamSynchronize(g->st));
@@ -787,14 +788,9 @@ void gpu_dem_free(gpu_t *g)
 {
     gpu_dem *e = g->dem;
     if (!e) return;
-    for (int a = 0; a < 3; ++a) {
-        void *b[7] = {e->x[a], e->v[a], e->w[a], e->fint[a], e->fd[a], e->uf[a], e->x0[a]};
-        for (int k = 0; k < 7; ++k) CK(cudaFree(b[k]));
-    }
-    void *bufs[] = {e->eps, e->snorm, e->id, e->cid, e->cid2, e->cxi, e->cxi2, e->ncon, e->ncon2, e->eps_f,
-                    e->deps_f, e->key, e->key2, e->vin, e->gidx, e->fidx, e->gstart, e->fstart, e->F, e->T,
-                    e->Fi, e->gsum, e->exch, e->xg, e->box_d, e->dbad, e->exs, e->rs, e->sidx[0], e->sidx[1],
-                    e->dbuf, e->dxb};
+    gd_arrays_free(e);
+    void *bufs[] = {e->eps_f, e->deps_f, e->key, e->key2, e->vin, e->fidx, e->gstart, e->fstart, e->exch,
+                    e->box_d, e->dbad, e->exs, e->rs, e->sidx[0], e->sidx[1], e->dbuf, e->dxb};
     for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k)
         if (bufs[k]) CK(cudaFree(bufs[k]));
     CK(cudaFreeHost(e->box_h));

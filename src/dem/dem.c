@@ -26,26 +26,49 @@ static void *dem_calloc(size_t n, size_t sz)
     return q;
 }
 
+/* ---- the per-grain arrays ------------------------------------------------------ */
+
+void dem_arrays(dem_t *d, dem_arr t[DEM_NARR])
+{
+    int k = 0;
+    double **vec[6] = {d->x, d->v, d->w, d->fint, d->fd, d->uf};
+    for (int q = 0; q < 6; ++q)
+        for (int a = 0; a < 3; ++a) t[k++] = (dem_arr){(void **)&vec[q][a], sizeof(double)};
+    t[k++] = (dem_arr){(void **)&d->eps, sizeof(double)};
+    t[k++] = (dem_arr){(void **)&d->snorm, sizeof(double)};
+    t[k++] = (dem_arr){(void **)&d->id, sizeof(int64_t)};
+    t[k++] = (dem_arr){(void **)&d->ncon, sizeof(int)};
+    t[k++] = (dem_arr){(void **)&d->cid, DEM_CMAX * sizeof(int64_t)};
+    t[k++] = (dem_arr){(void **)&d->cxi, 3 * DEM_CMAX * sizeof(double)};
+    t[k++] = (dem_arr){(void **)&d->ncon2, sizeof(int)};    /* 24: scratch from here */
+    t[k++] = (dem_arr){(void **)&d->cid2, DEM_CMAX * sizeof(int64_t)};
+    t[k++] = (dem_arr){(void **)&d->cxi2, 3 * DEM_CMAX * sizeof(double)};
+    t[k] = (dem_arr){(void **)&d->gsum, 5 * sizeof(double)}; /* k = DEM_NARR - 1 */
+}
+
+void dem_reserve(dem_t *d, size_t m)
+{
+    if (m <= d->cap) return;
+    size_t cap = d->cap + d->cap / 2;
+    if (cap < m) cap = m;
+    dem_arr t[DEM_NARR];
+    dem_arrays(d, t);
+    for (int k = 0; k < DEM_NARR; ++k) {
+        void *q = realloc(*t[k].a, cap * t[k].bytes);
+        if (!q) error_exit(EXIT_SYSTEM, "out of memory for %zu DEM grains", cap);
+        *t[k].a = q;
+    }
+    d->cap = cap;
+}
+
 dem_t *dem_alloc(size_t n)
 {
     dem_t *d = dem_calloc(1, sizeof *d);
-    d->n = d->no = d->ntot = d->cap = n;
-    for (int a = 0; a < 3; ++a) {
-        d->x[a] = dem_calloc(n, sizeof(double)), d->v[a] = dem_calloc(n, sizeof(double));
-        d->w[a] = dem_calloc(n, sizeof(double)), d->fint[a] = dem_calloc(n, sizeof(double));
-        d->fd[a] = dem_calloc(n, sizeof(double));
-        d->uf[a] = dem_calloc(n, sizeof(double));
-    }
-    d->eps = dem_calloc(n, sizeof(double));
-    d->snorm = dem_calloc(n, sizeof(double));
-    d->id = dem_calloc(n, sizeof(int64_t));
-    d->ncon = dem_calloc(n, sizeof(int));
-    d->cid = dem_calloc(n * DEM_CMAX, sizeof(int64_t));
-    d->cxi = dem_calloc(n * DEM_CMAX * 3, sizeof(double));
-    d->ncon2 = dem_calloc(n, sizeof(int));
-    d->cid2 = dem_calloc(n * DEM_CMAX, sizeof(int64_t));
-    d->cxi2 = dem_calloc(n * DEM_CMAX * 3, sizeof(double));
-    d->gsum = dem_calloc(n * 5, sizeof(double));
+    dem_reserve(d, n ? n : 1);
+    dem_arr t[DEM_NARR];
+    dem_arrays(d, t);
+    for (int k = 0; k < DEM_NARR; ++k) memset(*t[k].a, 0, d->cap * t[k].bytes);
+    d->n = d->no = d->ntot = n;
     for (size_t i = 0; i < n; ++i) d->id[i] = (int64_t)i, d->eps[i] = 1.0;
     return d;
 }
@@ -91,10 +114,10 @@ dem_t *dem_create(const struct scene *sc, double h, double rho_f, double nu, dou
 void dem_free(dem_t *d)
 {
     if (!d) return;
-    for (int a = 0; a < 3; ++a) free(d->x[a]), free(d->v[a]), free(d->w[a]), free(d->fint[a]), free(d->uf[a]), free(d->fd[a]);
-    free(d->eps), free(d->snorm), free(d->id), free(d->ncon), free(d->cid), free(d->cxi);
-    free(d->ncon2), free(d->cid2), free(d->cxi2);
-    free(d->eps_f), free(d->deps_f), free(d->gsum);
+    dem_arr t[DEM_NARR];
+    dem_arrays(d, t);
+    for (int k = 0; k < DEM_NARR; ++k) free(*t[k].a);
+    free(d->eps_f), free(d->deps_f);
     free(d->gstart), free(d->gidx), free(d->fstart), free(d->fidx);
     free(d->soff), free(d->slist), free(d->goff), free(d->scnt), free(d->gcnt), free(d->bound0);
     for (int a = 0; a < 3; ++a) free(d->x0[a]);
@@ -262,8 +285,7 @@ static void dem_grains_couple(dem_t *d, const dem_view *v, const particles_t *p)
     double *gs = d->gsum;
 #pragma omp parallel for schedule(static) if (ng >= DEM_OMP_MIN)
     for (long i = 0; i < ng; ++i) dem_grain_partial(v, p, (size_t)i, &gs[5 * i]);
-    if (d->split) dem_sums_home(d);
-    else comm_sum_rows_ordered(gs, d->n, 5); /* one rank: as they are */
+    dem_sums_home(d); /* one rank: as they are */
 #pragma omp parallel for schedule(static) if (no >= DEM_OMP_MIN)
     for (long i = 0; i < no; ++i) {
         dem_grain_from_sums(v, (size_t)i, &gs[5 * i]);

@@ -222,6 +222,16 @@ void dem_exch_steps(dem_t *d, double *ex, long m);
 void dem_sum_ranks(const dem_t *d, double *x, int k);
 /* Room for m grains in every per-grain array (their values kept). */
 void dem_reserve(dem_t *d, size_t m);
+/* Every per-grain array of d (the one list that allocation, growth, release
+ * and migration read): its pointer in dem_t and its bytes a grain. The first
+ * DEM_NMIG travel with a migrating grain (the rest are scratch a step
+ * rewrites). */
+typedef struct dem_arr {
+    void **a;
+    size_t bytes;
+} dem_arr;
+enum { DEM_NARR = 28, DEM_NMIG = 24 };
+void dem_arrays(dem_t *d, dem_arr t[DEM_NARR]);
 
 /* The normal force the walls w carry from grain i now (overlap and
  * velocity as they are), N. */

@@ -156,6 +156,16 @@ HD_INLINE void dem_sep(const dem_view *d, const double x[3], double y0, double y
     }                 \
     }
 
+/* The squared distance grain i moved from x0 (its centre at the last
+ * exchange, src/dem/dem_halo.c), the minimum image across the periods. */
+HD_INLINE double dem_shift2(const dem_view *d, size_t i, const double *const x0[3])
+{
+    const double x[3] = {d->x[0][i], d->x[1][i], d->x[2][i]};
+    double r[3];
+    dem_sep(d, x, x0[0][i], x0[1][i], x0[2][i], r);
+    return r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+}
+
 /* Grain i back into the period along the periodic axes. */
 HD_INLINE void dem_wrap_grain(const dem_view *d, size_t i)
 {

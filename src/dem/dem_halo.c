@@ -26,53 +26,9 @@
 #include <string.h>
 #include "core/error.h"
 #include "dem.h"
+#include "dem_body.h"
 #include "mpi/comm.h"
 #include "mpi/halo.h"
-
-/* ---- the per-grain arrays ------------------------------------------------------ */
-
-typedef struct dem_arr {
-    void **a;     /* the array's pointer in dem_t */
-    size_t bytes; /* bytes a grain */
-} dem_arr;
-
-enum { DEM_NARR = 28 };
-
-/* Every per-grain array of d; the first DEM_NMIG travel with a migrating
- * grain (the rest are scratch a step rewrites). */
-enum { DEM_NMIG = 24 };
-static void dem_arrays(dem_t *d, dem_arr t[DEM_NARR])
-{
-    int k = 0;
-    double **vec[6] = {d->x, d->v, d->w, d->fint, d->fd, d->uf};
-    for (int q = 0; q < 6; ++q)
-        for (int a = 0; a < 3; ++a) t[k++] = (dem_arr){(void **)&vec[q][a], sizeof(double)};
-    t[k++] = (dem_arr){(void **)&d->eps, sizeof(double)};
-    t[k++] = (dem_arr){(void **)&d->snorm, sizeof(double)};
-    t[k++] = (dem_arr){(void **)&d->id, sizeof(int64_t)};
-    t[k++] = (dem_arr){(void **)&d->ncon, sizeof(int)};
-    t[k++] = (dem_arr){(void **)&d->cid, DEM_CMAX * sizeof(int64_t)};
-    t[k++] = (dem_arr){(void **)&d->cxi, 3 * DEM_CMAX * sizeof(double)};
-    t[k++] = (dem_arr){(void **)&d->ncon2, sizeof(int)};    /* 24: scratch from here */
-    t[k++] = (dem_arr){(void **)&d->cid2, DEM_CMAX * sizeof(int64_t)};
-    t[k++] = (dem_arr){(void **)&d->cxi2, 3 * DEM_CMAX * sizeof(double)};
-    t[k] = (dem_arr){(void **)&d->gsum, 5 * sizeof(double)}; /* k = DEM_NARR - 1 */
-}
-
-void dem_reserve(dem_t *d, size_t m)
-{
-    if (m <= d->cap) return;
-    size_t cap = d->cap + d->cap / 2;
-    if (cap < m) cap = m;
-    dem_arr t[DEM_NARR];
-    dem_arrays(d, t);
-    for (int k = 0; k < DEM_NARR; ++k) {
-        void *q = realloc(*t[k].a, cap * t[k].bytes);
-        if (!q) error_exit(EXIT_SYSTEM, "out of memory for %zu DEM grains", cap);
-        *t[k].a = q;
-    }
-    d->cap = cap;
-}
 
 /* Bytes of a migrating grain's record. */
 static size_t dem_rec_bytes(dem_t *d)
@@ -405,16 +361,11 @@ int dem_exchange_due(dem_t *d, const halo_t *h, double maxdisp)
 
 double dem_max_shift(const dem_t *d)
 {
+    if (d->x0cap < d->no) return 0; /* no exchange yet: dem_exchange_due asks for one */
+    const dem_view v = dem_view_of((dem_t *)d);
+    const double *const x0[3] = {d->x0[0], d->x0[1], d->x0[2]};
     double m = 0;
-    for (size_t i = 0; i < d->no && d->x0cap >= d->no; ++i) {
-        double r2 = 0;
-        for (int a = 0; a < 3; ++a) {
-            double s = d->x[a][i] - d->x0[a][i];
-            if (d->per >> a & 1) s -= d->plen[a] * floor(s / d->plen[a] + 0.5); /* a grain wrapped across a period */
-            r2 += s * s;
-        }
-        m = fmax(m, r2);
-    }
+    for (size_t i = 0; i < d->no; ++i) m = fmax(m, dem_shift2(&v, i, x0));
     return sqrt(m);
 }
 
