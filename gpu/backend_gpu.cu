@@ -142,6 +142,10 @@ static void gpu_finish(sim_t *s)
     message("gpu: %ld neighbour-list builds in %ld steps (Run:list_skin %.3g h: one build in %.1f steps)", g->builds,
             steps, (double)(g->skin / s->seg.k.h), g->builds ? (double)steps / (double)g->builds : 0.0);
     gpu_mem_report(s, g);
+    if (g->tile)
+        message("gpu: SPHSEG_GPU_NBR tile: %ld flow passes staged, %ld run as list16's (a tile past the shared "
+                "memory); the last build's largest tile %u particles", g->tile_passes, g->tile_over_passes,
+                g->tile_need);
     if (prof.on) {
         double tot = 0;
         for (int k = 0; k < P_NPROF; ++k) tot += prof.ms[k];
@@ -180,6 +184,7 @@ static void gpu_finish(sim_t *s)
     gpu_dem_free(g);
     for (size_t k = 0; k < part_narrays(); ++k) CK(cudaFree(part_array_get(&g->d, k))); /* NULL: not held */
     for (int c = 0; c < PSCR_N; ++c) CK(cudaFree(g->pscr[c]));
+    CK(cudaFree(g->tile_dmax));
     void *bufs[] = {g->start, g->end, g->cell_mat, g->cell_type, g->key, g->key2, g->idx, g->idx2,
                     g->cls, g->sums, g->nl, g->ncnt, g->amag, g->tmp, g->dbox, g->dres, g->dfirst,
                     g->dchk, g->dstep, g->xb[0], g->xb[1], g->xb[2], g->lvl, g->wact};

@@ -44,6 +44,7 @@ enum { PERM_MAX = PART_NARRAYS, BLOCK = 128 };
 enum { PSCR_8, PSCR_4, PSCR_1, PSCR_N };
 #define GPU_TEAM_MAX_2D 4 /* threads per particle in the neighbour loops (gpu_team_size) */
 #define GPU_TEAM_MAX_3D 8
+#define GPU_TEAM_MIN_3D 2 /* the fewest in 3D, however large the store (gpu_team_size) */
 #define GPU_TEAM_THREADS 2097152.0
 
 
@@ -154,6 +155,11 @@ typedef struct gpu {
     unsigned nl_est;    /* the setup's estimate of nl_cap (grid_list_est): the form's choice, gpu_form_fits */
     int nbr_form;       /* the list's form (GRID_NBR_*, SPHSEG_GPU_NBR): nl holds 4-byte entries, 2-byte
                          * ones (list16), or is NULL (cells) */
+    int tile;           /* SPHSEG_GPU_NBR=tile: list16, its flow pass staged cell by cell in shared memory
+                         * (gpu_pairs.cu, k_flow_tile) */
+    unsigned *tile_dmax; /* gpu_tile_need's device maximum (NULL without tile) */
+    unsigned tile_need; /* the build's largest tile (particles), gpu_tile_need */
+    long tile_passes, tile_over_passes; /* the staged passes, and those run as list16's (a tile too large) */
     real *xb[3];        /* positions at the last build */
     real skin;          /* m */
     int built, stale, every; /* the list: exists; must be rebuilt; rebuild every stage */
@@ -260,6 +266,7 @@ void gpu_build(gpu_t *g, halo_t *hl, int dim, real support, real list2, const re
 void gpu_classify(gpu_t *g, const sph_ctx *kc);
 void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, int kgc, sel sl);
 void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl);
+void gpu_tile_need(gpu_t *g);
 void gpu_dcdt(sim_t *s, gpu_t *g, particles_t p, sel sl);
 void gpu_shift_pass(sim_t *s, gpu_t *g);
 void gpu_shepard_pass(sim_t *s, gpu_t *g);

@@ -168,6 +168,7 @@ static void gpu_list(gpu_t *g, int dim, real list2, size_t n, const unsigned *rk
     for (int d = 0; d < 3; ++d) g->view.xb[d] = g->xb[d];
     g->view.rk = rk;
     g->view.list2 = list2;
+    if (g->tile && form == GRID_NBR_LIST16) gpu_tile_need(g);
 }
 
 /* From the new list: the dummies no material reaches (wact) and the halo

@@ -14,6 +14,7 @@
 template <int F> __device__ __forceinline__ grid_view view_as(grid_view v)
 {
     v.form = F;
+    v.tiled = 0, v.tile = NULL, v.tp = NULL; /* k_flow_tile sets its own */
     if (F != GRID_NBR_LIST) v.nl = NULL;
     if (F != GRID_NBR_LIST16) v.nl16 = NULL;
     return v;
@@ -168,8 +169,179 @@ template <int RENORM, int KGC, int SHIFT, int F> static void gpu_flow_pass(sim_t
     });
 }
 
+/* The staged flow pass (SPHSEG_GPU_NBR=tile; docs/performance.md, "Neighbour
+ * pass"): a block per cell of the build, 32 teams of T threads. The block
+ * first copies what the flow rates read of a neighbour (x, u, sigma, V,
+ * kind; B with the corrected gradient) for the 3^d cells around its cell
+ * into shared memory, in the order of grid_tile (each cell's owned run, then
+ * its ghost run), once for all the cell's particles; each team then walks
+ * its particle's 16-bit list and reads neighbour j at its tile slot
+ * (NBR_BEGIN_TJ): a lane meets the list16's neighbours in its order with
+ * the same values, and so gives the same bits. Each build finds the largest
+ * tile (gpu_tile_need); where it exceeds the shared memory, that build's
+ * passes run as list16's (counted in tile_over_passes). */
+struct flow_tile_args {
+    particles_t p;
+    grid_view v;
+    flow_ctx c;
+    shift_ctx sh;
+    seg_ctx sc;
+    real sdt;
+    int seg;
+    sel sl;
+    real *amag;
+    unsigned cap;
+};
+
+/* The arrays a tile stages, in shared memory: x, u (3 each), sigma (6), V,
+ * and B (6) with the corrected gradient; then kind, a byte each. */
+template <int KGC> __host__ __device__ constexpr int tile_nreal() { return 13 + (KGC ? 6 : 0); }
+template <int KGC> static size_t tile_bytes(unsigned cap)
+{
+    return (size_t)cap * (tile_nreal<KGC>() * sizeof(real) + 1);
+}
+
+template <int T, int RENORM, int KGC, int SHIFT>
+__global__ void __launch_bounds__(32 * T, 512 / (32 * T)) k_flow_tile(const __grid_constant__ flow_tile_args A)
+{
+    extern __shared__ __align__(16) unsigned char tile_sm[];
+    __shared__ grid_tile tb;
+    __shared__ unsigned ngs[27];
+    const size_t cell = blockIdx.x;
+    const size_t a0 = A.v.start[cell], n0 = A.v.end[cell] - a0;
+    if (n0 == 0) return;
+    const int tid = (int)threadIdx.x;
+    const particles_t p = A.p;
+    int any = 0; /* a material particle of the pass here: else the block has nothing to stage */
+    for (size_t k = (size_t)tid; k < n0; k += blockDim.x) {
+        const size_t i = a0 + k;
+        if (!sel_on(A.sl, i)) continue;
+        if (p.kind[i] == KIND_MATERIAL) any = 1;
+        else A.amag[i] = R(0.0);
+    }
+    if (!__syncthreads_or(any)) return;
+    const grid_view &v = A.v;
+    const size_t nxy = (size_t)v.nc[0] * (size_t)v.nc[1];
+    const int c0[3] = {(int)(cell % (size_t)v.nc[0]), (int)((cell / (size_t)v.nc[0]) % (size_t)v.nc[1]),
+                       (int)(cell / nxy)};
+    const int ns = v.dim == 3 ? 27 : 9;
+    if (tid < ns) ngs[tid] = grid_tile_slot(&v, c0, tid, &tb);
+    __syncthreads();
+    if (tid == 0) grid_tile_bases(&tb, ngs, v.dim);
+    __syncthreads();
+    const unsigned cap = A.cap, tot = tb.base[ns]; /* tot <= cap: gpu_tile_need */
+    real *sr = (real *)tile_sm;
+    particles_t tp = p; /* the tile's arrays in place of the store's */
+    for (int d = 0; d < 3; ++d) tp.x[d] = sr + d * cap, tp.v[d] = sr + (3 + d) * cap;
+    for (int q = 0; q < 6; ++q) tp.sig[q] = sr + (6 + q) * cap;
+    tp.vol = sr + 12 * cap;
+    if (KGC)
+        for (int q = 0; q < 6; ++q) tp.B[q] = sr + (13 + q) * cap;
+    tp.kind = (uint8_t *)(sr + tile_nreal<KGC>() * cap);
+    {
+        for (unsigned k = (unsigned)tid; k < tot; k += blockDim.x) {
+            const size_t j = grid_tile_at(&tb, k, v.dim);
+            for (int d = 0; d < 3; ++d) tp.x[d][k] = p.x[d][j], tp.v[d][k] = p.v[d][j];
+            for (int q = 0; q < 6; ++q) tp.sig[q][k] = p.sig[q][j];
+            tp.vol[k] = p.vol[j];
+            if (KGC)
+                for (int q = 0; q < 6; ++q) tp.B[q][k] = p.B[q][j];
+            tp.kind[k] = p.kind[j];
+        }
+    }
+    __syncthreads();
+    /* every particle's list is read (the list is as wide as its longest,
+     * gpu_list), as a view with a tile requires */
+    grid_view wt = view_as<GRID_NBR_LIST16>(v);
+    wt.tiled = 1, wt.tile = &tb, wt.tp = &tp;
+    const flow_ctx c = A.c;
+    const shift_ctx sh = A.sh;
+    const int lane = tid % T;
+    for (size_t k0 = 0; k0 < n0; k0 += 32) {
+        const size_t i = a0 + k0 + (size_t)(tid / T);
+        if (i >= a0 + n0 || !sel_on(A.sl, i)) continue;
+        particles_t q = p;
+        if (q.kind[i] != KIND_MATERIAL) continue;
+        const real a = flow_rates_body(i, &q, &wt, &c, lane, T, RENORM, KGC, SHIFT ? &sh : (const shift_ctx *)0, A.sdt);
+        if (lane != 0) continue;
+        A.amag[i] = a;
+        if (A.seg) seg_coeffs(i, &q, &A.sc);
+    }
+}
+
+/* A tile's capacity at most: the shared memory of an SM (228 kB on sm_90,
+ * less 1 kB a block) for one block; the blocks an SM runs at once follow
+ * from the build's largest tile (gpu_flow_tile sizes it). */
+template <int KGC> static unsigned tile_cap(int T)
+{
+    (void)T;
+    const size_t per = 227u * 1024u - 1024u - sizeof(grid_tile) - 256u;
+    const size_t cap = per / (tile_nreal<KGC>() * sizeof(real) + 1);
+    return (unsigned)(cap & ~(size_t)15);
+}
+
+template <int T, int RENORM, int KGC, int SHIFT> static void flow_tile_launch(gpu_t *g, const flow_tile_args &A)
+{
+    static int set; /* the dynamic shared memory past 48 kB, once per kernel */
+    const size_t bytes = tile_bytes<KGC>(A.cap);
+    if (!set) {
+        CK(cudaFuncSetAttribute(k_flow_tile<T, RENORM, KGC, SHIFT>, cudaFuncAttributeMaxDynamicSharedMemorySize,
+                                (int)tile_bytes<KGC>(tile_cap<KGC>(T))));
+        set = 1;
+    }
+    k_flow_tile<T, RENORM, KGC, SHIFT><<<(unsigned)g->ncell, 32 * T, bytes, g->st>>>(A);
+    CK(cudaGetLastError());
+}
+
+/* At a list build (gpu_list): the largest tile of the build's cells that
+ * hold particles, into g->tile_need (one read-back). */
+void gpu_tile_need(gpu_t *g)
+{
+    const grid_view v = g->view;
+    unsigned *dmax = g->tile_dmax;
+    CK(cudaMemsetAsync(dmax, 0, sizeof *dmax, g->st));
+    each(g, g->ncell, [=] __device__(size_t cell) {
+        if (v.end[cell] == v.start[cell]) return;
+        const size_t nxy = (size_t)v.nc[0] * (size_t)v.nc[1];
+        const int c0[3] = {(int)(cell % (size_t)v.nc[0]), (int)((cell / (size_t)v.nc[0]) % (size_t)v.nc[1]),
+                           (int)(cell / nxy)};
+        grid_tile t;
+        unsigned tot = 0;
+        for (int k = 0; k < (v.dim == 3 ? 27 : 9); ++k) {
+            const unsigned ng = grid_tile_slot(&v, c0, k, &t);
+            tot += ng + t.na[k];
+        }
+        atomicMax(dmax, tot);
+    });
+    CK(cudaMemcpyAsync(&g->tile_need, dmax, sizeof *dmax, cudaMemcpyDeviceToHost, g->st));
+    CK(cudaStreamSynchronize(g->st));
+}
+
+template <int RENORM, int KGC, int SHIFT> static void gpu_flow_tile(sim_t *s, gpu_t *g, sel sl)
+{
+    if (g->tile_need > tile_cap<KGC>(g->team)) { /* the build's largest tile past the shared memory */
+        g->tile_over_passes++;
+        return gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_LIST16>(s, g, sl);
+    }
+    flow_tile_args A;
+    A.p = g->d, A.v = g->view, A.c = s->flow, A.sh = s->shift, A.sc = s->seg;
+    A.sdt = (real)s->dt;
+    A.seg = gpu_plans(s, HOOK_RATES, ST_SEG_COEFFS);
+    A.sl = sl, A.amag = g->amag;
+    A.cap = (g->tile_need + 31u) & ~31u;
+    g->tile_passes++;
+    switch (g->team) {
+    case 1: flow_tile_launch<1, RENORM, KGC, SHIFT>(g, A); break;
+    case 2: flow_tile_launch<2, RENORM, KGC, SHIFT>(g, A); break;
+    case 4: flow_tile_launch<4, RENORM, KGC, SHIFT>(g, A); break;
+    case 8: flow_tile_launch<8, RENORM, KGC, SHIFT>(g, A); break;
+    default: flow_tile_launch<16, RENORM, KGC, SHIFT>(g, A); break;
+    }
+}
+
 template <int RENORM, int KGC, int SHIFT> static void gpu_flow_form(sim_t *s, gpu_t *g, sel sl)
 {
+    if (g->tile && g->view.form == GRID_NBR_LIST16) return gpu_flow_tile<RENORM, KGC, SHIFT>(s, g, sl);
     switch (g->view.form) {
     case GRID_NBR_LIST16: gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_LIST16>(s, g, sl); break;
     case GRID_NBR_CELLS: gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_CELLS>(s, g, sl); break;

@@ -139,8 +139,10 @@ void gpu_counts(gpu_t *g, size_t n, size_t ng)
  * or 16; core/tuning.h), else GPU_TEAM_MAX of the dimension (by the length of the list:
  * 4 in 2D, about 30 neighbours; 8 in 3D, about 140), halved while n T
  * exceeds GPU_TEAM_THREADS, n the particles of all ranks (gpu_get): a small store runs more threads per particle
- * (latency), a large one fills the device with one (the rule is measured in
- * docs/gpu.md, "Teams"). */
+ * (latency), a large one fills the device with fewer; in 3D never fewer than
+ * GPU_TEAM_MIN_3D: two lanes read a particle's list in pairs of adjacent
+ * entries, 1.06-1.09x one lane's rate from 1.1e6 to 3.4e7 particles at
+ * Run:preset fast (one H200, single; docs/performance.md, "GPU kernels"). */
 static int gpu_team_size(int dim, size_t n)
 {
     const tuning *tu = tuning_get();
@@ -148,7 +150,8 @@ static int gpu_team_size(int dim, size_t n)
         error_exit(2, "SPHSEG_GPU_TEAM=%s: expected 1, 2, 4, 8 or 16 threads per particle", tu->gpu_team_text);
     if (tu->gpu_team > 0) return tu->gpu_team;
     int t = dim == 3 ? GPU_TEAM_MAX_3D : GPU_TEAM_MAX_2D;
-    while (t > 1 && (double)n * t > GPU_TEAM_THREADS) t /= 2;
+    const int tmin = dim == 3 ? GPU_TEAM_MIN_3D : 1;
+    while (t > tmin && (double)n * t > GPU_TEAM_THREADS) t /= 2;
     return t;
 }
 
@@ -207,7 +210,9 @@ gpu_t *gpu_get(sim_t *s)
     const double skin = s->sc->run.list_skin; /* Run:list_skin, in units of h */
     g->nbr_form = tuning_get()->gpu_nbr;
     if (g->nbr_form < 0)
-        error_exit(2, "SPHSEG_GPU_NBR=%s: expected list, list16 or cells", tuning_get()->gpu_nbr_text);
+        error_exit(2, "SPHSEG_GPU_NBR=%s: expected list, list16, cells or tile", tuning_get()->gpu_nbr_text);
+    if (g->nbr_form == 4) g->tile = 1, g->nbr_form = GRID_NBR_LIST16; /* the list16, its flow pass staged */
+    if (g->tile) CK(cudaMalloc(&g->tile_dmax, sizeof *g->tile_dmax));
     g->nl_est = grid_list_est(h->dim, (1 + 0.5 * skin) * (double)(s->seg.k.h / s->seg.k.dr));
     g->nl_cap = 0; /* the list is sized at the first build, from the counts (gpu_list) */
     if (!tuning_get()->gpu_nbr_text) g->nbr_form = gpu_form_fits(g, h, n);
@@ -228,7 +233,7 @@ gpu_t *gpu_get(sim_t *s)
             "bytes estimated, sized at the first build; skin %.3g h%s), %d threads per particle in neighbour loops%s%s", g->dev, ndev, prop.name,
             (double)prop.totalGlobalMem / (1u << 30), n * (part_store_bytes(h) + gpu_spare_bytes(h)) >> 20,
             (n * g->nl_est * gpu_nl_esize(g)) >> 20,
-            g->nbr_form == GRID_NBR_LIST16 ? "list16" : g->nbr_form == GRID_NBR_CELLS ? "cells" : "list", g->nl_est,
+            g->tile ? "tile" : g->nbr_form == GRID_NBR_LIST16 ? "list16" : g->nbr_form == GRID_NBR_CELLS ? "cells" : "list", g->nl_est,
             gpu_nl_esize(g), skin, tuning_get()->gpu_nbr_text ? "" : "; the fastest form that fits", g->team,
             !g->hx                  ? ""
             : g->hx->cuda_aware     ? "; halo: packed on the device, CUDA-aware MPI on device buffers"

@@ -439,6 +439,52 @@ static void check_forms(int dim)
                 met += m;
             }
     assert_true(met > 5 * nt); /* real neighbours were compared */
+    /* The tile (grid_tile: the GPU's staged flow pass, SPHSEG_GPU_NBR=tile):
+     * for each cell, the 3^d cells around it copied into a stage in the
+     * tile's order; every owned particle of the cell meets, through
+     * NBR_BEGIN_TJ, the list16's neighbours in its order, each at a slot of
+     * the stage that holds that neighbour's copy. */
+    grid_view vt = v[1];
+    grid_tile tb;
+    particles_t st = {0};
+    size_t tiles = 0, via = 0;
+    for (size_t c = 0; c < g.ncell; ++c) {
+        if (g.end[c] == g.start[c]) continue;
+        const int c0[3] = {(int)(c % (size_t)g.view.nc[0]), (int)((c / (size_t)g.view.nc[0]) % (size_t)g.view.nc[1]),
+                           (int)(c / ((size_t)g.view.nc[0] * (size_t)g.view.nc[1]))};
+        unsigned ng[27];
+        for (int k = 0; k < (dim == 3 ? 27 : 9); ++k) ng[k] = grid_tile_slot(&g.view, c0, k, &tb);
+        grid_tile_bases(&tb, ng, dim);
+        const unsigned tot = tb.base[27];
+        for (int d = 0; d < 3; ++d) st.x[d] = malloc((tot + 1) * sizeof(real));
+        st.id = malloc((tot + 1) * sizeof *st.id);
+        for (unsigned k = 0; k < tot; ++k) {
+            const size_t j = grid_tile_at(&tb, k, dim);
+            for (int d = 0; d < 3; ++d) st.x[d][k] = p.x[d][j];
+            st.id[k] = p.id[j];
+        }
+        vt.tiled = 1, vt.tile = &tb, vt.tp = &st;
+        for (size_t i = g.start[c]; i < g.end[c]; ++i)
+            for (int T = 1; T <= 16; T *= 4)
+                for (int l = 0; l < T; ++l) {
+                    size_t m = 0, k = 0;
+                    NBR_BEGIN_T(&v[0], p.x, i, j, l, T)
+                        ref[m++] = j;
+                    NBR_END
+                    NBR_BEGIN_TJ(&vt, &p, i, j, jj, jp, l, T)
+                        assert_true(k < m);
+                        assert_int_equal(j, ref[k]);
+                        assert_true(jp == &st && jj < tot);
+                        assert_true(jp->id[jj] == p.id[j] && jp->x[0][jj] == p.x[0][j] && jp->x[1][jj] == p.x[1][j]);
+                        ++k, ++via;
+                    NBR_END
+                    assert_int_equal(k, m);
+                }
+        for (int d = 0; d < 3; ++d) free(st.x[d]);
+        free(st.id);
+        ++tiles;
+    }
+    assert_true(tiles > 10 && via > 5 * p.n); /* the tiles were walked */
     free(ref), free(rk), free(nl), free(cnt), free(nl16);
     for (int d = 0; d < 3; ++d) free(xb[d]);
     nbr_free(&g);

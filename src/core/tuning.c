@@ -29,7 +29,7 @@ static int team_of(const char *e)
 static int nbr_of(const char *e)
 {
     if (!is_set(e) || !strcmp(e, "list")) return 0;
-    return !strcmp(e, "list16") ? 1 : !strcmp(e, "cells") ? 2 : -1;
+    return !strcmp(e, "list16") ? 1 : !strcmp(e, "cells") ? 2 : !strcmp(e, "tile") ? 4 : -1;
 }
 
 /* "list" 0 (or not set), "cells" 2; else -1. */

@@ -11,7 +11,8 @@ typedef struct tuning {
     int gpu_profile;  /* SPHSEG_GPU_PROFILE set and not 0: time each GPU stage (default 0) */
     int gpu_team;     /* SPHSEG_GPU_TEAM: threads per particle 1, 2, 4, 8 or 16; 0: the rule (default);
                        * -1: set to something else (gpu_team_text; the GPU backend refuses it) */
-    int gpu_nbr;      /* SPHSEG_GPU_NBR: the GPU's neighbour pass, 0 list, 1 list16, 2 cells (unset: by memory, gpu_setup.cu)
+    int gpu_nbr;      /* SPHSEG_GPU_NBR: the GPU's neighbour pass, 0 list, 1 list16, 2 cells, 4 tile (list16 with
+                       * the flow pass staged in shared memory) (unset: by memory, gpu_setup.cu)
                        * (src/physics/grid.h GRID_NBR_*); -1: set to something else (the GPU backend refuses it) */
     int gpu_wallskip; /* SPHSEG_GPU_WALLSKIP not 0: dummies out of reach skip their wall loop (default 1) */
     int gpu_overlap;  /* SPHSEG_GPU_OVERLAP not 0: ghost refreshes overlap interior work (default 1) */

@@ -227,7 +227,9 @@ HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6
  * a dummy j taking B_i; the GPU passes kgc as a template constant. With sh
  * given (not NULL), the shift of a step of length sdt comes with it
  * (shift_team's sums over the same pairs, shift_finish): Run:integrator
- * leapfrog's midpoint pass (src/sim/integrate.c), fused. */
+ * leapfrog's midpoint pass (src/sim/integrate.c), fused. Neighbour j's
+ * fields are read through NBR_BEGIN_TJ's jp at jj (the GPU's staged pass:
+ * a tile of shared memory). */
 HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
                                int nlanes, int renorm, int kgc, const shift_ctx *sh, real sdt)
 {
@@ -246,18 +248,18 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
         for (int q = 0; q < 6; ++q) Bi[q] = p->B[q][i];
     shift_sums ss;
     if (sh) shift_sums_zero(&ss);
-    NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
+    NBR_BEGIN_TJ(g, p, i, j, jj, jp, lane, nlanes)
         if (j == i) continue;
         real uj[3], sj[6], volj = 0;
-        if (SPH_EARLY_LOADS) flow_load_j(p, j, uj, sj, &volj);
+        if (SPH_EARLY_LOADS) flow_load_j(jp, jj, uj, sj, &volj);
         real xij[3];
-        real r2 = grid_pair_xi(k->dim, xi, p->x, j, xij);
+        real r2 = grid_pair_xi(k->dim, xi, jp->x, jj, xij);
         if (r2 >= k->support2) continue;
-        if (!SPH_EARLY_LOADS) flow_load_j(p, j, uj, sj, &volj);
+        if (!SPH_EARLY_LOADS) flow_load_j(jp, jj, uj, sj, &volj);
         const real r = sqrt_r(r2);
         real f = kernel_f(r, k->h, k->alpha);
         if (sh) shift_pair_add(&ss, sh, r, r2, f, volj, xij, uj, sj, ui, si);
-        if (renorm && p->kind[j] == KIND_MATERIAL) seg_renorm_add(m, k->dim, -f * volj, xij);
+        if (renorm && jp->kind[jj] == KIND_MATERIAL) seg_renorm_add(m, k->dim, -f * volj, xij);
         real gradW[3] = {f * xij[0], f * xij[1], f * xij[2]};
         real uij[3] = {ui[0] - uj[0], ui[1] - uj[1], ui[2] - uj[2]};
         mom_velgrad_add(L, volj, uij, gradW);
@@ -266,8 +268,8 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
             if (c->alpha_av > 0) Pi = mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij);
         } else {
             if (c->stab == STAB_RIEMANN)
-                Pi = mom_riemann(c->eta_r, c->cs, c->rho, uij, xij, r2, p->kind[j] != KIND_MATERIAL);
-            if (c->bed_alpha > 0 && qi < R(1.0) && p->kind[j] == KIND_MATERIAL) {
+                Pi = mom_riemann(c->eta_r, c->cs, c->rho, uij, xij, r2, jp->kind[jj] != KIND_MATERIAL);
+            if (c->bed_alpha > 0 && qi < R(1.0) && jp->kind[jj] == KIND_MATERIAL) {
                 const real qj = stress_static_q(sj, c->bed_k), w = R(1.0) - (qi > qj ? qi : qj);
                 if (w > 0) Pi += w * mom_av(c->bed_alpha, c->cs, k->h, c->rho, c->rho, uij, xij);
             }
@@ -281,7 +283,7 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
         if (c->p_back != 0) Pi += c->p_back;
         if (kgc) { /* V_j (sigma_i B_i + sigma_j B_j) grad W / rho, the dissipation on grad W */
             real Bj[6], gi[3], gj[3];
-            for (int q = 0; q < 6; ++q) Bj[q] = p->kind[j] == KIND_MATERIAL ? p->B[q][j] : Bi[q];
+            for (int q = 0; q < 6; ++q) Bj[q] = jp->kind[jj] == KIND_MATERIAL ? jp->B[q][jj] : Bi[q];
             linalg_sym_apply(Bi, gradW, gi);
             linalg_sym_apply(Bj, gradW, gj);
             mom_accel_add_kgc(a, c->rho * volj, si, sj, c->rho, Pi, gradW, gi, gj);

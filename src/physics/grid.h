@@ -41,6 +41,15 @@ typedef struct grid_view {
     real *xb[3];
     const unsigned *rk;
     real list2;
+    /* GRID_NBR_LIST16 with a tile (the GPU's staged pass, gpu/gpu_pairs.cu):
+     * the neighbours of the particles of one cell staged in tp at the slots
+     * of tile (grid_tile); NULL: read from the store. Bodies that read j
+     * through NBR_BEGIN_TJ's jp and jj take them from the tile. A view with
+     * a tile serves only the particles of its cell whose list it holds
+     * (ncnt[i] <= nl_cap). */
+    int tiled; /* 1: tile and tp are set (a flag, not a pointer test: the compiler folds it) */
+    const struct grid_tile *tile;
+    const struct particles *tp;
 } grid_view;
 
 enum { GRID_NBR_LIST = 0, GRID_NBR_LIST16 = 1, GRID_NBR_CELLS = 2, GRID_NBR_ROWS = 3 };
@@ -51,6 +60,24 @@ enum { GRID_NBR_LIST = 0, GRID_NBR_LIST16 = 1, GRID_NBR_CELLS = 2, GRID_NBR_ROWS
 #define GRID_ENC16_OFF 2047u
 #define GRID_ENC16_OVER 0xffffffffu /* a build's count: an offset past GRID_ENC16_OFF */
 HD_INLINE unsigned grid_enc16(int s, size_t off) { return (unsigned)s << 11 | (unsigned)off; }
+
+/* A tile: the 3^d cells around one cell c0 in the order of the 16-bit
+ * entries' slots, each cell's owned run followed by its ghost run, staged
+ * one after the other (the GPU's staged flow pass, gpu/gpu_pairs.cu, in a
+ * block's shared memory): slot s's cell holds the store's [a[s], a[s] +
+ * na[s]) and [ga[s], ga[s] + ng) at the tile's base[s], ...; base[3^d] is
+ * the tile's size. Entry e of a particle of c0 is then at base[s] + offset,
+ * the store's particle grid_tile_j. */
+typedef struct grid_tile {
+    size_t a[27], ga[27];
+    unsigned na[27], base[28];
+} grid_tile;
+
+HD_INLINE size_t grid_tile_j(const grid_tile *t, unsigned e)
+{
+    const unsigned s = e >> 11, o = e & GRID_ENC16_OFF;
+    return o < t->na[s] ? t->a[s] + o : t->ga[s] + (o - t->na[s]);
+}
 
 /* Fit the grid to the bounding box [lo, hi] of n particles with cells of
  * edge `support` (2h); returns the number of cells. Shared by the CPU and
@@ -129,6 +156,15 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
  * would: GRID_NBR_LIST16 decodes them (grid_dec16), GRID_NBR_CELLS counts
  * the particles within the list's radius across its cells (grid_ex_next). */
 #define NBR_BEGIN_T(g, x, i, j, lane, nlanes)                                          \
+    NBR_BEGIN_X(g, x, i, j, nbr_jj_, nbr_jp_, (const struct particles *)0, lane, nlanes) \
+    (void)nbr_jj_, (void)nbr_jp_;
+
+/* The same loop for a body that reads neighbour j's fields through jp at
+ * index jj: the store p at j, or, for a particle whose list is read from a
+ * tile (grid_view tile), the tile's staged copy. */
+#define NBR_BEGIN_TJ(g, p, i, j, jj, jp, lane, nlanes) NBR_BEGIN_X(g, (p)->x, i, j, jj, jp, (p), lane, nlanes)
+
+#define NBR_BEGIN_X(g, x, i, j, jj, jp, psrc, lane, nlanes)                            \
     {                                                                                  \
         const int frm_ = (g)->form;                                                    \
         int c0_[3];                                                                    \
@@ -138,6 +174,9 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
         const int zr_ = (g)->dim == 3 ? 1 : 0;                                         \
         const int l16_ = (g)->nl16 != NULL && (g)->ncnt[i] <= (g)->nl_cap;             \
         const int lst_ = l16_ || ((g)->nl != NULL && (g)->ncnt[i] <= (g)->nl_cap);     \
+        const int tld_ = (g)->tiled;                                                   \
+        const grid_tile *const tl_ = (g)->tile;                                        \
+        const struct particles *const jp = tld_ ? (g)->tp : (psrc);                    \
         const int ex_ = frm_ == GRID_NBR_CELLS;                                        \
         const int nsub_ = (g)->gstart != NULL && !ex_ ? 2 : 1;                         \
         const int nseg_ = lst_ ? 1 : (zr_ ? 27 : 9) * nsub_;                           \
@@ -161,10 +200,13 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
             }                                                                          \
             for (size_t q_ = ex_ ? grid_ex_next(&xs_, (g), (lane), (nlanes)) : a_ + (size_t)(lane); \
                  q_ < b_; q_ = ex_ ? grid_ex_next(&xs_, (g), (lane), (nlanes)) : q_ + (size_t)(nlanes)) { \
+                const unsigned e16_ = l16_ ? (g)->nl16[q_ * (g)->nl_stride + (i)] : 0u;  \
                 const size_t j = !lst_ ? q_                                            \
-                                 : l16_ ? grid_dec16((g), &dc_, c0_, (g)->nl16[q_ * (g)->nl_stride + (i)]) \
+                                 : tld_ ? grid_tile_j(tl_, e16_)                       \
+                                 : l16_ ? grid_dec16((g), &dc_, c0_, e16_)             \
                                  : row_ ? (size_t)(g)->nl[(i) * (g)->nl_stride + q_]   \
-                                        : (size_t)(g)->nl[q_ * (g)->nl_stride + (i)];
+                                        : (size_t)(g)->nl[q_ * (g)->nl_stride + (i)];  \
+                const size_t jj = tld_ ? (size_t)tl_->base[e16_ >> 11] + (e16_ & GRID_ENC16_OFF) : j;
 
 #define NBR_END                                                                        \
             }                                                                          \
@@ -210,6 +252,42 @@ HD_INLINE size_t grid_dec16(const grid_view *g, grid_dec *d, const int c0[3], un
         d->ga = g->gstart ? g->gstart[c] : 0;
     }
     return o < d->na ? d->a + o : d->ga + (o - d->na);
+}
+
+/* Slot s of the tile around cell c0: its cell's runs into t (na[s] = 0
+ * outside the grid); returns the ghost run's length. */
+HD_INLINE unsigned grid_tile_slot(const grid_view *g, const int c0[3], int s, grid_tile *t)
+{
+    const int cx = c0[0] + s % 3 - 1, cy = c0[1] + (s / 3) % 3 - 1, cz = c0[2] + (g->dim == 3 ? s / 9 - 1 : 0);
+    t->a[s] = t->ga[s] = 0, t->na[s] = 0;
+    if (cx < 0 || cy < 0 || cz < 0 || cx >= g->nc[0] || cy >= g->nc[1] || cz >= g->nc[2]) return 0;
+    const size_t c = grid_cell_index(g, cx, cy, cz);
+    t->a[s] = g->start[c], t->na[s] = (unsigned)(g->end[c] - g->start[c]);
+    if (!g->gstart) return 0;
+    t->ga[s] = g->gstart[c];
+    return (unsigned)(g->gend[c] - g->gstart[c]);
+}
+
+/* The tile's bases from the slots' run lengths (ng: the ghost runs). */
+HD_INLINE void grid_tile_bases(grid_tile *t, const unsigned *ng, int dim)
+{
+    const int ns = dim == 3 ? 27 : 9;
+    t->base[0] = 0;
+    for (int s = 0; s < ns; ++s) t->base[s + 1] = t->base[s] + t->na[s] + ng[s];
+    for (int s = ns; s < 27; ++s) t->base[s + 1] = t->base[ns];
+}
+
+/* The store index of the tile's k-th particle (k < base[3^d]). */
+HD_INLINE size_t grid_tile_at(const grid_tile *t, unsigned k, int dim)
+{
+    int lo = 0, hi = dim == 3 ? 27 : 9; /* the slot s with base[s] <= k < base[s + 1] */
+    while (hi - lo > 1) {
+        const int m = (lo + hi) / 2;
+        if (t->base[m] <= k) lo = m;
+        else hi = m;
+    }
+    const unsigned o = k - t->base[lo];
+    return o < t->na[lo] ? t->a[lo] + o : t->ga[lo] + (o - t->na[lo]);
 }
 
 /* GRID_NBR_CELLS: a lane's walk over i's cells, each cell's owned run

@@ -3,18 +3,20 @@
 # "Neighbour pass"), SPHSEG_GPU_NBR=
 #   list     the Verlet list, 4-byte entries (the default),
 #   list16   the same list in 2-byte entries (a cell slot and an offset in the cell),
-#   cells    no list: the build's cells scanned, counted within the list's radius.
-# (a) Bit-identity of list16 and cells against list (tools.dev.identical, --backend
+#   cells    no list: the build's cells scanned, counted within the list's radius,
+#   tile     list16, its flow pass staged cell by cell in shared memory (k_flow_tile).
+# (a) Bit-identity of each form against list (tools.dev.identical, --backend
 #     gpu, 100 steps): the 2D EN drum and the 3D drum coarsened to about 3e4
 #     particles; and tests/test_ranks_bitwise.py --backend gpu (1, 2, 3 ranks on the
 #     one device) under each form.
 # (b) The 3D drum of 1.1e7 particles (inputs/drum_3d.yml, dr 0.25 mm, length 0.1 m,
-#     Run:preset converged), STEPS steps with SPHSEG_GPU_PROFILE=1, each form:
+#     Run:preset PRESET, converged unless set), STEPS steps with SPHSEG_GPU_PROFILE=1, each form:
 #     particle-steps/s (sphseg's "done:" line: set-up and output excluded), the
 #     profile's ms per step, the list's size and the device's peak memory in use
 #     (nvidia-smi sampled every 100 ms).
 # Usage (repository root, one GPU):
 #   OUT=DIR [SPHSEG_GPU=local/sphseg_gpu] [SPHSEG_GPU_DOUBLE=BIN] [STEPS=200] [PYTHON=python3] \
+#     [FORMS="list list16 cells tile"] [PRESET=converged|fast] \
 #     bash tools/bench/nbr_designs.sh
 # SPHSEG_GPU is a single-precision build (make GPU=1 PRECISION=single); SPHSEG_GPU_DOUBLE,
 # if given, a double one, timed after it. Writes under OUT: identity.txt, ranks.txt,
@@ -25,7 +27,8 @@ bin=${SPHSEG_GPU:-local/sphseg_gpu}
 bind=${SPHSEG_GPU_DOUBLE:-}
 steps=${STEPS:-200}
 py=${PYTHON:-python3}
-forms="list list16 cells"
+forms=${FORMS:-list list16 cells tile}
+preset=${PRESET:-converged}
 mkdir -p "$out"
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 log="$out/log.txt"
@@ -42,7 +45,8 @@ left() { [ $((SECONDS + $1)) -lt "${BUDGET:-460}" ]; } # room for $1 s more with
 
 # (a) bit-identity
 : > "$out/identity.txt"
-for f in list16 cells; do
+for f in $forms; do
+    [ "$f" = list ] && continue
     echo "== $f against list (one rank, 100 steps)" >> "$out/identity.txt"
     timeout 150 "$py" -m tools.dev.identical --backend gpu --before "$(wrap list "$bin")" --after "$(wrap "$f" "$bin")" \
         --only '^drum_2d_EN|^drum_3d' --no-cases --steps 100 --max-particles 30000 >> "$out/identity.txt" 2>&1 \
@@ -51,7 +55,7 @@ done
 # (b) the 1.1e7 drum, single; then (a)'s rank counts, and the double build, while time is left
 gpu=$(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1)
 csv="$out/nbr_designs.csv"
-echo "form,precision,particles,steps,wall_s,particle_steps_per_s,list_mib,peak_device_mib,builds,list_ms_step,flow_ms_step,walls_ms_step,shift_ms_step,kgc_ms_step,total_ms_step,gpu" > "$csv"
+echo "form,precision,preset,particles,steps,wall_s,particle_steps_per_s,list_mib,peak_device_mib,builds,list_ms_step,flow_ms_step,walls_ms_step,shift_ms_step,kgc_ms_step,total_ms_step,gpu" > "$csv"
 : > "$out/profiles.txt"
 ms() { # profile row name -> ms/step
     sed -n "s/^ *$1.* \([0-9.]*\) ms\/step.*/\1/p" "$tmp/log" | head -1
@@ -61,7 +65,7 @@ drum() { # form precision binary
     nvidia-smi --query-gpu=memory.used --format=csv,noheader,nounits -lms 100 > "$tmp/mem" 2>/dev/null &
     local smi=$!
     SPHSEG_GPU_NBR=$f SPHSEG_GPU_PROFILE=1 timeout 240 "$b" inputs/drum_3d.yml -o "$tmp/run" --overwrite --backend gpu \
-        -P Geometry:dr=0.00025 -P Geometry:length=0.1 -P Run:preset=converged -P Run:max_steps="$steps" \
+        -P Geometry:dr=0.00025 -P Geometry:length=0.1 -P Run:preset="$preset" -P Run:max_steps="$steps" \
         -P Run:progress_s=1e9 -P Output:snapshots=off -P Output:diag_dt=1e9 > "$tmp/log" 2>&1
     local rc=$?
     kill "$smi" 2>/dev/null; wait "$smi" 2>/dev/null
@@ -70,7 +74,7 @@ drum() { # form precision binary
     line=$(grep '^done:' "$tmp/log")
     if [ $rc -ne 0 ] || [ -z "$line" ]; then
         echo "$f $prec: sphseg exited $rc: $(tail -n 1 "$tmp/log")" | tee -a "$log"
-        echo "$f,$prec,,,,,,,,,,,,,,failed rc $rc" >> "$csv"
+        echo "$f,$prec,$preset,,,,,,,,,,,,,,failed rc $rc" >> "$csv"
         return
     fi
     n=$(sed -n 's/.*, \([0-9]*\) material + \([0-9]*\) dummy.*/\1 \2/p' "$tmp/log" | head -1 | awk '{print $1+$2}')
@@ -79,7 +83,7 @@ drum() { # form precision binary
     lmib=$(sed -n 's/.* \([0-9]*\) MiB of neighbour list.*/\1/p' "$tmp/log" | head -1)
     peak=$(sort -n "$tmp/mem" | tail -1)
     builds=$(sed -n 's/^gpu: \([0-9]*\) neighbour-list builds.*/\1/p' "$tmp/log" | head -1)
-    echo "$f,$prec,$n,$steps,$wall,$rate,$lmib,$peak,$builds,$(ms 'neighbour list'),$(ms 'flow rates'),$(ms 'dummy walls'),$(ms 'particle shifting'),$(ms "corrected gradient's"),$(sed -n 's/^ *total *\([0-9.]*\) ms;.*/\1/p' "$tmp/log" | awk -v s="$steps" '{printf "%.4f", $1 / s}'),$gpu" >> "$csv"
+    echo "$f,$prec,$preset,$n,$steps,$wall,$rate,$lmib,$peak,$builds,$(ms 'neighbour list'),$(ms 'flow rates'),$(ms 'dummy walls'),$(ms 'particle shifting'),$(ms "corrected gradient's"),$(sed -n 's/^ *total *\([0-9.]*\) ms;.*/\1/p' "$tmp/log" | awk -v s="$steps" '{printf "%.4f", $1 / s}'),$gpu" >> "$csv"
     echo "$f $prec: $rate particle-steps/s, peak $peak MiB" | tee -a "$log"
 }
 for f in $forms; do left 60 && drum "$f" single "$bin" || echo "$f single: skipped (time)" | tee -a "$log"; done

@@ -19,7 +19,8 @@ pass's code"). Write such loops with a fixed trip count and a break, as
 flow_advance and shift_finish do.
 
 --check: exit 1 when a kernel of the per-step passes (the flow pass without the
-L it sums only when a scheme needs it, the shift pass) has a frame of more than
+L it sums only when a scheme needs it, in both its list kernels and its staged
+one, k_flow_tile; the shift pass) has a frame of more than
 LIMIT bytes (32; today the list form's have none, list16's and cells' fused
 leapfrog pass 8 with 4 bytes spilled); the rest (the L's 3x3 solve, the Shepard
 filter's MLS solve, dC/dt) keep small frames of once-per-particle arrays and are
@@ -36,7 +37,7 @@ from tools import ROOT
 
 LIMIT = 32  # bytes of stack frame a per-step pair kernel may keep (0 today: docs/performance.md)
 # the per-step passes --check holds to LIMIT: the flow pass without the owned L (RENORM 0), the shift pass
-CHECKED = re.compile(r"^gpu_flow_pass<0, \d, \d, \d>$|^gpu_shift_f<\d>$")
+CHECKED = re.compile(r"^gpu_flow_pass<0, \d, \d, \d>$|^gpu_shift_f<\d>$|^k_flow_tile<\d+, 0, \d, \d>$")
 
 
 def compile_report(precision, arch, log):
@@ -61,14 +62,14 @@ def demangle(names):
 
 def rows(report):
     """{host function with its template case: (registers, stack bytes, spill-store bytes)}, the largest over
-    the team sizes."""
+    the team sizes (the staged flow pass k_flow_tile: a row a team size)."""
     blocks = report.split("Compiling entry function")[1:]
     names = [b.split("'")[1] for b in blocks]
     out = {}
     for b, dm in zip(blocks, demangle(names)):
         st = re.search(r"(\d+) bytes stack frame, (\d+) bytes spill stores", b)
         rg = re.search(r"Used (\d+) registers", b)
-        m = re.search(r"(gpu_\w+)(<[^>]*>)?\(", dm)
+        m = re.search(r"(gpu_\w+|k_flow_tile)(<[^>]*>)?\(", dm)
         if not (st and rg and m):
             continue
         key = m.group(1) + (m.group(2) or "")
