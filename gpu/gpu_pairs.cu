@@ -238,16 +238,14 @@ __global__ void __launch_bounds__(32 * T, 512 / (32 * T)) k_flow_tile(const __gr
     if (KGC)
         for (int q = 0; q < 6; ++q) tp.B[q] = sr + (13 + q) * cap;
     tp.kind = (uint8_t *)(sr + tile_nreal<KGC>() * cap);
-    {
-        for (unsigned k = (unsigned)tid; k < tot; k += blockDim.x) {
-            const size_t j = grid_tile_at(&tb, k, v.dim);
-            for (int d = 0; d < 3; ++d) tp.x[d][k] = p.x[d][j], tp.v[d][k] = p.v[d][j];
-            for (int q = 0; q < 6; ++q) tp.sig[q][k] = p.sig[q][j];
-            tp.vol[k] = p.vol[j];
-            if (KGC)
-                for (int q = 0; q < 6; ++q) tp.B[q][k] = p.B[q][j];
-            tp.kind[k] = p.kind[j];
-        }
+    for (unsigned k = (unsigned)tid; k < tot; k += blockDim.x) {
+        const size_t j = grid_tile_at(&tb, k, v.dim);
+        for (int d = 0; d < 3; ++d) tp.x[d][k] = p.x[d][j], tp.v[d][k] = p.v[d][j];
+        for (int q = 0; q < 6; ++q) tp.sig[q][k] = p.sig[q][j];
+        tp.vol[k] = p.vol[j];
+        if (KGC)
+            for (int q = 0; q < 6; ++q) tp.B[q][k] = p.B[q][j];
+        tp.kind[k] = p.kind[j];
     }
     __syncthreads();
     /* every particle's list is read (the list is as wide as its longest,
@@ -272,9 +270,8 @@ __global__ void __launch_bounds__(32 * T, 512 / (32 * T)) k_flow_tile(const __gr
 /* A tile's capacity at most: the shared memory of an SM (228 kB on sm_90,
  * less 1 kB a block) for one block; the blocks an SM runs at once follow
  * from the build's largest tile (gpu_flow_tile sizes it). */
-template <int KGC> static unsigned tile_cap(int T)
+template <int KGC> static unsigned tile_cap()
 {
-    (void)T;
     const size_t per = 227u * 1024u - 1024u - sizeof(grid_tile) - 256u;
     const size_t cap = per / (tile_nreal<KGC>() * sizeof(real) + 1);
     return (unsigned)(cap & ~(size_t)15);
@@ -286,7 +283,7 @@ template <int T, int RENORM, int KGC, int SHIFT> static void flow_tile_launch(gp
     const size_t bytes = tile_bytes<KGC>(A.cap);
     if (!set) {
         CK(cudaFuncSetAttribute(k_flow_tile<T, RENORM, KGC, SHIFT>, cudaFuncAttributeMaxDynamicSharedMemorySize,
-                                (int)tile_bytes<KGC>(tile_cap<KGC>(T))));
+                                (int)tile_bytes<KGC>(tile_cap<KGC>())));
         set = 1;
     }
     k_flow_tile<T, RENORM, KGC, SHIFT><<<(unsigned)g->ncell, 32 * T, bytes, g->st>>>(A);
@@ -319,7 +316,7 @@ void gpu_tile_need(gpu_t *g)
 
 template <int RENORM, int KGC, int SHIFT> static void gpu_flow_tile(sim_t *s, gpu_t *g, sel sl)
 {
-    if (g->tile_need > tile_cap<KGC>(g->team)) { /* the build's largest tile past the shared memory */
+    if (g->tile_need > tile_cap<KGC>()) { /* the build's largest tile past the shared memory */
         g->tile_over_passes++;
         return gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_LIST16>(s, g, sl);
     }

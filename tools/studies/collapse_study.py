@@ -54,15 +54,43 @@ def lube_height(a):
     return np.where(a < 1.15, a, a ** 0.4)
 
 
+# The floor past the column: 3 times Lube et al.'s runout plus 2 L0. Until 2026-11-30 it was 1.5 times
+# plus L0, and the runs whose deposit reached its end wall (a >= 4, and a = 2 on a Coulomb floor) read the
+# wall's place as their runout: 1.5 + L0 / law times the law (1.92 at a = 2, 1.71 at 4, 1.63 at 8).
+FLOOR_LAW, FLOOR_L0 = 3.0, 2.0
+OLD_FLOOR_LAW, OLD_FLOOR_L0 = 1.5, 1.0  # the floor of the runs before, to mark their results (x_end)
+AT_WALL = 4  # a front within 2h + dr (h 1.5 dr) of the floor's end wall, in reach of its dummies: a bound
+
+
+def x_end_of(L0, dr, runout):
+    """The end wall's x: the column and the floor in whole dr (src/sim/setup.c walls_box)."""
+    return (round(L0 / dr) + round(runout / dr)) * dr
+
+
 def case(name, a, L0=0.02, dr=0.001, scene=SCENE, **extra):
     H0 = a * L0
-    run = L0 * (1.5 * float(lube_runout(a)) + 1.0)
+    run = L0 * (FLOOR_LAW * float(lube_runout(a)) + FLOOR_L0)
     t_end = GATE + 7 * math.sqrt(H0 / G)
     over = {"Geometry:dr": dr, "Geometry:height": round(H0, 9), "Geometry:width": L0,
             "Geometry:runout": round(run, 4), "Run:t_end": round(t_end, 4), "Output:dt": 0.01,
             "Output:diag_dt": 0.01, "Run:progress_s": 1e9}
     over.update(extra)
-    return batch.Case(name, scene, over, a=a, L0=L0, H0=H0, dr=dr, t_end=t_end)
+    x_end = x_end_of(L0, dr, float(over["Geometry:runout"]))
+    return batch.Case(name, scene, over, a=a, L0=L0, H0=H0, dr=dr, t_end=t_end, x_end=x_end)
+
+
+def at_end_wall(r, front):
+    """Whether a run's final front lies at its floor's end wall (runs.csv row r; a run from before x_end
+    was recorded had the old floor)."""
+    L0, dr, a = float(r["L0"]), float(r["dr"]), float(r["a"])
+    x_end = float(r["x_end"]) if r.get("x_end") else x_end_of(
+        L0, dr, round(L0 * (OLD_FLOOR_LAW * float(lube_runout(a)) + OLD_FLOOR_L0), 4))
+    return front >= x_end - AT_WALL * dr
+
+
+def bound(v, wall):
+    """A value, or a lower bound where the end wall stopped the front."""
+    return ("≥ %.2f" if wall else "%.2f") % v
 
 
 # Lagree, Staron & Popinet (2011): mu_s 0.32, delta mu 0.28, I0 0.4 (their Gerris example
@@ -221,7 +249,8 @@ def glass_rows(runs, where):
         rows.append(dict(name=n, model=m.group(2), floor="coulomb" if m.group(5) else "no_slip", a=av,
                          n=int(m.group(3)), E="1e6" if m.group(4) else "1e5",
                          runout=run, lube_runout=float(lube_runout(av)), height=hf, lube_height=float(lube_height(av)),
-                         creep_mm_s=creep, wall_s=r["wall_s"], steps=r["steps"], backend=r.get("backend", "")))
+                         creep_mm_s=creep, wall_s=r["wall_s"], steps=r["steps"], backend=r.get("backend", ""),
+                         end_wall=int(at_end_wall(r, f["front"][-1]))))
     return sorted(rows, key=lambda q: (q["floor"], q["model"] != "glass", q["E"], q["n"], q["a"]))
 
 
@@ -242,15 +271,16 @@ def glass_report(runs, where, P, docs):
       "H_inf/L0 | Lube 2005 | ratio | "
       "front moving at t_end (mm/s) | wall (s) | backend |")
     P("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for q in rows:
-        P("| %s | %s | %g | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f | %s | %s |" % (
-            glass_label(q["model"], q["floor"]), q["E"], q["a"], q["n"], q["runout"], q["lube_runout"],
-            q["runout"] / q["lube_runout"], q["height"], q["lube_height"], q["height"] / q["lube_height"],
-            q["creep_mm_s"], q["wall_s"], q["backend"]))
+    for q in rows:  # "≥": the front stopped at the floor's end wall
+        P("| %s | %s | %g | %d | %s | %.2f | %s | %.2f | %.2f | %.2f | %.1f | %s | %s |" % (
+            glass_label(q["model"], q["floor"]), q["E"], q["a"], q["n"], bound(q["runout"], q["end_wall"]),
+            q["lube_runout"], bound(q["runout"] / q["lube_runout"], q["end_wall"]), q["height"], q["lube_height"],
+            q["height"] / q["lube_height"], q["creep_mm_s"], q["wall_s"], q["backend"]))
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.3))
     aa = np.linspace(0.4, 10, 200)
     ax[0].loglog(aa, lube_runout(aa), "k-", label="Lube et al. 2005")
     ax[1].loglog(aa, lube_height(aa), "k-", label="Lube et al. 2005")
+    bounds = False
     for k, (model, floor) in enumerate((("glass", "no_slip"), ("const", "no_slip"), ("glass", "coulomb"),
                                         ("const", "coulomb"))):
         for j, nn in enumerate(GLASS_N):
@@ -261,6 +291,11 @@ def glass_report(runs, where, P, docs):
                       label="%s, L0/dr %d" % (glass_label(model, floor), nn))
             ax[0].loglog([q["a"] for q in sel], [q["runout"] for q in sel], **st)
             ax[1].loglog([q["a"] for q in sel], [q["height"] for q in sel], **st)
+            b = [q for q in sel if q["end_wall"]]  # a lower bound: the front stopped at the floor's end wall
+            if b:
+                ax[0].loglog([q["a"] for q in b], [q["runout"] for q in b], ls="none", color="k", ms=10,
+                             marker="$\\uparrow$", label=None if bounds else "a bound (the floor's end wall)")
+                bounds = True
     for x in ax:
         x.fill_between(aa, 0.85 * (lube_runout(aa) if x is ax[0] else lube_height(aa)),
                        1.15 * (lube_runout(aa) if x is ax[0] else lube_height(aa)), color="0.85", label="law +- 15 %")
@@ -302,9 +337,10 @@ def cmd_report(a):
             run, hf = (f["front"][-1] - L0) / L0, f["height_at_wall"][-1] / L0
             creep = (f["front"][-1] - f["front"][-2]) / (f["t"][-1] - f["t"][-2]) * 1e3
             A.append(av), R.append(run), Hf.append(hf)
-            P("| %g | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f | %s | %s |" % (
-                av, round(L0 / float(r["dr"])), run, lube_runout(av), run / lube_runout(av), hf, lube_height(av),
-                hf / lube_height(av), creep, r["wall_s"], r.get("backend", "")))
+            wall = at_end_wall(r, f["front"][-1])  # "≥": the front stopped at the floor's end wall
+            P("| %g | %d | %s | %.2f | %s | %.2f | %.2f | %.2f | %.1f | %s | %s |" % (
+                av, round(L0 / float(r["dr"])), bound(run, wall), lube_runout(av), bound(run / lube_runout(av), wall),
+                hf, lube_height(av), hf / lube_height(av), creep, r["wall_s"], r.get("backend", "")))
         aa = np.linspace(0.4, 11, 200)
         ax[0].loglog(aa, lube_runout(aa), "k-", label="Lube et al. 2005")
         ax[0].loglog(A, R, "o", label="SPH, L0/dr = 20")
@@ -336,8 +372,9 @@ def cmd_report(a):
             r, f = runs[n], load(where[n], n)
             L0 = float(r["L0"])
             run = (f["front"][-1] - L0) / L0
-            P("| %g | %d | %s | %.3f | %.3f | %s | %s | %s | %s |" % (
-                float(r["dr"]) * 1e3, round(L0 / float(r["dr"])), r["material"], run, f["height_at_wall"][-1] / L0,
+            P("| %g | %d | %s | %s | %.3f | %s | %s | %s | %s |" % (
+                float(r["dr"]) * 1e3, round(L0 / float(r["dr"])), r["material"],
+                ("≥ %.3f" if at_end_wall(r, f["front"][-1]) else "%.3f") % run, f["height_at_wall"][-1] / L0,
                 "%+.3f" % (run - prev) if prev is not None else "-", r["wall_s"], r["steps"], r.get("backend", "")))
             if prev is not None:
                 dh.append(float(r["dr"])), de.append(abs(run - prev))
