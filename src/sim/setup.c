@@ -366,10 +366,9 @@ static void setup_walls(sim_t *s)
 /* The container's wall primitives (wall.h) of the built-in scenes. */
 
 /* Appends a primitive named `name` with the motion of the scene's walls
- * (the box's translation, Walls:velocity); returns it for the caller to
- * shape. */
-real wall_mu(const struct scene *sc, int slip) { return slip == SLIP_COULOMB ? (real)sc->walls.mu_w : R(0.0); }
-
+ * (the box's translation, Walls:velocity) and the slip `slip` (enum
+ * wall_slip: free slip, or no slip, with Walls:mu_w where coulomb); returns
+ * it for the caller to shape. */
 wall_prim *wall_add_prim(sim_t *s, const char *name, int shape, int slip, int bound, int claim)
 {
     wall_geom *w = &s->flow.w;
@@ -377,7 +376,8 @@ wall_prim *wall_add_prim(sim_t *s, const char *name, int shape, int slip, int bo
     wall_prim *q = &w->prim[w->n];
     memset(q, 0, sizeof *q);
     s->wall_name[w->n++] = name;
-    q->shape = shape, q->slip = slip, q->bound = bound, q->claim = claim;
+    q->shape = shape, q->slip = slip == SLIP_FREE, q->bound = bound, q->claim = claim;
+    q->mu_w = slip == SLIP_COULOMB ? (real)s->sc->walls.mu_w : R(0.0);
     q->open_at = -1;
     q->t_lo = (real)-1e30, q->t_hi = (real)1e30; /* unbounded */
     const double *u = s->sc->walls.velocity;
@@ -408,21 +408,20 @@ static void walls_box(sim_t *s)
     const struct scene_geometry *g = &sc->geometry;
     double dr = g->dr, W = (double)(lround(g->width / dr) + lround(g->runout / dr)) * dr;
     double D = g->dim == 3 ? (double)lround(g->depth / dr) * dr : 0.0, H = (double)lround(g->height / dr) * dr;
-    int sb = sc->walls.slip == SLIP_FREE, ss = sc->walls.side_slip == SLIP_FREE;
-    const real mb = wall_mu(sc, sc->walls.slip), ms = wall_mu(sc, sc->walls.side_slip);
-    wall_plane(s, "base", sb, !sc->outlet.enabled, WALL_CLAIM_FIRST, 0, 0, 0, 0, 1, 0)->mu_w = mb;
+    const int sb = (int)sc->walls.slip, ss = (int)sc->walls.side_slip;
+    wall_plane(s, "base", sb, !sc->outlet.enabled, WALL_CLAIM_FIRST, 0, 0, 0, 0, 1, 0);
     if (!(g->periodic & PERIODIC_X)) {
-        wall_plane(s, "xlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 1, 0, 0)->mu_w = ms;
-        wall_plane(s, "xhi", ss, 1, WALL_CLAIM_SIDE, W, 0, 0, -1, 0, 0)->mu_w = ms;
+        wall_plane(s, "xlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 1, 0, 0);
+        wall_plane(s, "xhi", ss, 1, WALL_CLAIM_SIDE, W, 0, 0, -1, 0, 0);
     }
     if (g->dim == 3 && !(g->periodic & PERIODIC_Z)) {
-        wall_plane(s, "zlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1)->mu_w = ms;
-        wall_plane(s, "zhi", ss, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1)->mu_w = ms;
+        wall_plane(s, "zlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
+        wall_plane(s, "zhi", ss, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1);
     }
     if (g->runout > 0)
         wall_plane(s, "gate", ss, 0, WALL_CLAIM_NONE, (double)lround(g->width / dr) * dr, 0, 0, -1, 0, 0)->open_at =
             sc->walls.gate_open;
-    if (g->lid) wall_plane(s, "lid", sb, 1, WALL_CLAIM_NONE, 0, H, 0, 0, -1, 0)->mu_w = mb;
+    if (g->lid) wall_plane(s, "lid", sb, 1, WALL_CLAIM_NONE, 0, H, 0, 0, -1, 0);
     s->flow.w.period[0] = (real)W, s->flow.w.period[2] = (real)D;
 }
 
@@ -433,16 +432,14 @@ static void walls_drum(sim_t *s)
 {
     const struct scene *sc = s->sc;
     const struct scene_geometry *g = &sc->geometry;
-    int sb = sc->walls.slip == SLIP_FREE;
-    const real mb = wall_mu(sc, sc->walls.slip);
+    const int sb = (int)sc->walls.slip;
     double omega = sc->walls.rpm * 2.0 * M_PI / 60.0 * (sc->walls.direction == ROT_CLOCKWISE ? -1.0 : 1.0);
     double L = (double)lround(g->length / g->dr) * g->dr;
     wall_prim *q[3] = {wall_add_prim(s, "drum", WALL_CYLINDER, sb, 1, WALL_CLAIM_SIDE), NULL, NULL};
-    q[0]->radius = (real)g->radius, q[0]->mu_w = mb;
+    q[0]->radius = (real)g->radius;
     if (g->dim == 3) {
         q[1] = wall_plane(s, "end_lo", sb, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
         q[2] = wall_plane(s, "end_hi", sb, 1, WALL_CLAIM_SIDE, 0, 0, L, 0, 0, -1);
-        q[1]->mu_w = q[2]->mu_w = mb;
     }
     for (int k = 0; k < 3; ++k)
         if (q[k]) q[k]->move = WALL_ROTATE, q[k]->omega = omega; /* about the z axis, c = 0 */

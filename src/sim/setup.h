@@ -19,11 +19,9 @@ void setup_put_wall(particles_t *p, size_t k, int id);
 size_t setup_count(size_t k);
 
 /* Append a wall primitive (s->flow.w) called name, with the box's
- * translation when Walls:velocity is set; wall_plane also places it. */
+ * translation when Walls:velocity is set and the slip `slip` (enum
+ * wall_slip; Walls:mu_w where coulomb); wall_plane also places it. */
 wall_prim *wall_add_prim(sim_t *s, const char *name, int shape, int slip, int bound, int claim);
-/* A wall's Coulomb friction coefficient (wall_prim.mu_w): Walls:mu_w where
- * its slip (enum wall_slip) is coulomb, else 0. */
-real wall_mu(const struct scene *sc, int slip);
 wall_prim *wall_plane(sim_t *s, const char *name, int slip, int bound, int claim, double px, double py, double pz,
                       double nx, double ny, double nz);
 

@@ -197,7 +197,7 @@ void container_walls(sim_t *s)
     for (unsigned i = 0; i < k->walls_count; ++i) {
         const struct scene_wall *w = &k->walls[i];
         wall_prim *q;
-        int slip = w->slip == SLIP_FREE;
+        const int slip = (int)w->slip;
         if (w->shape == CWALL_ENDS) {
             ends = w;
             continue;
@@ -228,7 +228,6 @@ void container_walls(sim_t *s)
             if (w->gate) q->open_at = w->open_at;
         }
         ctr_motion(q, w);
-        q->mu_w = wall_mu(sc, (int)w->slip);
     }
     /* a periodic axis: the period is Geometry:width along x, Geometry:height along y, Geometry:depth along z,
      * from 0, whole dr */
@@ -238,10 +237,9 @@ void container_walls(sim_t *s)
     if (sc->geometry.dim == 3 && !(sc->geometry.periodic & PERIODIC_Z)) {
         /* the end walls: as the entry of shape ends, else fixed, slipping as a column's side walls */
         double D = (double)lround(sc->geometry.depth / dr) * dr;
-        int ss = ends ? ends->slip == SLIP_FREE : sc->walls.side_slip == SLIP_FREE;
+        const int ss = ends ? (int)ends->slip : (int)sc->walls.side_slip;
         wall_prim *lo = wall_plane(s, "end_lo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
         wall_prim *hi = wall_plane(s, "end_hi", ss, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1);
-        lo->mu_w = hi->mu_w = wall_mu(sc, ends ? (int)ends->slip : (int)sc->walls.side_slip);
         if (ends) ctr_motion(lo, ends), ctr_motion(hi, ends);
     }
 }
