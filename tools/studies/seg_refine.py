@@ -26,6 +26,8 @@ Each variant changes one existing key against the baseline `base`:
   yielded   Segregation:shear_rate=yielded: eq. (2.7)'s shear rate only where the stress is on or past
             the static yield cone, 0 in the elastic bed (whose SPH shear rate grows as 1/dr)
   yieldedE  yielded at Material:E=1e5: the stiffness's share (E x 10), measured against yielded
+  yieldlim  yielded without the donor limiter (Segregation:limiter=none): the limiter's share at the
+            front of C below the flowing layer, measured against yielded
   cfl199    Run:cfl_flow=0.199: a step 0.5 % shorter, whose own effect is nil; what it changes is the
             runs' sensitivity to a perturbation, the floor under which a variant's effect is noise (at
             dr 2 mm, development machine, 0.199 and 0.201 move the index by up to 5.2 % EV, 2.6 % EN)
@@ -108,6 +110,7 @@ VARIANTS = {
     "cfl199": ["Run:cfl_flow=0.199"],
     "yielded": ["Segregation:shear_rate=yielded"],  # eq. (2.7)'s gdot only where the stress is on the static cone
     "yieldedE": ["Segregation:shear_rate=yielded", "Material:E=1e5"],  # E x 10 (after FLOW's 1e4), against yielded
+    "yieldlim": ["Segregation:shear_rate=yielded", "Segregation:limiter=none"],  # the limiter's share, against yielded
     "area": ["Geometry:fill_by=area"],  # the bed's area the segment's at every dr  # after FLOW's 0.2: the noise floor (below)
 }
 # The bed's area is N dr^2 of the lattice points inside R - dr/2 below the fill line (src/sim/setup.c,
@@ -128,9 +131,10 @@ RUNS = [("EV", "base", 0.001, 10), ("EV", "base", 0.0005, 10),
         ("EV", "shift05", 0.00025, 10), ("EN", "base", 0.00025, 10), ("EV", "const", 0.00025, 10),
         ("EV", "bd3", 0.00025, 10)] + \
        [(d, "yielded", dr, 10) for d in ("EV", "EN") for dr in (0.001, 0.0005, 0.00025)] + \
-       [(d, "yieldedE", 0.0005, 10) for d in ("EV", "EN")]
+       [(d, "yieldedE", 0.0005, 10) for d in ("EV", "EN")] + \
+       [("EV", "yieldlim", dr, 10) for dr in (0.0005, 0.00025)]
 # The variant each is measured against in --effects (base unless named here).
-REF = {"yieldedE": "yielded"}
+REF = {"yieldedE": "yielded", "yieldlim": "yielded"}
 
 
 def label_of(drum, var, dr):

@@ -118,8 +118,8 @@ def cmd_chart(a):
                 ax[k].axvline(h, ls=":", lw=1, color="gray")
                 ax[k].annotate(r["label"] + "\n(error not measured)", (h, 1.2e-3), fontsize=6, rotation=90,
                                ha="right", va="bottom", color="gray")
-        ax[k].axvline(6, color="k", lw=0.8, ls="--")
-        ax[k].annotate(" goal: 6 h", (6, 0.5), fontsize=8, ha="left")
+        ax[k].axvline(a.goal, color="k", lw=0.8, ls="--")
+        ax[k].annotate(" goal: %g h%s" % (a.goal, a.goal_note), (a.goal, 0.5), fontsize=8, ha="left")
         if a.band:
             ax[k].axhline(a.band, color="g", lw=0.8, ls="--")
             ax[k].annotate(" %g %% of the reference" % (100 * a.band), (min(hours) / 1.4, a.band * 1.1), fontsize=8)
@@ -244,6 +244,8 @@ def main():
     c.add_argument("--error-note", default="2D EV drum, Table 1 resolution, t = 5 s (o) or 10 s (s)",
                    help="where the errors come from (axis label)")
     c.add_argument("--band", type=float, help="draw this relative error as a line (e.g. 0.02)")
+    c.add_argument("--goal", type=float, default=6.0, help="draw this cost as the goal line, GPU-hours (default 6)")
+    c.add_argument("--goal-note", default="", help="text after the goal's hours")
     p = sub.add_parser("plan", help="the cheapest measured settings within a tolerance, and their GPU-hours")
     p.add_argument("--tolerance", type=float, required=True, help="PCT: largest error of speed and index, per cent")
     p.add_argument("--dr", type=float, help="particle spacing, m")
