@@ -47,9 +47,25 @@ def detector_check():
     return ok
 
 
+def grain_front_check():
+    """The grain-scale front (collapse_study.thickness_fronts) on a made deposit, bins of 2 dr from the wall
+    (dr 1 mm, L0 2 cm, bin centres x = dr + 2 dr k): tops 9, 8, 6, 4, 3, 2 mm to x = 11 mm, an empty bin, then a
+    lone 9-mm heap beyond it. Thicker than 5 mm: bins to x = 5 mm, its right edge 6 mm; than 2.5 mm: 10 mm; than
+    10 mm: none. The heap past the gap is not the wall's deposit and is not read."""
+    import numpy as np
+    dr, L0 = 1e-3, 0.02
+    x = np.array([1, 3, 5, 7, 9, 11, 15]) * dr
+    dep = {"x": x, "top": np.array([9, 8, 6, 4, 3, 2, 9]) * 1e-3}
+    f5, f25, f10 = cs.thickness_fronts(dep, dr, L0, (5e-3, 2.5e-3, 10e-3))
+    ok = abs(f5 - (6e-3 - L0) / L0) < 1e-12 and abs(f25 - (10e-3 - L0) / L0) < 1e-12 and np.isnan(f10)
+    print("%s the grain-scale front: %.3f, %.3f L0 (expected %.3f, %.3f), none above the deposit" % (
+        "ok  " if ok else "FAIL", f5, f25, (6e-3 - L0) / L0, (10e-3 - L0) / L0))
+    return ok
+
+
 def main():
     a = sphseg_work_args()
-    if not detector_check():
+    if not detector_check() or not grain_front_check():
         sys.exit(1)
     cases = [cs.case("a0.5", 0.5), cs.case("a2", 2), cs.glass_case(2, 10)]
     batch.run_cases_or_exit(cases, a.sphseg, a.work, limit_s=600)

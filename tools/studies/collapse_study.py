@@ -128,6 +128,10 @@ GLASS_A = (0.5, 2, 4, 8)
 # 2004), as a Coulomb wall (Walls:slip coulomb) in place of the scene's no-slip floor.
 COULOMB_FLOOR = {"Walls:slip": "coulomb", "Walls:mu_w": 0.4621}
 GLASS_N = (10, 20, 40)  # L0 / dr
+# The beads' diameter, m (the scene's Segregation... d; Kumar's table): the grain-scale fronts of the report, the
+# foremost bin of the wall-connected deposit thicker than 1.5 d and 3 d (as the Lagree set's), where the spacing
+# resolves a grain's thickness (dr <= d: L0/dr 20 and 40; at 10, dr = 2 mm, one particle is thicker than 1.5 d)
+GLASS_D = 1.15e-3
 
 
 def glass_case(a, n, model="glass", L0=0.02, tag="", **extra):
@@ -243,12 +247,17 @@ def glass_rows(runs, where):
         r, f = runs[n], load(where[n], n)
         if runs[n]["rc"] != "0" or f["t"][-1] < float(r["t_end"]) - 0.011:  # stopped early (limit, signal): partial
             continue
-        av, L0 = float(r["a"]), float(r["L0"])
+        av, L0, dr = float(r["a"]), float(r["L0"]), float(r["dr"])
         run, hf = (f["front"][-1] - L0) / L0, f["height_at_wall"][-1] / L0
         creep = (f["front"][-1] - f["front"][-2]) / (f["t"][-1] - f["t"][-2]) * 1e3
+        g15 = g3 = float("nan")  # grain-scale fronts (GLASS_D), where dr resolves a grain
+        if dr <= GLASS_D:
+            dep = np.genfromtxt(os.path.join(where[n], n, "deposit.csv"), delimiter=",", names=True)
+            g15, g3 = thickness_fronts(dep, dr, L0, (1.5 * GLASS_D, 3 * GLASS_D))
         rows.append(dict(name=n, model=m.group(2), floor="coulomb" if m.group(5) else "no_slip", a=av,
                          n=int(m.group(3)), E="1e6" if m.group(4) else "1e5",
                          runout=run, lube_runout=float(lube_runout(av)), height=hf, lube_height=float(lube_height(av)),
+                         runout_1_5d=g15, runout_3d=g3,
                          creep_mm_s=creep, wall_s=r["wall_s"], steps=r["steps"], backend=r.get("backend", ""),
                          end_wall=int(at_end_wall(r, f["front"][-1]))))
     return sorted(rows, key=lambda q: (q["floor"], q["model"] != "glass", q["E"], q["n"], q["a"]))
@@ -268,15 +277,22 @@ def glass_report(runs, where, P, docs):
     batch.write_csv(os.path.join(docs, "glass.csv"), list(rows[0]), [list(q.values()) for q in rows])
     P("")
     P("| friction (floor: no slip unless Coulomb, tan 24.8) | E (Pa) | a | L0/dr | runout (L_inf - L0)/L0 | Lube 2005 | ratio | "
-      "H_inf/L0 | Lube 2005 | ratio | "
+      "runout, h > 1.5 d | ratio | runout, h > 3 d | ratio | H_inf/L0 | Lube 2005 | ratio | "
       "front moving at t_end (mm/s) | wall (s) | backend |")
-    P("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    P("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+
+    def grain(v, q):  # a grain-scale front and its ratio to the law ("-" where dr > d)
+        if math.isnan(v):
+            return "- | -"
+        return "%s | %s" % (bound(v, q["end_wall"]), bound(v / q["lube_runout"], q["end_wall"]))
     for q in rows:  # "≥": the front stopped at the floor's end wall
-        P("| %s | %s | %g | %d | %s | %.2f | %s | %.2f | %.2f | %.2f | %.1f | %s | %s |" % (
+        P("| %s | %s | %g | %d | %s | %.2f | %s | %s | %s | %.2f | %.2f | %.2f | %.1f | %s | %s |" % (
             glass_label(q["model"], q["floor"]), q["E"], q["a"], q["n"], bound(q["runout"], q["end_wall"]),
-            q["lube_runout"], bound(q["runout"] / q["lube_runout"], q["end_wall"]), q["height"], q["lube_height"],
+            q["lube_runout"], bound(q["runout"] / q["lube_runout"], q["end_wall"]), grain(q["runout_1_5d"], q),
+            grain(q["runout_3d"], q), q["height"], q["lube_height"],
             q["height"] / q["lube_height"], q["creep_mm_s"], q["wall_s"], q["backend"]))
-    fig, ax = plt.subplots(1, 2, figsize=(11, 4.3))
+    fig, ax = plt.subplots(1, 3, figsize=(16, 4.3))
+    ax = [ax[0], ax[2], ax[1]]  # runout, height, grain-scale runout (drawn between them)
     aa = np.linspace(0.4, 10, 200)
     ax[0].loglog(aa, lube_runout(aa), "k-", label="Lube et al. 2005")
     ax[1].loglog(aa, lube_height(aa), "k-", label="Lube et al. 2005")
@@ -291,17 +307,23 @@ def glass_report(runs, where, P, docs):
                       label="%s, L0/dr %d" % (glass_label(model, floor), nn))
             ax[0].loglog([q["a"] for q in sel], [q["runout"] for q in sel], **st)
             ax[1].loglog([q["a"] for q in sel], [q["height"] for q in sel], **st)
+            g = [q for q in sel if not math.isnan(q["runout_1_5d"]) and not q["end_wall"]]
+            if g:
+                ax[2].loglog([q["a"] for q in g], [q["runout_1_5d"] for q in g], **st)
             b = [q for q in sel if q["end_wall"]]  # a lower bound: the front stopped at the floor's end wall
             if b:
                 ax[0].loglog([q["a"] for q in b], [q["runout"] for q in b], ls="none", color="k", ms=10,
                              marker="$\\uparrow$", label=None if bounds else "a bound (the floor's end wall)")
                 bounds = True
+    ax[2].loglog(aa, lube_runout(aa), "k-", label="Lube et al. 2005")
     for x in ax:
-        x.fill_between(aa, 0.85 * (lube_runout(aa) if x is ax[0] else lube_height(aa)),
-                       1.15 * (lube_runout(aa) if x is ax[0] else lube_height(aa)), color="0.85", label="law +- 15 %")
+        law = lube_height(aa) if x is ax[1] else lube_runout(aa)
+        x.fill_between(aa, 0.85 * law, 1.15 * law, color="0.85", label="law +- 15 %")
         x.set_xlabel("a = H0 / L0"), x.legend(fontsize=7)
     ax[0].set_ylabel("(L$_\\infty$ - L0) / L0"), ax[1].set_ylabel("H$_\\infty$ / L0")
-    ax[0].set_title("glass beads, d 1.15 mm, L0 2 cm: runout"), ax[1].set_title("final height at the wall")
+    ax[2].set_ylabel("(L$_\\infty$ - L0) / L0, deposit thicker than 1.5 d")
+    ax[0].set_title("glass beads, d 1.15 mm, L0 2 cm: runout (last particle)"), ax[1].set_title("final height at the wall")
+    ax[2].set_title("runout where the deposit is thicker than 1.5 d\n(L0/dr 20, 40; runs at the end wall left out)")
     fig.tight_layout()
     fig.savefig(os.path.join(docs, "validation_collapse_glass.png"), dpi=110)
     plt.close(fig)
