@@ -10,6 +10,7 @@ a = 2 at R0/dr = 8 (800 material particles), to 5 sqrt(H0 / g) = 0.23 s:
     the model: the study's runout grows with resolution (1.03, 1.23, 1.35 of
     the law at R0/dr = 10, 20, 40, heading for about 1.5, as in 2D), so at
     R0/dr = 8 the under-run and the model's low friction cancel;
+  - the front stops short of the floor's end wall (collapse3d_study.at_end_wall);
   - the deposit is axisymmetric: the front along x (z < 2 dr) and along z
     (x < 2 dr) agree within 2 dr, and both within 3 dr of the front over all
     directions (the lattice's columns are not round, so not closer).
@@ -46,6 +47,10 @@ def main():
     ok &= good
     print("%s the front moved %.2f %% of R0 over the last 0.05 s (tolerance 2 %%)" % ("ok  " if good else "FAIL",
                                                                                       100 * moved))
+    good = not cs.at_end_wall(dict(c.meta, R0=R0, dr=dr, a=2), fr[-1])
+    ok &= good
+    print("%s the front at %.4f m, the floor's end wall at %.4f m (a front within %d dr of it is the domain's)" % (
+        "ok  " if good else "FAIL", fr[-1], c.meta["x_end"], cs.AT_WALL))
     run = (fr[-1] - R0) / R0
     law = float(cs.lube_runout(2.0))
     good = abs(run / law - 1) <= TOL_RUNOUT

@@ -12,7 +12,9 @@ sand, salt, rice and sugar alike,
 The front is the largest distance from the axis, sqrt(x^2 + z^2), of the
 material that is not a lone particle (its radial bin of width 2 dr holds at
 least two); the final height is the highest material within 2 dr of the
-axis. Runs go to 7 sqrt(H0 / g) (the flow stops within about 3).
+axis. Runs go to 7 sqrt(H0 / g) (the flow stops within about 3). The floor
+reaches twice the law's runout plus R0 beyond the column (FLOOR_LAW, FLOOR_R0);
+a front within 4 dr of its end wall is a bound ("≥" in the report).
 
   python3 -m tools.studies.collapse3d_study run --sphseg build/sphseg --out out/collapse3d [--backend gpu] [--set ...]
   python3 -m tools.studies.collapse3d_study report --out out/collapse3d [--docs docs/data/collapse3d]
@@ -35,13 +37,36 @@ def lube_runout(a):
     return np.where(a < 1.7, 1.24 * a, 1.6 * np.sqrt(a))
 
 
+# The floor's reach from the axis, FLOOR_LAW times the law's runout plus FLOOR_R0 R0 (at least 3 R0). The runouts
+# rise with resolution (a = 2: 1.03, 1.23, 1.35 of the law at R0/dr 10, 20, 40, heading for about 1.5; a = 4: 1.44
+# at 20), so the floor leaves half the law and one R0 beyond 1.5 times it. Until 2026-11-30 it was 1.4 (1 + law)
+# R0: the a = 4 front at R0/dr 20 stopped 5.7 dr from that wall (the 2D study's floor, too short, had read its
+# wall's place as runouts: collapse_study.py). A front within AT_WALL dr of the wall is reported as a bound.
+FLOOR_LAW, FLOOR_R0 = 2.0, 2.0
+OLD_FLOOR = 1.4  # X = OLD_FLOOR (1 + law) R0, for runs from before x_end was recorded
+AT_WALL = 4  # 2h + dr (h 1.5 dr): the end wall's dummies reach the front
+
+
+def floor_reach(a, R0, dr, old=False):
+    """The floor's end, m from the axis, on the lattice."""
+    law = float(lube_runout(a))
+    X = max(3.0, OLD_FLOOR * (1 + law) if old else FLOOR_LAW * law + FLOOR_R0) * R0
+    return math.ceil(X / dr) * dr
+
+
+def at_end_wall(r, front):
+    """Whether a run's final front (m from the axis) lies at its floor's end wall (runs.csv row r)."""
+    R0, dr, a = float(r["R0"]), float(r["dr"]), float(r["a"])
+    x_end = float(r["x_end"]) if r.get("x_end") else floor_reach(a, R0, dr, old=True)
+    return front >= x_end - AT_WALL * dr
+
+
 def case(name, a, R0=0.01, rows=20, **extra):
     """A quarter column R0 wide and a R0 high, R0 / dr = rows, on a floor
-    reaching 1.4 times the law's runout (at least 3 R0)."""
+    reaching FLOOR_LAW times the law's runout plus FLOOR_R0 R0 (at least 3 R0)."""
     dr = round(R0 / rows, 12)
     H0 = a * R0
-    X = max(3.0, 1.4 * (1 + float(lube_runout(a)))) * R0
-    X = math.ceil(X / dr) * dr
+    X = floor_reach(a, R0, dr)
     top = round(1.5 * H0, 9)
     t_end = 7 * math.sqrt(H0 / G)
     walls = ("[{name: axis_x, from: [0, %.9g], to: [0, 0], slip: free_slip}, {name: floor, from: [0, 0], "
@@ -51,7 +76,7 @@ def case(name, a, R0=0.01, rows=20, **extra):
             "Container:regions": "[{shape: column, centre: [0, 0], r_out: %.9g, level: %.9g}]" % (R0, H0),
             "Run:t_end": round(t_end, 4), "Output:dt": 0.01, "Output:diag_dt": 0.01, "Run:progress_s": 1e9}
     over.update(extra)
-    return batch.Case(name, SCENE, over, a=a, R0=R0, H0=H0, dr=dr, rows=rows, t_end=t_end)
+    return batch.Case(name, SCENE, over, a=a, R0=R0, H0=H0, dr=dr, rows=rows, t_end=t_end, x_end=round(X, 9))
 
 
 def cases(which):
@@ -63,6 +88,11 @@ def cases(which):
         for a in (0.5, 1, 3, 4):  # 2 is a2_rows20
             c.append(case("a%g" % a, a))
     return c
+
+
+def bound(v, wall, digits=2):
+    """A value, or a lower bound ("≥") where the floor's end wall stopped the front."""
+    return ("≥ " if wall else "") + "%.*f" % (digits, v)
 
 
 def reduce_run(outdir, dr, keep=False):
@@ -132,9 +162,10 @@ def cmd_report(a):
             run, hgt, stopped = summarise(f, R0)
             vals.append(run)
             law = float(lube_runout(2.0))
-            P("| %s | %s | %.3f | %.3f | %.2f | %.3f | %s | %s | %s | %s |" % (
-                r["rows"], r["material"], run, law, run / law, hgt, "yes" if stopped else "no", r["wall_s"],
-                r.get("backend", ""), r["steps"]))
+            w = at_end_wall(r, f["front"][-1])  # "≥": the front stopped at the floor's end wall
+            P("| %s | %s | %s | %.3f | %s | %.3f | %s | %s | %s | %s |" % (
+                r["rows"], r["material"], bound(run, w, 3), law, bound(run / law, w), hgt, "yes" if stopped else "no",
+                r["wall_s"], r.get("backend", ""), r["steps"]))
             ax[1].plot(f["t"] / math.sqrt(float(r["H0"]) / G), (f["front"] - R0) / R0, label="R0/dr = %s" % r["rows"])
         if len(vals) >= 3:  # the change between successive resolutions
             d = [abs(vals[i + 1] - vals[i]) for i in range(len(vals) - 1)]
@@ -157,9 +188,10 @@ def cmd_report(a):
             run, hgt, stopped = summarise(f, R0)
             law = float(lube_runout(aa))
             A.append(aa), Rn.append(run)
-            P("| %g | %.3f | %.3f | %.2f | %.3f | %s | %s | %s |" % (aa, run, law, run / law, hgt,
-                                                                    "yes" if stopped else "no", r["wall_s"],
-                                                                    r.get("backend", "")))
+            w = at_end_wall(r, f["front"][-1])
+            P("| %g | %s | %.3f | %s | %.3f | %s | %s | %s |" % (aa, bound(run, w, 3), law, bound(run / law, w), hgt,
+                                                                "yes" if stopped else "no", r["wall_s"],
+                                                                r.get("backend", "")))
             dep = np.genfromtxt(os.path.join(where[n], n, "deposit.csv"), delimiter=",", names=True)
             ax[2].plot(dep["r"] / R0, dep["top"] / R0, label="a = %g" % aa)
         aa = np.linspace(0.3, 5, 100)
