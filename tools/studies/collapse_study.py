@@ -127,7 +127,7 @@ GLASS_A = (0.5, 2, 4, 8)
 # The floor with the beads' wall friction angle, 24.8 deg (Kumar's thesis, ch. 4, from Lajeunesse et al.
 # 2004), as a Coulomb wall (Walls:slip coulomb) in place of the scene's no-slip floor.
 COULOMB_FLOOR = {"Walls:slip": "coulomb", "Walls:mu_w": 0.4621}
-GLASS_N = (10, 20, 40)  # L0 / dr
+GLASS_N = (10, 20, 40, 80)  # L0 / dr (80: a = 0.5 and 2 on the development machine; the rest want a GPU)
 # The beads' diameter, m (the scene's Segregation... d; Kumar's table): the grain-scale fronts of the report, the
 # foremost bin of the wall-connected deposit thicker than 1.5 d and 3 d (as the Lagree set's), where the spacing
 # resolves a grain's thickness (dr <= d: L0/dr 20 and 40; at 10, dr = 2 mm, one particle is thicker than 1.5 d)
