@@ -77,7 +77,8 @@ sum_j V_j W_ij).
 table: per drum and variant, at each time both resolutions reached, the index change and the RMS
 of the mid-chord C profiles' difference (on d_mc / R over the shorter profile) for dr 2 -> 1,
 1.0 -> 0.5 and 0.5 -> 0.25 mm, the shear-rate profile's relative RMS change, the observed order where three
-resolutions meet, and the factor's share: 1 - |change with the variant| / |change of base| at the
+resolutions meet (and, where the two changes share their sign, Richardson's limit of the index and the finer
+run's distance under it, "to lim%"), and the factor's share: 1 - |change with the variant| / |change of base| at the
 same pair and time (1: switching the factor removes the resolution change; 0: no effect; negative:
 the variant changes more). --effects: each variant against base (or REF's variant) at the same drum and dr (index,
 mid-chord speed, the C profile's RMS, the bed's area), per time.
@@ -391,8 +392,11 @@ def table(a):
     for r in rows:
         prev = by.get((r["drum"], r["variant"], r["dr_coarse_mm"], r["t_s"]))
         if prev is not None and abs(r["index_fine"] - r["index_coarse"]) > 0:
-            r["order_index"] = math.log2(abs(prev["index_fine"] - prev["index_coarse"])
-                                         / abs(r["index_fine"] - r["index_coarse"]))
+            d1, d2 = prev["index_fine"] - prev["index_coarse"], r["index_fine"] - r["index_coarse"]
+            r["order_index"] = math.log2(abs(d1) / abs(d2))
+            if d1 * d2 > 0 and r["order_index"] > 0:  # monotone: Richardson's limit from the three spacings
+                r["index_limit"] = r["index_fine"] + d2 / (2 ** r["order_index"] - 1)
+                r["fine_to_limit_pct"] = 100 * (r["index_limit"] - r["index_fine"]) / r["index_limit"]
         base = by.get((r["drum"], "base", r["dr_fine_mm"], r["t_s"]))
         if base is not None and r["variant"] != "base" and base["index_change_pct"] != 0:
             r["share_index"] = 1 - abs(r["index_change_pct"]) / abs(base["index_change_pct"])
@@ -404,7 +408,8 @@ def table(a):
         if base and r["t_s"] in base["t_series"]:
             r["variant_vs_base_fine_pct"] = 100 * (r["index_fine"] / base["t_series"][r["t_s"]]["index"] - 1)
     fields = ["drum", "variant", "dr_coarse_mm", "dr_fine_mm", "t_s", "index_coarse", "index_fine",
-              "index_change_pct", "C_rms", "gdot_rel_rms", "speed_change_pct", "order_index", "share_index",
+              "index_change_pct", "C_rms", "gdot_rel_rms", "speed_change_pct", "order_index", "index_limit",
+              "fine_to_limit_pct", "share_index",
               "share_C_rms", "variant_vs_base_fine_pct", "bed_gdot_mean_coarse", "bed_gdot_mean_fine",
               "bed_drive_share_coarse", "bed_drive_share_fine", "ksum_std_coarse", "ksum_std_fine",
               "nn_std_coarse", "nn_std_fine"]
@@ -415,14 +420,16 @@ def table(a):
         for r in rows:
             w.writerow({k: ("%.4g" % r[k] if isinstance(r.get(k), float) else r.get(k, "")) for k in fields})
     print("wrote %s (%d rows)" % (a.csv, len(rows)))
-    print("%-3s %-8s %-10s %5s %9s %9s %8s %7s %7s %6s %6s" % ("drm", "variant", "dr", "t", "I coarse", "I fine",
-                                                             "dI %", "C rms", "gd rms", "order", "share"))
+    print("%-3s %-8s %-10s %5s %9s %9s %8s %7s %7s %6s %7s %6s" % ("drm", "variant", "dr", "t", "I coarse", "I fine",
+                                                                  "dI %", "C rms", "gd rms", "order", "to lim%",
+                                                                  "share"))
     for r in rows:
-        print("%-3s %-8s %4g->%-4g %5g %9.4f %9.4f %+8.2f %7.4f %7.3f %6s %6s" % (
+        print("%-3s %-8s %4g->%-4g %5g %9.4f %9.4f %+8.2f %7.4f %7.3f %6s %7s %6s" % (
             r["drum"], r["variant"], r["dr_coarse_mm"], r["dr_fine_mm"], r["t_s"], r["index_coarse"],
             r["index_fine"], r["index_change_pct"], r.get("C_rms", float("nan")), r.get("gdot_rel_rms", float("nan")),
-            "%.2f" % r["order_index"] if "order_index" in r else "", "%.2f" % r["share_index"]
-            if "share_index" in r else ""))
+            "%.2f" % r["order_index"] if "order_index" in r else "",
+            "%+.1f" % r["fine_to_limit_pct"] if "fine_to_limit_pct" in r else "",
+            "%.2f" % r["share_index"] if "share_index" in r else ""))
     if a.effects:
         effects(runs, a.effects)
     vols = sorted({(d, dr): r["series"][0]["volume"] for (d, v, dr), r in runs.items() if v == "base"
