@@ -323,7 +323,7 @@ def glass_report(runs, where, P, docs):
     ax[0].set_ylabel("(L$_\\infty$ - L0) / L0"), ax[1].set_ylabel("H$_\\infty$ / L0")
     ax[2].set_ylabel("(L$_\\infty$ - L0) / L0, deposit thicker than 1.5 d")
     ax[0].set_title("glass beads, d 1.15 mm, L0 2 cm: runout (last particle)"), ax[1].set_title("final height at the wall")
-    ax[2].set_title("runout where the deposit is thicker than 1.5 d\n(L0/dr 20, 40; runs at the end wall left out)")
+    ax[2].set_title("runout where the deposit is thicker than 1.5 d\n(L0/dr 20 and finer, where dr <= d; runs at the end wall left out)")
     fig.tight_layout()
     fig.savefig(os.path.join(docs, "validation_collapse_glass.png"), dpi=110)
     plt.close(fig)
