@@ -127,10 +127,11 @@ GLASS_A = (0.5, 2, 4, 8)
 # The floor with the beads' wall friction angle, 24.8 deg (Kumar's thesis, ch. 4, from Lajeunesse et al.
 # 2004), as a Coulomb wall (Walls:slip coulomb) in place of the scene's no-slip floor.
 COULOMB_FLOOR = {"Walls:slip": "coulomb", "Walls:mu_w": 0.4621}
-GLASS_N = (10, 20, 40, 80)  # L0 / dr (80: a = 0.5 and 2 on the development machine; the rest want a GPU)
-# The beads' diameter, m (the scene's Segregation... d; Kumar's table): the grain-scale fronts of the report, the
+# L0 / dr (80: a = 0.5 and 2, 160: a = 0.5, on the development machine; the rest of 80 and 160 want a GPU)
+GLASS_N = (10, 20, 40, 80, 160)
+# The beads' diameter, m (the scene's Grains:d_small; Kumar's table): the grain-scale fronts of the report, the
 # foremost bin of the wall-connected deposit thicker than 1.5 d and 3 d (as the Lagree set's), where the spacing
-# resolves a grain's thickness (dr <= d: L0/dr 20 and 40; at 10, dr = 2 mm, one particle is thicker than 1.5 d)
+# resolves a grain's thickness (dr <= d: L0/dr 20 and finer; at 10, dr = 2 mm, one particle is thicker than 1.5 d)
 GLASS_D = 1.15e-3
 
 
@@ -322,8 +323,10 @@ def glass_report(runs, where, P, docs):
         x.set_xlabel("a = H0 / L0"), x.legend(fontsize=7)
     ax[0].set_ylabel("(L$_\\infty$ - L0) / L0"), ax[1].set_ylabel("H$_\\infty$ / L0")
     ax[2].set_ylabel("(L$_\\infty$ - L0) / L0, deposit thicker than 1.5 d")
-    ax[0].set_title("glass beads, d 1.15 mm, L0 2 cm: runout (last particle)"), ax[1].set_title("final height at the wall")
-    ax[2].set_title("runout where the deposit is thicker than 1.5 d\n(L0/dr 20 and finer, where dr <= d; runs at the end wall left out)")
+    ax[0].set_title("glass beads, d 1.15 mm, L0 2 cm: runout (last particle)")
+    ax[1].set_title("final height at the wall")
+    ax[2].set_title("runout where the deposit is thicker than 1.5 d\n"
+                    "(L0/dr 20 and finer, where dr <= d; runs at the end wall left out)")
     fig.tight_layout()
     fig.savefig(os.path.join(docs, "validation_collapse_glass.png"), dpi=110)
     plt.close(fig)
