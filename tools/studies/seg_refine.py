@@ -7,7 +7,8 @@ on the 2D drums, factor by factor.
   python3 -m tools.studies.seg_refine analyse RUNDIR --json FILE [--rc RC] [--log LOG]   (the script calls it)
   python3 -m tools.studies.seg_refine table FILE.json... [--csv docs/data/drum/seg_refine.csv] [--effects CSV]
   python3 -m tools.studies.seg_refine chart [--csv ...] [--effects CSV] [--png docs/data/drum/seg_refine.png]
-  python3 -m tools.studies.seg_refine profiles FILE.json... [--times 6 10] [--png ...]   (base's C and shear-rate profiles)
+  python3 -m tools.studies.seg_refine profiles FILE.json... [--times 6 10] [--png ...]   (base's C and shear-rate profiles,
+                                                             and each C profile's peak: height, depth, width)
 
 The runs. The scenes (inputs/drum_2d_EV.yml, drum_2d_EN.yml) with their flow (riemann, bed damping 1,
 the corrected gradient, Fickian shifting, C in windows `every auto`) at E 10 kPa, chi 0.2, the
@@ -526,9 +527,25 @@ def chart(a):
     print("wrote %s" % a.png)
 
 
+def c_peak(p, below=0.15):
+    """The peak of a mid-chord C profile (p: d / R, C): its C, its depth d / R, and its full width (d / R) at
+    half its rise over the C `below` R deeper; the width is read on the profile's own points."""
+    import numpy as np
+    d, C = np.asarray(p["d"], float), np.asarray(p["C"], float)
+    k = int(np.argmax(C))
+    half = 0.5 * (C[k] + np.interp(d[k] + below, d, C))
+    lo = hi = k
+    while lo > 0 and C[lo] > half:
+        lo -= 1
+    while hi < len(C) - 1 and C[hi] > half:
+        hi += 1
+    return float(C[k]), float(d[k]), float(d[hi] - d[lo])
+
+
 def profiles(a):
     """One variant's runs' (--variant, base by default) mid-chord profiles of C and of the shear rate at
-    each dr (rows: drums; columns: the times asked, C above the shear rate), from the runs' JSONs."""
+    each dr (rows: drums; columns: the times asked, C above the shear rate), from the runs' JSONs; prints
+    each profile's C peak (c_peak: its height, depth and width at half height)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -543,6 +560,7 @@ def profiles(a):
                 if d_ != drum or key not in r["profiles"]:
                     continue
                 p = r["profiles"][key]
+                print("%s dr %g mm t %g s: C peak %.3f at d/R %.3f, width %.3f R" % ((drum, dr, t) + c_peak(p)))
                 for row, q, lab in ((2 * k, "C", "C"), (2 * k + 1, "gdot", "shear rate, 1/s")):
                     ax[row][m].plot(p["d"], p[q], lw=1.5, label="dr %g mm" % dr)
                     ax[row][m].set_ylabel("%s: %s" % (drum, lab))
