@@ -25,6 +25,8 @@ grain-scale: the foremost bin of the wall-connected deposit thicker than 1.5 d
 and 3 d (what a CD deposit or an experiment can see), beside the front above,
 which follows a film thinner than a grain and does not converge with dr at
 these parameters (docs/validation.md, "Against contact dynamics").
+The glass-bead sets (lajeunesse*) report both: the front above, and where
+dr <= d the foremost deposit thicker than 1.5 and 3 bead diameters (GLASS_D).
 
   python3 -m tools.studies.collapse_study run --sphseg build/sphseg --out out/collapse_study [--backend gpu]
   python3 -m tools.studies.collapse_study report --out out/collapse_study [--docs docs/data/collapse]
