@@ -10,6 +10,7 @@ DIR/runs.csv. A case that fails or runs out of time is recorded as such, with
 the tail of its output, and the others go on: a study reports what ran.
 """
 import csv
+import math
 import os
 import re
 import subprocess
@@ -195,6 +196,16 @@ def write_csv(path, header, rows):
         w = csv.writer(f)
         w.writerow(header)
         w.writerows(rows)
+
+
+def richardson(a, b, c, r=2.0):
+    """Three values at spacings h, h/r, h/r^2 (a the coarsest): the observed order of their two changes and
+    Richardson's limit c + (c - b) / (r^p - 1), NaN where the order is not positive (or a change is 0)."""
+    d1, d2 = b - a, c - b
+    if d1 == 0 or d2 == 0:
+        return math.nan, math.nan
+    p = math.log(abs(d1 / d2)) / math.log(r)
+    return p, (c + d2 / (r ** p - 1) if p > 0 else math.nan)
 
 
 def observed_order(h, e):

@@ -26,6 +26,7 @@ import numpy as np
 
 from tools import ROOT  # noqa: E402
 from tools.studies import batch  # noqa: E402
+from tools.studies.collapse_study import AT_WALL, bound  # noqa: E402  (the 2D study's wall test and "≥")
 
 SCENE = os.path.join(ROOT, "inputs", "collapse_3d.yml")
 G = 9.81
@@ -44,7 +45,6 @@ def lube_runout(a):
 # wall's place as runouts: collapse_study.py). A front within AT_WALL dr of the wall is reported as a bound.
 FLOOR_LAW, FLOOR_R0 = 2.0, 2.0
 OLD_FLOOR = 1.4  # X = OLD_FLOOR (1 + law) R0, for runs from before x_end was recorded
-AT_WALL = 4  # 2h + dr (h 1.5 dr): the end wall's dummies reach the front
 
 
 def floor_reach(a, R0, dr, old=False):
@@ -88,11 +88,6 @@ def cases(which):
         for a in (0.5, 1, 3, 4):  # 2 is a2_rows20
             c.append(case("a%g" % a, a))
     return c
-
-
-def bound(v, wall, digits=2):
-    """A value, or a lower bound ("≥") where the floor's end wall stopped the front."""
-    return ("≥ " if wall else "") + "%.*f" % (digits, v)
 
 
 def reduce_run(outdir, dr, keep=False):

@@ -90,9 +90,9 @@ def at_end_wall(r, front):
     return front >= x_end - AT_WALL * dr
 
 
-def bound(v, wall):
-    """A value, or a lower bound where the end wall stopped the front."""
-    return ("≥ %.2f" if wall else "%.2f") % v
+def bound(v, wall, digits=2):
+    """A value, or a lower bound ("≥") where the floor's end wall stopped the front."""
+    return ("≥ " if wall else "") + "%.*f" % (digits, v)
 
 
 # Lagree, Staron & Popinet (2011): mu_s 0.32, delta mu 0.28, I0 0.4 (their Gerris example

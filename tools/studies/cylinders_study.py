@@ -246,10 +246,9 @@ def cmd_report(a):
             batch.observed_order([float(runs[n]["dr"]) for n in res], [abs(S[n]["early"]) for n in res]), len(res)))
         m = [S[n]["mean"] for n in res if np.isfinite(S[n]["mean"])]
         if len(m) >= 3:  # successive changes of the window mean (its error changes sign) and their limit
-            d1, d2 = m[-2] - m[-3], m[-1] - m[-2]
-            p = math.log(abs(d1 / d2)) / math.log(2) if d2 != 0 and d1 != 0 else math.nan
+            p, lim = batch.richardson(m[-3], m[-2], m[-1])
             P("window mean: changes %+.1f, %+.1f %% between the last three resolutions, order %.2f, Richardson "
-              "limit %+.1f %%" % (100 * d1, 100 * d2, p, 100 * (m[-1] + d2 / (2 ** p - 1)) if p > 0 else math.nan))
+              "limit %+.1f %%" % (100 * (m[-2] - m[-3]), 100 * (m[-1] - m[-2]), p, 100 * lim))
         ax[0].set_title("resolution, background pressure 30 Pa")
         ax[0].axvline(T1, color="0.6", ls=":")
     # the background-pressure runs and the 40-row run of the resolution set (30 Pa)

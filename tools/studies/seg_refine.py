@@ -88,14 +88,13 @@ at the same dr beside the noise runs (cfl199, cfl201).
 """
 import argparse
 import csv
-import glob
 import json
 import math
 import os
 import sys
-import time
 
 from tools import ROOT
+from tools.studies import batch
 
 CSV = os.path.join(ROOT, "docs", "data", "drum", "seg_refine.csv")
 PNG = os.path.join(ROOT, "docs", "data", "drum", "seg_refine.png")
@@ -394,10 +393,10 @@ def table(a):
         prev = by.get((r["drum"], r["variant"], r["dr_coarse_mm"], r["t_s"]))
         if prev is not None and abs(r["index_fine"] - r["index_coarse"]) > 0:
             d1, d2 = prev["index_fine"] - prev["index_coarse"], r["index_fine"] - r["index_coarse"]
-            r["order_index"] = math.log2(abs(d1) / abs(d2))
-            if d1 * d2 > 0 and r["order_index"] > 0:  # monotone: Richardson's limit from the three spacings
-                r["index_limit"] = r["index_fine"] + d2 / (2 ** r["order_index"] - 1)
-                r["fine_to_limit_pct"] = 100 * (r["index_limit"] - r["index_fine"]) / r["index_limit"]
+            r["order_index"], lim = batch.richardson(prev["index_coarse"], r["index_coarse"], r["index_fine"])
+            if d1 * d2 > 0 and not math.isnan(lim):  # monotone: Richardson's limit from the three spacings
+                r["index_limit"] = lim
+                r["fine_to_limit_pct"] = 100 * (lim - r["index_fine"]) / lim
         base = by.get((r["drum"], "base", r["dr_fine_mm"], r["t_s"]))
         if base is not None and r["variant"] != "base" and base["index_change_pct"] != 0:
             r["share_index"] = 1 - abs(r["index_change_pct"]) / abs(base["index_change_pct"])
