@@ -142,6 +142,7 @@ static void gpu_finish(sim_t *s)
     message("gpu: %ld neighbour-list builds in %ld steps (Run:list_skin %.3g h: one build in %.1f steps)", g->builds,
             steps, (double)(g->skin / s->seg.k.h), g->builds ? (double)steps / (double)g->builds : 0.0);
     gpu_mem_report(s, g);
+    gpu_graph_report(g);
     if (g->tile)
         message("gpu: SPHSEG_GPU_NBR tile: %ld flow passes staged, %ld run as list16's (a tile past the shared "
                 "memory); the last build's largest tile %u particles", g->tile_passes, g->tile_over_passes,
@@ -195,6 +196,7 @@ static void gpu_finish(sim_t *s)
     CK(cudaFreeHost(g->hfirst));
     CK(cudaFreeHost(g->hchk));
     free(g->hstep);
+    gpu_graph_free(g);
     CK(cudaStreamDestroy(g->st));
     free(g);
     s->be_data = NULL;
@@ -205,7 +207,7 @@ extern "C" const struct backend *backend_gpu(int local_rank)
     static const struct backend b = {"gpu",          gpu_prepare,    gpu_rates,  gpu_advance, gpu_conc_begin,
                                       gpu_conc_step,  gpu_save_start, gpu_filter, gpu_bounds,  gpu_check,
                                       gpu_to_host,    gpu_finish,     gpu_from_host, 3,
-                                      gpu_relist,     gpu_dem_hook,   gpu_dem_advance};
+                                      gpu_relist,     gpu_dem_hook,   gpu_dem_advance, gpu_step_begin};
     g_local_rank = local_rank;
     return &b;
 }

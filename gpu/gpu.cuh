@@ -29,8 +29,16 @@ extern "C" {
 #include "sim/stages.h"
 }
 
+/* The deferred step (gpu_graph.cu): while a step's work is held for its
+ * graph (g_defer non-NULL), a CUDA call that is not held (CK) first issues
+ * what is, so that the stream keeps the order the code wrote. */
+struct gpu_defer;
+extern struct gpu_defer *g_defer;
+void gpu_defer_flush(void);
+
 #define CK(call)                                                                                     \
     do {                                                                                             \
+        if (g_defer) gpu_defer_flush();                                                              \
         cudaError_t e_ = (call);                                                                     \
         if (e_ != cudaSuccess)                                                                       \
             error_exit(1, "CUDA error at %s:%d: %s (%s)", __FILE__, __LINE__, cudaGetErrorString(e_), \
@@ -168,7 +176,7 @@ typedef struct gpu {
     real *amag;         /* |acc| of the last flow rate evaluation */
     int acc_pending;    /* amag not yet reduced into dres[STEP_ACC] (gpu_acc_reduce, gpu_check) */
     int pend_save, pend_adv; /* save_start and advance held back for the next kernel (gpu_step_kernel) */
-    real pend_a, pend_w;
+    double pend_a, pend_w; /* its lengths (gpu_advance's a and w) */
     flow_ctx pend_fc;
     int team;           /* threads per particle in the neighbour loops: 1, 2, 4, 8 or 16 */
     void *tmp;          /* CUB scratch */
@@ -183,6 +191,9 @@ typedef struct gpu {
     double *hres;
     long long *hfirst;
     struct gpu_dem *dem; /* the DEM grains' device mirror (gpu_dem.cu), made at its first hook; NULL without grains */
+    struct gpu_defer *df; /* the step's graphs (gpu_graph.cu); NULL: every launch direct (SPHSEG_GPU_GRAPH=0) */
+    double *sc_h, *sc_d; /* the step's scalars (gpu_scalar): pinned host slots and their device copies */
+    int nsc;            /* slots in use since the last synchronisation of the check */
 } gpu_t;
 
 extern int g_local_rank; /* backend_gpu(local_rank) (backend_gpu.cu) */
@@ -252,6 +263,31 @@ void gpu_counts(gpu_t *g, size_t n, size_t ng);
 gpu_t *gpu_get(sim_t *s);
 gpu_t *gpu_hook(sim_t *s, int mut);
 const step_ctx *gpu_step_ctx(sim_t *s, gpu_t *g);
+
+/* ---- the step's graphs (gpu_graph.cu) ------------------------------------ */
+/* Work held for a graph: a function that issues it on a stream, and its
+ * arguments, bytes that gpu_defer_push copies (a graph is replayed when a
+ * step holds the same functions with the same bytes as one before); kfn,
+ * where the function is one launch of kernel kfn with the arguments (size_t
+ * n at byte 0, the grid at 8, the functor at 16: nf_blob), lets a graph
+ * take new arguments in place of the node's own. */
+typedef void (*gpu_thunk)(const void *args, cudaStream_t st);
+void gpu_defer_push(gpu_thunk fn, const void *kfn, const void *args, size_t bytes);
+void gpu_graph_init(gpu_t *g);
+void gpu_graph_free(gpu_t *g);
+void gpu_graph_report(const gpu_t *g);
+void gpu_step_begin(sim_t *s);
+/* Up to three of a kernel's scalars that change from step to step (the
+ * step's time and lengths): while a step is held, read from device slots
+ * that the graph fills first (p), so that the arguments repeat; else by
+ * value (v), as a direct launch takes them. The same values either way. */
+struct dscal {
+    const double *p;
+    double v[3];
+    __host__ __device__ double at(int i) const { return p ? p[i] : v[i]; }
+};
+dscal gpu_scalar(gpu_t *g, const double *v, int k);
+void gpu_scalar_reset(gpu_t *g);
 
 #include "gpu_launch.cuh"
 

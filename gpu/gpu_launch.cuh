@@ -14,11 +14,53 @@ template <class F> __global__ void k_each(size_t n, F f)
     if (i < n) f(i);
 }
 
+/* A held launch's arguments as bytes (gpu_graph.cu compares them from
+ * step to step): the count, the grid (16 bytes, zeroed where unused) and
+ * the functor. Not held, each and team launch at once. */
+template <class F> struct nf_blob {
+    alignas(16) unsigned char b[16 + sizeof(F)];
+    nf_blob(size_t n, unsigned grid, const F &f)
+    {
+        static_assert(alignof(F) <= 16, "a functor aligned past 16 bytes");
+        memset(b, 0, 16);
+        memcpy(b, &n, sizeof n);
+        memcpy(b + 8, &grid, sizeof grid);
+        memcpy(b + 16, (const void *)&f, sizeof(F));
+        /* the closure's padding holds whatever the stack held: zeroed where
+         * the compiler finds it (GCC 12 leaves some of a large closure's,
+         * which gpu_graph.cu's patches then take) */
+        __builtin_clear_padding((F *)(b + 16));
+    }
+};
+template <class F> static inline void nf_read(const void *a, size_t *n, unsigned *grid, const F **f)
+{
+    const unsigned char *b = (const unsigned char *)a;
+    memcpy(n, b, sizeof *n);
+    memcpy(grid, b + 8, sizeof *grid);
+    *f = (const F *)(b + 16);
+}
+
+template <class F> static void th_each(const void *a, cudaStream_t st)
+{
+    size_t n;
+    unsigned grid;
+    const F *f;
+    nf_read(a, &n, &grid, &f);
+    k_each<<<grid, BLOCK, 0, st>>>(n, *f);
+    CK(cudaGetLastError());
+}
+
 template <class F> static void each(const gpu_t *g, size_t n, F f)
 {
     if (n == 0) return;
-    k_each<<<(unsigned)((n + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(n, f);
-    CK(cudaGetLastError());
+    const unsigned grid = (unsigned)((n + BLOCK - 1) / BLOCK);
+    if (!g_defer) {
+        k_each<<<grid, BLOCK, 0, g->st>>>(n, f);
+        CK(cudaGetLastError());
+        return;
+    }
+    const nf_blob<F> b(n, grid, f);
+    gpu_defer_push(th_each<F>, (const void *)k_each<F>, b.b, sizeof b.b);
 }
 
 /* At least SPHSEG_TEAM_MINB blocks of BLOCK threads per SM: at most 128
@@ -43,11 +85,26 @@ template <int T, class F> __global__ void TEAM_LB k_team(size_t n, F f)
     if (i < n) f(i, (int)(t % T), T);
 }
 
+template <int T, class F> static void th_team(const void *a, cudaStream_t st)
+{
+    size_t n;
+    unsigned grid;
+    const F *f;
+    nf_read(a, &n, &grid, &f);
+    k_team<T><<<grid, BLOCK, 0, st>>>(n, *f);
+    CK(cudaGetLastError());
+}
+
 template <int T, class F> static void team_launch(const gpu_t *g, size_t n, F f)
 {
-    size_t nt = n * T;
-    k_team<T><<<(unsigned)((nt + BLOCK - 1) / BLOCK), BLOCK, 0, g->st>>>(n, f);
-    CK(cudaGetLastError());
+    const unsigned grid = (unsigned)((n * T + BLOCK - 1) / BLOCK);
+    if (!g_defer) {
+        k_team<T><<<grid, BLOCK, 0, g->st>>>(n, f);
+        CK(cudaGetLastError());
+        return;
+    }
+    const nf_blob<F> b(n, grid, f);
+    gpu_defer_push(th_team<T, F>, (const void *)k_team<T, F>, b.b, sizeof b.b);
 }
 
 /* The neighbour-loop kernels, g->team threads per particle. */
@@ -120,12 +177,12 @@ struct chk {
 struct chk_of {
     particles_t p;
     const step_ctx *c;
-    double t;
+    dscal t; /* the step's time (gpu_scalar) */
     const real *xb0, *xb1, *xb2;
     __device__ chk operator()(size_t i) const
     {
         chk r;
-        r.first = p.kind[i] == KIND_MATERIAL && step_guard(i, &p, c, t) ? (long long)i : (long long)p.n;
+        r.first = p.kind[i] == KIND_MATERIAL && step_guard(i, &p, c, t.at(0)) ? (long long)i : (long long)p.n;
         real b0 = p.x[0][i] - xb0[i], b1 = p.x[1][i] - xb1[i], b2 = p.x[2][i] - xb2[i];
         real s0 = p.x[0][i] - p.x_n[0][i], s1 = p.x[1][i] - p.x_n[1][i], s2 = p.x[2][i] - p.x_n[2][i];
         r.build2 = b0 * b0 + b1 * b1 + b2 * b2;

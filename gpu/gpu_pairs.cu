@@ -152,7 +152,7 @@ template <int RENORM, int KGC, int SHIFT, int F> static void gpu_flow_pass(sim_t
     grid_view v = g->view;
     flow_ctx c = s->flow;
     shift_ctx sh = s->shift;
-    const real sdt = (real)s->dt;
+    const dscal sdt = gpu_scalar(g, &s->dt, SHIFT); /* the step's dt (gpu.cuh) */
     seg_ctx sc = s->seg;
     const int seg = gpu_plans(s, HOOK_RATES, ST_SEG_COEFFS); /* not in windows: at their close */
     real *amag = g->amag;
@@ -161,7 +161,8 @@ template <int RENORM, int KGC, int SHIFT, int F> static void gpu_flow_pass(sim_t
         particles_t q = p;
         const int mat = q.kind[i] == KIND_MATERIAL;
         const grid_view w = view_as<F>(v);
-        real a = mat ? flow_rates_body(i, &q, &w, &c, lane, T, RENORM, KGC, SHIFT ? &sh : (const shift_ctx *)0, sdt)
+        real a = mat ? flow_rates_body(i, &q, &w, &c, lane, T, RENORM, KGC, SHIFT ? &sh : (const shift_ctx *)0,
+                                       SHIFT ? (real)sdt.at(0) : R(0.0))
                      : R(0.0);
         if (lane != 0) return;
         amag[i] = a;
@@ -384,11 +385,11 @@ template <int F> static void gpu_shift_f(sim_t *s, gpu_t *g)
     particles_t p = g->d;
     grid_view v = g->view;
     shift_ctx c = s->shift;
-    const real dt = (real)s->dt;
+    const dscal dt = gpu_scalar(g, &s->dt, 1); /* (gpu.cuh) */
     team(g, g->n, [=] __device__(size_t i, int lane, int T) {
         particles_t q = p;
         const grid_view w = view_as<F>(v);
-        if (q.kind[i] == KIND_MATERIAL) shift_team(i, &q, &w, &c, dt, lane, T);
+        if (q.kind[i] == KIND_MATERIAL) shift_team(i, &q, &w, &c, (real)dt.at(0), lane, T);
     });
 }
 

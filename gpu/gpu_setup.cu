@@ -259,6 +259,7 @@ gpu_t *gpu_get(sim_t *s)
     CK(cudaMallocHost((void **)&g->hbox, sizeof(box)));
     CK(cudaMallocHost((void **)&g->hres, STEP_NBOUNDS * sizeof(double)));
     CK(cudaMallocHost((void **)&g->hfirst, sizeof(long long)));
+    gpu_graph_init(g);
     s->be_data = g;
     return g;
 }

@@ -194,15 +194,16 @@ void gpu_step_kernel(sim_t *s, gpu_t *g, int place, double t)
     particles_t p = g->d;
     flow_ctx c = g->pend_fc;
     const int flow = s->flow_on, seg = stage_runs(stage_flags(s), ST_ADVANCE_C), segon = s->seg_on;
-    const real a = g->pend_a, w8 = g->pend_w;
+    const double v[3] = {g->pend_a, g->pend_w, t}; /* device scalars: a step's graph holds their slots */
+    const dscal ds = gpu_scalar(g, v, 3);
     wall_geom w = s->flow.w;
     kin_params kin = s->kin;
     prof_begin(g->st);
     each(g, g->n, [=] __device__(size_t i) {
         particles_t q = p;
         if (sv) step_save(i, &q, flow, segon);
-        if (ad) step_advance(i, &q, a, &c, flow, seg, w8);
-        if (place) step_place(i, &q, flow, &w, &kin, t);
+        if (ad) step_advance(i, &q, (real)ds.at(0), &c, flow, seg, (real)ds.at(1));
+        if (place) step_place(i, &q, flow, &w, &kin, ds.at(2));
     });
     prof_end(g->st, P_MOTION);
 }
@@ -241,8 +242,8 @@ void gpu_advance(sim_t *s, double a, double w)
     if (g->pend_adv) gpu_step_kernel(s, g, 0, 0.0);
     g->bnd_fresh = 0;
     g->pend_adv = 1;
-    g->pend_a = (real)a;
-    g->pend_w = (real)w;
+    g->pend_a = a;
+    g->pend_w = w;
     g->pend_fc = s->flow;
 }
 
@@ -356,24 +357,44 @@ void gpu_bounds(sim_t *s, double out[STEP_NBOUNDS])
     out[STEP_ACC] = s->flow_on ? (double)acc : 0.0;
 }
 
+/* The check's reduction and read-backs, as a step's graph holds them. */
+struct chk_args {
+    gpu_t *g;
+    chkb_of f;
+    int acc;
+};
+static void th_check(const void *a, cudaStream_t st)
+{
+    chk_args A;
+    memcpy(&A, a, sizeof A);
+    gpu_t *g = A.g;
+    auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), A.f);
+    chkb init = {{(long long)g->n, 0, 0}, {{0, 0, 0}}, R(0.0)};
+    reduce(g, it, g->dchk, g->n, chkb_merge(), init);
+    if (A.acc) /* dres[STEP_ACC] as gpu_acc_reduce leaves it */
+        CK(cudaMemcpyAsync(g->dres + STEP_ACC, &g->dchk->amax, sizeof(real), cudaMemcpyDeviceToDevice, st));
+    CK(cudaMemcpyAsync(g->hchk, g->dchk, sizeof(chkb), cudaMemcpyDeviceToHost, st));
+    CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, st));
+}
+
 long gpu_check(sim_t *s)
 {
     gpu_t *g = gpu_hook(s, 0);
     prof_begin(g->st);
-    const int acc = g->acc_pending; /* |acc| in the same pass */
+    chk_args A;
+    memset(&A, 0, sizeof A); /* the graph compares these bytes: no stray padding */
+    A.g = g;
+    A.acc = g->acc_pending; /* |acc| in the same pass */
     const step_ctx *dc = gpu_step_ctx(s, g);
-    chkb_of f = {chk_of{g->d, dc, s->t, g->xb[0], g->xb[1], g->xb[2]}, bnd_of{g->d, dc},
-                 acc ? g->amag : NULL};
-    auto it = thrust::make_transform_iterator(thrust::counting_iterator<size_t>(0), f);
-    chkb init = {{(long long)g->n, 0, 0}, {{0, 0, 0}}, R(0.0)};
-    reduce(g, it, g->dchk, g->n, chkb_merge(), init);
-    if (acc) { /* dres[STEP_ACC] as gpu_acc_reduce leaves it */
-        CK(cudaMemcpyAsync(g->dres + STEP_ACC, &g->dchk->amax, sizeof(real), cudaMemcpyDeviceToDevice, g->st));
-        g->acc_pending = 0;
-    }
-    CK(cudaMemcpyAsync(g->hchk, g->dchk, sizeof(chkb), cudaMemcpyDeviceToHost, g->st));
-    CK(cudaMemcpyAsync(g->hres, g->dres, STEP_NBOUNDS * sizeof(double), cudaMemcpyDeviceToHost, g->st));
+    A.f.c.p = g->d, A.f.c.c = dc, A.f.c.t = gpu_scalar(g, &s->t, 1);
+    A.f.c.xb0 = g->xb[0], A.f.c.xb1 = g->xb[1], A.f.c.xb2 = g->xb[2];
+    A.f.b.p = g->d, A.f.b.c = dc, A.f.amag = A.acc ? g->amag : NULL;
+    if (g_defer) gpu_defer_push(th_check, NULL, &A, sizeof A);
+    else th_check(&A, g->st);
+    g->acc_pending = 0;
+    gpu_defer_flush(); /* the step's graph, ending with these read-backs */
     CK(cudaStreamSynchronize(g->st));
+    gpu_scalar_reset(g);
     prof_end(g->st, P_BOUNDS_CHECK);
     for (int k = 0; k < 3; ++k) g->hres[k] = g->hchk->b.v[k];
     g->bnd_fresh = 1;

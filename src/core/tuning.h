@@ -18,6 +18,8 @@ typedef struct tuning {
     int gpu_overlap;  /* SPHSEG_GPU_OVERLAP not 0: ghost refreshes overlap interior work (default 1) */
     int gpu_hostx;    /* SPHSEG_GPU_HOSTX set and not 0: list-build exchanges through the host (default 0) */
     int gpu_ipc;      /* SPHSEG_GPU_IPC not 0: CUDA IPC between the GPUs of one node (default 1) */
+    int gpu_graph;    /* SPHSEG_GPU_GRAPH not 0: a step between list builds on one rank is replayed as a CUDA
+                       * graph (gpu/gpu_graph.cu; default 1) */
     int cuda_aware;   /* SPHSEG_CUDA_AWARE not 0: device buffers to MPI where it reports CUDA support (default 1) */
     int skew_rank;    /* SPHSEG_BALANCE_SKEW=R:F: the load balance counts rank R's compute time F times (the
                        * cut moves, the answer does not beyond round-off); -1: not set (default); -2: set to

@@ -390,6 +390,7 @@ const struct backend *backend_cpu(void)
     static const struct backend b = {"cpu",          cpu_prepare,   cpu_rates,      cpu_advance, cpu_conc_begin,
                                       cpu_conc_step,  cpu_save_start, cpu_filter,     cpu_bounds,  cpu_check,
                                       cpu_to_host,    cpu_finish,     cpu_from_host,  HALO_DEPTH,
-                                      NULL /* relist: every prepare sorts */, cpu_dem_couple, cpu_dem_advance};
+                                      NULL /* relist: every prepare sorts */, cpu_dem_couple, cpu_dem_advance,
+                                      NULL /* step_begin: no graphs */};
     return &b;
 }

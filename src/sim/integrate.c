@@ -92,6 +92,7 @@ void integrate_step(sim_t *s, double dt)
     const int win = s->win.on; /* C in windows: the flow alone here (integrate_conc) */
     s->flow.damping = (real)(s->t < s->sc->flow.damping_until ? s->sc->flow.damping : 0.0);
     s->dt = dt; /* this step's, for the shift in save_start (physics/shift.h) */
+    if (s->be->step_begin) s->be->step_begin(s);
     if (s->sc->run.integrator == INTEGRATOR_LEAPFROG) step_lf(s, dt, win);
     else step_pc(s, dt, win);
     if (s->dem) s->be->dem_advance(s, s->t, dt); /* the grains over the step, the coupling's forces */

@@ -93,6 +93,10 @@ struct backend {
      * (gpu/gpu_dem.cu), and its to_host brings the grains up too. */
     void (*dem_couple)(struct sim *s, double t);
     void (*dem_advance)(struct sim *s, double t, double dt);
+    /* A step begins (integrate_step), its end the next check: the GPU holds
+     * the step's launches until then and replays them as one CUDA graph
+     * (gpu/gpu_graph.cu); NULL on the CPU. */
+    void (*step_begin)(struct sim *s);
 };
 
 /* The concentration equation in windows of K flow steps (Segregation:every,
