@@ -77,11 +77,14 @@ template <int F> static void gpu_classify_f(gpu_t *g, const sph_ctx *kc)
 void gpu_classify(gpu_t *g, const sph_ctx *kc) { BY_FORM(g, gpu_classify_f, (g, kc)) }
 
 /* Over owned particles and ghosts in sl: the dummy walls (paper §4.1;
- * walls) and the conservative scheme's L of the material (renorm). Neither
- * reads what the other writes: a small store (several threads per
- * particle, latency-bound) runs them as one kernel, a large one as two (the
- * merged kernel would run both at the larger register count: 2 % slower on
- * the 3D drum, docs/gpu.md). */
+ * walls), the conservative scheme's L of the material (renorm) and the
+ * corrected gradient's B (kgc). None reads what another writes: a small
+ * store (several threads per particle, latency-bound) runs them as one
+ * kernel (the walls and L with 2 or more threads a particle; B with them at
+ * 4 or more: the 2D drums, docs/performance.md "Small stores"), a large one
+ * apart (the merged kernel would run at the larger register count: 2 %
+ * slower on the 3D drum, docs/gpu.md). SPHSEG_GPU_PROFILE keeps B apart, on
+ * its own line. */
 /* Dummy i's wall state: its loop when material may be in reach (wa[i]),
  * else flow_wall_none, the same result without the loop (the list holds no
  * material, so the loop's sums would be zero): about half the dummies of a
@@ -105,6 +108,21 @@ template <int F> static void gpu_walls_renorm_f(sim_t *s, gpu_t *g, int walls, i
     if (rlo >= n) renorm = 0;
     if (!walls && !renorm && !kgc) return;
     prof_begin(g->st);
+    if (kgc && g->team >= 4 && !prof.on) { /* a small store: B, the walls and L in one kernel (below) */
+        team(g, n, [=] __device__(size_t i, int lane, int T) {
+            if (!sel_on(sl, i)) return;
+            particles_t q = p;
+            const grid_view w = view_as<F>(v);
+            if (q.kind[i] == KIND_DUMMY) {
+                if (walls) wall_one(i, &q, &w, &c, wa, lane, T);
+            } else if (q.kind[i] == KIND_MATERIAL) {
+                flow_kgc_team(i, &q, &w, &c, lane, T);
+                if (renorm && i >= rlo) seg_renorm_team(i, &q, &w, &sc, lane, T);
+            }
+        });
+        prof_end(g->st, P_WALLS);
+        return;
+    }
     if (kgc) { /* ST_KGC: B of the material, owned and ghosts (reads positions only) */
         team(g, n, [=] __device__(size_t i, int lane, int T) {
             const grid_view w = view_as<F>(v);
