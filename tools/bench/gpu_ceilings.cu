@@ -13,15 +13,7 @@
 #include <vector>
 #include <cublas_v2.h>
 #include <cuda_runtime.h>
-
-#define CK(x)                                                                        \
-    do {                                                                             \
-        cudaError_t e_ = (x);                                                        \
-        if (e_ != cudaSuccess) {                                                     \
-            fprintf(stderr, "%s:%d %s\n", __FILE__, __LINE__, cudaGetErrorString(e_)); \
-            exit(1);                                                                 \
-        }                                                                            \
-    } while (0)
+#include "bench_cuda.h"
 
 __global__ void fill(double *a, size_t n, unsigned seed)
 {
@@ -32,12 +24,6 @@ __global__ void fillf(float *a, size_t n, unsigned seed)
 {
     size_t i = blockIdx.x * (size_t)blockDim.x + threadIdx.x;
     if (i < n) a[i] = ((i * 2654435761u + seed) % 1000003) / 1000003.0f + 0.5f;
-}
-
-static double median(std::vector<double> v)
-{
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
 }
 
 int main()
