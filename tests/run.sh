@@ -89,6 +89,8 @@ run_one drum_mui_ref "$PYTHON" -m tests.test_drum_mui_ref
 # issue 30: how the drum tools read a mid-chord (surface speeds, mass depth, the layer's fluxes) on known beds
 run_one drum_readers "$PYTHON" -m tests.test_drum_readers --work "$tmp/drum_readers"
 run_one inertial_range "$PYTHON" -m tests.test_inertial_range
+# issue 57: the particles' own mixing of C read from snapshots, on particles of known wandering (no sphseg run)
+run_one drum_mixing "$PYTHON" -m tests.test_drum_mixing --sphseg "$BUILD/sphseg"
 # issue 30: how chute_profile reads a chute layer's rows against Bagnold, on a known layer (no sphseg run)
 run_one chute_profile "$PYTHON" -m tests.test_chute_profile
 # issue 30: the plane Couette layer's exact local mu(I) solution and its reading (no sphseg run)

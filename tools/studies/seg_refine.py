@@ -7,6 +7,7 @@ on the 2D drums, factor by factor.
   python3 -m tools.studies.seg_refine analyse RUNDIR --json FILE [--rc RC] [--log LOG]   (the script calls it)
   python3 -m tools.studies.seg_refine table FILE.json... [--csv docs/data/drum/seg_refine.csv] [--effects CSV]
   python3 -m tools.studies.seg_refine chart [--csv ...] [--effects CSV] [--png docs/data/drum/seg_refine.png]
+  python3 -m tools.studies.seg_refine mixemu FILE.json... [--csv ...]   (the mixemu runs against yielded at 0.5, 0.25 mm)
   python3 -m tools.studies.seg_refine profiles FILE.json... [--times 6 10] [--png ...]   (base's C and shear-rate profiles,
                                                              and each C profile's peak: height, depth, width)
 
@@ -29,6 +30,9 @@ Each variant changes one existing key against the baseline `base`:
   yieldedE  yielded at Material:E=1e5: the stiffness's share (E x 10), measured against yielded
   yieldlim  yielded without the donor limiter (Segregation:limiter=none): the limiter's share at the
             front of C below the flowing layer, measured against yielded
+  mixemu    yielded at dr 0.25 mm with chi_D raised so that the flowing layer's total diffusion (eq. 2.7's plus
+            the particles' own cross-stream mixing, tools/analysis/drum_mixing.py) is dr 0.5 mm's (MIXEMU):
+            if the index then equals dr 0.5 mm's, that mixing is what moves it under refinement
   cfl199    Run:cfl_flow=0.199: a step 0.5 % shorter, whose own effect is nil; what it changes is the
             runs' sensitivity to a perturbation, the floor under which a variant's effect is noise (at
             dr 2 mm, development machine, 0.199 and 0.201 move the index by up to 5.2 % EV, 2.6 % EN)
@@ -112,6 +116,7 @@ VARIANTS = {
     "yielded": ["Segregation:shear_rate=yielded"],  # eq. (2.7)'s gdot only where the stress is on the static cone
     "yieldedE": ["Segregation:shear_rate=yielded", "Material:E=1e5"],  # E x 10 (after FLOW's 1e4), against yielded
     "yieldlim": ["Segregation:shear_rate=yielded", "Segregation:limiter=none"],  # the limiter's share, against yielded
+    "mixemu": ["Segregation:shear_rate=yielded"],  # + chi_D from MIXEMU: dr 0.5 mm's mixing emulated at 0.25 mm
     "area": ["Geometry:fill_by=area"],  # the bed's area the segment's at every dr  # after FLOW's 0.2: the noise floor (below)
 }
 # The bed's area is N dr^2 of the lattice points inside R - dr/2 below the fill line (src/sim/setup.c,
@@ -120,6 +125,11 @@ VARIANTS = {
 # "fill" moves the fill line by one row where that brings the bed's area to the dr 0.5-mm one's:
 # EV 0.9909, (0.9877), 0.9854; EN 0.9866, (0.9894), (0.9899); where no fill is given it is base's run.
 FILL = {("EV", 0.001): 0.422857, ("EV", 0.00025): 0.418571, ("EN", 0.001): 0.594286}
+# mixemu: the particles' own cross-stream mixing in the flowing layer (gdot >= 10 1/s, docs/seg_refine.md "The
+# particles' own mixing", tools/studies/drum_mixing.sh) is 2.09 (EV) and 1.82 (EN) times chi_D gdot d_avg^2 at
+# dr 0.5 mm and 0.50 and 0.31 times at 0.25 mm; so at dr 0.25 mm chi_D x (1 + 2.09 - 0.50) = 2.58 (EV) and
+# x (1 + 1.82 - 0.31) = 2.51 (EN) gives the layer the total diffusion of dr 0.5 mm. Against yielded at dr 0.5 mm.
+MIXEMU = {"EV": 0.0307 * 2.584, "EN": 0.0307 * 2.510}
 # (drum, variant, dr m, t_end s), in the order they start (the long ones first; see the budget above)
 RUNS = [("EV", "base", 0.001, 10), ("EV", "base", 0.0005, 10),
         ("EV", "cfl199", 0.001, 10), ("EV", "cfl199", 0.0005, 10), ("EV", "area", 0.001, 10),
@@ -133,9 +143,10 @@ RUNS = [("EV", "base", 0.001, 10), ("EV", "base", 0.0005, 10),
         ("EV", "bd3", 0.00025, 10)] + \
        [(d, "yielded", dr, 10) for d in ("EV", "EN") for dr in (0.001, 0.0005, 0.00025)] + \
        [(d, "yieldedE", 0.0005, 10) for d in ("EV", "EN")] + \
-       [("EV", "yieldlim", dr, 10) for dr in (0.0005, 0.00025)]
+       [("EV", "yieldlim", dr, 10) for dr in (0.0005, 0.00025)] + \
+       [(d, "mixemu", 0.00025, 20) for d in ("EV", "EN")]
 # The variant each is measured against in --effects (base unless named here).
-REF = {"yieldedE": "yielded", "yieldlim": "yielded"}
+REF = {"yieldedE": "yielded", "yieldlim": "yielded", "mixemu": "yielded"}
 
 
 def label_of(drum, var, dr):
@@ -184,6 +195,8 @@ def commands(a):
         keys = FLOW + ["Geometry:dr=%g" % dr, "Run:t_end=%g" % t_end] + VARIANTS[var]
         if var == "fill":
             keys.append("Geometry:fill=%g" % FILL[(drum, 0.002 if a.tiny else dr)])
+        if var == "mixemu":
+            keys.append("Segregation:chi_D=%.4g" % MIXEMU[drum])
         if a.tiny:
             keys = [{"Output:dt=2": "Output:dt=0.1", "Output:diag_dt=0.25": "Output:diag_dt=0.05"}.get(k, k) for k in keys]
         lab = label_of(drum, var, dr)
@@ -576,6 +589,38 @@ def profiles(a):
     print("wrote %s" % a.png)
 
 
+def mixemu(a):
+    """The mixemu runs (dr 0.25 mm, chi_D raised by the dr-0.5-mm mixing) beside yielded's index at dr 0.5 and
+    0.25 mm from the 40-s table (--ref): one row per drum and even second."""
+    import csv
+    ref = {}
+    with open(a.ref) as fh:
+        for r in csv.DictReader(fh):
+            if r["variant"] == "yielded" and r["dr_coarse_mm"] == "0.5" and r["dr_fine_mm"] == "0.25":
+                ref[(r["drum"], round(float(r["t_s"])))] = (float(r["index_coarse"]), float(r["index_fine"]))
+    rows = []
+    for f in a.files:
+        with open(f) as fh:
+            j = json.load(fh)
+        drum = j["label"].split("_")[0]
+        for p in j["series"]:
+            k = (drum, round(p["t"]))
+            if k in ref and abs(p["t"] - k[1]) < 1e-6 and k[1] > 0:
+                c, fn = ref[k]
+                rows.append({"drum": drum, "t_s": k[1], "chi_D": "%.4g" % j["chi_D"], "index_dr0.5": "%.4g" % c,
+                             "index_dr0.25": "%.4g" % fn, "index_mixemu_dr0.25": "%.4g" % p["index"],
+                             "dr0.25_vs_dr0.5_pct": "%.2f" % (100 * (fn / c - 1)),
+                             "mixemu_vs_dr0.5_pct": "%.2f" % (100 * (p["index"] / c - 1)),
+                             "mixemu_vs_dr0.25_pct": "%.2f" % (100 * (p["index"] / fn - 1))})
+    with open(a.csv, "w", newline="") as fh:
+        w = csv.DictWriter(fh, list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    for r in rows:
+        print(" ".join("%s" % v for v in r.values()))
+    print("wrote %s" % a.csv)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="what", required=True)
@@ -608,8 +653,13 @@ def main():
     f.add_argument("--variant", default="base", help="the variant whose runs are drawn")
     f.add_argument("--png", default=PNG.replace(".png", "_profiles.png"))
     f.add_argument("--machine", default="development machine", help="the runs' machine, for the title")
+    m = sub.add_parser("mixemu")
+    m.add_argument("files", nargs="+", help="the mixemu runs' JSONs")
+    m.add_argument("--ref", default=CSV.replace(".csv", "_h200_t40.csv"), help="the 40-s table (yielded at 0.5, 0.25 mm)")
+    m.add_argument("--csv", default=CSV.replace(".csv", "_mixemu.csv"))
     a = ap.parse_args()
-    {"commands": commands, "analyse": analyse, "table": table, "chart": chart, "profiles": profiles}[a.what](a)
+    {"commands": commands, "analyse": analyse, "table": table, "chart": chart, "profiles": profiles,
+     "mixemu": mixemu}[a.what](a)
 
 
 if __name__ == "__main__":
