@@ -329,7 +329,7 @@ def chart(csv_path, png, radius="2"):
                     alpha=1.0 if var == "shift" else 0.5, mfc="none" if var != "shift" else None,
                     label="%s, %s, gdot %s" % (drum, "Fickian shifting" if var == "shift" else "no shifting",
                                                 ">= 10 1/s" if lo == "10" else "5-10 1/s"))
-    x = [0.25, 1.0]
+    x = [min(float(r["dr_mm"]) for r in rows), max(float(r["dr_mm"]) for r in rows)]
     ax.plot(x, [0.4 * (v / 0.25) ** 2 for v in x], color="0.5", lw=0.8, label="slope dr^2")
     ax.axhline(1, color="0.7", lw=0.8)
     ax.set_xscale("log")
