@@ -10,7 +10,8 @@ Coordinates, Kind, ParticleIDs, ShearRate, Concentration), with a used_params.ym
 
 - D_num recovers D0 within 10 % in each class of shear rate holding at least 4e4 samples (the
   reference is the Brownian motion put in; with the class's shear dispersion in the fitted line,
-  M = D_num (4 tau + (2/3) gdot^2 tau^3) + M0);
+  M = D_num (4 tau + (2/3) gdot^2 tau^3) + M0), and so does D_perp, across the streamline (no shear
+  dispersion there); the same in 3D (six layers of the same flow, a Brownian motion in x, y, z);
 - the same motion without the Brownian part (jitter alone) gives |D_num| < 5 % of D0: the jitter's
   constant offset M0 is not read as diffusion, and the fit follows the flow's gradient and curvature;
 - the affine fit (--order 1) on that flow reads the curvature as departure: its D_num is well off
@@ -39,16 +40,22 @@ DR, KAPPA, D0, STEP, NSNAP = 5e-4, 1000.0, 5e-9, 2.5e-3, 14
 CHI_D, DS, DL, C0 = 0.0307, 2.5e-4, 5e-4, 0.3
 
 
-def write_snapshots(path, D, jitter, times=None, seed=1):
-    """The run folder: used_params.yml and the snapshots."""
+def write_snapshots(path, D, jitter, times=None, seed=1, dim=2):
+    """The run folder: used_params.yml and the snapshots (dim 3: 120 x 30 x 6 particles, the same flow in x, y)."""
     os.makedirs(path, exist_ok=True)
     with open(os.path.join(path, "used_params.yml"), "w") as f:
         f.write("Geometry:\n  dr: %r\n  h_factor: 1.5\nGrains:\n  d_small: %r\n  d_large: %r\n"
                 "Segregation:\n  chi_D: %r\nFlow:\n  shifting: off\n" % (DR, DS, DL, CHI_D))
     rng = np.random.default_rng(seed)
     nx, ny = 240, 30
-    gx, gy = np.meshgrid((np.arange(nx) + 0.5) * DR, (np.arange(ny) + 0.5) * DR)
-    x = np.stack([gx.ravel(), gy.ravel()], 1) + rng.normal(0, 0.05 * DR, (nx * ny, 2))
+    if dim == 2:
+        gx, gy = np.meshgrid((np.arange(nx) + 0.5) * DR, (np.arange(ny) + 0.5) * DR)
+        x = np.stack([gx.ravel(), gy.ravel()], 1)
+    else:
+        nx = 120
+        gx, gy, gz = np.meshgrid(*((np.arange(m) + 0.5) * DR for m in (nx, ny, 6)))
+        x = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], 1)
+    x = x + rng.normal(0, 0.05 * DR, x.shape)
     n = len(x)
     yc = 0.5 * ny * DR
     times = np.arange(NSNAP) * STEP if times is None else np.asarray(times, float)
@@ -66,9 +73,9 @@ def write_snapshots(path, D, jitter, times=None, seed=1):
         with h5py.File(os.path.join(path, "snapshot_%05d.h5" % k), "w") as f:
             hd = f.create_group("Header")
             hd.attrs["Time"] = float(tk)
-            hd.attrs["Dimension"] = 2
+            hd.attrs["Dimension"] = dim
             p = f.create_group("Particles")
-            p["Coordinates"] = np.column_stack([obs, np.zeros(n)])[perm]
+            p["Coordinates"] = (np.column_stack([obs, np.zeros(n)]) if dim == 2 else obs)[perm]
             p["Kind"] = np.zeros(n, np.uint8)
             p["ParticleIDs"] = np.arange(n, dtype=np.int64)[perm]
             p["ShearRate"] = (2 * KAPPA * np.abs(obs[:, 1] - yc))[perm]
@@ -97,6 +104,18 @@ def main():
             want = CHI_D * c["gdot_mean"] * dexp ** 2
             check("D_phys, " + name, c["D_phys"] / want - 1, "|x| < 1e-12", abs(c["D_phys"] / want - 1) < 1e-12,
                   "chi_D gdot d_avg^2, eq. 2.7")
+        for c in big(r):
+            name = "gdot %g-%s" % (c["gdot_lo"], c["gdot_hi"] or "")
+            check("D_perp of a Brownian motion, " + name, c["D_perp"] / D0 - 1, "|x| < 0.10",
+                  abs(c["D_perp"] / D0 - 1) < 0.10, "the diffusivity put in; across the streamline no shear dispersion")
+        b3 = os.path.join(work, "brownian3d")
+        write_snapshots(b3, D0, 0.02, seed=3, dim=3)
+        r3 = dm.measure(b3)
+        for c in big(r3):
+            name = "3D, gdot %g-%s" % (c["gdot_lo"], c["gdot_hi"] or "")
+            for key in ("D_num", "D_perp"):
+                check("%s of a Brownian motion, %s" % (key, name), c[key] / D0 - 1, "|x| < 0.10",
+                      abs(c[key] / D0 - 1) < 0.10, "the diffusivity put in (120 x 30 x 6 particles, 2 dim = 6)")
         worst = max(abs(c["D_num"]) for c in big(dm.measure(still))) / D0
         check("D_num of jitter alone, worst class", worst, "< 0.05", worst < 0.05,
               "no diffusion put in; the jitter's M0 = 8e-4 dr^2 does not grow with the lag")

@@ -25,19 +25,27 @@ spaced snapshots of one run (same particles, found by ParticleIDs):
   mix C). D_num and M0 are the least-squares fit of that line over the lags, with the class's
   mean gdot^2; dim is the run's dimension (2: the drum's plane). Its standard error (D_num_se)
   is the spread of the same fit over the particles split into 8 groups by ID;
+- D_perp, the one segregation feels: the departure's part across the streamline in the x, y
+  plane (normal to the fitted motion a there; a drum turning about z, in 2D or 3D), whose mean
+  square M_perp = 2 D_perp tau + M0_perp has no shear dispersion; fitted over the lags of at
+  least --fit-from intervals. The walk is ballistic at first (M grows as tau^2 while a particle
+  keeps its velocity off its neighbours', 20-40 ms on the drums), so the slopes are taken past
+  that: in the drums' study, lags 10-160 ms with the slopes from 40 ms;
 - D_phys in a class is the mean of chi_D gdot d_avg^2 over the same particles and times, with
   d_avg = d_small C + d_large (1 - C) and chi_D, d_small, d_large from the run's
   used_params.yml; under Segregation:shear_rate yielded the mean still takes every particle's
   gdot (the ratio then states the mixing against the diffusion where the grains flow).
 
 The fit's radius sets what counts as the continuum: motion coherent over 2h moves C as the flow
-does; motion relative to the neighbours within 2h is mixing at the resolution's scale. The lags
-should keep gdot tau well under 1 in the flowing layer (the fit follows a smooth deformation; the
-JSON records the largest gdot tau of each class). Snapshots must be evenly spaced: e.g. restart a
-developed flow from its checkpoint with -P Output:dt=0.0025 -P Run:t_end=T+0.05
-(tools/studies/drum_mixing.sh).
+does; motion relative to the neighbours within 2h is mixing at the resolution's scale. The fit
+follows a smooth deformation (second order over the neighbourhood; the JSON records the largest
+gdot tau of each class). Snapshots must be evenly spaced: e.g. restart a developed flow from its
+checkpoint with -P Output:dt=0.01 -P Run:t_end=T+0.2 (tools/studies/drum_mixing.sh). In a
+container periodic along an axis, the particles within the radius of the periodic faces have no
+full neighbourhood in the snapshot (no images) and are left out with the rest.
 
-  python3 -m tools.analysis.drum_mixing RUNDIR [--lags 1 2 4 8 12] [--radius 2] [--order 2] [--json F]
+  python3 -m tools.analysis.drum_mixing RUNDIR [--lags 1 2 4 8 12] [--fit-from 1] [--stride 1]
+                                       [--radius 2] [--order 2] [--json F]
   python3 -m tools.analysis.drum_mixing table F.json... --csv C   (a row per run and class of shear rate)
   python3 -m tools.analysis.drum_mixing chart --csv C --png P     (D_perp / D_phys in the layer against dr)
 
@@ -156,16 +164,15 @@ def departures(fit, x0, x1):
     delta = disp - a0
     corr = 1 + Ainv[:, 0, 0]
     msd = np.einsum("ij,ij->i", delta, delta) / corr
-    if disp.shape[1] != 2:
-        return msd, None
-    # across the streamline: the departure's part normal to the fitted motion a0 (2D)
+    # across the streamline in the drum's plane: the departure's part in x, y normal to the fitted motion a0's
+    # (in 3D the flow is taken to lie in x, y, as a drum turning about z: motion along z mixes no C there)
     amag = np.hypot(a0[:, 0], a0[:, 1])
     amag[amag == 0] = 1
     perp = (delta[:, 0] * a0[:, 1] - delta[:, 1] * a0[:, 0]) / amag
     return msd, perp * perp / corr
 
 
-def measure(rundir, lags=(1, 2, 4, 8, 12), radius=2.0, order=2, full=0.85, bins=BINS, fit_from=1):
+def measure(rundir, lags=(1, 2, 4, 8, 12), radius=2.0, order=2, full=0.85, bins=BINS, fit_from=1, stride=1):
     par = read_params(rundir)
     times, dim, frames = load(rundir)
     if len(times) < 2:
@@ -182,7 +189,7 @@ def measure(rundir, lags=(1, 2, 4, 8, 12), radius=2.0, order=2, full=0.85, bins=
     r = radius * par["h"]
     fits = {}
     for L in lags:
-        for k in range(len(times) - L):
+        for k in range(0, len(times) - L, stride):
             f0, f1 = frames[k], frames[k + L]
             if np.array_equal(f0["id"], f1["id"]):  # the same particles (a closed drum): one fit per origin
                 common, i0, i1 = f0["id"], slice(None), slice(None)
@@ -201,16 +208,14 @@ def measure(rundir, lags=(1, 2, 4, 8, 12), radius=2.0, order=2, full=0.85, bins=
             b = np.clip(np.searchsorted(bins, g, "right") - 1, 0, nb - 1)
             a = acc[L]
             a["m"] += np.bincount(b[ok], weights=msd[ok], minlength=nb)
-            if mperp is not None:
-                a["mp"] += np.bincount(b[ok], weights=mperp[ok], minlength=nb)
+            a["mp"] += np.bincount(b[ok], weights=mperp[ok], minlength=nb)
             a["n"] += np.bincount(b[ok], minlength=nb)
             a["g"] += np.bincount(b[ok], weights=g[ok], minlength=nb)
             a["g2"] += np.bincount(b[ok], weights=g[ok] ** 2, minlength=nb)
             bg = (b * G + common % G)[ok]
             accg[L]["m"] += np.bincount(bg, weights=msd[ok], minlength=nb * G)
             accg[L]["n"] += np.bincount(bg, minlength=nb * G)
-            if mperp is not None:
-                accg[L]["mp"] += np.bincount(bg, weights=mperp[ok], minlength=nb * G)
+            accg[L]["mp"] += np.bincount(bg, weights=mperp[ok], minlength=nb * G)
             a["D"] += np.bincount(b[ok], weights=Dp[ok], minlength=nb)
             a["gt"] = np.maximum(a["gt"], [g[ok & (b == q)].max() * L * step if (ok & (b == q)).any() else 0
                                            for q in range(nb)])
@@ -248,10 +253,10 @@ def measure(rundir, lags=(1, 2, 4, 8, 12), radius=2.0, order=2, full=0.85, bins=
              "M0": icpt, "msd": [float(m) for m in M],
              "msd_over_2dim_tau": [float(m / (2 * dim * t)) for m, t in zip(M, tau)],
              "gdot_tau_max": float(max(acc[L]["gt"][q] for L in lags))}
-        if dim == 2:
-            Mp, Dp, icp, sep = fitted("mp", f_perp)
-            c.update({"D_perp": Dp, "D_perp_se": sep, "ratio_perp": Dp / Dph if Dph > 0 else None, "M0_perp": icp,
-                      "msd_perp_over_2tau": [float(m / (2 * t)) for m, t in zip(Mp, tau)]})
+        # across the streamline in the x, y plane
+        Mp, Dp, icp, sep = fitted("mp", f_perp)
+        c.update({"D_perp": Dp, "D_perp_se": sep, "ratio_perp": Dp / Dph if Dph > 0 else None, "M0_perp": icp,
+                  "msd_perp_over_2tau": [float(m / (2 * t)) for m, t in zip(Mp, tau)]})
         classes.append(c)
     return {"run": os.path.abspath(rundir), "dr": par["dr"], "h": par["h"], "dim": dim, "t0": float(times[0]),
             "t1": float(times[-1]), "snapshot_dt": step, "lags_s": [float(t) for t in tau],
@@ -264,17 +269,15 @@ def report(res):
     print("%s: dr %.3g mm, t %.4g-%.4g s, lags %s ms (slopes from %.3g ms), fit radius %g h, order %d" % (
         res["run"], res["dr"] * 1e3, res["t0"], res["t1"], " ".join("%.3g" % (t * 1e3) for t in res["lags_s"]),
         res["fit_from_s"] * 1e3, res["radius_h"], res["order"]))
-    perp = res["dim"] == 2
     print("%-10s %8s %6s %10s %10s %8s %7s %10s %8s %7s %7s" % (
-        "gdot 1/s", "samples", "mean", "D_phys", "D_num", "+-", "ratio", "D_perp" if perp else "", "+-",
-        "ratio" if perp else "", "gdot tau"))
+        "gdot 1/s", "samples", "mean", "D_phys", "D_num", "+-", "ratio", "D_perp", "+-",
+        "ratio", "gdot tau"))
     for c in res["classes"]:
         rng = "%g-%s" % (c["gdot_lo"], "" if c["gdot_hi"] is None else "%g" % c["gdot_hi"])
         r = lambda x: "-" if x is None else "%.3f" % x
         print("%-10s %8d %6.3g %10.3e %10.3e %8.1e %7s %10s %8s %7s %7.3g" % (
             rng, c["n"], c["gdot_mean"], c["D_phys"], c["D_num"], c["D_num_se"] or float("nan"), r(c["ratio"]),
-            "%.3e" % c["D_perp"] if perp else "", "%.1e" % (c["D_perp_se"] or float("nan")) if perp else "",
-            r(c["ratio_perp"]) if perp else "", c["gdot_tau_max"]))
+            "%.3e" % c["D_perp"], "%.1e" % (c["D_perp_se"] or float("nan")), r(c["ratio_perp"]), c["gdot_tau_max"]))
 
 
 CSV_COLS = ["label", "dr_mm", "radius_h", "lags_ms", "fit_from_ms", "gdot_lo", "gdot_hi", "n", "gdot_mean", "D_phys",
@@ -318,7 +321,7 @@ def chart(csv_path, png, radius="2"):
         rows = [r for r in csv.DictReader(fh) if r["radius_h"] == radius]
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     labels = sorted({r["label"] for r in rows})
-    colours = {"EV": "tab:blue", "EN": "tab:red"}
+    colours = {"EV": "tab:blue", "EN": "tab:red", "EV3D": "tab:green"}
     for lab in labels:
         for lo, ls, mk in (("10", "-", "o"), ("5", ":", "s")):
             pts = sorted((float(r["dr_mm"]), float(r["ratio_perp"])) for r in rows if r["label"] == lab and r["gdot_lo"] == lo)
@@ -327,7 +330,7 @@ def chart(csv_path, png, radius="2"):
             drum, var = lab.split("_", 1)
             ax.plot(*zip(*pts), ls if var == "shift" else "--", marker=mk, color=colours.get(drum, "k"),
                     alpha=1.0 if var == "shift" else 0.5, mfc="none" if var != "shift" else None,
-                    label="%s, %s, gdot %s" % (drum, "Fickian shifting" if var == "shift" else "no shifting",
+                    label="%s, %s, gdot %s" % (drum.replace("3D", " periodic 3D"), "Fickian shifting" if var == "shift" else "no shifting",
                                                 ">= 10 1/s" if lo == "10" else "5-10 1/s"))
     x = [min(float(r["dr_mm"]) for r in rows), max(float(r["dr_mm"]) for r in rows)]
     ax.plot(x, [0.4 * (v / 0.25) ** 2 for v in x], color="0.5", lw=0.8, label="slope dr^2")
@@ -364,6 +367,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("rundir")
     ap.add_argument("--lags", type=int, nargs="+", default=[1, 2, 4, 8, 12], help="lags in snapshot intervals")
+    ap.add_argument("--stride", type=int, default=1, help="time origins every this many snapshots (default 1: all)")
     ap.add_argument("--fit-from", type=int, default=1, help="the slopes over the lags of at least this many intervals")
     ap.add_argument("--radius", type=float, default=2.0, help="the fit's radius, in h (default 2: the kernel's support)")
     ap.add_argument("--order", type=int, choices=(1, 2), default=2, help="1: affine fit; 2: with curvature (default)")
@@ -371,7 +375,7 @@ def main(argv=None):
     ap.add_argument("--label", default=None, help="the run's name in the JSON (default: the folder's, less _drN)")
     ap.add_argument("--json", default=None)
     a = ap.parse_args(argv)
-    res = measure(a.rundir, a.lags, a.radius, a.order, a.full, fit_from=a.fit_from)
+    res = measure(a.rundir, a.lags, a.radius, a.order, a.full, fit_from=a.fit_from, stride=a.stride)
     if a.label:
         res["label"] = a.label
     report(res)

@@ -28,6 +28,11 @@ NSNAP=${NSNAP:-20}
 LAGS=${LAGS:-1 2 4 8 12 16}  # in snapshot intervals: 10 to 160 ms, gdot tau up to 2.5 in the layer
 FIT_FROM=${FIT_FROM:-4}         # the slopes from 40 ms: past the ballistic start (M grows as tau^2 below ~20 ms)
 RADII=${RADII:-2 3}  # the fit's radii, in h: what counts as the continuum's motion
+VARS=${VARS:-shift noshift}     # noshift: the same window with Flow:shifting off (the shifting's share)
+# PERIODIC3D=1: the drum as a 3D container periodic along z over 24 dr, no end walls (as
+# tools/studies/periodic_drum.py builds it; EV only), labelled EV3D; the tool reads its in-plane mixing
+PERIODIC3D=${PERIODIC3D:-0}
+STRIDE=${STRIDE:-1}             # time origins every STRIDE snapshots (2 halves the 3D analysis's time)
 if [ "${TINY:-0}" = 1 ]; then DRS="0.002"; T_DEV=0.3; BACKEND=cpu; SNAP_DT=0.005; NSNAP=9; LAGS="1 2 4 8"; FIT_FROM=2; fi
 FLOW=(-P Material:E=1e4 -P Run:cfl_flow=0.2 -P Output:diag_dt=0.5 -P Run:progress_s=60)
 T_END=$($PY -c "print(round($T_DEV + $NSNAP * $SNAP_DT, 9))")  # the restart writes none at T_DEV: NSNAP after it
@@ -35,21 +40,30 @@ mkdir -p "$OUT/res" "$OUT/runs"
 T0=$(date +%s)
 for drum in $DRUMS; do
     for dr in $DRS; do
-        lab=${drum}_dr$($PY -c "print('%g' % ($dr * 1e3))")
+        GEO=(); tag=$drum
+        if [ "$PERIODIC3D" = 1 ]; then
+            tag=${drum}3D
+            H=$($PY -c "print('%.4g' % ((2 * 0.42 - 1) * 0.035))")
+            GEO=(-P Geometry:type=container -P Geometry:dim=3 -P "Geometry:depth=$($PY -c "print('%.6g' % (24 * $dr))")"
+                 -P Geometry:periodic=z
+                 -P "Container:walls=[{name: drum, shape: cylinder, centre: [0, 0], radius: 0.035, motion: turning, rpm: 5, direction: clockwise}]"
+                 -P "Container:regions=[{shape: fill, level: $H, C: 0.5}]")
+        fi
+        lab=${tag}_dr$($PY -c "print('%g' % ($dr * 1e3))")
         dev="$OUT/runs/${lab}_dev"
-        "$SPHSEG" "inputs/drum_2d_$drum.yml" --backend "$BACKEND" -o "$dev" "${FLOW[@]}" -P "Geometry:dr=$dr" \
+        "$SPHSEG" "inputs/drum_2d_$drum.yml" --backend "$BACKEND" -o "$dev" "${FLOW[@]}" "${GEO[@]}" -P "Geometry:dr=$dr" \
             -P "Run:t_end=$T_DEV" -P "Output:dt=$T_DEV" -P "Output:checkpoint_dt=$T_DEV" > "$dev.log" 2>&1 ||
             { echo "$lab: developing failed (rc $?)"; tail -5 "$dev.log"; continue; }
-        for var in shift noshift; do
+        for var in $VARS; do
             extra=(); [ $var = noshift ] && extra=(-P Flow:shifting=off)
-            w="$OUT/runs/${drum}_${var}_dr$($PY -c "print('%g' % ($dr * 1e3))")"
-            "$SPHSEG" "inputs/drum_2d_$drum.yml" --backend "$BACKEND" -o "$w" "${FLOW[@]}" -P "Geometry:dr=$dr" \
+            w="$OUT/runs/${tag}_${var}_dr$($PY -c "print('%g' % ($dr * 1e3))")"
+            "$SPHSEG" "inputs/drum_2d_$drum.yml" --backend "$BACKEND" -o "$w" "${FLOW[@]}" "${GEO[@]}" -P "Geometry:dr=$dr" \
                 -P "Run:t_end=$T_END" -P "Output:dt=$SNAP_DT" -P "Output:checkpoint_dt=0" "${extra[@]}" \
                 --restart "$dev/checkpoint.h5" > "$w.log" 2>&1 || { echo "$w: window failed (rc $?)"; tail -5 "$w.log"; continue; }
             (   # measured beside the next runs (the device's cores are idle while the GPU runs)
                 for rad in $RADII; do
                     r=$(basename "$w"); [ "$rad" = 2 ] || r=${r}_r$rad
-                    $PY -m tools.analysis.drum_mixing "$w" --radius "$rad" --lags $LAGS --fit-from "$FIT_FROM" --label "${drum}_${var}" \
+                    $PY -m tools.analysis.drum_mixing "$w" --radius "$rad" --lags $LAGS --fit-from "$FIT_FROM" --stride "$STRIDE" --label "${tag}_${var}" \
                         --json "$OUT/res/$r.json" > "$OUT/res/$r.txt" 2>&1 || echo "$w: analysis failed" >> "$OUT/res/$r.txt"
                 done
                 rm -f "$w"/snapshot_*.h5
