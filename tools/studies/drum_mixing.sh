@@ -51,14 +51,14 @@ for drum in $DRUMS; do
         fi
         lab=${tag}_dr$($PY -c "print('%g' % ($dr * 1e3))")
         dev="$OUT/runs/${lab}_dev"
-        "$SPHSEG" "inputs/drum_2d_$drum.yml" --backend "$BACKEND" -o "$dev" "${FLOW[@]}" "${GEO[@]}" -P "Geometry:dr=$dr" \
+        "$SPHSEG" "inputs/drum_2d_$drum.yml" --backend "$BACKEND" -o "$dev" "${FLOW[@]}" ${GEO[@]+"${GEO[@]}"} -P "Geometry:dr=$dr" \
             -P "Run:t_end=$T_DEV" -P "Output:dt=$T_DEV" -P "Output:checkpoint_dt=$T_DEV" > "$dev.log" 2>&1 ||
             { echo "$lab: developing failed (rc $?)"; tail -5 "$dev.log"; continue; }
         for var in $VARS; do
             extra=(); [ $var = noshift ] && extra=(-P Flow:shifting=off)
             w="$OUT/runs/${tag}_${var}_dr$($PY -c "print('%g' % ($dr * 1e3))")"
-            "$SPHSEG" "inputs/drum_2d_$drum.yml" --backend "$BACKEND" -o "$w" "${FLOW[@]}" "${GEO[@]}" -P "Geometry:dr=$dr" \
-                -P "Run:t_end=$T_END" -P "Output:dt=$SNAP_DT" -P "Output:checkpoint_dt=0" "${extra[@]}" \
+            "$SPHSEG" "inputs/drum_2d_$drum.yml" --backend "$BACKEND" -o "$w" "${FLOW[@]}" ${GEO[@]+"${GEO[@]}"} -P "Geometry:dr=$dr" \
+                -P "Run:t_end=$T_END" -P "Output:dt=$SNAP_DT" -P "Output:checkpoint_dt=0" ${extra[@]+"${extra[@]}"} \
                 --restart "$dev/checkpoint.h5" > "$w.log" 2>&1 || { echo "$w: window failed (rc $?)"; tail -5 "$w.log"; continue; }
             (   # measured beside the next runs (the device's cores are idle while the GPU runs)
                 for rad in $RADII; do
