@@ -65,15 +65,18 @@ BINS = (0.0, 0.5, 2.0, 5.0, 10.0, math.inf)  # shear-rate classes, 1/s: the bed'
 
 
 def read_params(rundir):
+    """What the measurement reads of the run's used_params.yml, which holds every key the run used
+    (defaults included): a missing key is an error, not a default the run may not have had."""
     import yaml
     with open(os.path.join(rundir, "used_params.yml")) as f:
         par = yaml.safe_load(f)
-    g, gr, sg = par["Geometry"], par.get("Grains", {}), par.get("Segregation", {})
+    g, sg = par["Geometry"], par["Segregation"]
+    gr = par.get("Grains", sg)  # an output written before the Grains section: Segregation's (as drum_analysis)
+    fl = par.get("Flow", {})
     dr = float(g["dr"])
-    return {"dr": dr, "h": float(g.get("h_factor", 1.5)) * dr, "chi_D": float(sg.get("chi_D", 0.0307)),
-            "d_small": float(gr.get("d_small", 0.004)), "d_large": float(gr.get("d_large", 0.008)),
-            "shift_coeff": float(par.get("Flow", {}).get("shift_coeff", 2.0)),
-            "shifting": str(par.get("Flow", {}).get("shifting", "off"))}
+    return {"dr": dr, "h": float(g["h_factor"]) * dr, "chi_D": float(sg["chi_D"]),
+            "d_small": float(gr["d_small"]), "d_large": float(gr["d_large"]),
+            "shift_coeff": fl.get("shift_coeff"), "shifting": str(fl.get("shifting", "?"))}  # labels only
 
 
 def load(rundir):
