@@ -8,6 +8,8 @@ on the 2D drums, factor by factor.
   python3 -m tools.studies.seg_refine table FILE.json... [--csv docs/data/drum/seg_refine.csv] [--effects CSV]
   python3 -m tools.studies.seg_refine chart [--csv ...] [--effects CSV] [--png docs/data/drum/seg_refine.png]
   python3 -m tools.studies.seg_refine mixemu FILE.json... [--csv ...]   (the mixemu runs against yielded at 0.5, 0.25 mm)
+  python3 -m tools.studies.seg_refine third FILE.json... [--csv ...] [--png ...]   (yielded at dr 0.125 mm against 0.5,
+                                                             0.25 mm: the observed order and Richardson's limit)
   python3 -m tools.studies.seg_refine profiles FILE.json... [--times 6 10] [--png ...]   (base's C and shear-rate profiles,
                                                              and each C profile's peak: height, depth, width)
 
@@ -144,7 +146,9 @@ RUNS = [("EV", "base", 0.001, 10), ("EV", "base", 0.0005, 10),
        [(d, "yielded", dr, 10) for d in ("EV", "EN") for dr in (0.001, 0.0005, 0.00025)] + \
        [(d, "yieldedE", 0.0005, 10) for d in ("EV", "EN")] + \
        [("EV", "yieldlim", dr, 10) for dr in (0.0005, 0.00025)] + \
-       [(d, "mixemu", 0.00025, 20) for d in ("EV", "EN")]
+       [(d, "mixemu", 0.00025, 20) for d in ("EV", "EN")] + \
+       [(d, "yielded", 0.000125, 20) for d in ("EV", "EN")]  # 1.6e6 steps, ~1000 s of one H200: by hand in two
+# calls, the second with --restart (the script deletes a run's .h5, its checkpoint too; seg_refine.md "A third spacing")
 # The variant each is measured against in --effects (base unless named here).
 REF = {"yieldedE": "yielded", "yieldlim": "yielded", "mixemu": "yielded"}
 
@@ -621,6 +625,69 @@ def mixemu(a):
     print("wrote %s" % a.csv)
 
 
+def third(a):
+    """The third spacing: yielded at dr 0.125 mm (its runs' JSONs) beside yielded's index at dr 0.5 and 0.25 mm
+    from the 40-s table (--ref): one row per drum and even second, with the changes per halving, the observed
+    order p = log2(change 0.5->0.25 / change 0.25->0.125) where both have one sign, and Richardson's limit
+    I_0.125 + change_0.25->0.125 / (2^p - 1); the CSV and a chart of the index against dr."""
+    import csv
+    ref = {}
+    with open(a.ref) as fh:
+        for r in csv.DictReader(fh):
+            if r["variant"] == "yielded" and r["dr_coarse_mm"] == "0.5" and r["dr_fine_mm"] == "0.25":
+                ref[(r["drum"], round(float(r["t_s"])))] = (float(r["index_coarse"]), float(r["index_fine"]))
+    rows = []
+    for f in a.files:
+        with open(f) as fh:
+            j = json.load(fh)
+        drum = j["label"].split("_")[0]
+        for p in j["series"]:
+            k = (drum, round(p["t"]))
+            if k not in ref or abs(p["t"] - k[1]) > 1e-6 or k[1] == 0:
+                continue
+            c, m = ref[k]
+            fn = p["index"]
+            e1, e2 = m - c, fn - m
+            order = math.log2(e1 / e2) if e1 * e2 > 0 and e1 / e2 > 1 else float("nan")
+            lim = fn + e2 / (2 ** order - 1) if order == order else float("nan")
+            rows.append({"drum": drum, "t_s": k[1], "index_dr0.5": "%.4g" % c, "index_dr0.25": "%.4g" % m,
+                         "index_dr0.125": "%.4g" % fn, "change_0.5_0.25_pct": "%.2f" % (100 * e1 / c),
+                         "change_0.25_0.125_pct": "%.2f" % (100 * e2 / m), "order": "%.2f" % order,
+                         "limit": "%.4g" % lim, "dr0.125_to_limit_pct": "%.2f" % (100 * (fn / lim - 1))})
+    rows.sort(key=lambda r: (r["drum"], r["t_s"]))
+    with open(a.csv, "w", newline="") as fh:
+        w = csv.DictWriter(fh, list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    for r in rows:
+        print(" ".join("%s" % v for v in r.values()))
+    print("wrote %s" % a.csv)
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    drums = sorted({r["drum"] for r in rows})
+    fig, ax = plt.subplots(1, len(drums), figsize=(5.2 * len(drums), 3.8), squeeze=False)
+    for k, drum in enumerate(drums):
+        x = ax[0][k]
+        for r in rows:
+            if r["drum"] != drum or r["t_s"] % 4 != 0 and r["t_s"] != 10:
+                continue
+            v = [float(r["index_dr0.5"]), float(r["index_dr0.25"]), float(r["index_dr0.125"])]
+            x.plot([0.5, 0.25, 0.125], [y / v[-1] for y in v], "o-", label="t = %d s" % r["t_s"])
+        x.set_xscale("log", base=2)
+        x.set_xticks([0.5, 0.25, 0.125], ["0.5", "0.25", "0.125"])
+        x.invert_xaxis()
+        x.axhspan(0.97, 1.03, color="0.9", zorder=0)
+        x.set_xlabel("dr, mm")
+        x.set_ylabel("segregation index / its value at dr 0.125 mm")
+        x.set_title("%s drum, yielded (grey: within 3 %%)" % drum)
+        x.legend(fontsize=7)
+    fig.suptitle("The 2D drums at three spacings (%s)" % a.machine, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(a.png, dpi=110)
+    print("wrote %s" % a.png)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="what", required=True)
@@ -657,9 +724,15 @@ def main():
     m.add_argument("files", nargs="+", help="the mixemu runs' JSONs")
     m.add_argument("--ref", default=CSV.replace(".csv", "_h200_t40.csv"), help="the 40-s table (yielded at 0.5, 0.25 mm)")
     m.add_argument("--csv", default=CSV.replace(".csv", "_mixemu.csv"))
+    d = sub.add_parser("third")
+    d.add_argument("files", nargs="+", help="the dr 0.125-mm runs' JSONs (yielded)")
+    d.add_argument("--ref", default=CSV.replace(".csv", "_h200_t40.csv"), help="the 40-s table (yielded at 0.5, 0.25 mm)")
+    d.add_argument("--csv", default=CSV.replace(".csv", "_dr0125.csv"))
+    d.add_argument("--png", default=PNG.replace(".png", "_dr0125.png"))
+    d.add_argument("--machine", default="one H200 a run", help="the runs' machine, for the title")
     a = ap.parse_args()
     {"commands": commands, "analyse": analyse, "table": table, "chart": chart, "profiles": profiles,
-     "mixemu": mixemu}[a.what](a)
+     "mixemu": mixemu, "third": third}[a.what](a)
 
 
 if __name__ == "__main__":
