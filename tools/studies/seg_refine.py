@@ -593,36 +593,47 @@ def profiles(a):
     print("wrote %s" % a.png)
 
 
-def mixemu(a):
-    """The mixemu runs (dr 0.25 mm, chi_D raised by the dr-0.5-mm mixing) beside yielded's index at dr 0.5 and
-    0.25 mm from the 40-s table (--ref): one row per drum and even second."""
+def _against_t40(ref_csv, files):
+    """(drum, t, j, index, I_0.5, I_0.25) for each run's point (its JSON j) at an even second that the 40-s
+    table (ref_csv) has for yielded at dr 0.5 and 0.25 mm, t > 0."""
     import csv
     ref = {}
-    with open(a.ref) as fh:
+    with open(ref_csv) as fh:
         for r in csv.DictReader(fh):
             if r["variant"] == "yielded" and r["dr_coarse_mm"] == "0.5" and r["dr_fine_mm"] == "0.25":
                 ref[(r["drum"], round(float(r["t_s"])))] = (float(r["index_coarse"]), float(r["index_fine"]))
-    rows = []
-    for f in a.files:
+    for f in files:
         with open(f) as fh:
             j = json.load(fh)
         drum = j["label"].split("_")[0]
         for p in j["series"]:
             k = (drum, round(p["t"]))
             if k in ref and abs(p["t"] - k[1]) < 1e-6 and k[1] > 0:
-                c, fn = ref[k]
-                rows.append({"drum": drum, "t_s": k[1], "chi_D": "%.4g" % j["chi_D"], "index_dr0.5": "%.4g" % c,
-                             "index_dr0.25": "%.4g" % fn, "index_mixemu_dr0.25": "%.4g" % p["index"],
-                             "dr0.25_vs_dr0.5_pct": "%.2f" % (100 * (fn / c - 1)),
-                             "mixemu_vs_dr0.5_pct": "%.2f" % (100 * (p["index"] / c - 1)),
-                             "mixemu_vs_dr0.25_pct": "%.2f" % (100 * (p["index"] / fn - 1))})
-    with open(a.csv, "w", newline="") as fh:
+                yield (drum, k[1], j, p["index"]) + ref[k]
+
+
+def _write_rows(path, rows):
+    import csv
+    with open(path, "w", newline="") as fh:
         w = csv.DictWriter(fh, list(rows[0]))
         w.writeheader()
         w.writerows(rows)
     for r in rows:
         print(" ".join("%s" % v for v in r.values()))
-    print("wrote %s" % a.csv)
+    print("wrote %s" % path)
+
+
+def mixemu(a):
+    """The mixemu runs (dr 0.25 mm, chi_D raised by the dr-0.5-mm mixing) beside yielded's index at dr 0.5 and
+    0.25 mm from the 40-s table (--ref): one row per drum and even second."""
+    rows = []
+    for drum, t, j, x, c, fn in _against_t40(a.ref, a.files):
+        rows.append({"drum": drum, "t_s": t, "chi_D": "%.4g" % j["chi_D"], "index_dr0.5": "%.4g" % c,
+                     "index_dr0.25": "%.4g" % fn, "index_mixemu_dr0.25": "%.4g" % x,
+                     "dr0.25_vs_dr0.5_pct": "%.2f" % (100 * (fn / c - 1)),
+                     "mixemu_vs_dr0.5_pct": "%.2f" % (100 * (x / c - 1)),
+                     "mixemu_vs_dr0.25_pct": "%.2f" % (100 * (x / fn - 1))})
+    _write_rows(a.csv, rows)
 
 
 def third(a):
@@ -630,38 +641,17 @@ def third(a):
     from the 40-s table (--ref): one row per drum and even second, with the changes per halving, the observed
     order p = log2(change 0.5->0.25 / change 0.25->0.125) where both have one sign, and Richardson's limit
     I_0.125 + change_0.25->0.125 / (2^p - 1); the CSV and a chart of the index against dr."""
-    import csv
-    ref = {}
-    with open(a.ref) as fh:
-        for r in csv.DictReader(fh):
-            if r["variant"] == "yielded" and r["dr_coarse_mm"] == "0.5" and r["dr_fine_mm"] == "0.25":
-                ref[(r["drum"], round(float(r["t_s"])))] = (float(r["index_coarse"]), float(r["index_fine"]))
     rows = []
-    for f in a.files:
-        with open(f) as fh:
-            j = json.load(fh)
-        drum = j["label"].split("_")[0]
-        for p in j["series"]:
-            k = (drum, round(p["t"]))
-            if k not in ref or abs(p["t"] - k[1]) > 1e-6 or k[1] == 0:
-                continue
-            c, m = ref[k]
-            fn = p["index"]
-            e1, e2 = m - c, fn - m
-            order = math.log2(e1 / e2) if e1 * e2 > 0 and e1 / e2 > 1 else float("nan")
-            lim = fn + e2 / (2 ** order - 1) if order == order else float("nan")
-            rows.append({"drum": drum, "t_s": k[1], "index_dr0.5": "%.4g" % c, "index_dr0.25": "%.4g" % m,
-                         "index_dr0.125": "%.4g" % fn, "change_0.5_0.25_pct": "%.2f" % (100 * e1 / c),
-                         "change_0.25_0.125_pct": "%.2f" % (100 * e2 / m), "order": "%.2f" % order,
-                         "limit": "%.4g" % lim, "dr0.125_to_limit_pct": "%.2f" % (100 * (fn / lim - 1))})
+    for drum, t, j, fn, c, m in _against_t40(a.ref, a.files):
+        e1, e2 = m - c, fn - m
+        order = math.log2(e1 / e2) if e1 * e2 > 0 and e1 / e2 > 1 else float("nan")
+        lim = fn + e2 / (2 ** order - 1) if order == order else float("nan")
+        rows.append({"drum": drum, "t_s": t, "index_dr0.5": "%.4g" % c, "index_dr0.25": "%.4g" % m,
+                     "index_dr0.125": "%.4g" % fn, "change_0.5_0.25_pct": "%.2f" % (100 * e1 / c),
+                     "change_0.25_0.125_pct": "%.2f" % (100 * e2 / m), "order": "%.2f" % order,
+                     "limit": "%.4g" % lim, "dr0.125_to_limit_pct": "%.2f" % (100 * (fn / lim - 1))})
     rows.sort(key=lambda r: (r["drum"], r["t_s"]))
-    with open(a.csv, "w", newline="") as fh:
-        w = csv.DictWriter(fh, list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    for r in rows:
-        print(" ".join("%s" % v for v in r.values()))
-    print("wrote %s" % a.csv)
+    _write_rows(a.csv, rows)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
