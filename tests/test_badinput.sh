@@ -103,6 +103,9 @@ check flow_in_shearbox "-P Kinematics:velocity=computed: Kinematics:velocity: co
 check flow_direction "-P Walls:direction=up: Walls:direction: expected one of clockwise|counterclockwise" \
     "$good" -P Walls:direction=up
 check coulomb_no_mu "$good:1: Walls:mu_w: a wall with slip coulomb needs Walls:mu_w > 0" "$good" -P Walls:slip=coulomb
+check coulomb_end_no_mu "$good:1: Walls:mu_w: a wall with slip coulomb needs Walls:mu_w > 0" "$good" -P Walls:end_slip=coulomb
+check end_slip_enum "-P Walls:end_slip=rough: Walls:end_slip: expected one of side|no_slip|free_slip|coulomb" \
+    "$good" -P Walls:end_slip=rough
 check drum_small "-P Geometry:radius=0.01: Geometry:radius: must be >= 8*dr" \
     "$good" -P Geometry:type=drum -P Kinematics:velocity=computed -P Geometry:radius=0.01
 check shearbox_3d "-P Geometry:dim=3: Geometry:dim: 3D is supported for Geometry:type column or drum only" \

@@ -20,6 +20,8 @@ enum periodic_axes {
     PERIODIC_YZ = 6, PERIODIC_XYZ = 7
 };
 enum wall_slip { SLIP_NO = 0, SLIP_FREE = 1, SLIP_COULOMB = 2 };
+/* Walls:end_slip side: the end walls z = 0 and z = depth slip as Walls:side_slip (scene_end_slip) */
+#define SLIP_AS_SIDE (-1)
 enum rot_dir { ROT_CLOCKWISE = 0, ROT_COUNTERCLOCKWISE = 1 };
 enum init_stress { INIT_STRESS_ZERO = 0, INIT_STRESS_GEOSTATIC = 1 };
 /* Run:preset: a named group of keys (scene_preset.c) */
@@ -124,6 +126,13 @@ struct scene {
     char *text; /* the scene file's text, for snapshot headers */
     struct scene_keys *keys; /* for scene_key_line / scene_key_where */
 };
+
+/* The slip of a 3D box's, column's or container's end walls z = 0 and z =
+ * depth (enum wall_slip): Walls:end_slip, or where it is side, Walls:side_slip. */
+static inline int scene_end_slip(const struct scene *s)
+{
+    return s->walls.end_slip == SLIP_AS_SIDE ? (int)s->walls.side_slip : s->walls.end_slip;
+}
 
 /* The core of scene_load, which does not exit: load path, apply the overrides
  * over[0..n_over-1] ("Section:key=value", later ones win), fill defaults,

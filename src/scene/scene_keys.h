@@ -30,6 +30,8 @@ static const cyaml_strval_t geom_types[] = {
 static const cyaml_strval_t kin_types[] = {
     {"rest", KIN_REST}, {"oscillatory_shear", KIN_OSCILLATORY_SHEAR}, {"computed", KIN_COMPUTED}};
 static const cyaml_strval_t slips[] = {{"no_slip", SLIP_NO}, {"free_slip", SLIP_FREE}, {"coulomb", SLIP_COULOMB}};
+static const cyaml_strval_t end_slips[] = {
+    {"side", SLIP_AS_SIDE}, {"no_slip", SLIP_NO}, {"free_slip", SLIP_FREE}, {"coulomb", SLIP_COULOMB}};
 static const cyaml_strval_t rot_dirs[] = {{"clockwise", ROT_CLOCKWISE},
                                           {"counterclockwise", ROT_COUNTERCLOCKWISE}};
 static const cyaml_strval_t init_stresses[] = {{"zero", INIT_STRESS_ZERO},
@@ -380,6 +382,10 @@ SECTION("Walls", walls, scene_walls)
       "the wall's shear traction is below mu_w times its normal stress, else sliding at that traction); default no_slip")
     KE("Walls", walls, scene_walls, side_slip, enum wall_slip, slips, "free_slip",
       "box side walls; default free_slip")
+    KE("Walls", walls, scene_walls, end_slip, int, end_slips, "side",
+      "3D box, column or container: the end walls z = 0 and z = depth (a quasi-2D channel's side walls), apart from "
+      "the walls x = 0 and x = width: side (as Walls:side_slip) | no_slip | free_slip | coulomb; a container's entry "
+      "of shape ends takes precedence; default side")
     KF("Walls", walls, scene_walls, mu_w, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "the wall friction coefficient (tan of the wall friction angle) of every wall whose slip is coulomb, -; >= 0, "
       "> 0 where a wall is coulomb; default 0")

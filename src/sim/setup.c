@@ -399,7 +399,7 @@ wall_prim *wall_plane(sim_t *s, const char *name, int slip, int bound, int claim
 
 /* Shear box and column: the base y = 0 (its corners; not bounding when an
  * outlet opens it), the side walls x = 0 and x = width and in 3D z = 0 and
- * z = depth (none across a periodic axis), the gate x = width of the
+ * z = depth (none across a periodic axis; those two slip as Walls:end_slip), the gate x = width of the
  * material with a runout, the lid y = height. Widths in whole dr, the
  * runout included, as the particles are placed. */
 static void walls_box(sim_t *s)
@@ -408,15 +408,15 @@ static void walls_box(sim_t *s)
     const struct scene_geometry *g = &sc->geometry;
     double dr = g->dr, W = (double)(lround(g->width / dr) + lround(g->runout / dr)) * dr;
     double D = g->dim == 3 ? (double)lround(g->depth / dr) * dr : 0.0, H = (double)lround(g->height / dr) * dr;
-    const int sb = (int)sc->walls.slip, ss = (int)sc->walls.side_slip;
+    const int sb = (int)sc->walls.slip, ss = (int)sc->walls.side_slip, se = scene_end_slip(sc);
     wall_plane(s, "base", sb, !sc->outlet.enabled, WALL_CLAIM_FIRST, 0, 0, 0, 0, 1, 0);
     if (!(g->periodic & PERIODIC_X)) {
         wall_plane(s, "xlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 1, 0, 0);
         wall_plane(s, "xhi", ss, 1, WALL_CLAIM_SIDE, W, 0, 0, -1, 0, 0);
     }
     if (g->dim == 3 && !(g->periodic & PERIODIC_Z)) {
-        wall_plane(s, "zlo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
-        wall_plane(s, "zhi", ss, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1);
+        wall_plane(s, "zlo", se, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
+        wall_plane(s, "zhi", se, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1);
     }
     if (g->runout > 0)
         wall_plane(s, "gate", ss, 0, WALL_CLAIM_NONE, (double)lround(g->width / dr) * dr, 0, 0, -1, 0, 0)->open_at =

@@ -235,9 +235,9 @@ void container_walls(sim_t *s)
     s->flow.w.period[1] = (real)((double)lround(sc->geometry.height / dr) * dr);
     s->flow.w.period[2] = (real)((double)lround(sc->geometry.depth / dr) * dr);
     if (sc->geometry.dim == 3 && !(sc->geometry.periodic & PERIODIC_Z)) {
-        /* the end walls: as the entry of shape ends, else fixed, slipping as a column's side walls */
+        /* the end walls: as the entry of shape ends, else fixed, slipping as Walls:end_slip */
         double D = (double)lround(sc->geometry.depth / dr) * dr;
-        const int ss = ends ? (int)ends->slip : (int)sc->walls.side_slip;
+        const int ss = ends ? (int)ends->slip : scene_end_slip(sc);
         wall_prim *lo = wall_plane(s, "end_lo", ss, 1, WALL_CLAIM_SIDE, 0, 0, 0, 0, 0, 1);
         wall_prim *hi = wall_plane(s, "end_hi", ss, 1, WALL_CLAIM_SIDE, 0, 0, D, 0, 0, -1);
         if (ends) ctr_motion(lo, ends), ctr_motion(hi, ends);

@@ -135,6 +135,13 @@ GLASS_N = (10, 20, 40, 80, 160)
 # foremost bin of the wall-connected deposit thicker than 1.5 d and 3 d (as the Lagree set's), where the spacing
 # resolves a grain's thickness (dr <= d: L0/dr 20 and finer; at 10, dr = 2 mm, one particle is thicker than 1.5 d)
 GLASS_D = 1.15e-3
+# The quasi-2D channel (set lajeunesse_slot): the 3D column between end walls z = 0 and z = W (Walls:end_slip), free
+# slip (a 2D column's equal) or the beads' Coulomb friction tan 24.8 deg on the glass; a = 2 and 0.5 at L0/dr 10
+# and 20 (W of 5 to 40 particles). The back wall x = 0 (the symmetry plane) and the gate stay free slip.
+SLOT_W = (0.01, 0.02, 0.04)
+SLOT_A = (2, 0.5)
+SLOT_N = (10, 20, 40)  # at 40 only a = 2, W 1 and 2 cm were run (--only; docs/data/collapse/glass/README.md)
+SLOT_SLIPS = (("fs", "free_slip"), ("cw", "coulomb"))
 
 
 def glass_case(a, n, model="glass", L0=0.02, tag="", **extra):
@@ -158,6 +165,10 @@ def cases(which):
     if which == "lajeunesse_coulomb":  # the floor with the beads' wall friction, tan 24.8 deg (Kumar's table)
         c += [glass_case(a, n, m, tag="_cw", **COULOMB_FLOOR) for m in ("glass", "const") for n in GLASS_N
               for a in GLASS_A]
+    if which == "lajeunesse_slot":
+        c += [glass_case(a, n, tag="_slot%g_%s" % (W * 1e3, t), **{"Geometry:dim": 3, "Geometry:depth": W,
+                                                                  "Walls:end_slip": slip, "Walls:mu_w": 0.4621})
+              for n in SLOT_N for a in SLOT_A for W in SLOT_W for t, slip in SLOT_SLIPS]
     if which == "lajeunesse_E":  # the stiffness is numerical: E x 10 at the fastest column
         c += [glass_case(a, n, tag="_E1e6", **{"Material:E": 1e6}) for a, n in ((2, 10), (2, 20), (2, 40), (8, 20))]
     if which in ("full", "aspect"):
@@ -334,6 +345,68 @@ def glass_report(runs, where, P, docs):
     plt.close(fig)
 
 
+def slot_report(runs, where, P, docs):
+    """The quasi-2D channel (set lajeunesse_slot): per a, L0/dr and W, the runout and height between free-slip and
+    Coulomb end walls, their ratios to Lube et al.'s laws, and the side walls' share (Coulomb over free slip - 1);
+    slot.csv in the --docs folder."""
+    rows = {}
+    for n in runs:
+        m = re.fullmatch(r"a([0-9.]+)_glass_n([0-9]+)_slot([0-9.]+)_(fs|cw)", n)
+        if not m or runs[n]["rc"] != "0":
+            continue
+        r, f = runs[n], load(where[n], n)
+        if f["t"][-1] < float(r["t_end"]) - 0.011:
+            continue
+        L0 = float(r["L0"])
+        rows.setdefault((float(m.group(1)), int(m.group(2)), float(m.group(3))), {})[m.group(4)] = (
+            (f["front"][-1] - L0) / L0, f["height_at_wall"][-1] / L0, int(at_end_wall(r, f["front"][-1])),
+            r.get("backend", ""))
+    out = []
+    for (av, nn, wmm), v in sorted(rows.items()):
+        if "fs" not in v or "cw" not in v:
+            continue
+        (rf, hf, ef, be), (rc, hc, ec, _) = v["fs"], v["cw"]
+        out.append(dict(a=av, n=nn, W_mm=wmm, W_over_H0=wmm * 1e-3 / (av * 0.02), runout_free=rf, runout_coulomb=rc,
+                        lube_runout=float(lube_runout(av)), share_runout_pct=100 * (rc / rf - 1), height_free=hf,
+                        height_coulomb=hc, lube_height=float(lube_height(av)), share_height_pct=100 * (hc / hf - 1),
+                        end_wall=ef | ec, backend=be))
+    if not out:
+        return
+    os.makedirs(docs, exist_ok=True)
+    batch.write_csv(os.path.join(docs, "slot.csv"), list(out[0]), [list(q.values()) for q in out])
+    P("")
+    P("| a | L0/dr | W (mm) | W/H0 | runout / law, free-slip ends | Coulomb ends | Coulomb / free - 1 | "
+      "H_inf / law, free | Coulomb | Coulomb / free - 1 | backend |")
+    P("|---|---|---|---|---|---|---|---|---|---|---|")
+    for q in out:
+        P("| %g | %d | %g | %.2f | %s | %s | %+.1f %% | %.2f | %.2f | %+.1f %% | %s |" % (
+            q["a"], q["n"], q["W_mm"], q["W_over_H0"], bound(q["runout_free"] / q["lube_runout"], q["end_wall"]),
+            bound(q["runout_coulomb"] / q["lube_runout"], q["end_wall"]), q["share_runout_pct"],
+            q["height_free"] / q["lube_height"], q["height_coulomb"] / q["lube_height"], q["share_height_pct"],
+            q["backend"]))
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
+    for j, av in enumerate(sorted({q["a"] for q in out})):
+        for k, nn in enumerate(sorted({q["n"] for q in out})):
+            sel = sorted((q for q in out if q["a"] == av and q["n"] == nn), key=lambda q: q["W_over_H0"])
+            if not sel:
+                continue
+            st = dict(marker="os^"[k % 3], color="C%d" % j, label="a = %g, L0/dr %d" % (av, nn))
+            ax[0].plot([q["W_over_H0"] for q in sel], [q["share_runout_pct"] for q in sel], **st)
+            ax[1].plot([q["W_over_H0"] for q in sel], [q["share_height_pct"] for q in sel], **st)
+    for x, what in zip(ax, ("runout", "final height")):
+        x.set_xscale("log")
+        x.axhline(0, color="k", lw=0.5)
+        x.set_xlabel("W / H0 (W: the channel's width)")
+        x.set_ylabel("%s, Coulomb / free-slip end walls - 1, %%" % what)
+        x.legend(fontsize=7)
+    ax[0].set_title("the side walls' share: runout (glass beads, mu_w = tan 24.8 deg)", fontsize=9)
+    ax[1].set_title("final height at the back wall", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(os.path.join(docs, "slot.png"), dpi=110)
+    plt.close(fig)
+
+
 def reduce_done(a, c, rec):
     d = os.path.join(a.out, c.name)
     if os.path.isdir(d):
@@ -419,12 +492,13 @@ def cmd_report(a):
         fig.savefig(os.path.join(a.docs, "validation_collapse_deposit.png"), dpi=110)
     lagree_table(runs, where, P)
     glass_report(runs, where, P, a.docs)
+    slot_report(runs, where, P, a.docs)
     batch.report_tables(a, lines)
 
 
 def main(argv=None):
     batch.study_main(__doc__, ("aspect", "yield", "resolution", "lagree", "lajeunesse", "lajeunesse_const", "lajeunesse_E",
-                                  "lajeunesse_coulomb"), cases, reduce_done, cmd_report, "collapse", argv=argv)
+                                  "lajeunesse_coulomb", "lajeunesse_slot"), cases, reduce_done, cmd_report, "collapse", argv=argv)
 
 
 if __name__ == "__main__":

@@ -12,6 +12,11 @@ on the 2D drums, factor by factor.
                                                              0.25 mm: the observed order and Richardson's limit)
   python3 -m tools.studies.seg_refine profiles FILE.json... [--times 6 10] [--png ...]   (base's C and shear-rate profiles,
                                                              and each C profile's peak: height, depth, width)
+  python3 -m tools.studies.seg_refine stiff FILE.json... [--csv ...] [--png ...]   (yieldedE against yielded at the same
+                                                             dr from the 40-s table: E x 10's change per even second)
+  python3 -m tools.studies.seg_refine area A0.5.json A0.25.json A0.125.json --lattice L0.125.json [--csv ...]
+                                                             (yielded with Geometry:fill_by area at three spacings against
+                                                             the lattice fill's: each fill's change per halving)
 
 The runs. The scenes (inputs/drum_2d_EV.yml, drum_2d_EN.yml) with their flow (riemann, bed damping 1,
 the corrected gradient, Fickian shifting, C in windows `every auto`) at E 10 kPa, chi 0.2, the
@@ -678,6 +683,70 @@ def third(a):
     print("wrote %s" % a.png)
 
 
+def stiff(a):
+    """E x 10: the yieldedE runs (Material:E 1e5, its JSONs) beside yielded at E 1e4 and the same dr from the 40-s
+    table (--ref, dr 0.5 or 0.25 mm): one row per drum and even second; the CSV and a chart of the change against t."""
+    rows = []
+    for drum, t, j, x, c, fn in _against_t40(a.ref, a.files):
+        ref = {0.0005: c, 0.00025: fn}.get(round(j["dr"], 6))
+        if ref is None:
+            continue
+        rows.append({"drum": drum, "dr_mm": j["dr"] * 1e3, "t_s": t, "index_E1e4": "%.4g" % ref,
+                     "index_E1e5": "%.4g" % x, "change_pct": "%.2f" % (100 * (x / ref - 1))})
+    rows.sort(key=lambda r: (r["drum"], r["dr_mm"], r["t_s"]))
+    _write_rows(a.csv, rows)
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 3.6))
+    for drum in sorted({r["drum"] for r in rows}):
+        sel = [r for r in rows if r["drum"] == drum]
+        ax.plot([r["t_s"] for r in sel], [float(r["change_pct"]) for r in sel], "o-", ms=3,
+                label="%s drum, dr %g mm" % (drum, sel[0]["dr_mm"]))
+    ax.axhspan(-3, 3, color="0.9", zorder=0)
+    ax.axhline(0, color="k", lw=0.5)
+    ax.set_xlabel("t, s")
+    ax.set_ylabel("index at E 0.1 MPa / at 10 kPa - 1, %")
+    ax.set_title("E x 10, yielded (grey: within 3 %%; %s)" % a.machine, fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(a.png, dpi=110)
+    print("wrote %s" % a.png)
+
+
+def area(a):
+    """The fill by area at three spacings: the area runs' JSONs (Geometry:fill_by area, yielded, dr 0.5, 0.25,
+    0.125 mm) beside the lattice fill's yielded runs (0.5, 0.25 mm from the 40-s table --ref, 0.125 mm from
+    --lattice JSONs): one row per drum and even second, with each fill's change per halving."""
+    lat = {}
+    for f in a.lattice or []:
+        with open(f) as fh:
+            j = json.load(fh)
+        for p in j["series"]:
+            lat[(j["label"].split("_")[0], round(p["t"], 6))] = p["index"]
+    runs = {}
+    for f in a.files:
+        with open(f) as fh:
+            j = json.load(fh)
+        runs[(j["label"].split("_")[0], round(j["dr"], 6))] = {round(p["t"], 6): p["index"] for p in j["series"]}
+    rows = []
+    for drum, t, j, x, c, m in _against_t40(a.ref, a.files):
+        if round(j["dr"], 6) != 0.000125:
+            continue
+        ar = [runs.get((drum, dr), {}).get(float(t)) for dr in (0.0005, 0.00025, 0.000125)]
+        fine = lat.get((drum, float(t)))
+        if None in ar or fine is None:
+            continue
+        rows.append({"drum": drum, "t_s": t, "lattice_dr0.5": "%.4g" % c, "lattice_dr0.25": "%.4g" % m,
+                     "lattice_dr0.125": "%.4g" % fine, "area_dr0.5": "%.4g" % ar[0], "area_dr0.25": "%.4g" % ar[1],
+                     "area_dr0.125": "%.4g" % ar[2], "lattice_0.5_0.25_pct": "%.2f" % (100 * (m / c - 1)),
+                     "lattice_0.25_0.125_pct": "%.2f" % (100 * (fine / m - 1)),
+                     "area_0.5_0.25_pct": "%.2f" % (100 * (ar[1] / ar[0] - 1)),
+                     "area_0.25_0.125_pct": "%.2f" % (100 * (ar[2] / ar[1] - 1))})
+    rows.sort(key=lambda r: (r["drum"], r["t_s"]))
+    _write_rows(a.csv, rows)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="what", required=True)
@@ -720,9 +789,20 @@ def main():
     d.add_argument("--csv", default=CSV.replace(".csv", "_dr0125.csv"))
     d.add_argument("--png", default=PNG.replace(".png", "_dr0125.png"))
     d.add_argument("--machine", default="one H200 a run", help="the runs' machine, for the title")
+    e = sub.add_parser("stiff")
+    e.add_argument("files", nargs="+", help="the yieldedE runs' JSONs")
+    e.add_argument("--ref", default=CSV.replace(".csv", "_h200_t40.csv"), help="the 40-s table (yielded at 0.5, 0.25 mm)")
+    e.add_argument("--csv", default=CSV.replace(".csv", "_E10.csv"))
+    e.add_argument("--png", default=PNG.replace(".png", "_E10.png"))
+    e.add_argument("--machine", default="one H200 a run", help="the runs' machine, for the title")
+    r = sub.add_parser("area")
+    r.add_argument("files", nargs="+", help="the area runs' JSONs (yielded, Geometry:fill_by area; dr 0.5, 0.25, 0.125 mm)")
+    r.add_argument("--lattice", nargs="+", help="yielded's dr 0.125-mm JSONs (the lattice fill)")
+    r.add_argument("--ref", default=CSV.replace(".csv", "_h200_t40.csv"), help="the 40-s table (yielded at 0.5, 0.25 mm)")
+    r.add_argument("--csv", default=CSV.replace(".csv", "_area.csv"))
     a = ap.parse_args()
     {"commands": commands, "analyse": analyse, "table": table, "chart": chart, "profiles": profiles,
-     "mixemu": mixemu, "third": third}[a.what](a)
+     "mixemu": mixemu, "third": third, "stiff": stiff, "area": area}[a.what](a)
 
 
 if __name__ == "__main__":
