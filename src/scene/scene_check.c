@@ -237,7 +237,8 @@ static int check_vectors(struct scene_ctx *c, const struct scene *s)
     if (s->geometry.dim == 2 && g[2] != 0)
         return scene_fail_at(c, "Physics:gravity", "z entry must be 0 in 2D (the x-y plane)");
     /* a Coulomb wall takes its friction from Walls:mu_w */
-    int coulomb = s->walls.slip == SLIP_COULOMB || s->walls.side_slip == SLIP_COULOMB || scene_end_slip(s) == SLIP_COULOMB;
+    int coulomb = s->walls.slip == SLIP_COULOMB || s->walls.side_slip == SLIP_COULOMB ||
+                  scene_end_slip(s) == SLIP_COULOMB;
     for (unsigned i = 0; i < s->container.walls_count; ++i) coulomb |= s->container.walls[i].slip == SLIP_COULOMB;
     if (coulomb && !(s->walls.mu_w > 0))
         return scene_fail_at(c, "Walls:mu_w", "a wall with slip coulomb needs Walls:mu_w > 0 (the tangent of the "

@@ -399,9 +399,9 @@ wall_prim *wall_plane(sim_t *s, const char *name, int slip, int bound, int claim
 
 /* Shear box and column: the base y = 0 (its corners; not bounding when an
  * outlet opens it), the side walls x = 0 and x = width and in 3D z = 0 and
- * z = depth (none across a periodic axis; those two slip as Walls:end_slip), the gate x = width of the
- * material with a runout, the lid y = height. Widths in whole dr, the
- * runout included, as the particles are placed. */
+ * z = depth (none across a periodic axis; those two slip as Walls:end_slip),
+ * the gate x = width of the material with a runout, the lid y = height.
+ * Widths in whole dr, the runout included, as the particles are placed. */
 static void walls_box(sim_t *s)
 {
     const struct scene *sc = s->sc;
