@@ -81,8 +81,9 @@ snapshot, through tools.analysis.drum_analysis.Drum: dynamic angle, surface spee
 mid-chord, segregation index, C range, the mid-chord profiles (speed, shear rate, C; 120 points),
 the material's volume, the bed's shear-rate noise (the volume-weighted mean shear rate of particles
 that move with the drum to within 5 % of the wall speed and lie more than 2h from the wall and the
-surface line, and the bed's share of the material's sum of V gdot C (1 - C), the segregation flux's drive)
-and the particle disorder (interior particles, up to 3000 of them: the nearest neighbour's
+surface line, and the bed's share of the material's sum of V gdot C (1 - C), the segregation flux's drive),
+where the largest C sits (its distance from the wall in dr, its depth below the surface line and its place
+along that line, in R) with the volume share of C > 0.5, and the particle disorder (interior particles, up to 3000 of them: the nearest neighbour's
 distance over dr, mean and standard deviation, and the standard deviation of the kernel sum
 sum_j V_j W_ij).
 
@@ -285,6 +286,12 @@ def snapshot_metrics(d, om):
            "bed_gdot_p90": float(np.percentile(d.gdot[bed], 90)) if bed.any() else float("nan"),
            "bed_drive_share": float(w[bed].sum() / w.sum()) if w.sum() > 0 else float("nan"),
            "bed_volume_share": float(d.vol[bed].sum() / d.vol.sum())}
+    # where the largest C sits: its distance from the wall in dr, its depth below the surface line and its
+    # place along that line from its midpoint M (in the direction (-n_y, n_x)) in R; and the volume share of C > 0.5
+    k = int(np.argmax(d.C))
+    out.update({"C_max_wall_dr": float(rw[k] / dr), "C_max_depth_R": float(depth[k] / R),
+                "C_max_along_R": float((x[k] - d.M) @ np.array([-d.n[1], d.n[0]]) / R),
+                "C_half_volume_share": float(d.vol[d.C > 0.5].sum() / d.vol.sum())})
     sel = np.flatnonzero(inner)
     if len(sel) > 3000:
         sel = np.random.default_rng(1).choice(sel, 3000, replace=False)
