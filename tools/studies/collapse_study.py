@@ -360,13 +360,13 @@ def slot_report(runs, where, P, docs):
         L0 = float(r["L0"])
         rows.setdefault((float(m.group(1)), int(m.group(2)), float(m.group(3))), {})[m.group(4)] = (
             (f["front"][-1] - L0) / L0, f["height_at_wall"][-1] / L0, int(at_end_wall(r, f["front"][-1])),
-            r.get("backend", ""))
+            r.get("backend", ""), float(r["H0"]))
     out = []
     for (av, nn, wmm), v in sorted(rows.items()):
         if "fs" not in v or "cw" not in v:
             continue
-        (rf, hf, ef, be), (rc, hc, ec, _) = v["fs"], v["cw"]
-        out.append(dict(a=av, n=nn, W_mm=wmm, W_over_H0=wmm * 1e-3 / (av * 0.02), runout_free=rf, runout_coulomb=rc,
+        (rf, hf, ef, be, H0), (rc, hc, ec, _, _) = v["fs"], v["cw"]
+        out.append(dict(a=av, n=nn, W_mm=wmm, W_over_H0=wmm * 1e-3 / H0, runout_free=rf, runout_coulomb=rc,
                         lube_runout=float(lube_runout(av)), share_runout_pct=100 * (rc / rf - 1), height_free=hf,
                         height_coulomb=hc, lube_height=float(lube_height(av)), share_height_pct=100 * (hc / hf - 1),
                         end_wall=ef | ec, backend=be))
