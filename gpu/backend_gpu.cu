@@ -75,8 +75,7 @@ static const char *prof_name[P_NPROF] = {"save start, advance, motion", "boundin
                                           "HCSR classification", "dummy walls, renormalisation L",
                                           "flow rates (+seg. coefficients)", "concentration rates", "Shepard filter",
                                           "dt bounds, blow-up check (+sync)", "particle shifting (a neighbour pass)",
-                                          "corrected gradient's moment matrix B",
-                                          "flow pass's neighbour records (pack)", "DEM grid (box +sync, sort, starts)",
+                                          "corrected gradient's moment matrix B", "DEM grid (box +sync, sort, starts)",
                                           "DEM coupling (fraction, drag, source)", "DEM steps (contacts, motion)",
                                           "DEM exchange (ranks: read-back, MPI, upload)",
                                           "DEM ghost refreshes, sums home (ranks)"};
@@ -188,7 +187,7 @@ static void gpu_finish(sim_t *s)
     for (int c = 0; c < PSCR_N; ++c) CK(cudaFree(g->pscr[c]));
     CK(cudaFree(g->tile_dmax));
     void *bufs[] = {g->start, g->end, g->cell_mat, g->cell_type, g->key, g->key2, g->idx, g->idx2,
-                    g->cls, g->sums, g->nl, g->ncnt, g->amag, g->pack, g->tmp, g->dbox, g->dres, g->dfirst,
+                    g->cls, g->sums, g->nl, g->ncnt, g->amag, g->tmp, g->dbox, g->dres, g->dfirst,
                     g->dchk, g->dstep, g->xb[0], g->xb[1], g->xb[2], g->lvl, g->wact};
     for (size_t k = 0; k < sizeof bufs / sizeof bufs[0]; ++k)
         if (bufs[k]) CK(cudaFree(bufs[k]));

@@ -174,9 +174,6 @@ typedef struct gpu {
     long builds;
     long step0;         /* s->step when this backend started: a restart counts its own steps */
     real *amag;         /* |acc| of the last flow rate evaluation */
-    int pack_on;        /* SPHSEG_GPU_PACK: the list form's flow pass reads packed records (gpu_flow_pass) */
-    real *pack;         /* those records, FLOW_PACK_W(1) reals a particle for pack_cap particles; NULL until used */
-    size_t pack_cap;
     int acc_pending;    /* amag not yet reduced into dres[STEP_ACC] (gpu_acc_reduce, gpu_check) */
     int pend_save, pend_adv; /* save_start and advance held back for the next kernel (gpu_step_kernel) */
     double pend_a, pend_w; /* its lengths (gpu_advance's a and w) */
@@ -206,7 +203,7 @@ extern int g_local_rank; /* backend_gpu(local_rank) (backend_gpu.cu) */
  * the total runs slower than without; a table at the end of the run
  * (gpu_finish; the state is defined in backend_gpu.cu). */
 enum { P_MOTION, P_BBOX, P_SORT, P_PERMUTE, P_LIST, P_CLASSIFY, P_WALLS, P_FLOW, P_SEG, P_FILTER, P_BOUNDS_CHECK,
-       P_SHIFT, P_KGC, P_PACK, P_DEM_GRID, P_DEM_COUPLE, P_DEM_STEP, P_DEM_XCHG, P_DEM_REFRESH, P_NPROF };
+       P_SHIFT, P_KGC, P_DEM_GRID, P_DEM_COUPLE, P_DEM_STEP, P_DEM_XCHG, P_DEM_REFRESH, P_NPROF };
 struct gpu_prof {
     int on;
     cudaEvent_t a, b;

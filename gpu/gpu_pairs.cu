@@ -15,7 +15,6 @@ template <int F> __device__ __forceinline__ grid_view view_as(grid_view v)
 {
     v.form = F;
     v.tiled = 0, v.tile = NULL, v.tp = NULL; /* k_flow_tile sets its own */
-    v.packed = 0, v.pack = NULL;             /* gpu_flow_pass sets its own */
     if (F != GRID_NBR_LIST) v.nl = NULL;
     if (F != GRID_NBR_LIST16) v.nl16 = NULL;
     return v;
@@ -165,28 +164,8 @@ void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, int kgc, sel sl
 /* The flow rates of the owned particles in sl, and with segregation their
  * concentration coefficients (seg_coeffs reads only i's C and the shear
  * rate just computed). */
-/* The packed records (flow_pack_store) of the owned particles and ghosts,
- * made before each packed flow pass from the store as it stands. */
-template <int KGC> static const real *gpu_flow_pack(gpu_t *g, int dim)
+template <int RENORM, int KGC, int SHIFT, int F> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
 {
-    const size_t n = g->n + g->ng;
-    if (g->pack_cap < n) {
-        if (g->pack) CK(cudaFree(g->pack));
-        g->pack = (real *)dev_alloc(g->cap * FLOW_PACK_W(1) * sizeof(real)); /* 16-byte aligned */
-        g->pack_cap = g->cap;
-    }
-    particles_t p = g->d;
-    real *pk = g->pack;
-    prof_begin(g->st);
-    each(g, n, [=] __device__(size_t i) { flow_pack_store(i, &p, dim, KGC, pk); });
-    prof_end(g->st, P_PACK);
-    return pk;
-}
-
-template <int RENORM, int KGC, int SHIFT, int F, int PK = 0> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
-{
-    const real *pk = PK ? gpu_flow_pack<KGC>(g, s->flow.k.dim) : NULL;
-    if (PK) prof_begin(g->st); /* the flow line anew: the records have a line of their own */
     particles_t p = g->d;
     grid_view v = g->view;
     flow_ctx c = s->flow;
@@ -199,8 +178,7 @@ template <int RENORM, int KGC, int SHIFT, int F, int PK = 0> static void gpu_flo
         if (!sel_on(sl, i)) return;
         particles_t q = p;
         const int mat = q.kind[i] == KIND_MATERIAL;
-        grid_view w = view_as<F>(v);
-        if (PK) w.packed = 1, w.pack = pk;
+        const grid_view w = view_as<F>(v);
         real a = mat ? flow_rates_body(i, &q, &w, &c, lane, T, RENORM, KGC, SHIFT ? &sh : (const shift_ctx *)0,
                                        SHIFT ? (real)sdt.at(0) : R(0.0))
                      : R(0.0);
@@ -383,10 +361,7 @@ template <int RENORM, int KGC, int SHIFT> static void gpu_flow_form(sim_t *s, gp
     switch (g->view.form) {
     case GRID_NBR_LIST16: gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_LIST16>(s, g, sl); break;
     case GRID_NBR_CELLS: gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_CELLS>(s, g, sl); break;
-    default:
-        if (g->pack_on) gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_LIST, 1>(s, g, sl);
-        else gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_LIST>(s, g, sl);
-        break;
+    default: gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_LIST>(s, g, sl); break;
     }
 }
 

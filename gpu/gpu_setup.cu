@@ -179,8 +179,7 @@ static int gpu_form_fits(const gpu_t *g, const particles_t *h, size_t n)
 {
     size_t fr = 0, tot = 0;
     CK(cudaMemGetInfo(&fr, &tot));
-    const double base = (double)(part_store_bytes(h) + gpu_spare_bytes(h)) + GPU_SCRATCH_EST +
-                        (g->pack_on ? FLOW_PACK_W(1) * sizeof(real) : 0); /* the list's packed records */
+    const double base = (double)(part_store_bytes(h) + gpu_spare_bytes(h)) + GPU_SCRATCH_EST;
     const double room = 0.9 * (double)fr / (1.15 * (double)n + 1024.0);
     if (base + 4.0 * g->nl_est <= room) return GRID_NBR_LIST;
     if (base + 2.0 * g->nl_est <= room) return GRID_NBR_LIST16;
@@ -199,7 +198,6 @@ gpu_t *gpu_get(sim_t *s)
     CK(cudaStreamCreateWithFlags(&g->st, cudaStreamNonBlocking));
     prof.on = tuning_get()->gpu_profile;
     g->wskip = tuning_get()->gpu_wallskip;
-    g->pack_on = tuning_get()->gpu_pack;
     g->hcsr = s->hcsr;
     if (prof.on) {
         CK(cudaEventCreate(&prof.a));

@@ -65,25 +65,6 @@ HD_INLINE real sqrt_r(real x) { return sqrt(x); }
 
 #define DIM_MAX 3
 
-/* Four consecutive reals from a 16-byte-aligned address: on the GPU one
- * 16-byte load through the read-only cache (float4 in the single build, two
- * double2 in the double one), elsewhere four loads. The GPU's packed
- * neighbour records (flow_pack_store, src/physics/flow.h) are read so. */
-HD_INLINE void ld4(const real *a, real o[4])
-{
-#ifdef __CUDA_ARCH__
-#ifdef SPHSEG_SINGLE
-    const float4 v = __ldg((const float4 *)a);
-    o[0] = v.x, o[1] = v.y, o[2] = v.z, o[3] = v.w;
-#else
-    const double2 v0 = __ldg((const double2 *)a), v1 = __ldg((const double2 *)a + 1);
-    o[0] = v0.x, o[1] = v0.y, o[2] = v1.x, o[3] = v1.y;
-#endif
-#else
-    o[0] = a[0], o[1] = a[1], o[2] = a[2], o[3] = a[3];
-#endif
-}
-
 /* Neighbour loops read all of a neighbour's values before the distance test
  * on the GPU (its loads then go out together: +13 % on the 3D drum,
  * docs/gpu.md) and only within the support on the CPU (whose cell scan

@@ -20,8 +20,6 @@ typedef struct tuning {
     int gpu_ipc;      /* SPHSEG_GPU_IPC not 0: CUDA IPC between the GPUs of one node (default 1) */
     int gpu_graph;    /* SPHSEG_GPU_GRAPH not 0: a step between list builds on one rank is replayed as a CUDA
                        * graph (gpu/gpu_graph.cu; default 1) */
-    int gpu_pack;     /* SPHSEG_GPU_PACK not 0: the flow pass reads its neighbours from packed records
-                       * (flow_pack_store, src/physics/flow.h; the list form; default 1) */
     int cuda_aware;   /* SPHSEG_CUDA_AWARE not 0: device buffers to MPI where it reports CUDA support (default 1) */
     int skew_rank;    /* SPHSEG_BALANCE_SKEW=R:F: the load balance counts rank R's compute time F times (the
                        * cut moves, the answer does not beyond round-off); -1: not set (default); -2: set to

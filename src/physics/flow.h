@@ -215,46 +215,6 @@ HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6
     *volj = p->vol[j];
 }
 
-/* The GPU's packed flow pass (SPHSEG_GPU_PACK; docs/performance.md,
- * "Neighbour pass"): what flow_rates_body reads of a neighbour, as one record
- * of FLOW_PACK_W(kgc) reals a particle, four 16-byte groups (five with the
- * corrected gradient's B): x0 x1 x2 V | u0 u1 u2 kind | s0 s1 s2 s3 | s4 s5
- * B0 B1 | B2 B3 B4 B5. The store keeps each field in an array of its own, so
- * a neighbour's 13 to 20 values are as many loads from as many cache
- * sectors; the record is 4 or 5 loads from 2 or 3 sectors (single). The
- * values are the store's (kind exact as a real; B of a dummy, never read, 0),
- * so a packed pass gives the store's bits. */
-#define FLOW_PACK_W(kgc) ((kgc) ? 20 : 16)
-
-HD_INLINE void flow_pack_store(size_t i, const particles_t *p, int dim, int kgc, real *pack)
-{
-    real *r = pack + (size_t)FLOW_PACK_W(kgc) * i;
-    r[0] = p->x[0][i], r[1] = p->x[1][i], r[2] = dim == 3 ? p->x[2][i] : R(0.0), r[3] = p->vol[i];
-    for (int d = 0; d < 3; ++d) r[4 + d] = p->v[d][i];
-    r[7] = (real)p->kind[i];
-    for (int q = 0; q < 6; ++q) r[8 + q] = p->sig[q][i];
-    if (kgc)
-        for (int q = 0; q < 6; ++q) r[14 + q] = p->kind[i] == KIND_MATERIAL ? p->B[q][i] : R(0.0);
-}
-
-/* Neighbour j's record (flow_pack_store): x_ij and r^2 as grid_pair_xi
- * makes them, u_j, sigma_j, V_j, whether j is material, and with kgc B_j. */
-HD_INLINE real flow_unpack_j(const real *pack, size_t jj, int dim, int kgc, const real xi[3], real xij[3],
-                             real uj[3], real sj[6], real *volj, int *jmat, real Bj[6])
-{
-    const real *r = pack + (size_t)FLOW_PACK_W(kgc) * jj;
-    real a[4], b[4], c[4], d[4], e[4] = {0, 0, 0, 0};
-    ld4(r, a), ld4(r + 4, b), ld4(r + 8, c), ld4(r + 12, d);
-    if (kgc) ld4(r + 16, e);
-    for (int q = 0; q < 3; ++q) uj[q] = b[q];
-    for (int q = 0; q < 4; ++q) sj[q] = c[q];
-    sj[4] = d[0], sj[5] = d[1];
-    *volj = a[3];
-    *jmat = b[3] == (real)KIND_MATERIAL;
-    Bj[0] = d[2], Bj[1] = d[3], Bj[2] = e[0], Bj[3] = e[1], Bj[4] = e[2], Bj[5] = e[3];
-    return grid_pair_xj(dim, xi, a, xij);
-}
-
 /* Material particle i: acc (3.9 + g), dsig (C1) and gdot from the current
  * positions, velocities and stresses of i and its neighbours (material and
  * dummy). Returns |acc|. Lane `lane` of a team of nlanes (hd.h): lane 0
@@ -288,29 +248,18 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
         for (int q = 0; q < 6; ++q) Bi[q] = p->B[q][i];
     shift_sums ss;
     if (sh) shift_sums_zero(&ss);
-#ifdef __CUDA_ARCH__
-    const int pkd = g->packed; /* the GPU's packed pass (flow_pack_store) */
-#else
-    const int pkd = 0;
-#endif
     NBR_BEGIN_TJ(g, p, i, j, jj, jp, lane, nlanes)
         if (j == i) continue;
-        real uj[3], sj[6], volj = 0, xij[3], r2, Bp[6];
-        int jmat;
-        if (pkd) {
-            r2 = flow_unpack_j(g->pack, jj, k->dim, kgc, xi, xij, uj, sj, &volj, &jmat, Bp);
-            if (r2 >= k->support2) continue;
-        } else {
-            if (SPH_EARLY_LOADS) flow_load_j(jp, jj, uj, sj, &volj);
-            r2 = grid_pair_xi(k->dim, xi, jp->x, jj, xij);
-            if (r2 >= k->support2) continue;
-            if (!SPH_EARLY_LOADS) flow_load_j(jp, jj, uj, sj, &volj);
-            jmat = jp->kind[jj] == KIND_MATERIAL;
-        }
+        real uj[3], sj[6], volj = 0;
+        if (SPH_EARLY_LOADS) flow_load_j(jp, jj, uj, sj, &volj);
+        real xij[3];
+        real r2 = grid_pair_xi(k->dim, xi, jp->x, jj, xij);
+        if (r2 >= k->support2) continue;
+        if (!SPH_EARLY_LOADS) flow_load_j(jp, jj, uj, sj, &volj);
         const real r = sqrt_r(r2);
         real f = kernel_f(r, k->h, k->alpha);
         if (sh) shift_pair_add(&ss, sh, r, r2, f, volj, xij, uj, sj, ui, si);
-        if (renorm && jmat) seg_renorm_add(m, k->dim, -f * volj, xij);
+        if (renorm && jp->kind[jj] == KIND_MATERIAL) seg_renorm_add(m, k->dim, -f * volj, xij);
         real gradW[3] = {f * xij[0], f * xij[1], f * xij[2]};
         real uij[3] = {ui[0] - uj[0], ui[1] - uj[1], ui[2] - uj[2]};
         mom_velgrad_add(L, volj, uij, gradW);
@@ -319,8 +268,8 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
             if (c->alpha_av > 0) Pi = mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij);
         } else {
             if (c->stab == STAB_RIEMANN)
-                Pi = mom_riemann(c->eta_r, c->cs, c->rho, uij, xij, r2, !jmat);
-            if (c->bed_alpha > 0 && qi < R(1.0) && jmat) {
+                Pi = mom_riemann(c->eta_r, c->cs, c->rho, uij, xij, r2, jp->kind[jj] != KIND_MATERIAL);
+            if (c->bed_alpha > 0 && qi < R(1.0) && jp->kind[jj] == KIND_MATERIAL) {
                 const real qj = stress_static_q(sj, c->bed_k), w = R(1.0) - (qi > qj ? qi : qj);
                 if (w > 0) Pi += w * mom_av(c->bed_alpha, c->cs, k->h, c->rho, c->rho, uij, xij);
             }
@@ -334,7 +283,7 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
         if (c->p_back != 0) Pi += c->p_back;
         if (kgc) { /* V_j (sigma_i B_i + sigma_j B_j) grad W / rho, the dissipation on grad W */
             real Bj[6], gi[3], gj[3];
-            for (int q = 0; q < 6; ++q) Bj[q] = !jmat ? Bi[q] : pkd ? Bp[q] : jp->B[q][jj];
+            for (int q = 0; q < 6; ++q) Bj[q] = jp->kind[jj] == KIND_MATERIAL ? jp->B[q][jj] : Bi[q];
             linalg_sym_apply(Bi, gradW, gi);
             linalg_sym_apply(Bj, gradW, gj);
             mom_accel_add_kgc(a, c->rho * volj, si, sj, c->rho, Pi, gradW, gi, gj);

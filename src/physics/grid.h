@@ -50,13 +50,6 @@ typedef struct grid_view {
     int tiled; /* 1: tile and tp are set (a flag, not a pointer test: the compiler folds it) */
     const struct grid_tile *tile;
     const struct particles *tp;
-    /* The GPU's packed flow pass (SPHSEG_GPU_PACK, gpu/gpu_pairs.cu): what
-     * flow_rates_body reads of neighbour j, one record of FLOW_PACK_W reals
-     * a particle at pack (flow_pack_store, flow.h), read in 16-byte loads;
-     * packed 0: from the store. A flag the compiler folds, as tiled; the
-     * host's bodies never read it. */
-    int packed;
-    const real *pack;
 } grid_view;
 
 enum { GRID_NBR_LIST = 0, GRID_NBR_LIST16 = 1, GRID_NBR_CELLS = 2, GRID_NBR_ROWS = 3 };
@@ -219,15 +212,6 @@ HD_INLINE size_t grid_cell_index(const grid_view *g, int cx, int cy, int cz)
             }                                                                          \
         }                                                                              \
     }
-
-/* Pair geometry: x_ij = x_i - x_j and r^2 from both positions at hand. */
-HD_INLINE real grid_pair_xj(int dim, const real xi[3], const real xj[3], real xij[3])
-{
-    xij[0] = xi[0] - xj[0];
-    xij[1] = xi[1] - xj[1];
-    xij[2] = dim == 3 ? xi[2] - xj[2] : R(0.0);
-    return xij[0] * xij[0] + xij[1] * xij[1] + xij[2] * xij[2];
-}
 
 /* Pair geometry: x_ij = x_i - x_j and r^2, with x_i already at hand (read
  * once outside a neighbour loop). */

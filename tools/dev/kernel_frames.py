@@ -37,7 +37,7 @@ from tools import ROOT
 
 LIMIT = 32  # bytes of stack frame a per-step pair kernel may keep (0 today: docs/performance.md)
 # the per-step passes --check holds to LIMIT: the flow pass without the owned L (RENORM 0), the shift pass
-CHECKED = re.compile(r"^gpu_flow_pass<0, \d, \d, \d, \d>$|^gpu_shift_f<\d>$|^k_flow_tile<\d+, 0, \d, \d>$")
+CHECKED = re.compile(r"^gpu_flow_pass<0, \d, \d, \d>$|^gpu_shift_f<\d>$|^k_flow_tile<\d+, 0, \d, \d>$")
 
 
 def compile_report(precision, arch, log):
