@@ -71,52 +71,65 @@ template <class F> static void each(const gpu_t *g, size_t n, F f)
 #ifndef SPHSEG_TEAM_MINB
 #define SPHSEG_TEAM_MINB 4
 #endif
-#if SPHSEG_TEAM_MINB > 0
-#define TEAM_LB __launch_bounds__(BLOCK, SPHSEG_TEAM_MINB)
+/* The fused leapfrog flow pass's own bound (gpu_pairs.cu, gpu_flow_pass
+ * with SHIFT): in the double build its values take twice the registers, and
+ * at 128 it kept a 416-byte frame and spilled 804 bytes a thread
+ * (tools.dev.kernel_frames --precision double). At 3 blocks (168 registers)
+ * the 1.1e7 3D drum ran 1.35x (2 blocks: 1.22x), the 2D drums 1.02x; the
+ * predictor-corrector's passes, which spill 144 bytes, ran 0.89x at 3 and
+ * keep 4 (docs/performance.md, "The flow pass's code"). The single build
+ * keeps 4: its fused pass has no frame at 128. */
+#ifndef SPHSEG_FUSED_MINB
+#ifdef SPHSEG_SINGLE
+#define SPHSEG_FUSED_MINB SPHSEG_TEAM_MINB
 #else
-#define TEAM_LB
+#define SPHSEG_FUSED_MINB 3
+#endif
 #endif
 /* Teams (src/core/hd.h): T consecutive threads per particle, f(i, lane,
  * T), T a power of two dividing the warp, so that a team never straddles a
- * warp and a team past n is out as a whole. */
-template <int T, class F> __global__ void TEAM_LB k_team(size_t n, F f)
+ * warp and a team past n is out as a whole. MB: at least MB blocks of BLOCK
+ * threads a SM (the register bound; 0: nvcc's choice). */
+template <int T, int MB, class F> __global__ void __launch_bounds__(BLOCK, MB > 0 ? MB : 1) k_team(size_t n, F f)
 {
     size_t t = (size_t)blockIdx.x * blockDim.x + threadIdx.x, i = t / T;
     if (i < n) f(i, (int)(t % T), T);
 }
 
-template <int T, class F> static void th_team(const void *a, cudaStream_t st)
+template <int T, int MB, class F> static void th_team(const void *a, cudaStream_t st)
 {
     size_t n;
     unsigned grid;
     const F *f;
     nf_read(a, &n, &grid, &f);
-    k_team<T><<<grid, BLOCK, 0, st>>>(n, *f);
+    k_team<T, MB><<<grid, BLOCK, 0, st>>>(n, *f);
     CK(cudaGetLastError());
 }
 
-template <int T, class F> static void team_launch(const gpu_t *g, size_t n, F f)
+template <int T, int MB, class F> static void team_launch(const gpu_t *g, size_t n, F f)
 {
     const unsigned grid = (unsigned)((n * T + BLOCK - 1) / BLOCK);
     if (!g_defer) {
-        k_team<T><<<grid, BLOCK, 0, g->st>>>(n, f);
+        k_team<T, MB><<<grid, BLOCK, 0, g->st>>>(n, f);
         CK(cudaGetLastError());
         return;
     }
     const nf_blob<F> b(n, grid, f);
-    gpu_defer_push(th_team<T, F>, (const void *)k_team<T, F>, b.b, sizeof b.b);
+    gpu_defer_push(th_team<T, MB, F>, (const void *)k_team<T, MB, F>, b.b, sizeof b.b);
 }
 
-/* The neighbour-loop kernels, g->team threads per particle. */
-template <class F> static void team(const gpu_t *g, size_t n, F f)
+/* The neighbour-loop kernels, g->team threads per particle, at least MB
+ * blocks a SM (SPHSEG_TEAM_MINB unless given: the fused leapfrog pass's is
+ * SPHSEG_FUSED_MINB). */
+template <int MB = SPHSEG_TEAM_MINB, class F> static void team(const gpu_t *g, size_t n, F f)
 {
     if (n == 0) return;
     switch (g->team) {
-    case 1: team_launch<1>(g, n, f); break;
-    case 2: team_launch<2>(g, n, f); break;
-    case 4: team_launch<4>(g, n, f); break;
-    case 8: team_launch<8>(g, n, f); break;
-    default: team_launch<16>(g, n, f); break;
+    case 1: team_launch<1, MB>(g, n, f); break;
+    case 2: team_launch<2, MB>(g, n, f); break;
+    case 4: team_launch<4, MB>(g, n, f); break;
+    case 8: team_launch<8, MB>(g, n, f); break;
+    default: team_launch<16, MB>(g, n, f); break;
     }
 }
 

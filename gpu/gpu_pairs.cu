@@ -174,7 +174,7 @@ template <int RENORM, int KGC, int SHIFT, int F> static void gpu_flow_pass(sim_t
     seg_ctx sc = s->seg;
     const int seg = gpu_plans(s, HOOK_RATES, ST_SEG_COEFFS); /* not in windows: at their close */
     real *amag = g->amag;
-    team(g, g->n, [=] __device__(size_t i, int lane, int T) {
+    team<SHIFT ? SPHSEG_FUSED_MINB : SPHSEG_TEAM_MINB>(g, g->n, [=] __device__(size_t i, int lane, int T) {
         if (!sel_on(sl, i)) return;
         particles_t q = p;
         const int mat = q.kind[i] == KIND_MATERIAL;
