@@ -19,12 +19,20 @@ windows), measured on the dev machine before the change. Checked:
                 < 1.6e-6 (measured 8.1e-7: the windows' own error, first order
                 in K, tests/validate_conc_window.py).
 
+  set-up:       every 2D container scene of inputs/ (walls as data, some
+                through lattice sites: the hopper's 45-degree walls) lays out
+                the same material and dummy counts in both builds (the
+                single build once stopped on inputs/hopper_2d.yml: a site on a
+                wall's line, a float rounding behind it).
+
 --single is the single-precision binary (default $BUILD-single/sphseg:
 make PRECISION=single GPU=0 BUILD=build-single), which tests/run.sh builds
 first; a missing one fails the test.
 """
 import argparse
+import glob
 import os
+import re
 import subprocess
 import sys
 
@@ -43,6 +51,15 @@ def run(binary, out, every):
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit("%s failed (%d): %s" % (binary, r.returncode, r.stderr.strip()[-300:]))
+
+
+def counts(binary, scene, out):
+    """The set-up's material and dummy counts of one scene (one step, no output)."""
+    r = subprocess.run([binary, scene, "-o", out, "--overwrite", "--backend", "cpu", "-P", "Run:max_steps=1",
+                        "-P", "Output:snapshots=off"], capture_output=True, text=True)
+    m = re.search(r"(\d+) material \+ (\d+) dummy", r.stdout + r.stderr)
+    return (int(m.group(1)), int(m.group(2))) if r.returncode == 0 and m else "exit %d: %s" % (
+        r.returncode, (r.stderr.strip().splitlines() or [""])[-1][-160:])
 
 
 def main():
@@ -68,6 +85,14 @@ def main():
     check("single vs double: mid-chord speed", r["speed_err"] < 1e-5, "%.2e of the surface speed" % r["speed_err"])
     r = drum_compare.compare(d1, sa, [0.6])[0]
     check("single with windows vs double: C", r["C_rms"] < 1.6e-6, "rms %.2e (tol 1.6e-6)" % r["C_rms"])
+    for scene in sorted(glob.glob(os.path.join(HERE, "..", "inputs", "*_2d.yml"))):
+        with open(scene) as f:
+            if not re.search(r"^\s*type:\s*container", f.read(), re.M):
+                continue
+        cd = counts(a.sphseg, scene, os.path.join(a.work, "setup_double"))
+        cs = counts(a.single, scene, os.path.join(a.work, "setup_single"))
+        check("set-up of %s: single as double" % os.path.basename(scene), cd == cs and not isinstance(cd, str),
+              "material, dummies: double %s, single %s" % (cd, cs))
     print("all checks passed" if check.ok else "SOME CHECKS FAILED")
     sys.exit(0 if check.ok else 1)
 

@@ -64,10 +64,24 @@ static double ctr_depth(const wall_prim *q, double x, double y, int *within)
     return -(q->n[0] * dx + q->n[1] * dy);
 }
 
-/* The wall whose dummy the site (x, y) is, or 0: behind it by at most nl dr
- * within its extent, by wall_id_at's preference. */
+/* The walls' geometry is held in the build's precision (wall_prim: float
+ * in the single build), so a site that lies on a wall's line (the hopper's
+ * 45-degree walls pass through lattice sites) is found a rounding error
+ * behind it or in front. Within a few units of the last place of the
+ * coordinates a site counts as on the material's side, in either build:
+ * the single build then lays out what the double build does (inputs/
+ * hopper_2d.yml stopped with "reaches behind the walls" there). */
+static double ctr_on_line(const ctr_lattice *L, double x, double y)
+{
+    return 8.0 * (double)REAL_EPS * (fabs(x) + fabs(y) + L->dr);
+}
+
+/* The wall whose dummy the site (x, y) is, or 0: behind it by more than
+ * ctr_on_line and at most nl dr within its extent, by wall_id_at's
+ * preference. */
 static int ctr_dummy_wall(const sim_t *s, const ctr_lattice *L, double x, double y, double *depth)
 {
+    const double tol = ctr_on_line(L, x, y);
     int best = 0, best_claim = 0;
     double best_d = 0;
     for (int k = 0; k < L->nw; ++k) {
@@ -75,7 +89,7 @@ static int ctr_dummy_wall(const sim_t *s, const ctr_lattice *L, double x, double
         if (q->shape == WALL_CYLINDER) continue; /* its dummies are rings (ctr_place) */
         int within;
         double d = ctr_depth(q, x, y, &within);
-        if (!within || !(d > 0) || d > L->nl * L->dr) continue;
+        if (!within || !(d > tol) || d > L->nl * L->dr) continue;
         if (!best || q->claim > best_claim || (q->claim == best_claim && d > best_d))
             best = k + 1, best_claim = q->claim, best_d = d;
     }
@@ -90,8 +104,8 @@ typedef struct ctr_seg {
 } ctr_seg;
 
 /* Inside the walls: on the material's side of the nearest wall (of the
- * permanent ones and the gates), ties at a shared end broken towards
- * inside. */
+ * permanent ones and the gates) or on its line (ctr_on_line), ties at a
+ * shared end broken towards inside. */
 static int ctr_inside(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg, double x, double y)
 {
     double best = INFINITY, sign = -1;
@@ -111,7 +125,7 @@ static int ctr_inside(const sim_t *s, const ctr_lattice *L, const ctr_seg *seg, 
         if (dist < best - 1e-12 * L->dr) best = dist, sign = depth;
         else if (dist <= best + 1e-12 * L->dr && depth < sign) sign = depth; /* a tie: inside wins */
     }
-    return sign < 0;
+    return sign < 0 || (sign < ctr_on_line(L, x, y) && best < ctr_on_line(L, x, y));
 }
 
 /* Within dr/2 of a cylinder, on either side (r in (R - dr/2, R + dr/2]):
