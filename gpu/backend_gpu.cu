@@ -207,7 +207,8 @@ extern "C" const struct backend *backend_gpu(int local_rank)
     static const struct backend b = {"gpu",          gpu_prepare,    gpu_rates,  gpu_advance, gpu_conc_begin,
                                       gpu_conc_step,  gpu_save_start, gpu_filter, gpu_bounds,  gpu_check,
                                       gpu_to_host,    gpu_finish,     gpu_from_host, 3,
-                                      gpu_relist,     gpu_dem_hook,   gpu_dem_advance, gpu_step_begin};
+                                      gpu_relist,     gpu_dem_hook,   gpu_dem_advance, gpu_step_begin,
+                                      0 /* ghosts kept in every run */};
     g_local_rank = local_rank;
     return &b;
 }

@@ -14,17 +14,20 @@
  * reads the cell types of the cells next to its own, which read their
  * neighbours, so two columns of ghosts make every owned particle's class
  * exact without an exchange between the classification stages; every other
- * stage reads one support. The GPU backend keeps ghosts between neighbour
- * list builds and asks for 3 (halo_set_depth; struct backend.ghost_depth).
+ * stage reads one support. A backend that keeps its ghosts between
+ * neighbour list builds asks for 3 (halo_set_depth; struct
+ * backend.ghost_depth): the GPU, and the CPU but with DEM grains.
  * A rank exchanges with its neighbours: the ranks owning a lattice cell
  * within depth cells of one of its own (slabs at least depth columns wide:
  * the two next slabs).
  *
- * Per prepare (CPU): halo_exchange (migrate, then fresh ghosts carrying the
- * arrays the scene's stages read), the cell sort, halo_sorted (follow the
- * ghosts and the send lists through the sort); then halo_refresh of a few
- * arrays after the stages that change what neighbours read
- * (src/cpu/backend_cpu.c). The GPU backend exchanges only at its list builds and
+ * Per prepare (CPU): at a list build (and at every prepare with periodic
+ * axes or DEM grains) halo_exchange (migrate, then fresh ghosts carrying the
+ * arrays the scene's stages read), else halo_refresh of the moving fields
+ * and halo_set_origin; the cell sort, halo_sorted (follow the ghosts and the
+ * send lists through the sort); then halo_refresh of a few arrays after the
+ * stages that change what neighbours read (src/cpu/backend_cpu.c). The GPU
+ * backend exchanges only at its list builds and
  * refreshes with device-packed byte segments (halo_post_bytes) in between.
  * One rank uses none of this (sim_t.halo is NULL), unless an axis is
  * periodic: the images across a period are ghosts of the rank itself
@@ -101,9 +104,10 @@ typedef struct halo {
  * longest extent of the particles (chosen in halo_decompose).
  * arr[0..narr-1]: the arrays ghosts carry. */
 void halo_init(halo_t *h, int dim, real support, int method, int axis, const int *arr, int narr);
-/* Ghosts `depth` lattice cells deep (default HALO_DEPTH = 2; the GPU
- * backend, whose neighbour lists reach 2h + skin and are kept for many
- * steps, needs 3); METIS coarse cells as wide. Before halo_decompose. */
+/* Ghosts `depth` lattice cells deep (default HALO_DEPTH = 2, where they are
+ * made afresh at every prepare; a backend whose neighbour lists reach 2h +
+ * skin and are kept for many steps with their ghosts needs 3); METIS coarse
+ * cells as wide. Before halo_decompose. */
 void halo_set_depth(halo_t *h, int depth);
 /* Periodic axes: bit d of mask makes axis d periodic with the period
  * [lo[d], lo[d] + len[d]). After halo_set_depth, before halo_decompose or

@@ -35,7 +35,8 @@ void run_decompose(sim_t *s, const ckpt_run *rs)
     decomp_config c = {.dim = s->p.dim, .support = R(2.0) * s->seg.k.h,
                        .method = s->sc->parallel.method == PART_METIS ? HALO_METIS : HALO_SLABS,
                        .axis = s->sc->parallel.axis == AXIS_AUTO ? -1 : (int)s->sc->parallel.axis,
-                       .depth = s->be->ghost_depth, .arr = arr, .narr = parallel_ghost_arrays(s, arr),
+                       .depth = s->dem && s->be->ghost_depth_fresh ? s->be->ghost_depth_fresh : s->be->ghost_depth,
+                       .arr = arr, .narr = parallel_ghost_arrays(s, arr),
                        .periodic = per, .backend = s->be->name};
     for (int d = 0; d < 3; ++d) c.period[d] = s->flow.w.period[d];
     decomp_saved saved = {0};

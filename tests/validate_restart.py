@@ -33,12 +33,12 @@ bit-identical to the same run done straight through (DESIGN.md: checkpoints
              on 2 ranks from the same checkpoint it ends equal to the straight
              run to round-off (every field within 1e-8 of its scale, classes
              equal: tests/validate_mpi.py's tolerance). METIS: the checkpoint
-             records the coarse-cell width (2 on the CPU); set to 3 (a GPU
-             checkpoint) the restart partitions again and ends equal to
-             round-off; without it (older checkpoints) the cut is restored and
-             the run ends bit-identical. (Checkpoints edited with h5py are
-             sealed again, tests/ckpt_seal.py, else their checksum refuses
-             them.)
+             records the coarse-cell width (3, the ghost depth); set to 2 (a
+             checkpoint of a run with DEM grains, or of the CPU before it kept
+             its ghosts) the restart partitions again and ends equal to
+             round-off, and so does one without it (older checkpoints, read
+             as 2). (Checkpoints edited with h5py are sealed again,
+             tests/ckpt_seal.py, else their checksum refuses them.)
   chute:     a layer sliding down a 40-degree incline, periodic along x
              (inputs/column_2d.yml, Geometry:periodic x): stopped at step
              450 and restarted to 900 on one rank, bit-identical; on 3 ranks
@@ -133,7 +133,7 @@ TOL_DEM = 1e-10  # the grains across rank counts (tests/validate_mpi.py's)
 OK = True
 TOL = 1e-8
 AGREE = {"cpu": "bit-identical", "gpu": "equal to round-off"}  # what a restart must reach
-DEPTH = {"cpu": 2, "gpu": 3}  # ghost depth in lattice cells = METIS coarse-cell width
+DEPTH = {"cpu": 3, "gpu": 3}  # ghost depth in lattice cells = METIS coarse-cell width (the CPU's: 2 with DEM grains)
 
 
 def check(name, good, detail=""):
@@ -511,10 +511,11 @@ def test_dem_bad(args):
 def metis_width(args, a, c, over):
     """METIS parts are coarse cells as wide as the ghost depth, which the
     checkpoint records (/Decomposition CoarseCellWidth). A cut saved with
-    other coarse cells (a GPU run: depth 3) is made again at the restart, and
-    the run ends equal to the straight one to round-off; a checkpoint without
-    the attribute (older) is taken as the CPU's 2: restored on the CPU, cut
-    again on the GPU (depth 3)."""
+    other coarse cells (2: a run with DEM grains on the CPU, whose ghosts
+    are 2 cells deep) is made again at the restart, and the run ends equal
+    to the straight one to round-off; a checkpoint without the attribute
+    (older) is taken as 2 and cut again alike (the code below keeps the
+    bit-identical branch for a backend whose depth is 2)."""
     depth = DEPTH[args.backend]
     other = 3 if depth == 2 else 2
     for name, width in (("w%d" % other, other), ("nowidth", None)):

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "nbr.h"
 #include "nlist.h"
+#include "mpi/comm.h"
 #include "sim/sim.h"
 #include "sim/stages.h"
 
@@ -26,6 +27,9 @@ typedef struct cpu_state {
     nbr_grid grid;
     nlist list;
     int list_init;
+    int keep;             /* a halo's ghosts are kept between list builds (several ranks; not with periodic
+                           * axes, DEM grains or the cells: cpu_keeps_why) */
+    long exchanges, kept; /* prepares with a halo: ghosts made afresh; kept */
     long steps0; /* s->step at the first call (the list's log) */
     bound_work bw;
 } cpu_state;
@@ -48,6 +52,21 @@ static void cpu_refresh(sim_t *s, uint32_t fields)
     int arr[PART_NARRAYS], n = stage_arrays(&s->p, fields, 0, ptrs);
     for (int k = 0; k < n; ++k) arr[k] = part_array_find(&s->p, ptrs[k]);
     halo_refresh(s->halo, &s->p, arr, n);
+}
+
+/* The cells' lattice from the owned particles' lower corner over all ranks
+ * (halo_set_origin), as halo_exchange sets it and as one rank's grid_fit
+ * takes it at every sort: a prepare that keeps the ghosts bins on the
+ * lattice the one-rank run bins on, so that the cells, and so the sums'
+ * order, are the same (a lattice left at the last exchange's corner moved
+ * a rotating drum on two ranks by 2e-15 of the one-rank run in 8 steps). */
+static void cpu_origin(sim_t *s)
+{
+    const particles_t *p = &s->p;
+    real lo[3] = {R(1e30), R(1e30), R(1e30)};
+    for (size_t i = 0; i < p->n; ++i)
+        for (int d = 0; d < p->dim; ++d) lo[d] = p->x[d][i] < lo[d] ? p->x[d][i] : lo[d];
+    halo_set_origin(s->halo, lo);
 }
 
 /* What a hook's call brings to its stages. */
@@ -157,18 +176,34 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
 #pragma omp parallel for schedule(static)
         for (long i = 0; i < n; ++i) step_place((size_t)i, p, s->flow_on, &s->flow.w, &s->kin, c->t);
         return 1;
-    case ST_EXCHANGE: { /* the ghosts (made afresh: a halo's runs build the list at every prepare), the sort,
-                         * the Verlet list built or following the sort (nlist.h) */
+    case ST_EXCHANGE: { /* the ghosts (kept, or made afresh), the sort, the Verlet list built or following
+                         * the sort (nlist.h) */
         cpu_state *cs = cpu_of(s);
-        if (s->halo) halo_exchange(s->halo, p);
+        /* with a halo the ghosts are kept while the list can follow on every rank and no exact
+         * classification is due (as the GPU's, gpu_step.cu gpu_exchange): their moving fields
+         * refreshed; else migration and ghosts made afresh, and the list built */
+        int keep = 0;
+        if (cs->list_init && cs->keep) {
+            const int exact = c->classify == 2 || (s->hcsr && c->classify);
+            keep = comm_max((double)(exact || nlist_stale(&cs->list, p))) == 0;
+        }
+        if (keep) {
+            cpu_refresh(s, stage_schedule(stage_flags(s))->moving);
+            cpu_origin(s); /* the lattice at this prepare's corner, as an exchange sets it */
+        } else if (s->halo)
+            halo_exchange(s->halo, p);
         if (s->halo) nbr_set_period(&cs->grid, s->halo->per, s->halo->plo, s->halo->plen);
         nbr_build(&cs->grid, p, R(2.0) * s->seg.k.h, s->halo ? s->halo->origin : NULL);
         if (s->halo) halo_sorted(s->halo, cs->grid.perm, p->n + p->ng);
-        if (!cs->list_init) {
-            nlist_init(&cs->list, p, (double)s->seg.k.h, (double)s->seg.k.dr, s->sc->run.list_skin);
+        if (!cs->list_init) { /* where ghosts are made at every prepare (cs->keep 0), the list is read before
+                               * anything moves: no skin but a hair (NLIST_SKIN_FRESH) */
+            nlist_init(&cs->list, p, (double)s->seg.k.h, (double)s->seg.k.dr,
+                       s->halo && (s->halo->per || s->dem) ? NLIST_SKIN_FRESH : s->sc->run.list_skin);
             cs->list_init = 1, cs->steps0 = s->step;
+            cs->keep = s->halo && !s->halo->per && !s->dem && cs->list.on;
         }
-        nlist_update(&cs->list, &cs->grid, p, s->halo != NULL);
+        nlist_update(&cs->list, &cs->grid, p, !s->halo ? NLIST_AUTO : keep ? NLIST_FOLLOW : NLIST_BUILD);
+        if (s->halo) cs->exchanges += !keep, cs->kept += keep;
         return 1;
     }
     case ST_CLASSIFY: /* the ghosts an owned particle reads hold their whole support here and
@@ -253,9 +288,10 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
 static void cpu_hook(sim_t *s, int hook, cpu_call *c)
 {
     const stage_sched *m = stage_schedule(stage_flags(s));
-    for (int k = 0; k < m->n[hook]; ++k) {
+    for (int k = 0; k < m->n[hook]; ++k) { /* the refreshes of a run that keeps its ghosts ([1]) reach past
+                                             * ST_EXCHANGE; keep is set at the first one */
         const int id = m->ids[hook][k];
-        if (cpu_stage(s, id, c)) cpu_refresh(s, m->refresh[0][id]);
+        if (cpu_stage(s, id, c)) cpu_refresh(s, m->refresh[s->be_data && cpu_of(s)->keep][id]);
     }
 }
 
@@ -355,6 +391,22 @@ static void cpu_from_host(sim_t *s)
     if (s->be_data) nlist_forget(&cpu_of(s)->list);
 }
 
+/* Why a run with a halo keeps its ghosts between list builds or not (the
+ * end's log line). Periodic axes make them afresh at every prepare: an
+ * exchange wraps the owned particles into the period, which moves their
+ * positions at round-off (x - L against an image's x + L), so its steps
+ * must not depend on the list's builds, which differ between a run and its
+ * restart and between rank counts (tried: 2 and 3 ranks of the periodic
+ * chutes of tests/validate_mpi.py left the one-rank run by 1e-15). DEM
+ * grains divide among the ranks at every coupling (src/dem/dem_halo.c). */
+static const char *cpu_keeps_why(const sim_t *s, const cpu_state *c)
+{
+    if (c->keep) return "kept while the list follows the sort";
+    if (s->halo->per) return "periodic axes: afresh at every prepare, wrapping into the period";
+    if (s->dem) return "DEM grains: afresh at every prepare";
+    return "the cells: afresh at every prepare";
+}
+
 static void cpu_finish(sim_t *s)
 {
     cpu_state *c = (cpu_state *)s->be_data;
@@ -367,8 +419,11 @@ static void cpu_finish(sim_t *s)
             "neighbour list %zu, classification %zu), rank 0", part_store_bytes(&s->p), __builtin_popcount(s->p.fields),
             __builtin_popcount(part_fields_all()), cl + vl + bc, cl, vl, bc);
     if (c->list.on)
-        message("cpu: %ld neighbour-list builds, %ld sorts followed, in %ld steps (Run:list_skin %.3g h), rank 0",
+        message("cpu: %ld neighbour-list builds, %ld sorts followed, in %ld steps (skin %.3g h), rank 0",
                 c->list.builds, c->list.follows, s->step - c->steps0, c->list.skin / (double)s->seg.k.h);
+    if (s->halo)
+        message("cpu: ghosts made afresh at %ld prepares, kept at %ld (%s), rank 0", c->exchanges, c->kept,
+                cpu_keeps_why(s, c));
     nbr_free(&c->grid);
     nlist_free(&c->list);
     bound_free(&c->bw);
@@ -389,8 +444,8 @@ const struct backend *backend_cpu(void)
 {
     static const struct backend b = {"cpu",          cpu_prepare,   cpu_rates,      cpu_advance, cpu_conc_begin,
                                       cpu_conc_step,  cpu_save_start, cpu_filter,     cpu_bounds,  cpu_check,
-                                      cpu_to_host,    cpu_finish,     cpu_from_host,  HALO_DEPTH,
+                                      cpu_to_host,    cpu_finish,     cpu_from_host,  3 /* ghosts kept */,
                                       NULL /* relist: every prepare sorts */, cpu_dem_couple, cpu_dem_advance,
-                                      NULL /* step_begin: no graphs */};
+                                      NULL /* step_begin: no graphs */, HALO_DEPTH /* with DEM grains */};
     return &b;
 }

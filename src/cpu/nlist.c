@@ -49,8 +49,10 @@ void nlist_init(nlist *L, const particles_t *p, double h, double dr, double skin
     if (L->on && need > 0.5 * have) L->on = 0, why = "the list would not fit in half the free memory";
     if (L->on && 2.0 * (double)(p->n + p->ng) >= 4294967295.0) L->on = 0, why = "4-byte entries: too many particles";
     if (L->on)
-        message("cpu: neighbour pass: Verlet list within 2h + %.3g h (Run:list_skin), about %u entries a particle "
-                "(sized at the first build), %.1f MiB", skin_h, est, need / 1048576.0);
+        message("cpu: neighbour pass: Verlet list within 2h + %.3g h (%s), about %u entries a particle "
+                "(sized at the first build), %.1f MiB", skin_h,
+                skin_h == NLIST_SKIN_FRESH ? "built at every prepare: a halo's, no skin" : "Run:list_skin", est,
+                need / 1048576.0);
     else
         message("cpu: neighbour pass: the cells (%s; the list would take %.1f MiB, %.1f MiB free)", why,
                 need / 1048576.0, have / 1048576.0);
@@ -134,12 +136,25 @@ static int nlist_moved(const nlist *L, const particles_t *p, const size_t *perm)
     return moved;
 }
 
+/* Does j (old index, of the sort g made) come after i in the cell scan of
+ * a store whose owned and ghost particles share cells: by cell, then by
+ * the rank within it (nbr.c: periodic image last, global ID). */
+static int nlist_after(const nbr_grid *g, unsigned j, unsigned i)
+{
+    return g->key[j] != g->key[i] ? g->key[j] > g->key[i] : g->rank[j] > g->rank[i];
+}
+
 /* The rows follow the sort: row k is the old row of perm[k], its entries
  * renamed to the new indices and put in ascending order (the cell scan's
  * order where there are no ghosts: nlist.h), by an insertion sort (a sort
- * moves few particles past each other). */
-static void nlist_follow(nlist *L, const size_t *perm, int dim)
+ * moves few particles past each other). With ghosts kept (n_owned < L->n),
+ * a row's owned entries and its ghost entries, each ascending, are then
+ * merged by cell and rank (nlist_after): a particle that moved across a
+ * slab bound since the exchange shares its cell with particles of the
+ * other kind, and the one-rank run meets that cell's particles by rank. */
+static void nlist_follow(nlist *L, const nbr_grid *g, int dim, size_t n_owned)
 {
+    const size_t *perm = g->perm;
     const long nt = (long)L->n;
     const size_t cap = L->cap;
     unsigned *inv = L->inv, *src = L->nl, *dst = L->nl2, *cnt = L->cnt, *cnt2 = L->cnt2;
@@ -159,13 +174,21 @@ static void nlist_follow(nlist *L, const size_t *perm, int dim)
             unsigned down = 0; /* entries below the one before them (a gather loop, then the sort if any) */
             for (unsigned e = 0; e < c; ++e) b[e] = inv[a[e]];
             for (unsigned e = 1; e < c; ++e) down |= b[e] < b[e - 1];
-            if (!down) continue;
-            for (unsigned e = 1; e < c; ++e) {
-                const unsigned v = b[e];
-                unsigned m = e;
-                for (; m > 0 && b[m - 1] > v; --m) b[m] = b[m - 1];
-                b[m] = v;
-            }
+            if (down)
+                for (unsigned e = 1; e < c; ++e) {
+                    const unsigned v = b[e];
+                    unsigned m = e;
+                    for (; m > 0 && b[m - 1] > v; --m) b[m] = b[m - 1];
+                    b[m] = v;
+                }
+            unsigned s = 0; /* the first ghost entry */
+            while (s < c && b[s] < n_owned) ++s;
+            if (s == 0 || s == c || !nlist_after(g, (unsigned)perm[b[s - 1]], (unsigned)perm[b[s]])) continue;
+            /* a ghost before the last owned entry: merge the two runs into the old row (read above), back */
+            unsigned *t = (unsigned *)a, u = 0, v = s, e = 0; /* (row o is read by this k alone) */
+            while (u < s || v < c)
+                t[e++] = v >= c || (u < s && !nlist_after(g, (unsigned)perm[b[u]], (unsigned)perm[b[v]])) ? b[u++] : b[v++];
+            memcpy(b, t, c * sizeof(unsigned));
         }
     }
     L->nl = dst, L->nl2 = src, L->cnt = cnt2, L->cnt2 = cnt;
@@ -176,14 +199,38 @@ static void nlist_follow(nlist *L, const size_t *perm, int dim)
     L->follows++;
 }
 
-void nlist_update(nlist *L, nbr_grid *g, particles_t *p, int rebuild)
+int nlist_stale(const nlist *L, const particles_t *p)
+{
+    if (!L->on || !L->valid || p->n + p->ng != L->n) return 1;
+    const double lim = 0.25 * (1 - 1e-6) * L->skin * L->skin; /* nlist_moved's */
+    const long n = (long)p->n;
+    const int dim = p->dim;
+    int moved = 0;
+#pragma omp parallel for schedule(static) reduction(max : moved)
+    for (long i = 0; i < n; ++i) {
+        double d2 = 0;
+        for (int d = 0; d < dim; ++d) {
+            const double dx = (double)p->x[d][i] - (double)L->xb[d][i];
+            d2 += dx * dx;
+        }
+        if (d2 > lim) moved = 1;
+    }
+    return moved;
+}
+
+void nlist_update(nlist *L, nbr_grid *g, particles_t *p, int mode)
 {
     grid_view *v = &g->view;
     v->form = GRID_NBR_LIST, v->nl = v->ncnt = NULL;
     if (!L->on) return;
     const size_t nt = p->n + p->ng;
-    if (rebuild || p->ng || !L->valid || nt != L->n || nlist_moved(L, p, g->perm)) nlist_build(L, g, p);
-    else nlist_follow(L, g->perm, p->dim);
+    int build = mode == NLIST_BUILD;
+    if (mode == NLIST_AUTO) build = p->ng || !L->valid || nt != L->n || nlist_moved(L, p, g->perm);
+    if (mode == NLIST_FOLLOW && (!L->valid || nt != L->n))
+        error_exit(1, "nlist_update: asked to follow a list of %zu particles that does not match the store (%zu)",
+                   L->n, nt);
+    if (build) nlist_build(L, g, p);
+    else nlist_follow(L, g, p->dim, p->n);
     v->form = GRID_NBR_ROWS;
     v->nl = L->nl, v->ncnt = L->cnt;
     v->nl_stride = L->cap, v->nl_cap = L->cap;

@@ -14,13 +14,25 @@
  * before anything else (r^2 >= support2), so a list that holds every
  * particle within 2h, in the scan's order, gives the scan's sums bit for bit.
  * It is built again (from the cells that the ball of 2h + skin touches,
- * grid_list_fill_reach) when a particle has moved skin/2 since the last build, when the store changed outside a sort (a drain,
- * a load balance: nlist_forget), and at every prepare of a run with a halo
- * (several ranks, periodic axes), whose ghosts are made afresh at every
- * prepare. */
+ * grid_list_fill_reach) when a particle has moved skin/2 since the last
+ * build, when the store changed outside a sort (a drain, a load balance:
+ * nlist_forget), and with a halo at every prepare that makes the ghosts
+ * afresh: on several ranks, when an owned particle of any rank has moved
+ * skin/2 (nlist_stale) or an exact classification is due, the ghosts kept
+ * in between (their rows follow the sort: nlist_follow merges a row's owned
+ * and ghost entries by cell and rank); with periodic axes or DEM grains at
+ * every prepare (src/cpu/backend_cpu.c, cpu_keeps_why). */
 #ifndef SPHSEG_NLIST_H
 #define SPHSEG_NLIST_H
 #include "nbr.h"
+
+/* The skin, in units of h, of a list built at every prepare (a run with a
+ * halo): the stages between two prepares read it at the positions it was
+ * built at (sim/integrate.c: every advance is followed by a prepare before
+ * any neighbour loop), so it needs no skin, only a margin over the rounding
+ * of r^2 against the support's square (1e-3 h: 5e-4 of 2h, far above a
+ * float's 6e-8). */
+#define NLIST_SKIN_FRESH 1e-3
 
 typedef struct nlist {
     int on;                 /* 1: the list (SPHSEG_CPU_NBR unset or list, and it fits); 0: the cell scan */
@@ -39,9 +51,16 @@ typedef struct nlist {
  * list's memory against the machine's free memory) and name it in the log. */
 void nlist_init(nlist *L, const particles_t *p, double h, double dr, double skin_h);
 /* After nbr_build of g (g->perm: the old index now at k): build the list,
- * or follow the sort, and set it in g->view. rebuild: the ghosts were made
- * afresh. */
-void nlist_update(nlist *L, nbr_grid *g, particles_t *p, int rebuild);
+ * or follow the sort, and set it in g->view. mode NLIST_AUTO (no halo):
+ * build where a particle has moved skin/2 or the store changed, else
+ * follow; NLIST_BUILD: the ghosts were made afresh; NLIST_FOLLOW: the
+ * ghosts were kept (the ranks agreed on it: nlist_stale). */
+enum { NLIST_AUTO, NLIST_BUILD, NLIST_FOLLOW };
+void nlist_update(nlist *L, nbr_grid *g, particles_t *p, int mode);
+/* Before a prepare's sort: 1 when the list cannot be followed (off, never
+ * built, the store changed, or an owned particle has moved skin/2 since
+ * the build), so that the ghosts must be made afresh and the list built. */
+int nlist_stale(const nlist *L, const particles_t *p);
 /* The store changed outside a sort (drain, load balance, restart): the next
  * update builds. */
 void nlist_forget(nlist *L);

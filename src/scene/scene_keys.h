@@ -164,7 +164,8 @@ SECTION("Run", run, scene_run)
       "ranks) and longer lists (0.1 was the fastest on one GPU and on two: docs/performance.md); at "
       "most 1 (ghosts are 3 cells of 2h "
       "deep); on the GPU results differ at round-off only; the CPU backend's list gives the same bits for any skin "
-      "(on several ranks or periodic axes it is built at every stage); default 0.1")
+      "(on several ranks its builds are exchanges, ghosts kept in between; with periodic axes or DEM grains it is "
+      "built at every stage); default 0.1")
     KS("Run", run, scene_run, backend, 0, CYAML_UNLIMITED, "auto",
       "\"auto\" (default: gpu when built with CUDA and a device is present) | \"cpu\" | \"gpu\"")
     KE("Run", run, scene_run, preset, enum run_preset, run_presets, "none",

@@ -72,9 +72,9 @@ struct backend {
      * between ranks): take them over; prepare follows. A no-op on the CPU. */
     void (*from_host)(struct sim *s);
     /* Ghost depth in lattice cells of 2h that the backend needs on several
-     * ranks (mpi/halo.h): 2 on the CPU (exchanges every prepare); 3 on the
-     * GPU, whose neighbour lists and ghosts are kept between builds while
-     * particles move up to a skin. */
+     * ranks (mpi/halo.h): 3, where the neighbour lists and the ghosts are
+     * kept between builds while particles move up to a skin (the GPU; the
+     * CPU but for ghost_depth_fresh below). */
     int ghost_depth;
     /* Drop the neighbour lists kept between prepares, so that the next
      * prepare builds them afresh (the GPU's Verlet lists); NULL where every
@@ -97,6 +97,11 @@ struct backend {
      * the step's launches until then and replays them as one CUDA graph
      * (gpu/gpu_graph.cu); NULL on the CPU. */
     void (*step_begin)(struct sim *s);
+    /* The ghost depth of a run whose ghosts this backend makes afresh at
+     * every prepare: the CPU's runs with DEM grains (src/dem/dem_halo.c
+     * divides the grains at every coupling), 2 = HALO_DEPTH; 0 where the
+     * backend keeps its ghosts in every run (the GPU). */
+    int ghost_depth_fresh;
 };
 
 /* The concentration equation in windows of K flow steps (Segregation:every,
