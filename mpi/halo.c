@@ -426,6 +426,8 @@ static void halo_corner(halo_t *h, const particles_t *p, real *hi)
     halo_set_origin(h, lo);
 }
 
+void halo_reorigin(halo_t *h, const particles_t *p) { halo_corner(h, p, NULL); }
+
 void halo_set_origin(halo_t *h, const real lo_local[3])
 {
     real lo[3] = {lo_local[0], lo_local[1], lo_local[2]};

@@ -24,7 +24,7 @@
  * Per prepare (CPU): at a list build (and at every prepare with periodic
  * axes or DEM grains) halo_exchange (migrate, then fresh ghosts carrying the
  * arrays the scene's stages read), else halo_refresh of the moving fields
- * and halo_set_origin; the cell sort, halo_sorted (follow the ghosts and the
+ * and halo_reorigin; the cell sort, halo_sorted (follow the ghosts and the
  * send lists through the sort); then halo_refresh of a few arrays after the
  * stages that change what neighbours read (src/cpu/backend_cpu.c). The GPU
  * backend exchanges only at its list builds and
@@ -187,6 +187,10 @@ int halo_cuda_aware(void);
 /* The decisions' view of h (halo_geom.h), pointing at h's arrays; a device
  * copy points its arrays at device memory instead. */
 void halo_geom_of(const halo_t *h, halo_geom *g);
+/* Collective. The lattice origin from the owned particles' lower corner
+ * over all ranks, as halo_exchange takes it: a backend that keeps its
+ * ghosts bins at each sort on the lattice one rank would (the CPU). */
+void halo_reorigin(halo_t *h, const particles_t *p);
 /* Collective. The lattice origin from every rank's lower corner lo (this
  * rank's owned particles; periodic axes keep theirs): what halo_exchange
  * does first, for a backend that reduces its particles itself. */

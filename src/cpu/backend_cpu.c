@@ -54,21 +54,6 @@ static void cpu_refresh(sim_t *s, uint32_t fields)
     halo_refresh(s->halo, &s->p, arr, n);
 }
 
-/* The cells' lattice from the owned particles' lower corner over all ranks
- * (halo_set_origin), as halo_exchange sets it and as one rank's grid_fit
- * takes it at every sort: a prepare that keeps the ghosts bins on the
- * lattice the one-rank run bins on, so that the cells, and so the sums'
- * order, are the same (a lattice left at the last exchange's corner moved
- * a rotating drum on two ranks by 2e-15 of the one-rank run in 8 steps). */
-static void cpu_origin(sim_t *s)
-{
-    const particles_t *p = &s->p;
-    real lo[3] = {R(1e30), R(1e30), R(1e30)};
-    for (size_t i = 0; i < p->n; ++i)
-        for (int d = 0; d < p->dim; ++d) lo[d] = p->x[d][i] < lo[d] ? p->x[d][i] : lo[d];
-    halo_set_origin(s->halo, lo);
-}
-
 /* What a hook's call brings to its stages. */
 typedef struct cpu_call {
     double t;       /* prepare, the DEM coupling: the time */
@@ -189,7 +174,10 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         }
         if (keep) {
             cpu_refresh(s, stage_schedule(stage_flags(s))->moving);
-            cpu_origin(s); /* the lattice at this prepare's corner, as an exchange sets it */
+            /* the lattice at this prepare's corner, as an exchange takes it and one rank's grid_fit at
+             * every sort: the cells, and so the sums' order, are the one-rank run's (left at the last
+             * exchange's corner, a rotating drum on two ranks left the one-rank run by 2e-15 in 8 steps) */
+            halo_reorigin(s->halo, p);
         } else if (s->halo)
             halo_exchange(s->halo, p);
         if (s->halo) nbr_set_period(&cs->grid, s->halo->per, s->halo->plo, s->halo->plen);

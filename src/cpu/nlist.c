@@ -115,17 +115,18 @@ static void nlist_build(nlist *L, const nbr_grid *g, particles_t *p)
     L->builds++;
 }
 
-/* Has a particle moved skin/2 since the build? perm: the sort's (the old
- * index now at k), xb by old index. */
-static int nlist_moved(const nlist *L, const particles_t *p, const size_t *perm)
+/* Has one of particles [0, n) moved skin/2 since the build? perm: the
+ * sort's (the old index now at k; xb by old index), or NULL before a sort
+ * (xb by the index now). */
+static int nlist_moved(const nlist *L, const particles_t *p, const size_t *perm, size_t n)
 {
     const double lim = 0.25 * (1 - 1e-6) * L->skin * L->skin; /* a hair inside skin/2: rounding */
-    const long nt = (long)L->n;
+    const long nt = (long)n;
     const int dim = p->dim;
     int moved = 0;
 #pragma omp parallel for schedule(static) reduction(max : moved)
     for (long k = 0; k < nt; ++k) {
-        const size_t o = perm[k];
+        const size_t o = perm ? perm[k] : (size_t)k;
         double d2 = 0;
         for (int d = 0; d < dim; ++d) {
             const double dx = (double)p->x[d][k] - (double)L->xb[d][o];
@@ -201,21 +202,7 @@ static void nlist_follow(nlist *L, const nbr_grid *g, int dim, size_t n_owned)
 
 int nlist_stale(const nlist *L, const particles_t *p)
 {
-    if (!L->on || !L->valid || p->n + p->ng != L->n) return 1;
-    const double lim = 0.25 * (1 - 1e-6) * L->skin * L->skin; /* nlist_moved's */
-    const long n = (long)p->n;
-    const int dim = p->dim;
-    int moved = 0;
-#pragma omp parallel for schedule(static) reduction(max : moved)
-    for (long i = 0; i < n; ++i) {
-        double d2 = 0;
-        for (int d = 0; d < dim; ++d) {
-            const double dx = (double)p->x[d][i] - (double)L->xb[d][i];
-            d2 += dx * dx;
-        }
-        if (d2 > lim) moved = 1;
-    }
-    return moved;
+    return !L->on || !L->valid || p->n + p->ng != L->n || nlist_moved(L, p, NULL, p->n);
 }
 
 void nlist_update(nlist *L, nbr_grid *g, particles_t *p, int mode)
@@ -225,7 +212,7 @@ void nlist_update(nlist *L, nbr_grid *g, particles_t *p, int mode)
     if (!L->on) return;
     const size_t nt = p->n + p->ng;
     int build = mode == NLIST_BUILD;
-    if (mode == NLIST_AUTO) build = p->ng || !L->valid || nt != L->n || nlist_moved(L, p, g->perm);
+    if (mode == NLIST_AUTO) build = p->ng || !L->valid || nt != L->n || nlist_moved(L, p, g->perm, L->n);
     if (mode == NLIST_FOLLOW && (!L->valid || nt != L->n))
         error_exit(1, "nlist_update: asked to follow a list of %zu particles that does not match the store (%zu)",
                    L->n, nt);
