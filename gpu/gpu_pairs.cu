@@ -180,7 +180,7 @@ template <int RENORM, int KGC, int SHIFT, int F> static void gpu_flow_pass(sim_t
         const int mat = q.kind[i] == KIND_MATERIAL;
         const grid_view w = view_as<F>(v);
         real a = mat ? flow_rates_body(i, &q, &w, &c, lane, T, RENORM, KGC, SHIFT ? &sh : (const shift_ctx *)0,
-                                       SHIFT ? (real)sdt.at(0) : R(0.0))
+                                       SHIFT ? (real)sdt.at(0) : R(0.0), (const real *)0)
                      : R(0.0);
         if (lane != 0) return;
         amag[i] = a;
@@ -279,7 +279,8 @@ __global__ void __launch_bounds__(32 * T, 512 / (32 * T)) k_flow_tile(const __gr
         if (i >= a0 + n0 || !sel_on(A.sl, i)) continue;
         particles_t q = p;
         if (q.kind[i] != KIND_MATERIAL) continue;
-        const real a = flow_rates_body(i, &q, &wt, &c, lane, T, RENORM, KGC, SHIFT ? &sh : (const shift_ctx *)0, A.sdt);
+        const real a = flow_rates_body(i, &q, &wt, &c, lane, T, RENORM, KGC, SHIFT ? &sh : (const shift_ctx *)0, A.sdt,
+                                       (const real *)0);
         if (lane != 0) continue;
         A.amag[i] = a;
         if (A.seg) seg_coeffs(i, &q, &A.sc);

@@ -633,6 +633,66 @@ static void test_renorm_fused(void **st)
     assert_true(nmat == 81 && nbent > 0);
 }
 
+/* Flow:bed_damping's weight made once a particle (flow_bed_q, the CPU's
+ * cpu_bed_q) gives the flow rates the bits of the weight made per pair: a
+ * scrambled block whose stresses lie inside the static cone, past it and in
+ * tension, riemann with the damping on. The damping changes the rates (the
+ * path is taken) and an array shifted by one particle changes them too (the
+ * array is read at the neighbour's index). */
+static void test_bed_q_array(void **st)
+{
+    tu_fx *f = *st;
+    flow_ctx c = make_ctx();
+    c.stab = STAB_RIEMANN, c.eta_r = 3, c.alpha_av = 0, c.bed_alpha = 1, c.bed_k = (real)0.5;
+    tu_block2d(&f->p, 9, 9, DR, 3, 3);
+    scramble(&f->p, 5);
+    particles_t *p = &f->p;
+    unsigned seed = 17;
+    int inside = 0, past = 0;
+    for (size_t k = 0; k < p->n; ++k) { /* shear from none to twice the diagonal's */
+        const double sh = (double)(k % 5) * 0.25;
+        for (int q = 0; q < 3; ++q) p->sig[q][k] = (real)(-1000 + 100 * rnd(&seed));
+        for (int q = 3; q < 6; ++q) p->sig[q][k] = (real)(1000 * sh * rnd(&seed));
+        if (k % 13 == 0)
+            for (int q = 0; q < 3; ++q) p->sig[q][k] = 100; /* tension: q = 1 */
+    }
+    fx_list(f, &c);
+    real *bq = malloc(p->n * sizeof *bq), *bq1 = malloc(p->n * sizeof *bq1);
+    assert_non_null(bq);
+    assert_non_null(bq1);
+    for (size_t k = 0; k < p->n; ++k) {
+        bq[k] = flow_bed_q(k, p, &c);
+        if (p->kind[k] == KIND_MATERIAL) inside += bq[k] < 1, past += bq[k] >= 1;
+        else assert_true(bq[k] == 1);
+    }
+    for (size_t k = 0; k < p->n; ++k) bq1[k] = bq[(k + 1) % p->n];
+    assert_true(inside > 10 && past > 10);
+    int ndamped = 0, nshifted = 0, nmat = 0;
+    flow_ctx c0 = c;
+    c0.bed_alpha = 0;
+    for (size_t k = 0; k < p->n; ++k) {
+        if (p->kind[k] != KIND_MATERIAL) continue;
+        real acc[3], ds[6], gd, accn[3];
+        flow_rates_body(k, p, &f->g.view, &c, 0, 1, 0, 0, NULL, 0, NULL);
+        for (int a = 0; a < 3; ++a) acc[a] = p->acc[a][k];
+        for (int q = 0; q < 6; ++q) ds[q] = p->dsig[q][k];
+        gd = p->gdot[k];
+        flow_rates_body(k, p, &f->g.view, &c, 0, 1, 0, 0, NULL, 0, bq);
+        for (int a = 0; a < 3; ++a) assert_true(p->acc[a][k] == acc[a]);
+        for (int q = 0; q < 6; ++q) assert_true(p->dsig[q][k] == ds[q]);
+        assert_true(p->gdot[k] == gd);
+        flow_rates_body(k, p, &f->g.view, &c, 0, 1, 0, 0, NULL, 0, bq1);
+        for (int a = 0; a < 3; ++a) accn[a] = p->acc[a][k];
+        nshifted += accn[0] != acc[0] || accn[1] != acc[1];
+        flow_rates_body(k, p, &f->g.view, &c0, 0, 1, 0, 0, NULL, 0, NULL);
+        ndamped += p->acc[0][k] != acc[0] || p->acc[1][k] != acc[1];
+        nmat++;
+    }
+    assert_true(nmat == 81 && ndamped > 20 && nshifted > 20);
+    free(bq);
+    free(bq1);
+}
+
 static void test_advance(void **st)
 {
     tu_fx *f = *st;
@@ -816,6 +876,7 @@ int main(void)
         TU_FX_TEST(test_advance),               TU_FX_TEST(test_drum_dummy_stress),
         TU_FX_TEST(test_dummy_above_surface),   cmocka_unit_test(test_drum_wall_motion),
         cmocka_unit_test(test_box_translation),       cmocka_unit_test(test_drum3d_walls),
+        TU_FX_TEST(test_bed_q_array),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

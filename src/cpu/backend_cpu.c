@@ -31,6 +31,8 @@ typedef struct cpu_state {
                            * axes, DEM grains or the cells: cpu_keeps_why) */
     long exchanges, kept; /* prepares with a halo: ghosts made afresh; kept */
     long steps0; /* s->step at the first call (the list's log) */
+    real *bq;    /* Flow:bed_damping: flow_bed_q of the store and its ghosts, made before each flow pass */
+    size_t bq_cap;
     bound_work bw;
 } cpu_state;
 
@@ -90,6 +92,27 @@ static void cpu_renorm(sim_t *s, long lo)
         if (p->kind[i] == KIND_MATERIAL) seg_renorm((size_t)i, p, &cpu_of(s)->grid.view, &s->seg);
 }
 
+/* Flow:bed_damping's weight of every particle, store and ghosts, for the
+ * flow pass to read per pair (flow_bed_q: once a particle, not once a pair;
+ * the same bits); NULL where the pass does not damp the bed. */
+static const real *cpu_bed_q(sim_t *s)
+{
+    const particles_t *p = &s->p;
+    cpu_state *c = cpu_of(s);
+    if (!(s->flow.bed_alpha > 0) || s->flow.stab == STAB_MONAGHAN) return NULL;
+    const size_t n = p->n + p->ng;
+    if (n > c->bq_cap) {
+        free(c->bq);
+        c->bq_cap = n + n / 8;
+        c->bq = malloc(c->bq_cap * sizeof *c->bq);
+        if (!c->bq) error_exit(1, "cpu backend: out of memory for the bed damping's weights");
+    }
+    real *bq = c->bq;
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < (long)n; ++i) bq[i] = flow_bed_q((size_t)i, p, &s->flow);
+    return bq;
+}
+
 /* The flow rates of the material (and, when due, its L) and the largest
  * acceleration. */
 static void cpu_flow_rates(sim_t *s)
@@ -99,11 +122,13 @@ static void cpu_flow_rates(sim_t *s)
     const int renorm = s->renorm_due;
     const shift_ctx *sh = s->shift_due ? &s->shift : NULL; /* the step's shift, fused (sim.h) */
     const real sdt = (real)s->dt;
+    const real *bq = cpu_bed_q(s);
     double amax = 0;
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK) reduction(max : amax)
     for (long i = 0; i < n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
-        double a = flow_rates_body((size_t)i, p, &cpu_of(s)->grid.view, &s->flow, 0, 1, renorm, s->flow.kgc, sh, sdt);
+        double a =
+            flow_rates_body((size_t)i, p, &cpu_of(s)->grid.view, &s->flow, 0, 1, renorm, s->flow.kgc, sh, sdt, bq);
         amax = a > amax ? a : amax;
     }
     s->amax = amax;
@@ -402,10 +427,11 @@ static void cpu_finish(sim_t *s)
     /* the memory line (issue 56): the store's fields and the backend's per-particle scratch */
     const size_t cl = c->grid.cap_part ? 2 * sizeof(size_t) + sizeof(uint64_t) : 0, /* key, perm, rank */
         bc = c->bw.cap_part ? sizeof(bound_sums) + 1 : 0,                              /* sums, classes */
-        vl = nlist_bytes(&c->list);                                                    /* the Verlet list */
+        vl = nlist_bytes(&c->list),                                                    /* the Verlet list */
+        bd = c->bq_cap ? sizeof(real) : 0;                                             /* the bed's weights */
     message("cpu memory: store %zu bytes a particle (%d of %d fields), scratch %zu bytes a particle (cell list %zu, "
-            "neighbour list %zu, classification %zu), rank 0", part_store_bytes(&s->p), __builtin_popcount(s->p.fields),
-            __builtin_popcount(part_fields_all()), cl + vl + bc, cl, vl, bc);
+            "neighbour list %zu, classification %zu, bed damping %zu), rank 0", part_store_bytes(&s->p),
+            __builtin_popcount(s->p.fields), __builtin_popcount(part_fields_all()), cl + vl + bc + bd, cl, vl, bc, bd);
     if (c->list.on)
         message("cpu: %ld neighbour-list builds, %ld sorts followed, in %ld steps (skin %.3g h), rank 0",
                 c->list.builds, c->list.follows, s->step - c->steps0, c->list.skin / (double)s->seg.k.h);
@@ -415,6 +441,7 @@ static void cpu_finish(sim_t *s)
     nbr_free(&c->grid);
     nlist_free(&c->list);
     bound_free(&c->bw);
+    free(c->bq);
     free(c);
     s->be_data = NULL;
 }

@@ -207,6 +207,17 @@ HD_INLINE void flow_kgc_team(size_t i, const particles_t *p, const grid_view *g,
     flow_kgc_store(i, p, c->k.dim, m, c->kgc_det);
 }
 
+/* The bed damping's weight of particle i (Flow:bed_damping): stress_static_q
+ * of its stress, 1 where there is none (off, or a dummy). flow_rates_body
+ * reads it per pair from an array the backend made with this before the
+ * pass (the CPU), or computes it per pair (the GPU): the same bits. */
+HD_INLINE real flow_bed_q(size_t i, const particles_t *p, const flow_ctx *c)
+{
+    if (!(c->bed_alpha > 0) || p->kind[i] != KIND_MATERIAL) return R(1.0);
+    const real s[6] = {p->sig[0][i], p->sig[1][i], p->sig[2][i], p->sig[3][i], p->sig[4][i], p->sig[5][i]};
+    return stress_static_q(s, c->bed_k);
+}
+
 /* What flow_rates reads of neighbour j besides its position. */
 HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6], real *volj)
 {
@@ -226,12 +237,15 @@ HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6
  * divergence its work conjugate, m_j (sigma_i B_i + sigma_j B_j) grad W / rho^2,
  * a dummy j taking B_i; the GPU passes kgc as a template constant. With sh
  * given (not NULL), the shift of a step of length sdt comes with it
- * (shift_team's sums over the same pairs, shift_finish): Run:integrator
+ * (shift_team's sums over the same pairs, shift_finish, which takes L, before
+ * the correction, as its velocity gradient): Run:integrator
  * leapfrog's midpoint pass (src/sim/integrate.c), fused. Neighbour j's
  * fields are read through NBR_BEGIN_TJ's jp at jj (the GPU's staged pass:
- * a tile of shared memory). */
+ * a tile of shared memory). bq: flow_bed_q of every particle, store and
+ * ghosts, indexed as the store (so not with a tile), or NULL: the bed
+ * damping's weight computed per pair. */
 HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
-                               int nlanes, int renorm, int kgc, const shift_ctx *sh, real sdt)
+                               int nlanes, int renorm, int kgc, const shift_ctx *sh, real sdt, const real *bq)
 {
     const sph_ctx *k = &c->k;
     real L[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, a[3] = {0, 0, 0}, m[6] = {0, 0, 0, 0, 0, 0};
@@ -258,7 +272,7 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
         if (!SPH_EARLY_LOADS) flow_load_j(jp, jj, uj, sj, &volj);
         const real r = sqrt_r(r2);
         real f = kernel_f(r, k->h, k->alpha);
-        if (sh) shift_pair_add(&ss, sh, r, r2, f, volj, xij, uj, sj, ui, si);
+        if (sh) shift_pair_add(&ss, sh, r, r2, f, volj, xij, sj, si);
         if (renorm && jp->kind[jj] == KIND_MATERIAL) seg_renorm_add(m, k->dim, -f * volj, xij);
         real gradW[3] = {f * xij[0], f * xij[1], f * xij[2]};
         real uij[3] = {ui[0] - uj[0], ui[1] - uj[1], ui[2] - uj[2]};
@@ -270,7 +284,7 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
             if (c->stab == STAB_RIEMANN)
                 Pi = mom_riemann(c->eta_r, c->cs, c->rho, uij, xij, r2, jp->kind[jj] != KIND_MATERIAL);
             if (c->bed_alpha > 0 && qi < R(1.0) && jp->kind[jj] == KIND_MATERIAL) {
-                const real qj = stress_static_q(sj, c->bed_k), w = R(1.0) - (qi > qj ? qi : qj);
+                const real qj = bq ? bq[jj] : stress_static_q(sj, c->bed_k), w = R(1.0) - (qi > qj ? qi : qj);
                 if (w > 0) Pi += w * mom_av(c->bed_alpha, c->cs, k->h, c->rho, c->rho, uij, xij);
             }
             /* the pressure difference less its hydrostatic part rho g.x_ji (Fourtakas et al.
@@ -296,7 +310,7 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
     team_sum(a, 3, nlanes);
     if (c->pdiff > 0) team_sum(&pd, 1, nlanes);
     if (renorm) team_sum(m, 6, nlanes);
-    if (sh) shift_finish(i, p, sh, sdt, &ss, ui, lane, nlanes);
+    if (sh) shift_finish(i, p, sh, sdt, &ss, L, ui, lane, nlanes); /* L: the shift's velocity gradient */
     if (lane != 0) return R(0.0);
     if (renorm) seg_renorm_store(i, p, k->dim, m);
     real eps[6], w[3], ds[6];
@@ -321,7 +335,7 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
 HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
                                int nlanes, int renorm, int kgc)
 {
-    return flow_rates_body(i, p, g, c, lane, nlanes, renorm, kgc, (const shift_ctx *)0, R(0.0));
+    return flow_rates_body(i, p, g, c, lane, nlanes, renorm, kgc, (const shift_ctx *)0, R(0.0), (const real *)0);
 }
 
 HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)

@@ -20,7 +20,9 @@
  * The shifted particle carries its velocity and stress to its new place by
  * the first-order Taylor step phi' = phi + dr . grad phi (as Lind et al. do,
  * with grad phi_i = sum_j V_j (phi_j - phi_i) grad_i W_ij over material and
- * dummies); C is not corrected: shifting moves a particle with its C and V
+ * dummies; for u that is the flow rates' velocity gradient L of the same
+ * pairs, mom_velgrad_add, which the fused pass hands over rather than
+ * summing it twice); C is not corrected: shifting moves a particle with its C and V
  * unchanged, so sum C_i V_i stays conserved to round-off (a Taylor step of
  * C would not conserve it). Gather style, one material particle per call;
  * it runs in the save hook (ST_SHIFT, src/sim/stages.c), after step_save, and
@@ -32,6 +34,7 @@
 #include "../core/particles.h"
 #include "grid.h"
 #include "kernel.h"
+#include "momentum.h"
 #include "options.h"
 #include "sph.h"
 
@@ -58,24 +61,24 @@ HD_INLINE shift_ctx shift_make(const sph_ctx *k, int kind, real A)
 }
 
 /* The sums of a shift (shift_team): grad C (with the anti-clumping
- * weight), div r, and the gradients of u and sigma, over i's neighbours. */
+ * weight), div r, and the gradient of sigma, over i's neighbours (that of
+ * u is the velocity gradient L, summed by the caller: shift_finish). */
 typedef struct shift_sums {
-    real gc[3], div, gu[9], gs[18];
+    real gc[3], div, gs[18];
 } shift_sums;
 
 HD_INLINE void shift_sums_zero(shift_sums *a)
 {
     for (int b = 0; b < 3; ++b) a->gc[b] = 0;
     a->div = 0;
-    for (int q = 0; q < 9; ++q) a->gu[q] = 0;
     for (int q = 0; q < 18; ++q) a->gs[q] = 0;
 }
 
-/* Neighbour j's share (r, r2, f = kernel_f(r), V = V_j, x_ij, u_j, sigma_j;
- * ui, si: i's). Called from shift_team and, fused, from the flow pass
+/* Neighbour j's share (r, r2, f = kernel_f(r), V = V_j, x_ij, sigma_j;
+ * si: i's). Called from shift_team and, fused, from the flow pass
  * (flow_rates_body): the same arithmetic in both. */
 HD_INLINE void shift_pair_add(shift_sums *a, const shift_ctx *c, real r, real r2, real f, real V, const real xij[3],
-                              const real uj[3], const real sj[6], const real ui[3], const real si[6])
+                              const real sj[6], const real si[6])
 {
     const sph_ctx *k = &c->k;
     const real t = kernel_w(r, k->h, k->alpha) * (R(1.0) / c->w_dr), t2 = t * t; /* 1/w_dr hoisted */
@@ -83,20 +86,20 @@ HD_INLINE void shift_pair_add(shift_sums *a, const shift_ctx *c, real r, real r2
     a->div -= vf * r2;
     for (int b = 0; b < 3; ++b) {
         a->gc[b] += cw * xij[b];
-        for (int d = 0; d < 3; ++d) a->gu[3 * d + b] += vf * (uj[d] - ui[d]) * xij[b];
         for (int q = 0; q < 6; ++q) a->gs[3 * q + b] += vf * (sj[q] - si[q]) * xij[b];
     }
 }
 
 /* The team's sums added up; lane 0 applies the shift dr_i to x_n and its
- * Taylor steps to v_n and sig_n (step length dt; ui: i's velocity). */
-HD_INLINE void shift_finish(size_t i, particles_t *p, const shift_ctx *c, real dt, shift_sums *a, const real ui[3],
-                            int lane, int nlanes)
+ * Taylor steps to v_n and sig_n (step length dt; ui: i's velocity; gu: the
+ * velocity gradient L of mom_velgrad_add over the same pairs, row-major,
+ * without the gradient correction, already summed over the team). */
+HD_INLINE void shift_finish(size_t i, particles_t *p, const shift_ctx *c, real dt, shift_sums *a, const real gu[9],
+                            const real ui[3], int lane, int nlanes)
 {
     const sph_ctx *k = &c->k;
     team_sum(a->gc, 3, nlanes);
     team_sum(&a->div, 1, nlanes);
-    team_sum(a->gu, 9, nlanes);
     team_sum(a->gs, 18, nlanes);
     if (lane != 0) return;
     const real speed = sqrt_r(ui[0] * ui[0] + ui[1] * ui[1] + ui[2] * ui[2]);
@@ -109,7 +112,7 @@ HD_INLINE void shift_finish(size_t i, particles_t *p, const shift_ctx *c, real d
         p->x_n[d][i] += (preal)dr[d];
     }
     for (int d = 0; d < 3; ++d)
-        p->v_n[d][i] += a->gu[3 * d] * dr[0] + a->gu[3 * d + 1] * dr[1] + a->gu[3 * d + 2] * dr[2];
+        p->v_n[d][i] += gu[3 * d] * dr[0] + gu[3 * d + 1] * dr[1] + gu[3 * d + 2] * dr[2];
     for (int q = 0; q < 6; ++q)
         p->sig_n[q][i] += a->gs[3 * q] * dr[0] + a->gs[3 * q + 1] * dr[1] + a->gs[3 * q + 2] * dr[2];
 }
@@ -123,6 +126,7 @@ HD_INLINE void shift_team(size_t i, particles_t *p, const grid_view *g, const sh
     const sph_ctx *k = &c->k;
     shift_sums a;
     shift_sums_zero(&a);
+    real gu[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
     const real xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]}, ui[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
     real si[6];
     for (int q = 0; q < 6; ++q) si[q] = p->sig[q][i];
@@ -132,11 +136,14 @@ HD_INLINE void shift_team(size_t i, particles_t *p, const grid_view *g, const sh
         real r2 = grid_pair_xi(k->dim, xi, p->x, j, xij);
         if (r2 >= k->support2) continue;
         const real r = sqrt_r(r2), f = kernel_f(r, k->h, k->alpha);
-        const real uj[3] = {p->v[0][j], p->v[1][j], p->v[2][j]};
+        const real uij[3] = {ui[0] - p->v[0][j], ui[1] - p->v[1][j], ui[2] - p->v[2][j]};
+        const real gradW[3] = {f * xij[0], f * xij[1], f * xij[2]};
         const real sj[6] = {p->sig[0][j], p->sig[1][j], p->sig[2][j], p->sig[3][j], p->sig[4][j], p->sig[5][j]};
-        shift_pair_add(&a, c, r, r2, f, p->vol[j], xij, uj, sj, ui, si);
+        shift_pair_add(&a, c, r, r2, f, p->vol[j], xij, sj, si);
+        mom_velgrad_add(gu, p->vol[j], uij, gradW); /* the flow rates' L (flow_rates_body) */
     NBR_END
-    shift_finish(i, p, c, dt, &a, ui, lane, nlanes);
+    team_sum(gu, 9, nlanes);
+    shift_finish(i, p, c, dt, &a, gu, ui, lane, nlanes);
 }
 
 #endif
