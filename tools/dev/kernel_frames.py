@@ -21,8 +21,8 @@ flow_advance and shift_finish do.
 --check: exit 1 when a kernel of the per-step passes (the flow pass without the
 L it sums only when a scheme needs it, in both its list kernels and its staged
 one, k_flow_tile; the shift pass) has a frame of more than
-LIMIT bytes (32; today the list form's have none, list16's and cells' fused
-leapfrog pass 8 with 4 bytes spilled); the rest (the L's 3x3 solve, the Shepard
+LIMIT bytes (32; today none has one in the single build: the fused leapfrog
+pass takes 122, 128 and 127 registers in its list, list16 and cells forms); the rest (the L's 3x3 solve, the Shepard
 filter's MLS solve, dC/dt) keep small frames of once-per-particle arrays and are
 listed only. Exit 77 when nvcc is not installed.
 """
