@@ -40,11 +40,16 @@ material, as a disordered bed does on average.
   bins of 1-4 mm) and its components read 1 (1e-9);
 - layer_fe_chart --table's bins: the mean of a linear speed over each 1-mm
   bin is its value at the bin's centre (to the table's 0.001 cm/s), nan
-  where a run has no value.
+  where a run has no value;
+- periodic_drum table: on drum_analysis tables of known speeds and indices, a
+  run's means over t = 3-5 s go to the CSV and an ensemble's ('2D dr X run K')
+  count, mean and sample SD to the _spread CSV, not to the CSV (to its 4 digits).
 
     /usr/bin/python3 -m tests.test_drum_readers [--sphseg IGNORED --work IGNORED]
 """
+import argparse
 import copy
+import csv
 import os
 import sys
 import tempfile
@@ -58,6 +63,7 @@ from tools.analysis import drum_layer as dl  # noqa: E402
 from tools.analysis import drum_stress_map as dsm  # noqa: E402
 from tools.studies import filter_interval_chart as fic  # noqa: E402
 from tools.studies import layer_fe_chart as lfc  # noqa: E402
+from tools.studies import periodic_drum as pdrum  # noqa: E402
 
 R, YS, THETA, U, DELTA, RHO, G = 0.035, 0.0056, 21.2, 0.08, 0.006, 1500.0, 9.81
 
@@ -210,7 +216,32 @@ def main():
     eb = max(abs(float(got[k]) - 100 * (0.08 - 10 * (1e-3 * k + 5e-4))) for k in range(3))
     check("layer_fe_chart --table: 1-mm bin means of a linear speed - its bin centre's, cm/s", eb, 5e-4,
           eb <= 5e-4 and got[3] == "nan", "the mean of a linear profile over a bin; nan where the run has none")
+    spread_table(work)
     sys.exit(summary("test_drum_readers"))
+
+
+def spread_table(work):
+    """periodic_drum table on made-up drum_analysis tables: a run to the CSV, an ensemble's spread to _spread."""
+    def block(label, speeds, idx):
+        rows = "".join("   %.3f    21.00°     0.10 dr      %.2f cm/s       %.4f 0.100-0.600     %.2f cm/s\n"
+                       % (t, v, c, v) for t, v, c in zip((1.0, 2.0, 3.0, 4.0, 5.0), speeds, idx))
+        return "=== %s: rc 0\n   t (s)     angle   flatness   max |u| mc    seg index    C range  top grains u\n%s" % (
+            label, rows)
+    txt = (block("2D dr 0.001", (9, 9, 7.0, 7.1, 7.2), (0, 0, 0.020, 0.021, 0.022))
+           + block("2D dr 0.001 run 0", (9, 9, 7.0, 7.0, 7.0), (0, 0, 0.020, 0.020, 0.020))
+           + block("2D dr 0.001 run 1", (9, 9, 7.3, 7.3, 7.3), (0, 0, 0.024, 0.024, 0.024)))
+    src, out = os.path.join(work, "periodic_runs.txt"), os.path.join(work, "periodic.csv")
+    with open(src, "w") as f:
+        f.write(txt)
+    pdrum.table(argparse.Namespace(files=[src], csv=out))
+    rows = list(csv.DictReader(open(out)))
+    sp = list(csv.DictReader(open(pdrum.spread_path(out))))
+    want = [7.1, 0.021, 2, 7.15, 0.3 / np.sqrt(2), 0.022, 0.004 / np.sqrt(2)]
+    got = [float(rows[0]["speed_cm_s"]), float(rows[0]["index"])] + [float(sp[0][k]) for k in (
+        "runs", "speed_mean_cm_s", "speed_sd_cm_s", "index_mean", "index_sd")] if len(rows) == len(sp) == 1 else []
+    err = max(abs(g / w - 1) for g, w in zip(got, want)) if got else np.inf
+    check("periodic_drum table: a run's means and an ensemble's count, mean, SD (relative)", err, 1e-3,
+          err < 1e-3, "the made-up tables' values, to the CSV's 4 digits")
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The 3D drum without end walls (issue 57): a drum periodic along its axis against the 2D drum at the same dr.
 
-  python3 -m tools.studies.periodic_drum commands [--dr 0.0014 0.001 0.0007] [--sphseg BIN]
+  python3 -m tools.studies.periodic_drum commands [--dr 0.0014 0.001 0.0007] [--sphseg BIN] [--ensemble N]
   python3 -m tools.studies.periodic_drum table FILE... [--csv docs/data/drum/periodic_3d.csv]
   python3 -m tools.studies.periodic_drum chart [--csv ...] [--png docs/data/drum/periodic_3d.png]
 
@@ -12,12 +12,22 @@ no end walls), both at E 10 kPa, chi 0.2, with the scene's flow, to 5 s, each
 followed by its drum_analysis (`--times 1 2 3 4 5`), and the walled R35 3D
 drum (inputs/drum_3d.yml, length 0.07 m) for the end walls' effect. The 2D
 container drum gives the built-in 2D drum's bits (tests/test_own_scene.sh
-checks the particles; a 300-step comparison is in the CHANGELOG).
+checks the particles; a 300-step comparison is in the CHANGELOG). Each line
+writes its run's log to OUT.log and echoes the '=== LABEL: rc N' header that
+table reads, so `commands ... | bash > FILE` makes table's input.
+--ensemble N: the 2D drum alone, N runs a spacing whose step bound differs by
+1e-4 of chi (Run:cfl_flow 0.2, 0.2001, ...), a perturbation far under the
+discretisation's after which the runs part (the flow is chaotic): their spread
+is what the means of one run carry.
 table: each FILE holds '=== LABEL: rc ...' headers followed by that run's
-drum_analysis output (as the commands write them); the CSV gets, per run, the
-means over t = 3, 4, 5 s of the mid-chord speed and the segregation index of
-the whole bed (projected along z) and, in 3D, of the mid-length slab.
-chart: speed and index against dr, 2D, periodic 3D and walled 3D.
+drum_analysis output; the CSV gets, per run, the means over t = 3, 4, 5 s of
+the mid-chord speed and the segregation index of the whole bed (projected along
+z) and, in 3D, of the mid-length slab. Ensemble runs ('2D dr X run K') go to
+the CSV's _spread file instead: per spacing the runs' count, and the mean and
+sample standard deviation of the same means.
+chart: speed and index against dr, 2D, periodic 3D and walled 3D; where the
+spread file has a spacing, the 2D point there carries +-1 standard deviation of
+one run.
 """
 import argparse
 import csv
@@ -36,21 +46,36 @@ T = (3.0, 4.0, 5.0)
 CSV = os.path.join(ROOT, "docs", "data", "drum", "periodic_3d.csv")
 
 
+def _line(label, cmd, out):
+    """One run: sphseg's output to OUT.log, the header table reads, the analysis."""
+    return (f"{cmd} > {out}.log 2>&1; echo '=== {label}: rc '$?; "
+            f"python3 -m tools.analysis.drum_analysis {out} --times 1 2 3 4 5")
+
+
 def commands(a):
     H = (2 * 0.42 - 1) * 0.035
     walls = "Container:walls=[{name: drum, shape: cylinder, centre: [0, 0], radius: 0.035, motion: turning, rpm: 5, " \
             "direction: clockwise}]"
     reg = "Container:regions=[{shape: fill, level: %.4g, C: 0.5}]" % H
+    print("mkdir -p out/periodic")
     for dr in a.dr:
+        if a.ensemble:
+            for k in range(a.ensemble):
+                out = "out/periodic/2d_%g_run%d" % (dr, k)
+                keys = KEYS.replace("Run:cfl_flow=0.2", "Run:cfl_flow=%.4f" % (0.2 + 1e-4 * k))
+                print(_line("2D dr %g run %d" % (dr, k),
+                            f"{a.sphseg} inputs/drum_2d_EV.yml -o {out} -P Geometry:dr={dr} {keys}", out))
+            continue
         out = "out/periodic/2d_%g" % dr
-        print(f"{a.sphseg} inputs/drum_2d_EV.yml -o {out} -P Geometry:dr={dr} {KEYS}; "
-              f"python3 -m tools.analysis.drum_analysis {out} --times 1 2 3 4 5")
+        print(_line("2D dr %g" % dr, f"{a.sphseg} inputs/drum_2d_EV.yml -o {out} -P Geometry:dr={dr} {KEYS}", out))
         out = "out/periodic/3d_%g" % dr
-        print(f"{a.sphseg} inputs/drum_2d_EV.yml -o {out} -P Geometry:dr={dr} {KEYS} -P Geometry:type=container "
-              f"-P Geometry:dim=3 -P Geometry:depth={24 * dr:.6g} -P Geometry:periodic=z -P '{walls}' -P '{reg}'; "
-              f"python3 -m tools.analysis.drum_analysis {out} --times 1 2 3 4 5")
-    print(f"{a.sphseg} inputs/drum_3d.yml -o out/periodic/walled_0.0014 -P Geometry:dr=0.0014 -P Geometry:length=0.07 "
-          f"{KEYS}; python3 -m tools.analysis.drum_analysis out/periodic/walled_0.0014 --times 1 2 3 4 5")
+        print(_line("3D dr %g" % dr, f"{a.sphseg} inputs/drum_2d_EV.yml -o {out} -P Geometry:dr={dr} {KEYS} "
+                    f"-P Geometry:type=container -P Geometry:dim=3 -P Geometry:depth={24 * dr:.6g} "
+                    f"-P Geometry:periodic=z -P '{walls}' -P '{reg}'", out))
+    if not a.ensemble:
+        out = "out/periodic/walled_0.0014"
+        print(_line("walled 3D dr 0.0014", f"{a.sphseg} inputs/drum_3d.yml -o {out} -P Geometry:dr=0.0014 "
+                    f"-P Geometry:length=0.07 {KEYS}", out))
 
 
 def parse(text):
@@ -74,28 +99,52 @@ def parse(text):
     return runs
 
 
-def table(a):
-    runs = {}
-    for f in a.files:
-        runs.update(parse(open(f).read()))
-    rows = []
-    for label, r in sorted(runs.items()):
-        m = re.match(r"(walled )?(\dD) dr ([\d.]+)", label)
-        if not m or not all(t in r["t"] for t in T):
-            print("skipped %s: not every time of %s" % (label, T), file=sys.stderr)
-            continue
-        kind = "walled 3D" if m.group(1) else ("periodic 3D" if m.group(2) == "3D" else "2D")
-        slab = r["slab"][2:5] if len(r["slab"]) >= 5 else []
-        rows.append({"kind": kind, "dr_mm": float(m.group(3)) * 1e3,
-                     "speed_cm_s": np.mean([r["t"][t][0] for t in T]), "index": np.mean([r["t"][t][1] for t in T]),
-                     "slab_speed_cm_s": np.mean([s[0] for s in slab]) if slab else "",
-                     "slab_index": np.mean([s[1] for s in slab]) if slab else ""})
-    with open(a.csv, "w", newline="") as f:
+def spread_path(path):
+    return os.path.splitext(path)[0] + "_spread.csv"
+
+
+def write_csv(path, rows):
+    with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         for r in rows:
             w.writerow({k: ("%.4g" % v if isinstance(v, float) else v) for k, v in r.items()})
-    print("wrote %s (%d rows)" % (a.csv, len(rows)))
+    print("wrote %s (%d rows)" % (path, len(rows)))
+
+
+def table(a):
+    runs = {}
+    for f in a.files:
+        runs.update(parse(open(f).read()))
+    rows, members = [], {}
+    for label, r in sorted(runs.items()):
+        m = re.match(r"(walled )?(\dD) dr ([\d.]+)( run \d+)?$", label)
+        if not m or not all(t in r["t"] for t in T):
+            print("skipped %s: not every time of %s" % (label, T), file=sys.stderr)
+            continue
+        speed, index = np.mean([r["t"][t][0] for t in T]), np.mean([r["t"][t][1] for t in T])
+        if m.group(4):  # an ensemble member
+            members.setdefault(float(m.group(3)) * 1e3, []).append((speed, index))
+            continue
+        kind = "walled 3D" if m.group(1) else ("periodic 3D" if m.group(2) == "3D" else "2D")
+        slab = r["slab"][2:5] if len(r["slab"]) >= 5 else []
+        rows.append({"kind": kind, "dr_mm": float(m.group(3)) * 1e3, "speed_cm_s": speed, "index": index,
+                     "slab_speed_cm_s": np.mean([s[0] for s in slab]) if slab else "",
+                     "slab_index": np.mean([s[1] for s in slab]) if slab else ""})
+    if not rows and not members:
+        sys.exit("no run with every time of %s in %s" % (T, " ".join(a.files)))
+    if rows:
+        write_csv(a.csv, rows)
+    if members:
+        spread = []
+        for dr, v in sorted(members.items()):
+            v = np.array(v)
+            if len(v) < 2:
+                sys.exit("dr %g mm: one ensemble run, no spread" % dr)
+            spread.append({"kind": "2D", "dr_mm": dr, "runs": len(v), "speed_mean_cm_s": v[:, 0].mean(),
+                           "speed_sd_cm_s": v[:, 0].std(ddof=1), "index_mean": v[:, 1].mean(),
+                           "index_sd": v[:, 1].std(ddof=1)})
+        write_csv(spread_path(a.csv), spread)
 
 
 def chart(a):
@@ -103,6 +152,8 @@ def chart(a):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     rows = list(csv.DictReader(open(a.csv)))
+    sd = {float(r["dr_mm"]): r for r in csv.DictReader(open(spread_path(a.csv)))} \
+        if os.path.exists(spread_path(a.csv)) else {}
     fig, ax = plt.subplots(1, 2, figsize=(10, 4.2))
     for kind, col, mk in (("2D", "speed_cm_s", "o-"), ("periodic 3D", "slab_speed_cm_s", "s-"),
                           ("walled 3D", "slab_speed_cm_s", "^")):
@@ -112,13 +163,21 @@ def chart(a):
         dr = [float(r["dr_mm"]) for r in rs]
         ax[0].plot(dr, [float(r[col]) for r in rs], mk, label=kind + (" (mid-length slab)" if kind != "2D" else ""))
         ax[1].plot(dr, [float(r[col.replace("speed_cm_s", "index")]) for r in rs], mk, label=kind)
+        if kind == "2D" and sd:
+            on = [r for r in rs if float(r["dr_mm"]) in sd]
+            for k, (val, err) in enumerate((("speed_cm_s", "speed_sd_cm_s"), ("index", "index_sd"))):
+                ax[k].errorbar([float(r["dr_mm"]) for r in on], [float(r[val]) for r in on],
+                               yerr=[float(sd[float(r["dr_mm"])][err]) for r in on], fmt="none", ecolor="C0",
+                               capsize=4, label="2D, one run's spread (+-1 sd, %s runs)" % "/".join(
+                                   sd[float(r["dr_mm"])]["runs"] for r in on) if k == 0 else None)
     for k, lab in enumerate(("mid-chord surface speed, cm/s", "segregation index")):
         ax[k].set_xlabel("dr, mm")
         ax[k].set_ylabel(lab + "\n(means of t = 3, 4, 5 s)")
         ax[k].invert_xaxis()
         ax[k].grid(alpha=0.3)
         ax[k].legend(fontsize=8)
-    fig.suptitle("EV drum, E 10 kPa, chi 0.2, the scenes' flow: 2D against 3D without end walls (one H200)", fontsize=9)
+    fig.suptitle("EV drum, E 10 kPa, chi 0.2, the scenes' flow: 2D against 3D without end walls "
+                 "(machines: docs/validation.md)", fontsize=9)
     fig.tight_layout()
     fig.savefig(a.png, dpi=110)
     print("wrote %s" % a.png)
@@ -130,6 +189,8 @@ def main():
     c = sub.add_parser("commands")
     c.add_argument("--dr", type=float, nargs="+", default=[0.0014, 0.001, 0.0007])
     c.add_argument("--sphseg", default="build/sphseg")
+    c.add_argument("--ensemble", type=int, default=0, metavar="N",
+                   help="the 2D drum alone, N runs a spacing with chi 0.2 + 1e-4 k (k < N)")
     t = sub.add_parser("table")
     t.add_argument("files", nargs="+")
     t.add_argument("--csv", default=CSV)
