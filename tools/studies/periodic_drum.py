@@ -4,6 +4,7 @@
   python3 -m tools.studies.periodic_drum commands [--dr 0.0014 0.001 0.0007] [--sphseg BIN] [--ensemble N]
   python3 -m tools.studies.periodic_drum table FILE... [--csv docs/data/drum/periodic_3d.csv]
   python3 -m tools.studies.periodic_drum chart [--csv ...] [--png docs/data/drum/periodic_3d.png]
+  python3 -m tools.studies.periodic_drum axial OUT... [--from 2.5] [--flowing 0.02]
 
 commands: the runs, one line each: the 2D EV scene (inputs/drum_2d_EV.yml) and the
 same drum as a 3D container (its cylinder turning, a fill region to
@@ -28,6 +29,9 @@ sample standard deviation of the same means.
 chart: speed and index against dr, 2D, periodic 3D and walled 3D; where the
 spread file has a spacing, the 2D point there carries +-1 standard deviation of
 one run.
+axial: for each 3D run OUT, per snapshot from t = 2.5 s, the RMS of the axial
+velocity u_z over the flowing material (in-plane speed above 2 cm/s) against
+their in-plane RMS speed: how far the periodic drum's flow leaves the plane.
 """
 import argparse
 import csv
@@ -183,6 +187,22 @@ def chart(a):
     print("wrote %s" % a.png)
 
 
+def axial(a):
+    from tools.analysis import snap
+    for out in a.outs:
+        for path in snap.list_snapshots(out):
+            s = snap.read_snapshot(path)
+            u = np.asarray(s["Velocities"])
+            if s["Time"] < a.t_from or u.ndim < 2 or u.shape[1] < 3:
+                continue
+            u = u[np.asarray(s["Kind"]) == snap.MATERIAL]
+            sp = np.hypot(u[:, 0], u[:, 1])
+            f = sp > a.flowing
+            w, v = np.sqrt(np.mean(u[f, 2] ** 2)), np.sqrt(np.mean(sp[f] ** 2))
+            print("%s t = %.2f s: %d flowing of %d, RMS u_z %.3g cm/s, in-plane %.3g cm/s, ratio %.3g"
+                  % (out, s["Time"], f.sum(), len(u), 100 * w, 100 * v, w / v))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="what", required=True)
@@ -197,8 +217,12 @@ def main():
     h = sub.add_parser("chart")
     h.add_argument("--csv", default=CSV)
     h.add_argument("--png", default=os.path.join(ROOT, "docs", "data", "drum", "periodic_3d.png"))
+    x = sub.add_parser("axial")
+    x.add_argument("outs", nargs="+")
+    x.add_argument("--from", dest="t_from", type=float, default=2.5, help="first snapshot time read (s)")
+    x.add_argument("--flowing", type=float, default=0.02, help="in-plane speed of the flowing material (m/s)")
     a = ap.parse_args()
-    {"commands": commands, "table": table, "chart": chart}[a.what](a)
+    {"commands": commands, "table": table, "chart": chart, "axial": axial}[a.what](a)
 
 
 if __name__ == "__main__":
