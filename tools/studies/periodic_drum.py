@@ -42,6 +42,7 @@ import sys
 import numpy as np
 
 from tools import ROOT
+from tools.studies import batch
 
 ROW = re.compile(r"^\s+([\d.]+)\s+([\d.]+)°\s+[\d.]+ dr\s+([\d.]+) cm/s\s+(-?[\d.]+)\s+([\d.]+)-([\d.]+)\s+([\d.]+) cm/s")
 SLAB = re.compile(r"^\s+mid-length slab\s+([\d.]+)°\s+([\d.]+) cm/s\s+(-?[\d.]+)")
@@ -108,11 +109,9 @@ def spread_path(path):
 
 
 def write_csv(path, rows):
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: ("%.4g" % v if isinstance(v, float) else v) for k, v in r.items()})
+    """rows (dicts of one set of keys) to path, floats to 4 digits."""
+    batch.write_csv(path, list(rows[0]), [["%.4g" % v if isinstance(v, float) else v for v in r.values()]
+                                          for r in rows])
     print("wrote %s (%d rows)" % (path, len(rows)))
 
 
