@@ -141,7 +141,7 @@ def run_cases_or_exit(cases, sphseg, work, limit_s=900, side_by_side=False):
     return recs
 
 
-def study_main(doc, sets, cases_of, on_done, cmd_report, study, jobs=1, argv=None):
+def study_main(doc, sets, cases_of, on_done, cmd_report, study, jobs=1, argv=None, merge=None):
     """The command line the validation studies share: `run` (the cases of
     --set through `cases_of`, picked by --only, on_done(args, case, record)
     as each ends) and `report` (cmd_report(args) over --out folders; its
@@ -164,6 +164,8 @@ def study_main(doc, sets, cases_of, on_done, cmd_report, study, jobs=1, argv=Non
     p.add_argument("--docs", default=os.path.join(ROOT, "docs", "data", study),
                    help="folder for the charts (default docs/data/%s)" % study)
     p.add_argument("--table", help="also write the tables (markdown) here")
+    if merge:  # the study's report can keep rows of its earlier CSV (merge: the flag's help)
+        p.add_argument("--merge", action="store_true", help=merge)
     a = ap.parse_args(argv)
     if a.cmd == "report":
         return cmd_report(a)

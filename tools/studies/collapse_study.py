@@ -31,6 +31,7 @@ dr <= d the foremost deposit thicker than 1.5 and 3 bead diameters (GLASS_D).
   python3 -m tools.studies.collapse_study run --sphseg build/sphseg --out out/collapse_study [--backend gpu]
   python3 -m tools.studies.collapse_study report --out out/collapse_study [--docs docs/data/collapse]
 """
+import csv
 import math
 import os
 import re
@@ -274,16 +275,40 @@ def glass_rows(runs, where):
                          runout_1_5d=g15, runout_3d=g3,
                          creep_mm_s=creep, wall_s=r["wall_s"], steps=r["steps"], backend=r.get("backend", ""),
                          end_wall=int(at_end_wall(r, f["front"][-1]))))
-    return sorted(rows, key=lambda q: (q["floor"], q["model"] != "glass", q["E"], q["n"], q["a"]))
+    return sorted(rows, key=glass_order)
+
+
+def glass_order(q):
+    return q["floor"], q["model"] != "glass", q["E"], q["n"], q["a"]
 
 
 def glass_label(model, floor):
     return ("mu(I)" if model == "glass" else "tan 27.4") + (", Coulomb floor" if floor == "coulomb" else "")
 
 
-def glass_report(runs, where, P, docs):
-    """The glass-bead sets: a table, glass.csv (in the --docs folder) and the chart of runout and height against a."""
+GLASS_FLOATS = ("a", "runout", "lube_runout", "height", "lube_height", "runout_1_5d", "runout_3d", "creep_mm_s")
+
+
+def glass_kept(path, rows):
+    """The rows of an earlier glass.csv whose runs are not among rows (report --merge: some cases rerun)."""
+    if not os.path.exists(path):
+        return []
+    have, kept = {q["name"] for q in rows}, []
+    with open(path) as f:
+        for q in csv.DictReader(f):
+            if q["name"] not in have:
+                q.update({k: float(q[k]) for k in GLASS_FLOATS})
+                q.update(n=int(q["n"]), end_wall=int(q["end_wall"]))
+                kept.append(q)
+    return kept
+
+
+def glass_report(runs, where, P, docs, merge=False):
+    """The glass-bead sets: a table, glass.csv (in the --docs folder) and the chart of runout and height against a;
+    with merge, glass.csv's rows of runs not given stay."""
     rows = glass_rows(runs, where)
+    if merge:
+        rows = sorted(rows + glass_kept(os.path.join(docs, "glass.csv"), rows), key=glass_order)
     if not rows:
         return
     import matplotlib.pyplot as plt
@@ -491,14 +516,15 @@ def cmd_report(a):
         fig.tight_layout()
         fig.savefig(os.path.join(a.docs, "validation_collapse_deposit.png"), dpi=110)
     lagree_table(runs, where, P)
-    glass_report(runs, where, P, a.docs)
+    glass_report(runs, where, P, a.docs, getattr(a, "merge", False))
     slot_report(runs, where, P, a.docs)
     batch.report_tables(a, lines)
 
 
 def main(argv=None):
     batch.study_main(__doc__, ("aspect", "yield", "resolution", "lagree", "lajeunesse", "lajeunesse_const", "lajeunesse_E",
-                                  "lajeunesse_coulomb", "lajeunesse_slot"), cases, reduce_done, cmd_report, "collapse", argv=argv)
+                                  "lajeunesse_coulomb", "lajeunesse_slot"), cases, reduce_done, cmd_report, "collapse", argv=argv,
+                     merge="keep glass.csv's rows (in --docs) of the glass-bead runs not in --out: a rerun of some cases")
 
 
 if __name__ == "__main__":

@@ -26,9 +26,9 @@ the mid-chord speed and the segregation index of the whole bed (projected along
 z) and, in 3D, of the mid-length slab. Ensemble runs ('2D dr X run K') go to
 the CSV's _spread file instead: per spacing the runs' count, and the mean and
 sample standard deviation of the same means.
-chart: speed and index against dr, 2D, periodic 3D and walled 3D; where the
-spread file has a spacing, the 2D point there carries +-1 standard deviation of
-one run.
+chart: speed and index against dr, 2D, periodic 3D and walled 3D, and, where
+the spread file has a spacing, the 2D ensemble's mean with +-1 standard
+deviation of one run.
 axial: for each 3D run OUT, per snapshot from t = 2.5 s, the RMS of the axial
 velocity u_z over the flowing material (in-plane speed above 2 cm/s) against
 their in-plane RMS speed: how far the periodic drum's flow leaves the plane.
@@ -157,31 +157,31 @@ def chart(a):
     rows = list(csv.DictReader(open(a.csv)))
     sd = {float(r["dr_mm"]): r for r in csv.DictReader(open(spread_path(a.csv)))} \
         if os.path.exists(spread_path(a.csv)) else {}
-    fig, ax = plt.subplots(1, 2, figsize=(10, 4.2))
+    fig, ax = plt.subplots(1, 2, figsize=(10, 5))
     for kind, col, mk in (("2D", "speed_cm_s", "o-"), ("periodic 3D", "slab_speed_cm_s", "s-"),
                           ("walled 3D", "slab_speed_cm_s", "^")):
         rs = sorted((r for r in rows if r["kind"] == kind), key=lambda r: float(r["dr_mm"]))
         if not rs:
             continue
         dr = [float(r["dr_mm"]) for r in rs]
-        ax[0].plot(dr, [float(r[col]) for r in rs], mk, label=kind + (" (mid-length slab)" if kind != "2D" else ""))
-        ax[1].plot(dr, [float(r[col.replace("speed_cm_s", "index")]) for r in rs], mk, label=kind)
-        if kind == "2D" and sd:
-            on = [r for r in rs if float(r["dr_mm"]) in sd]
-            for k, (val, err) in enumerate((("speed_cm_s", "speed_sd_cm_s"), ("index", "index_sd"))):
-                ax[k].errorbar([float(r["dr_mm"]) for r in on], [float(r[val]) for r in on],
-                               yerr=[float(sd[float(r["dr_mm"])][err]) for r in on], fmt="none", ecolor="C0",
-                               capsize=4, label="2D, one run's spread (+-1 sd, %s runs)" % "/".join(
-                                   sd[float(r["dr_mm"])]["runs"] for r in on) if k == 0 else None)
+        lab = kind + (" (mid-length slab)" if kind != "2D" else ", one run")
+        ax[0].plot(dr, [float(r[col]) for r in rs], mk, label=lab)
+        ax[1].plot(dr, [float(r[col.replace("speed_cm_s", "index")]) for r in rs], mk, label=lab)
+    if sd:  # the 2D ensembles: their means with +-1 sample SD of one run, at every spacing the spread file has
+        dr = sorted(sd)
+        for k, (val, err) in enumerate((("speed_mean_cm_s", "speed_sd_cm_s"), ("index_mean", "index_sd"))):
+            ax[k].errorbar(dr, [float(sd[d][val]) for d in dr], yerr=[float(sd[d][err]) for d in dr], fmt="D",
+                           ms=4, color="C3", capsize=4, label="2D, mean of an ensemble +- one run's SD (%d-%d runs)"
+                           % (min(int(sd[d]["runs"]) for d in dr), max(int(sd[d]["runs"]) for d in dr)))
     for k, lab in enumerate(("mid-chord surface speed, cm/s", "segregation index")):
         ax[k].set_xlabel("dr, mm")
         ax[k].set_ylabel(lab + "\n(means of t = 3, 4, 5 s)")
         ax[k].invert_xaxis()
         ax[k].grid(alpha=0.3)
-        ax[k].legend(fontsize=8)
     fig.suptitle("EV drum, E 10 kPa, chi 0.2, the scenes' flow: 2D against 3D without end walls "
                  "(machines: docs/validation.md)", fontsize=9)
-    fig.tight_layout()
+    fig.legend(*ax[0].get_legend_handles_labels(), loc="lower center", ncol=2, fontsize=8)
+    fig.tight_layout(rect=(0, 0.12, 1, 1))
     fig.savefig(a.png, dpi=110)
     print("wrote %s" % a.png)
 
