@@ -63,6 +63,8 @@ run_one io_ranks bash tests/test_io_ranks.sh "$BUILD/tests/test_io_ranks" "$BUIL
 run_one ranks_bitwise "$PYTHON" -m tests.test_ranks_bitwise --sphseg "$BUILD/sphseg" --work "$tmp/ranks_bitwise"
 run_one ranks_bitwise_gpu "$PYTHON" -m tests.test_ranks_bitwise --backend gpu --sphseg "$BUILD/sphseg" --work "$tmp/ranks_bitwise_gpu"
 run_one jobs bash tests/test_jobs.sh "$BUILD/sphseg"
+# many small runs on one GPU: the share benchmark and the MPS wrapper, with stubs (no GPU needed)
+run_one gpu_share bash tests/test_gpu_share.sh
 run_one blowup bash tests/test_blowup.sh "$BUILD/sphseg"
 run_one settings_warnings bash tests/test_settings_warnings.sh "$BUILD/sphseg"
 # the single-precision build for validate_single.py (CPU only: a minute on 2 cores)
