@@ -2,8 +2,8 @@
 # Run a command with a CUDA MPS daemon, so that the GPU runs it starts side by
 # side share the SMs instead of time-slicing: for ensembles and sweeps of
 # small runs on one GPU (the 10^4-particle 2D EN drum: 3.3 times the rate of one
-# run with eight under MPS, 0.69 times without; docs/performance.md, "Small
-# stores"). The daemon is started with its pipe and log folders in a
+# run with eight under MPS, 0.75 times without; docs/performance.md, "Many
+# small runs on one GPU: MPS"). The daemon is started with its pipe and log folders in a
 # temporary folder (MPS_DIR to choose), and stopped when the command ends; it
 # changes no setting of the GPU. Without nvidia-cuda-mps-control, or where the
 # daemon does not start, the command runs plainly, with a warning.
