@@ -43,7 +43,13 @@ material, as a disordered bed does on average.
   where a run has no value;
 - periodic_drum table: on drum_analysis tables of known speeds and indices, a
   run's means over t = 3-5 s go to the CSV and an ensemble's ('2D dr X run K')
-  count, mean and sample SD to the _spread CSV, not to the CSV (to its 4 digits).
+  count, mean and sample SD to the _spread CSV, not to the CSV (to its 4 digits);
+- periodic_drum depth: on a made-up mid-chord profile u = U (1 - d/D)^2 above
+  the layer's foot D and a bed rising beyond it, with the particles' shear rate
+  k |du/dd| (k = 1, 1.2), the layer's depth is D (to one sample), the speeds at
+  1 and 3 dr the profile's (to the samples' spacing) and the shear-rate ratio
+  k (1e-2: finite differences of the sampled profile);
+- periodic_drum surface: means over the times a 2D run and its slab share.
 
     /usr/bin/python3 -m tests.test_drum_readers [--sphseg IGNORED --work IGNORED]
 """
@@ -217,6 +223,7 @@ def main():
     check("layer_fe_chart --table: 1-mm bin means of a linear speed - its bin centre's, cm/s", eb, 5e-4,
           eb <= 5e-4 and got[3] == "nan", "the mean of a linear profile over a bin; nan where the run has none")
     spread_table(work)
+    depth_profiles(work)
     sys.exit(summary("test_drum_readers"))
 
 
@@ -242,6 +249,41 @@ def spread_table(work):
     err = max(abs(g / w - 1) for g, w in zip(got, want)) if got else np.inf
     check("periodic_drum table: a run's means and an ensemble's count, mean, SD (relative)", err, 1e-3,
           err < 1e-3, "the made-up tables' values, to the CSV's 4 digits")
+
+
+def depth_profiles(work):
+    """periodic_drum depth on a made-up profile of known layer depth, speeds and shear-rate ratio."""
+    R, dr, U, D = 0.035, 0.0007, 0.08, 0.0063
+    d = np.linspace(0, 0.8 * R, 801)  # 3.5e-5 m apart: 0.05 dr
+    u = np.where(d < D, U * (1 - d / D) ** 2, 0.5 * (d - D))
+    du = np.abs(np.gradient(u, d))
+    errs = []
+    for k in (1.0, 1.2):
+        path = os.path.join(work, "x_%g_profiles.csv" % k)
+        with open(path, "w") as f:
+            f.write("t,d_mc,speed,gdot,C\n")
+            f.writelines("3,%.9g,%.9g,%.9g,0.5\n" % (q / R, v, k * g) for q, v, g in zip(d, u, du))
+        (t, top, sp, gd, lay, ratio), = pdrum.depth_rows(path, dr)
+        want = [U * (1 - q * dr / D) ** 2 for q in (1, 3)]
+        errs.append((abs(lay - D) / (d[1] - d[0]), max(abs(sp[i] / want[i] - 1) for i in (0, 1)), abs(ratio / k - 1)))
+    e = np.max(errs, axis=0)
+    check("periodic_drum depth: layer's foot - D (samples)", e[0], 1.0, e[0] <= 1.0, "where u is least")
+    check("periodic_drum depth: speed at 1, 3 dr / the profile's - 1", e[1], 2e-2, e[1] < 2e-2,
+          "the nearest sample, 0.05 dr away at most")
+    check("periodic_drum depth: shear-rate ratio / k - 1 (k = 1, 1.2)", e[2], 1e-2, e[2] < 1e-2,
+          "finite differences of the sampled profile")
+    path = os.path.join(work, "surface.csv")
+    with open(path, "w") as f:
+        f.write("call,variant,dim,dr_m,threshold_frac,t_s,speed_cm_s,seg_index\n"
+                "1,base,2D,0.0005,0.75,2,8,0.01\n1,base,2D,0.0005,0.75,3,9,0.02\n1,base,2D,0.0005,0.75,4,20,0.9\n"
+                "1,base,3D,0.0005,0.8333,1,50,0.5\n1,base,3D,0.0005,0.8333,2,7,0.01\n1,base,3D,0.0005,0.8333,3,8,0.01\n")
+    runs = pdrum.surface_runs(path)
+    two, three = runs[("base", "2D", 0.0005, 0.75)], runs[("base", "3D", 0.0005, 0.8333)]
+    ts = sorted(set(two) & set(three))
+    got = pdrum._mean(two, ts) + pdrum._mean(three, ts)
+    e = max(abs(g - w) for g, w in zip(got, (8.5, 0.015, 7.5, 0.01)))
+    check("periodic_drum surface: means over the shared t = 2-3 s (t = 1 and 4 left out)", e, 1e-12,
+          e < 1e-12 and ts == [2.0, 3.0], "the made-up rows")
 
 
 if __name__ == "__main__":
