@@ -24,7 +24,11 @@ viscosity, docs/validation.md):
            (measured +25 %; a steady layer's changes by < 1 % by then).
   riemann  the steady case with Flow:stabilization riemann (the Riemann
            solver's momentum dissipation alone, docs/granular.md
-           "Stabilisation"): the same tolerance on the mean as alpha_av 0.
+           "Stabilisation") to 0.8 s (five relaxation times), the mean of the
+           snapshots of t = 0.4-0.8 s: measured 1.3 % under the analytic
+           (0.65 % over it to 1.2 s with the last 0.5 s, 40 s more of a core;
+           development machine, 2026-12-01); the same tolerance on the mean as
+           alpha_av 0.
   segreg.  25 deg, H = 2 cm, dr 2 mm, V 0.04 m/s, D 2e-4 m^2/s, C 0.5 (Pe 3.6)
            to 3 s: measured MAE 0.0096 against eq. 28 (0.0055 at dr 1 mm,
            0.0030 at 0.5 mm on the H100); tolerance 0.02.
@@ -47,7 +51,7 @@ def main():
     layer = dict(H=0.005, dr=0.00025, alpha=0.0, E=2.5e4)
     # the two long runs first: side by side on two cores the short three then fill in after them
     cases = [cs.case("steady", theta=25, t_end=1.2, **layer),
-             cs.case("steady_riemann", theta=25, t_end=1.2, stab="riemann", **layer),
+             cs.case("steady_riemann", theta=25, t_end=0.8, stab="riemann", **layer),
              cs.case("rest", theta=18, t_end=0.4, **layer), cs.case("running", theta=30, t_end=0.4, **layer),
              cs.case("seg", dr=0.002, seg=cs.SEG)]
     for c in cases:
@@ -62,7 +66,7 @@ def main():
     # below the first row, so that the rows read one off and "the rows above the first" lay within 18.3 % of
     # u(H); with E moved by 4e-14 of itself, 4.8 % (2026-11-29, after the reordered sums of issue 55)
     S = {c.name: cs.summarise(a.work, c.name, {"theta": c.meta["theta"], "H": c.meta["H"]},
-                              window=0.5 if c.name.startswith("steady") else 0.0) for c in cases}
+                              window={"steady": 0.5, "steady_riemann": 0.4}.get(c.name, 0.0)) for c in cases}
 
     s = S["steady"]
     good = s["err_mean"] <= TOL_MEAN and s["err_profile"] <= TOL_ROWS
