@@ -52,7 +52,7 @@ static void save_all(particles_t *p)
 static shift_ctx fickian(void)
 {
     sph_ctx k = sph_make(2, (real)(1.5 * DR), (real)DR);
-    return shift_make(&k, SHIFT_FICKIAN, 2);
+    return shift_make(&k, SHIFT_FICKIAN, 2, R(0.5));
 }
 
 static void test_lattice_moment(void **st)
@@ -165,7 +165,7 @@ static void test_shift_surface(void **st)
         particles_t p;
         nbr_grid g = {0};
         sph_ctx k = sph_make(2, (real)(1.5 * DR), (real)DR);
-        shift_ctx c = shift_make(&k, SHIFT_FICKIAN, 2);
+        shift_ctx c = shift_make(&k, SHIFT_FICKIAN, 2, R(0.5));
         int n = 14;
         tu_block2d(&p, n, n, DR, 0, 0);
         size_t id = (size_t)((n - row) * n + n / 2); /* mid-width, moved along the surface */

@@ -10,8 +10,10 @@
  * and dummies, so a particle crowding a wall is pushed off it; dummies are
  * never shifted. At a free surface the particle concentration has a jump
  * the shift would follow outwards: a particle whose divergence of position
- * div r_i = -sum_j V_j x_ij . grad_i W_ij is below d - 1/2 (1.5 in 2D,
- * Lind et al.'s threshold; d in a full support) is not shifted. (Lind et
+ * div r_i = -sum_j V_j x_ij . grad_i W_ij is below d - s (s =
+ * Flow:shift_surface, 1/2 by default: 1.5 in 2D, Lind et al.'s threshold; d
+ * in a full support) is not shifted. The drums' surface speed depends on s
+ * (docs/drum3d.md: the periodic 3D drum's slab -12.5 % from s 1/2 to 3/4). (Lind et
  * al. keep the tangential part there, with the normal from grad C; with
  * the normal from the same sum as the shift that part is the difference of
  * two tilted estimates, of no reliable sign for a particle displaced along
@@ -45,10 +47,10 @@ typedef struct shift_ctx {
     real A;     /* Flow:shift_coeff, - */
     real R;     /* anti-clumping weight, 0.2 (Monaghan 2000; Lind et al. 2012) */
     real w_dr;  /* W(dr), the kernel at the initial spacing */
-    real div_free; /* div r below which a particle is at a free surface: d - 1/2 */
+    real div_free; /* div r below which a particle is at a free surface: d - s (Flow:shift_surface) */
 } shift_ctx;
 
-HD_INLINE shift_ctx shift_make(const sph_ctx *k, int kind, real A)
+HD_INLINE shift_ctx shift_make(const sph_ctx *k, int kind, real A, real s)
 {
     shift_ctx c;
     c.k = *k;
@@ -56,7 +58,7 @@ HD_INLINE shift_ctx shift_make(const sph_ctx *k, int kind, real A)
     c.A = A;
     c.R = R(0.2);
     c.w_dr = kernel_w(k->dr, k->h, k->alpha);
-    c.div_free = (real)k->dim - R(0.5);
+    c.div_free = (real)k->dim - s;
     return c;
 }
 

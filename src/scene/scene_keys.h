@@ -368,10 +368,14 @@ SECTION("Flow", flow, scene_flow)
       "damping acts while t < damping_until, s; default 0")
     KE("Flow", flow, scene_flow, shifting, enum shift_kind, flow_shiftings, "off",
        "particle shifting: off (the paper's) | fickian (Lind et al. 2012): each step a material particle moves by"
-       " -A h |u| dt sum_j V_j (1 + 0.2 (W_ij/W(dr))^4) grad W_ij, tangentially at a free surface, u and sigma carried by a"
-       " Taylor step, C and volume unchanged; default off")
+       " -A h |u| dt sum_j V_j (1 + 0.2 (W_ij/W(dr))^4) grad W_ij, not at a free surface (Flow:shift_surface), u and"
+       " sigma carried by a Taylor step, C and volume unchanged; default off")
     KF("Flow", flow, scene_flow, shift_coeff, OPT, "2", 0, INFINITY, HI_OPEN, ALWAYS,
       "A of Flow:shifting fickian (D = A h |u| dt), -; Lind et al. (2012) take 2; default 2")
+    KF("Flow", flow, scene_flow, shift_surface, OPT, "0.5", 0, 1, LO_OPEN, ALWAYS,
+      "s of Flow:shifting fickian's free surface: a particle whose divergence of position div r is below d - s is"
+      " at a free surface and not shifted, -; Lind et al. (2012) take 1/2 in 2D; a numerical parameter the drums'"
+      " surface speed depends on (docs/drum3d.md); default 0.5")
     KE("Flow", flow, scene_flow, background_pressure, enum flow_background, flow_backgrounds, "momentum",
        "Newtonian fluid: its background pressure Initial:pressure acts in the momentum pair term (3.9) (momentum) | is left out"
        " of it (excluded; Adami, Hu & Adams 2013); the granular material ignores it; default momentum")

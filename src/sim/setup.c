@@ -677,7 +677,8 @@ void setup_contexts(sim_t *s)
     s->flow_on = sc->kinematics.velocity == KIN_COMPUTED;
 
     flow_ctx_of(sc, &s->seg.k, &s->seg.sp, &s->flow);
-    s->shift = shift_make(&s->seg.k, (int)sc->flow.shifting, (real)sc->flow.shift_coeff);
+    s->shift = shift_make(&s->seg.k, (int)sc->flow.shifting, (real)sc->flow.shift_coeff,
+                          (real)sc->flow.shift_surface);
     wall_geom *w = &s->flow.w;
     memset(w, 0, sizeof *w);
     w->periodic = (int)sc->geometry.periodic;
