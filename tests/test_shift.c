@@ -19,7 +19,10 @@
  *    its site, 2.0 % measured);
  *  - at a free surface (the top row of a block with nothing above) a
  *    particle displaced along the surface is not shifted; three rows down
- *    the same displacement is shifted back;
+ *    the same displacement is shifted back; with Flow:shift_surface_rule
+ *    tangential the top row's is shifted back too, along the surface (its
+ *    normal part under a fifth of the tangential), and three rows down as
+ *    before;
  *  - Flow:background_pressure excluded: a uniform background pressure p0
  *    on a perturbed block exerts no force (flow_ctx.p_back = 2 p0 / rho^2
  *    cancels it in the pair term to round-off), where the pair term alone
@@ -52,7 +55,7 @@ static void save_all(particles_t *p)
 static shift_ctx fickian(void)
 {
     sph_ctx k = sph_make(2, (real)(1.5 * DR), (real)DR);
-    return shift_make(&k, SHIFT_FICKIAN, 2, R(0.5));
+    return shift_make(&k, SHIFT_FICKIAN, 2, R(0.5), SHIFT_SURFACE_NONE);
 }
 
 static void test_lattice_moment(void **st)
@@ -161,30 +164,32 @@ static void test_shift_taylor(void **st)
 static void test_shift_surface(void **st)
 {
     (void)st;
-    for (int row = 1; row <= 4; row += 3) { /* the top row, then three rows down */
-        particles_t p;
-        nbr_grid g = {0};
-        sph_ctx k = sph_make(2, (real)(1.5 * DR), (real)DR);
-        shift_ctx c = shift_make(&k, SHIFT_FICKIAN, 2, R(0.5));
-        int n = 14;
-        tu_block2d(&p, n, n, DR, 0, 0);
-        size_t id = (size_t)((n - row) * n + n / 2); /* mid-width, moved along the surface */
-        p.x[0][id] += (real)(0.2 * DR);
-        for (size_t i = 0; i < p.n; ++i) p.v[0][i] = (real)0.1;
-        nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-        save_all(&p);
-        size_t i = tu_find(&p, (int64_t)id);
-        shift_team(i, &p, &g.view, &c, (real)1e-4, 0, 1);
-        double s[2] = {(double)(p.x_n[0][i] - (preal)p.x[0][i]), (double)(p.x_n[1][i] - (preal)p.x[1][i])};
-        if (row == 1) {
-            assert_true(s[0] == 0 && s[1] == 0);
-        } else {
-            assert_true(s[0] < 0);
-            assert_true(fabs(s[1]) < 0.2 * fabs(s[0]));
+    for (int rule = SHIFT_SURFACE_NONE; rule <= SHIFT_SURFACE_TANGENTIAL; ++rule)
+        for (int row = 1; row <= 4; row += 3) { /* the top row, then three rows down */
+            particles_t p;
+            nbr_grid g = {0};
+            sph_ctx k = sph_make(2, (real)(1.5 * DR), (real)DR);
+            shift_ctx c = shift_make(&k, SHIFT_FICKIAN, 2, R(0.5), rule);
+            int n = 14;
+            tu_block2d(&p, n, n, DR, 0, 0);
+            size_t id = (size_t)((n - row) * n + n / 2); /* mid-width, moved along the surface */
+            p.x[0][id] += (real)(0.2 * DR);
+            for (size_t i = 0; i < p.n; ++i) p.v[0][i] = (real)0.1;
+            nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+            save_all(&p);
+            size_t i = tu_find(&p, (int64_t)id);
+            shift_team(i, &p, &g.view, &c, (real)1e-4, 0, 1);
+            double s[2] = {(double)(p.x_n[0][i] - (preal)p.x[0][i]), (double)(p.x_n[1][i] - (preal)p.x[1][i])};
+            print_message("rule %d row %d: shift (%.3e, %.3e) m\n", rule, row, s[0], s[1]);
+            if (row == 1 && rule == SHIFT_SURFACE_NONE) {
+                assert_true(s[0] == 0 && s[1] == 0);
+            } else {
+                assert_true(s[0] < 0);
+                assert_true(fabs(s[1]) < 0.2 * fabs(s[0]));
+            }
+            nbr_free(&g);
+            part_free(&p);
         }
-        nbr_free(&g);
-        part_free(&p);
-    }
 }
 
 static void test_background_excluded(void **st)

@@ -13,11 +13,14 @@
  * div r_i = -sum_j V_j x_ij . grad_i W_ij is below d - s (s =
  * Flow:shift_surface, 1/2 by default: 1.5 in 2D, Lind et al.'s threshold; d
  * in a full support) is not shifted. The drums' surface speed depends on s
- * (docs/drum3d.md: the periodic 3D drum's slab -12.5 % from s 1/2 to 3/4). (Lind et
- * al. keep the tangential part there, with the normal from grad C; with
- * the normal from the same sum as the shift that part is the difference of
- * two tilted estimates, of no reliable sign for a particle displaced along
- * the surface, so it is left out: the surface layer is not regularised.)
+ * (docs/drum3d.md: the periodic 3D drum's slab -12.5 % from s 1/2 to 3/4).
+ * With Flow:shift_surface_rule tangential such a particle keeps the part of
+ * its shift along the surface: dr - (dr . n) n / |n|^2, n = sum_j V_j grad
+ * W_ij (unweighted: the shift's own sum without the anti-clumping weight;
+ * the free-surface treatment of Lind et al. 2012 and of Sun et al. 2017's
+ * delta+-SPH, whose normal is this sum's). A particle of a flat surface
+ * row moved along it by 0.2 dr is shifted back by about half of what an
+ * interior one is, its normal part under a fifth of that (tests/test_shift.c).
  *
  * The shifted particle carries its velocity and stress to its new place by
  * the first-order Taylor step phi' = phi + dr . grad phi (as Lind et al. do,
@@ -48,9 +51,10 @@ typedef struct shift_ctx {
     real R;     /* anti-clumping weight, 0.2 (Monaghan 2000; Lind et al. 2012) */
     real w_dr;  /* W(dr), the kernel at the initial spacing */
     real div_free; /* div r below which a particle is at a free surface: d - s (Flow:shift_surface) */
+    int rule;      /* enum shift_surface_rule (Flow:shift_surface_rule) */
 } shift_ctx;
 
-HD_INLINE shift_ctx shift_make(const sph_ctx *k, int kind, real A, real s)
+HD_INLINE shift_ctx shift_make(const sph_ctx *k, int kind, real A, real s, int rule)
 {
     shift_ctx c;
     c.k = *k;
@@ -59,6 +63,7 @@ HD_INLINE shift_ctx shift_make(const sph_ctx *k, int kind, real A, real s)
     c.R = R(0.2);
     c.w_dr = kernel_w(k->dr, k->h, k->alpha);
     c.div_free = (real)k->dim - s;
+    c.rule = rule;
     return c;
 }
 
@@ -66,7 +71,7 @@ HD_INLINE shift_ctx shift_make(const sph_ctx *k, int kind, real A, real s)
  * weight), div r, and the gradient of sigma, over i's neighbours (that of
  * u is the velocity gradient L, summed by the caller: shift_finish). */
 typedef struct shift_sums {
-    real gc[3], div, gs[18];
+    real gc[3], div, gs[18], gk[3]; /* gk: sum_j V_j grad W_ij, the surface normal's (rule tangential only) */
 } shift_sums;
 
 HD_INLINE void shift_sums_zero(shift_sums *a)
@@ -74,6 +79,7 @@ HD_INLINE void shift_sums_zero(shift_sums *a)
     for (int b = 0; b < 3; ++b) a->gc[b] = 0;
     a->div = 0;
     for (int q = 0; q < 18; ++q) a->gs[q] = 0;
+    for (int b = 0; b < 3; ++b) a->gk[b] = 0;
 }
 
 /* Neighbour j's share (r, r2, f = kernel_f(r), V = V_j, x_ij, sigma_j;
@@ -86,6 +92,8 @@ HD_INLINE void shift_pair_add(shift_sums *a, const shift_ctx *c, real r, real r2
     const real t = kernel_w(r, k->h, k->alpha) * (R(1.0) / c->w_dr), t2 = t * t; /* 1/w_dr hoisted */
     const real cw = V * (R(1.0) + c->R * t2 * t2) * f, vf = V * f;
     a->div -= vf * r2;
+    if (c->rule == SHIFT_SURFACE_TANGENTIAL)
+        for (int b = 0; b < 3; ++b) a->gk[b] += vf * xij[b];
     for (int b = 0; b < 3; ++b) {
         a->gc[b] += cw * xij[b];
         for (int q = 0; q < 6; ++q) a->gs[3 * q + b] += vf * (sj[q] - si[q]) * xij[b];
@@ -103,11 +111,20 @@ HD_INLINE void shift_finish(size_t i, particles_t *p, const shift_ctx *c, real d
     team_sum(a->gc, 3, nlanes);
     team_sum(&a->div, 1, nlanes);
     team_sum(a->gs, 18, nlanes);
+    if (c->rule == SHIFT_SURFACE_TANGENTIAL) team_sum(a->gk, 3, nlanes);
     if (lane != 0) return;
     const real speed = sqrt_r(ui[0] * ui[0] + ui[1] * ui[1] + ui[2] * ui[2]);
     const real D = c->A * k->h * speed * dt;
-    const real dr[3] = {-D * a->gc[0], -D * a->gc[1], -D * a->gc[2]};
-    if (a->div < c->div_free) return; /* at a free surface: not shifted */
+    real dr[3] = {-D * a->gc[0], -D * a->gc[1], -D * a->gc[2]};
+    if (a->div < c->div_free) { /* at a free surface */
+        if (c->rule != SHIFT_SURFACE_TANGENTIAL) return; /* not shifted */
+        const real *n = a->gk; /* the normal, inwards: sum_j V_j grad W_ij */
+        const real n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+        if (n2 > 0) {
+            const real dn = (dr[0] * n[0] + dr[1] * n[1] + dr[2] * n[2]) / n2;
+            for (int d = 0; d < 3; ++d) dr[d] -= dn * n[d];
+        }
+    }
     for (int d = 0; d < 3; ++d) { /* a fixed trip count: the pointer table indexed statically (a runtime
                                    * bound put the fused flow pass's particles_t on the stack) */
         if (d >= k->dim) break;

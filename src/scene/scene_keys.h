@@ -45,6 +45,8 @@ static const cyaml_strval_t seg_schemes[] = {
 static const cyaml_strval_t seg_limiters[] = {{"none", SEG_LIMITER_NONE}, {"donor", SEG_LIMITER_DONOR}};
 static const cyaml_strval_t seg_gdots[] = {{"total", SEG_GDOT_TOTAL}, {"yielded", SEG_GDOT_YIELDED}};
 static const cyaml_strval_t flow_shiftings[] = {{"off", SHIFT_OFF}, {"fickian", SHIFT_FICKIAN}};
+static const cyaml_strval_t flow_shift_rules[] = {{"none", SHIFT_SURFACE_NONE},
+                                                  {"tangential", SHIFT_SURFACE_TANGENTIAL}};
 static const cyaml_strval_t flow_backgrounds[] = {{"momentum", FLOW_BACKGROUND_MOMENTUM},
                                                    {"excluded", FLOW_BACKGROUND_EXCLUDED}};
 static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
@@ -376,6 +378,10 @@ SECTION("Flow", flow, scene_flow)
       "s of Flow:shifting fickian's free surface: a particle whose divergence of position div r is below d - s is"
       " at a free surface and not shifted, -; Lind et al. (2012) take 1/2 in 2D; a numerical parameter the drums'"
       " surface speed depends on (docs/drum3d.md); default 0.5")
+    KE("Flow", flow, scene_flow, shift_surface_rule, enum shift_surface_rule, flow_shift_rules, "none",
+       "what Flow:shifting fickian does at a free surface (Flow:shift_surface): none (not shifted) | tangential (the"
+       " shift less its part along the surface normal n, n along sum_j V_j grad W_ij, as in Sun et al. 2017's delta+-SPH);"
+       " default none")
     KE("Flow", flow, scene_flow, background_pressure, enum flow_background, flow_backgrounds, "momentum",
        "Newtonian fluid: its background pressure Initial:pressure acts in the momentum pair term (3.9) (momentum) | is left out"
        " of it (excluded; Adami, Hu & Adams 2013); the granular material ignores it; default momentum")

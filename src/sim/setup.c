@@ -678,7 +678,7 @@ void setup_contexts(sim_t *s)
 
     flow_ctx_of(sc, &s->seg.k, &s->seg.sp, &s->flow);
     s->shift = shift_make(&s->seg.k, (int)sc->flow.shifting, (real)sc->flow.shift_coeff,
-                          (real)sc->flow.shift_surface);
+                          (real)sc->flow.shift_surface, (int)sc->flow.shift_surface_rule);
     wall_geom *w = &s->flow.w;
     memset(w, 0, sizeof *w);
     w->periodic = (int)sc->geometry.periodic;
