@@ -7,18 +7,17 @@
 # itself, in Xdmf3ReaderS/T and in the legacy XDMF reader; a Threshold on
 # Kind = 0 keeps the material and its Concentration range (each must hold);
 # a rendered PNG is not blank. The render runs in a pvbatch of its own: if it
-# dies rather than failing a check (a CI machine's ParaView once died of a
-# signal making its first render view, in Mesa's GL under xvfb), a plain
-# Sphere is drawn the same way; if that dies too, this machine cannot render
-# and the render check is reported as not run (the data checks still count);
-# if the Sphere draws, the failure is ours. Without pvbatch it exits 77
+# dies rather than failing a check, a plain Sphere is drawn the same way; if
+# that dies too, this machine cannot render and the render check is reported
+# as not run (the data checks still count); if the Sphere draws, the failure
+# is ours. Without pvbatch it exits 77
 # (skipped), except under CI=true, where make deps-test installs it and a
 # missing pvbatch is a failure.
 set -u
 bin=${1:?usage: test_paraview.sh build/sphseg}
 PY=${PYTHON:-/usr/bin/python3}
-if ! command -v pvbatch >/dev/null || ! command -v xvfb-run >/dev/null; then
-    echo "no pvbatch or xvfb-run here (make deps-test installs paraview, python3-paraview, xvfb)"
+if ! command -v pvbatch >/dev/null || ! command -v Xvfb >/dev/null; then
+    echo "no pvbatch or Xvfb here (make deps-test installs paraview, python3-paraview, xvfb)"
     [ "${CI:-}" = true ] && exit 1
     exit 77
 fi
@@ -45,9 +44,20 @@ assert len(set(e["nmaterial"])) > 1, "the silo lost no particles: the test needs
 print("snapshots:", len(e["npart"]), "particles:", e["npart"], "material:", e["nmaterial"])
 json.dump(e, open(sys.argv[2], "w"))
 PYEOF
-pv() { # mode args...: one pvbatch under xvfb (24-bit screen, GLX); its VTK stack traces cut to their cause
-    timeout 300 xvfb-run -a -s "-screen 0 640x480x24 +extension GLX" pvbatch tests/paraview_check.py "$@" 2>&1 |
-        grep -v -E -e '^$' -e 'Xlib' -e 'vtkXOpenGL' -e '^ *[0-9]+ +0x[0-9a-f]+ ' 
+# One X server for the three pvbatch runs, started here rather than by xvfb-run, with
+# -noreset: an X server resets when its last client leaves, pvbatch opens the display
+# more than once, and one opening during the reset fails ("vtkXOpenGLRenderWindow: bad X
+# server connection. Aborting.", SIGABRT: a CI machine once, and here a plain Sphere 4
+# times in 8 on a fresh Xvfb without it, 0 in 10 with it). -displayfd writes the display
+# number once the server accepts connections.
+Xvfb -displayfd 3 -screen 0 640x480x24 +extension GLX -nolisten tcp -noreset 3>"$tmp/display" 2>"$tmp/xvfb.log" &
+xvfb=$!
+trap 'kill $xvfb 2>/dev/null; wait $xvfb 2>/dev/null; rm -rf "$tmp"' EXIT
+for _ in $(seq 1 300); do grep -q '^[0-9]' "$tmp/display" 2>/dev/null && break; sleep 0.1; done
+grep -q '^[0-9]' "$tmp/display" || { echo "Xvfb did not start in 30 s:"; tail -5 "$tmp/xvfb.log"; exit 1; }
+export DISPLAY=":$(head -n 1 "$tmp/display")"
+pv() { # mode args...: one pvbatch; VTK's stack traces cut to their cause
+    timeout 300 pvbatch tests/paraview_check.py "$@" 2>&1 | grep -v -E -e '^$' -e '^ *[0-9]+ +0x[0-9a-f]+ '
     return "${PIPESTATUS[0]}"
 }
 pv data "$tmp/silo" "$tmp/expected.json" || exit 1
