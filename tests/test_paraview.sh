@@ -49,12 +49,26 @@ PYEOF
 # more than once, and one opening during the reset fails ("vtkXOpenGLRenderWindow: bad X
 # server connection. Aborting.", SIGABRT: a CI machine once, and here a plain Sphere 4
 # times in 8 on a fresh Xvfb without it, 0 in 10 with it). -displayfd writes the display
-# number once the server accepts connections.
-Xvfb -displayfd 3 -screen 0 640x480x24 +extension GLX -nolisten tcp -noreset 3>"$tmp/display" 2>"$tmp/xvfb.log" &
-xvfb=$!
+# number once the server accepts connections. The display is :99 or above, never :0-:9:
+# hwloc (under mpirun) opens those looking for GPUs, and the lane's MPI runs beside this
+# test died ("X connection to :0 broken") when a server there went away.
+xvfb=
+for n in $(seq 99 140); do
+    [ -e "/tmp/.X$n-lock" ] && continue
+    : >"$tmp/display"
+    Xvfb ":$n" -displayfd 3 -screen 0 640x480x24 +extension GLX -nolisten tcp -noreset \
+        3>"$tmp/display" 2>"$tmp/xvfb.log" &
+    xvfb=$!
+    for _ in $(seq 1 300); do
+        grep -q '^[0-9]' "$tmp/display" && break
+        kill -0 $xvfb 2>/dev/null || break # taken meanwhile: the next number
+        sleep 0.1
+    done
+    grep -q '^[0-9]' "$tmp/display" && break
+    kill $xvfb 2>/dev/null; wait $xvfb 2>/dev/null; xvfb=
+done
+[ -n "$xvfb" ] || { echo "no Xvfb started on :99-:140:"; tail -5 "$tmp/xvfb.log"; exit 1; }
 trap 'kill $xvfb 2>/dev/null; wait $xvfb 2>/dev/null; rm -rf "$tmp"' EXIT
-for _ in $(seq 1 300); do grep -q '^[0-9]' "$tmp/display" 2>/dev/null && break; sleep 0.1; done
-grep -q '^[0-9]' "$tmp/display" || { echo "Xvfb did not start in 30 s:"; tail -5 "$tmp/xvfb.log"; exit 1; }
 export DISPLAY=":$(head -n 1 "$tmp/display")"
 pv() { # mode args...: one pvbatch; VTK's stack traces cut to their cause
     timeout 300 pvbatch tests/paraview_check.py "$@" 2>&1 | grep -v -E -e '^$' -e '^ *[0-9]+ +0x[0-9a-f]+ '
