@@ -22,7 +22,10 @@
  *    the same displacement is shifted back; with Flow:shift_surface_rule
  *    tangential the top row's is shifted back too, along the surface (its
  *    normal part under a fifth of the tangential), and three rows down as
- *    before;
+ *    before; with the rule fade the top row keeps its tangential part
+ *    (within 10 % of the rule tangential's) and a share of its normal part,
+ *    outwards (w = 2 div r / d - 1, 0.24 on this lattice's top row), and
+ *    three rows down, a whole support, its shift is the rule none's (1 %);
  *  - Flow:background_pressure excluded: a uniform background pressure p0
  *    on a perturbed block exerts no force (flow_ctx.p_back = 2 p0 / rho^2
  *    cancels it in the pair term to round-off), where the pair term alone
@@ -161,35 +164,56 @@ static void test_shift_taylor(void **st)
     assert_true(f->p.sig_n[0][i] == f->p.sig[0][i]);
 }
 
+/* The shift of the particle `row` rows below the top of a 14 x 14 block, moved 0.2 dr along the surface,
+ * under the free-surface rule `rule` with s = Flow:shift_surface (m). */
+static void surface_shift(int rule, double s_free, int row, double out[2])
+{
+    particles_t p;
+    nbr_grid g = {0};
+    sph_ctx k = sph_make(2, (real)(1.5 * DR), (real)DR);
+    shift_ctx c = shift_make(&k, SHIFT_FICKIAN, 2, (real)s_free, rule);
+    int n = 14;
+    tu_block2d(&p, n, n, DR, 0, 0);
+    size_t id = (size_t)((n - row) * n + n / 2); /* mid-width, moved along the surface */
+    p.x[0][id] += (real)(0.2 * DR);
+    for (size_t i = 0; i < p.n; ++i) p.v[0][i] = (real)0.1;
+    nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
+    save_all(&p);
+    size_t i = tu_find(&p, (int64_t)id);
+    shift_team(i, &p, &g.view, &c, (real)1e-4, 0, 1);
+    out[0] = (double)(p.x_n[0][i] - (preal)p.x[0][i]), out[1] = (double)(p.x_n[1][i] - (preal)p.x[1][i]);
+    print_message("rule %d, s %.2f, row %d: shift (%.3e, %.3e) m\n", rule, s_free, row, out[0], out[1]);
+    nbr_free(&g);
+    part_free(&p);
+}
+
 static void test_shift_surface(void **st)
 {
     (void)st;
-    for (int rule = SHIFT_SURFACE_NONE; rule <= SHIFT_SURFACE_TANGENTIAL; ++rule)
+    double sh[3][5][2]; /* [rule][row]: the shift along the surface, and across */
+    for (int rule = SHIFT_SURFACE_NONE; rule <= SHIFT_SURFACE_FADE; ++rule)
         for (int row = 1; row <= 4; row += 3) { /* the top row, then three rows down */
-            particles_t p;
-            nbr_grid g = {0};
-            sph_ctx k = sph_make(2, (real)(1.5 * DR), (real)DR);
-            shift_ctx c = shift_make(&k, SHIFT_FICKIAN, 2, R(0.5), rule);
-            int n = 14;
-            tu_block2d(&p, n, n, DR, 0, 0);
-            size_t id = (size_t)((n - row) * n + n / 2); /* mid-width, moved along the surface */
-            p.x[0][id] += (real)(0.2 * DR);
-            for (size_t i = 0; i < p.n; ++i) p.v[0][i] = (real)0.1;
-            nbr_build(&g, &p, R(2.0) * c.k.h, NULL);
-            save_all(&p);
-            size_t i = tu_find(&p, (int64_t)id);
-            shift_team(i, &p, &g.view, &c, (real)1e-4, 0, 1);
-            double s[2] = {(double)(p.x_n[0][i] - (preal)p.x[0][i]), (double)(p.x_n[1][i] - (preal)p.x[1][i])};
-            print_message("rule %d row %d: shift (%.3e, %.3e) m\n", rule, row, s[0], s[1]);
+            double *s = sh[rule][row];
+            surface_shift(rule, 0.5, row, s);
             if (row == 1 && rule == SHIFT_SURFACE_NONE) {
                 assert_true(s[0] == 0 && s[1] == 0);
+            } else if (row == 1 && rule == SHIFT_SURFACE_FADE) {
+                assert_true(s[0] < 0 && s[1] > 0); /* back along the surface, and a share outwards */
             } else {
                 assert_true(s[0] < 0);
                 assert_true(fabs(s[1]) < 0.2 * fabs(s[0]));
             }
-            nbr_free(&g);
-            part_free(&p);
         }
+    /* fade: the top row's shift is the tangential rule's plus a share w of the normal part, which the rule
+     * none with a threshold under the row's div r (s = 1: d - 1 = 1 < 1.24) keeps whole */
+    double full[2];
+    surface_shift(SHIFT_SURFACE_NONE, 1.0, 1, full);
+    const double *tg = sh[SHIFT_SURFACE_TANGENTIAL][1], *fd = sh[SHIFT_SURFACE_FADE][1];
+    const double wx = (fd[0] - tg[0]) / (full[0] - tg[0]), wy = (fd[1] - tg[1]) / (full[1] - tg[1]);
+    print_message("fade's share of the normal part at the top row: %.4f (x), %.4f (y)\n", wx, wy);
+    assert_true(wx > 0.1 && wx < 0.5 && fabs(wx - wy) < 1e-6);
+    /* a whole support three rows down: within 3 % of the rule none's (the displaced particle's div r < d) */
+    assert_true(fabs(sh[SHIFT_SURFACE_FADE][4][0] / sh[SHIFT_SURFACE_NONE][4][0] - 1) < 0.03);
 }
 
 static void test_background_excluded(void **st)

@@ -6,7 +6,9 @@
 # moves the particles (s 0.25 shifts more of the surface rows of the drum:
 # docs/drum3d.md measured the drums' surface speed against it). So does
 # Flow:shift_surface_rule: none (the default) gives the default's bits,
-# tangential (the surface rows shifted along the surface) moves them. The
+# tangential (the surface rows shifted along the surface) moves them, and
+# fade (no threshold: the normal part's share 2 div r / d - 1) moves them
+# otherwise than tangential. The
 # 2D EV drum at dr 2.5 mm (Fickian shifting on, as the scene sets it), 200
 # steps.
 set -u
@@ -20,7 +22,8 @@ run() { # out, extra -P...
         -P Run:max_steps=200 -P Output:dt=1e3 -P Run:progress_s=1e9 "$@" > "$tmp/$out.log" 2>&1
 }
 run def && run half -P Flow:shift_surface=0.5 && run quarter -P Flow:shift_surface=0.25 &&
-    run none -P Flow:shift_surface_rule=none && run tangential -P Flow:shift_surface_rule=tangential ||
+    run none -P Flow:shift_surface_rule=none && run tangential -P Flow:shift_surface_rule=tangential &&
+    run fade -P Flow:shift_surface_rule=fade ||
     { echo "FAIL a run did not finish"; tail -5 "$tmp"/*.log; exit 1; }
 # the largest difference of the last snapshots' positions, by particle ID (m)
 diffx() {
@@ -35,12 +38,15 @@ PY
     )
 }
 d_half=$(diffx def half) d_quarter=$(diffx def quarter) d_none=$(diffx def none) d_tan=$(diffx def tangential)
+d_fade=$(diffx tangential fade)
 check "Flow:shift_surface 0.5 gives the default's bits (largest |dx| $d_half m)" "[ \"$d_half\" = 0.000e+00 ]"
 check "Flow:shift_surface 0.25 moves the particles (largest |dx| $d_quarter m, above 1e-9)" \
     "awk -v d=$d_quarter 'BEGIN { exit !(d > 1e-9) }'"
 check "Flow:shift_surface_rule none gives the default's bits (largest |dx| $d_none m)" "[ \"$d_none\" = 0.000e+00 ]"
 check "Flow:shift_surface_rule tangential moves the particles (largest |dx| $d_tan m, above 1e-9)" \
     "awk -v d=$d_tan 'BEGIN { exit !(d > 1e-9) }'"
+check "Flow:shift_surface_rule fade moves them otherwise than tangential (largest |dx| $d_fade m, above 1e-9)" \
+    "awk -v d=$d_fade 'BEGIN { exit !(d > 1e-9) }'"
 grep -q "shift_surface: 0.25" "$tmp/quarter/used_params.yml"
 check "used_params.yml echoes Flow:shift_surface" "[ $? -eq 0 ]"
 exit $fail

@@ -19,8 +19,9 @@ enum stress_yield { YIELD_DRUCKER_PRAGER = 0, YIELD_MU_I = 1 };
 
 /* Flow:shifting: off (the paper's) | fickian (Lind et al. 2012; physics/shift.h). */
 enum shift_kind { SHIFT_OFF = 0, SHIFT_FICKIAN = 1 };
-/* Flow:shift_surface_rule: what a free-surface particle's shift keeps: none | its part along the surface. */
-enum shift_surface_rule { SHIFT_SURFACE_NONE = 0, SHIFT_SURFACE_TANGENTIAL = 1 };
+/* Flow:shift_surface_rule: what a free-surface particle's shift keeps: none | its part along the surface |
+ * a share that fades with div r (no threshold). */
+enum shift_surface_rule { SHIFT_SURFACE_NONE = 0, SHIFT_SURFACE_TANGENTIAL = 1, SHIFT_SURFACE_FADE = 2 };
 
 /* Segregation:scheme. paper: eq. (2.10)/(3.13) with HCSR boundaries (§4.2)
  * and C1 boundary gradients (App. E); direct: eq. (2.5) with the same

@@ -21,6 +21,12 @@
  * delta+-SPH, whose normal is this sum's). A particle of a flat surface
  * row moved along it by 0.2 dr is shifted back by about half of what an
  * interior one is, its normal part under a fifth of that (tests/test_shift.c).
+ * With Flow:shift_surface_rule fade there is no threshold: every particle
+ * keeps its tangential part and a share w = 2 div r / d - 1, clamped to
+ * [0, 1], of its normal part, dr - (1 - w) (dr . n) n / |n|^2; w is 0 where a
+ * flat surface cuts the support in half (div r = d/2 in the continuum, in 2D
+ * and 3D alike) and 1 in a whole support (div r = d): the normal part fades
+ * in over the kernel's reach below the surface instead of at a step.
  *
  * The shifted particle carries its velocity and stress to its new place by
  * the first-order Taylor step phi' = phi + dr . grad phi (as Lind et al. do,
@@ -92,7 +98,7 @@ HD_INLINE void shift_pair_add(shift_sums *a, const shift_ctx *c, real r, real r2
     const real t = kernel_w(r, k->h, k->alpha) * (R(1.0) / c->w_dr), t2 = t * t; /* 1/w_dr hoisted */
     const real cw = V * (R(1.0) + c->R * t2 * t2) * f, vf = V * f;
     a->div -= vf * r2;
-    if (c->rule == SHIFT_SURFACE_TANGENTIAL)
+    if (c->rule != SHIFT_SURFACE_NONE)
         for (int b = 0; b < 3; ++b) a->gk[b] += vf * xij[b];
     for (int b = 0; b < 3; ++b) {
         a->gc[b] += cw * xij[b];
@@ -111,17 +117,23 @@ HD_INLINE void shift_finish(size_t i, particles_t *p, const shift_ctx *c, real d
     team_sum(a->gc, 3, nlanes);
     team_sum(&a->div, 1, nlanes);
     team_sum(a->gs, 18, nlanes);
-    if (c->rule == SHIFT_SURFACE_TANGENTIAL) team_sum(a->gk, 3, nlanes);
+    if (c->rule != SHIFT_SURFACE_NONE) team_sum(a->gk, 3, nlanes);
     if (lane != 0) return;
     const real speed = sqrt_r(ui[0] * ui[0] + ui[1] * ui[1] + ui[2] * ui[2]);
     const real D = c->A * k->h * speed * dt;
     real dr[3] = {-D * a->gc[0], -D * a->gc[1], -D * a->gc[2]};
-    if (a->div < c->div_free) { /* at a free surface */
-        if (c->rule != SHIFT_SURFACE_TANGENTIAL) return; /* not shifted */
+    const int fade = c->rule == SHIFT_SURFACE_FADE;
+    if (fade || a->div < c->div_free) { /* at a free surface, or fading: the part along the normal cut */
+        if (c->rule == SHIFT_SURFACE_NONE) return; /* not shifted */
+        real keep = 0; /* the share of the normal part kept: tangential none; fade 2 div r / d - 1 in [0, 1] */
+        if (fade) {
+            keep = R(2.0) * a->div / (real)k->dim - R(1.0);
+            keep = keep < 0 ? 0 : (keep > 1 ? R(1.0) : keep);
+        }
         const real *n = a->gk; /* the normal, inwards: sum_j V_j grad W_ij */
         const real n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
         if (n2 > 0) {
-            const real dn = (dr[0] * n[0] + dr[1] * n[1] + dr[2] * n[2]) / n2;
+            const real dn = (R(1.0) - keep) * (dr[0] * n[0] + dr[1] * n[1] + dr[2] * n[2]) / n2;
             for (int d = 0; d < 3; ++d) dr[d] -= dn * n[d];
         }
     }

@@ -46,7 +46,8 @@ static const cyaml_strval_t seg_limiters[] = {{"none", SEG_LIMITER_NONE}, {"dono
 static const cyaml_strval_t seg_gdots[] = {{"total", SEG_GDOT_TOTAL}, {"yielded", SEG_GDOT_YIELDED}};
 static const cyaml_strval_t flow_shiftings[] = {{"off", SHIFT_OFF}, {"fickian", SHIFT_FICKIAN}};
 static const cyaml_strval_t flow_shift_rules[] = {{"none", SHIFT_SURFACE_NONE},
-                                                  {"tangential", SHIFT_SURFACE_TANGENTIAL}};
+                                                  {"tangential", SHIFT_SURFACE_TANGENTIAL},
+                                                  {"fade", SHIFT_SURFACE_FADE}};
 static const cyaml_strval_t flow_backgrounds[] = {{"momentum", FLOW_BACKGROUND_MOMENTUM},
                                                    {"excluded", FLOW_BACKGROUND_EXCLUDED}};
 static const cyaml_strval_t on_off[] = {{"off", 0}, {"on", 1}};
@@ -380,8 +381,10 @@ SECTION("Flow", flow, scene_flow)
       " surface speed depends on (docs/drum3d.md); default 0.5")
     KE("Flow", flow, scene_flow, shift_surface_rule, enum shift_surface_rule, flow_shift_rules, "none",
        "what Flow:shifting fickian does at a free surface (Flow:shift_surface): none (not shifted) | tangential (the"
-       " shift less its part along the surface normal n, n along sum_j V_j grad W_ij, as in Sun et al. 2017's delta+-SPH);"
-       " default none")
+       " shift less its part along the surface normal n, n along sum_j V_j grad W_ij, as in Sun et al. 2017's delta+-SPH)"
+       " | fade (no threshold, Flow:shift_surface unused: every particle keeps its shift's tangential part and a share"
+       " w = 2 div r / d - 1 in [0, 1] of its normal part, 0 at a flat surface, where div r = d/2, 1 in a whole support;"
+       " a study's: it mixes C at the surface, the drums' segregation index a quarter lower, docs/drum3d.md); default none")
     KE("Flow", flow, scene_flow, background_pressure, enum flow_background, flow_backgrounds, "momentum",
        "Newtonian fluid: its background pressure Initial:pressure acts in the momentum pair term (3.9) (momentum) | is left out"
        " of it (excluded; Adami, Hu & Adams 2013); the granular material ignores it; default momentum")
