@@ -321,13 +321,22 @@ def surface(a):
             if pts:
                 ax.plot(*zip(*pts), mk + ("-" if dim == "2D" else "--"), color=col,
                         label="%s%s, dr %g mm" % (dim, "" if dim == "2D" else " slab", 1e3 * dr))
+    for dim, mk in (("2D", "o"), ("3D", "s")):  # the tangential rule at its thresholds, open; fade (none) as a line
+        pts = sorted((k[3], v[0]) for k, v in m.items() if k[1] == dim and k[2] == 0.0007 and k[0].startswith("tang"))
+        if pts:
+            ax.plot(*zip(*pts), mk, mfc="none", color="C2", label="%s%s, dr 0.7 mm, tangential" % (
+                dim, "" if dim == "2D" else " slab"))
+        fd = [v[0] for k, v in m.items() if k[1] == dim and k[2] == 0.0007 and k[0] == "fade"]
+        if fd:
+            ax.axhline(fd[0], color="C3", lw=0.9, ls="-" if dim == "2D" else "--",
+                       label="%s%s, dr 0.7 mm, fade (no threshold)" % (dim, "" if dim == "2D" else " slab"))
     ax.axvline(0.75, color="0.7", lw=0.8)
     ax.axvline(5 / 6, color="0.7", lw=0.8)
     ax.text(0.752, ax.get_ylim()[0], " d - 1/2 in 2D", rotation=90, va="bottom", fontsize=8, color="0.4")
     ax.text(0.835, ax.get_ylim()[0], " d - 1/2 in 3D", rotation=90, va="bottom", fontsize=8, color="0.4")
     ax.set_xlabel("shifting's free-surface threshold: div r < f d")
     ax.set_ylabel("mid-chord surface speed, t = 2-4 s (cm/s)")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
     ax.set_title("(a) the surface speed against the threshold", fontsize=10)
     here = os.path.dirname(a.csv)
     for name, lab, st in (("2d_0.0005", "2D, dr 0.5 mm", "-"), ("3d_0.0005", "3D slab, dr 0.5 mm", "--"),
