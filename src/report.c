@@ -214,6 +214,7 @@ void report_start(sim_t *s, const outputs *o, const run_cli *c)
         settings_warn_stabilization(sc);
         settings_warn_mu_law(sc);
         settings_warn_gradient_correction(sc);
+        settings_warn_shift(sc);
     }
     if (s->flow_on && sc->geometry.type == GEOM_DRUM) settings_warn_drum(sc); /* measured on drums */
     settings_warn_scales(sc, s->flow_on, s->seg_on);

@@ -38,6 +38,11 @@ void settings_warn_stabilization(const struct scene *sc);
  * corrected gradient"), once at start-up of a computed flow. */
 void settings_warn_gradient_correction(const struct scene *sc);
 
+/* Flow:shift_surface_rule fade with shifting on: it mixes C at a free
+ * surface (docs/drum3d.md "No threshold"), once at start-up of a computed
+ * flow. */
+void settings_warn_shift(const struct scene *sc);
+
 /* Material:mu_law partial: no static yield, and no better convergence in
  * the drum (docs/granular.md "Well-posedness"), once at start-up of a
  * computed granular flow. */

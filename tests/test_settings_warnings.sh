@@ -7,7 +7,8 @@
 # Run:cfl_flow > 0.2, and E below the softest measured accurate (10 kPa); the
 # pressure diffusion's (settings_warn_stabilization); Material:mu_law partial's
 # (settings_warn_mu_law); Flow:gradient_correction on without Flow:shifting
-# (settings_warn_gradient_correction); and the Shepard filter's interval below 3 acoustic times,
+# (settings_warn_gradient_correction); Flow:shift_surface_rule fade's (settings_warn_shift);
+# and the Shepard filter's interval below 3 acoustic times,
 # Flow:shepard_every * Run:cfl_flow (docs/granular.md "The time step and the Shepard
 # filter"). Each probe is a 1-step CPU drum; the warning must be
 # there when the setting is off and absent when it is in range.
@@ -62,6 +63,9 @@ probe "Flow:gradient_correction on with fickian shifting: no warning at all" no 
     Material:E=1e5 Flow:gradient_correction=on Flow:shifting=fickian
 probe "Flow:gradient_correction off, no shifting (the paper's): no warning at all" no "" \
     Material:E=1e5 Flow:gradient_correction=off Flow:shifting=off
+probe "Flow:shift_surface_rule fade: its warning" yes "Flow:shift_surface_rule fade keeps a share" \
+    Material:E=1e5 Flow:shift_surface_rule=fade
+probe "Flow:shift_surface_rule tangential: no warning at all" no "" Material:E=1e5 Flow:shift_surface_rule=tangential
 probe "cfl_flow 0.2: no CFL warning" no "cfl_flow" Run:cfl_flow=0.2
 probe "cfl_flow 0.3: CFL warning" yes "Run:cfl_flow = 0.3 > 0.2" Run:cfl_flow=0.3
 probe "cfl_flow 0.05, shepard_every 30 (1.5 acoustic times): filter warning" yes \
