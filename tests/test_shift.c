@@ -22,10 +22,12 @@
  *    the same displacement is shifted back; with Flow:shift_surface_rule
  *    tangential the top row's is shifted back too, along the surface (its
  *    normal part under a fifth of the tangential), and three rows down as
- *    before; with the rule fade the top row keeps its tangential part
- *    (within 10 % of the rule tangential's) and a share of its normal part,
- *    outwards (w = 2 div r / d - 1, 0.24 on this lattice's top row), and
- *    three rows down, a whole support, its shift is the rule none's (1 %);
+ *    before; with the rule fade the top row's shift is the rule
+ *    tangential's plus a share w of its normal part, outwards (the same w
+ *    along x and y to 1e-6, between 0.1 and 0.5: 0.23 measured, 2 div r / d
+ *    - 1 of this displaced top-row particle; the whole normal part is the
+ *    rule none's shift with the threshold under its div r), and three rows
+ *    down, a whole support, its shift is within 3 % of the rule none's;
  *  - Flow:background_pressure excluded: a uniform background pressure p0
  *    on a perturbed block exerts no force (flow_ctx.p_back = 2 p0 / rho^2
  *    cancels it in the pair term to round-off), where the pair term alone
