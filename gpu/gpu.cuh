@@ -174,6 +174,7 @@ typedef struct gpu {
     long builds;
     long step0;         /* s->step when this backend started: a restart counts its own steps */
     real *amag;         /* |acc| of the last flow rate evaluation */
+    const real *bq;     /* Flow:bed_damping's weights of the flow pass under way (gpu_bed_q; in a spare), or NULL */
     int acc_pending;    /* amag not yet reduced into dres[STEP_ACC] (gpu_acc_reduce, gpu_check) */
     int pend_save, pend_adv; /* save_start and advance held back for the next kernel (gpu_step_kernel) */
     double pend_a, pend_w; /* its lengths (gpu_advance's a and w) */

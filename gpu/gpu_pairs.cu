@@ -174,13 +174,14 @@ template <int RENORM, int KGC, int SHIFT, int F> static void gpu_flow_pass(sim_t
     seg_ctx sc = s->seg;
     const int seg = gpu_plans(s, HOOK_RATES, ST_SEG_COEFFS); /* not in windows: at their close */
     real *amag = g->amag;
+    const real *bq = g->bq;
     team<SHIFT ? SPHSEG_FUSED_MINB : SPHSEG_TEAM_MINB>(g, g->n, [=] __device__(size_t i, int lane, int T) {
         if (!sel_on(sl, i)) return;
         particles_t q = p;
         const int mat = q.kind[i] == KIND_MATERIAL;
         const grid_view w = view_as<F>(v);
         real a = mat ? flow_rates_body(i, &q, &w, &c, lane, T, RENORM, KGC, SHIFT ? &sh : (const shift_ctx *)0,
-                                       SHIFT ? (real)sdt.at(0) : R(0.0), (const real *)0)
+                                       SHIFT ? (real)sdt.at(0) : R(0.0), bq)
                      : R(0.0);
         if (lane != 0) return;
         amag[i] = a;
@@ -376,9 +377,35 @@ template <int SHIFT> static void gpu_flow_kgc(sim_t *s, gpu_t *g, sel sl)
     else kgc ? gpu_flow_form<0, 1, SHIFT>(s, g, sl) : gpu_flow_form<0, 0, SHIFT>(s, g, sl);
 }
 
+/* Flow:bed_damping: the weight flow_bed_q of each particle, once a particle
+ * rather than once a pair (its static cone's q costs a pair a square root
+ * and two divisions), into g->bq for the list forms' flow pass to read at
+ * the neighbour's index (the CPU's bq; the same bits as per pair). It lives
+ * in the permutation's spare of a real's size (gpu_permute), which holds
+ * nothing between builds. The particles whose stress is current: all, or
+ * with the ghosts' refresh in flight (sel_in, levels 3) the owned, then at
+ * the boundary pass (sel_bd) the ghosts just received. The staged pass
+ * (tile) indexes its neighbours by tile slot and computes q per pair. */
+static void gpu_bed_q(sim_t *s, gpu_t *g, sel sl)
+{
+    g->bq = NULL;
+    if (!(s->flow.bed_alpha > 0) || (g->tile && g->view.form == GRID_NBR_LIST16)) return;
+    real *bq = (real *)g->pscr[pscr_slot(sizeof(real))];
+    const size_t lo = sl.lvl && sl.hi < 3 ? g->n : 0, hi = sl.lvl && sl.hi == 3 ? g->n : g->n + g->ng;
+    particles_t p = g->d;
+    flow_ctx c = s->flow;
+    if (hi > lo)
+        each(g, hi - lo, [=] __device__(size_t k) {
+            particles_t q = p;
+            bq[lo + k] = flow_bed_q(lo + k, &q, &c);
+        });
+    g->bq = bq;
+}
+
 void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl)
 {
     prof_begin(g->st);
+    gpu_bed_q(s, g, sl);
     if (s->shift_due) gpu_flow_kgc<1>(s, g, sl);
     else gpu_flow_kgc<0>(s, g, sl);
     g->acc_pending = 1;

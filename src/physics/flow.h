@@ -210,7 +210,8 @@ HD_INLINE void flow_kgc_team(size_t i, const particles_t *p, const grid_view *g,
 /* The bed damping's weight of particle i (Flow:bed_damping): stress_static_q
  * of its stress, 1 where there is none (off, or a dummy). flow_rates_body
  * reads it per pair from an array the backend made with this before the
- * pass (the CPU), or computes it per pair (the GPU): the same bits. */
+ * pass (the CPU; the GPU's list forms, gpu_bed_q), or computes it per pair
+ * (the GPU's staged pass, whose neighbours are tile slots): the same bits. */
 HD_INLINE real flow_bed_q(size_t i, const particles_t *p, const flow_ctx *c)
 {
     if (!(c->bed_alpha > 0) || p->kind[i] != KIND_MATERIAL) return R(1.0);
@@ -260,6 +261,9 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
     real Bi[6] = {1, 1, 1, 0, 0, 0}; /* Flow:gradient_correction (kgc: the caller's c->kgc) */
     if (kgc)
         for (int q = 0; q < 6; ++q) Bi[q] = p->B[q][i];
+    /* mom_av's factors, made once (mom_av_coef) */
+    const real av_coef = mom_av_coef(c->alpha_av, c->cs, k->h, c->rho, c->rho);
+    const real bed_coef = mom_av_coef(c->bed_alpha, c->cs, k->h, c->rho, c->rho);
     shift_sums ss;
     if (sh) shift_sums_zero(&ss);
     NBR_BEGIN_TJ(g, p, i, j, jj, jp, lane, nlanes)
@@ -271,21 +275,22 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
         if (r2 >= k->support2) continue;
         if (!SPH_EARLY_LOADS) flow_load_j(jp, jj, uj, sj, &volj);
         const real r = sqrt_r(r2);
+        const int jmat = jp->kind[jj] == KIND_MATERIAL; /* read once: four uses below */
         real f = kernel_f(r, k->h, k->alpha);
         if (sh) shift_pair_add(&ss, sh, r, r2, f, volj, xij, sj, si);
-        if (renorm && jp->kind[jj] == KIND_MATERIAL) seg_renorm_add(m, k->dim, -f * volj, xij);
+        if (renorm && jmat) seg_renorm_add(m, k->dim, -f * volj, xij);
         real gradW[3] = {f * xij[0], f * xij[1], f * xij[2]};
         real uij[3] = {ui[0] - uj[0], ui[1] - uj[1], ui[2] - uj[2]};
         mom_velgrad_add(L, volj, uij, gradW);
         real Pi = R(0.0);
         if (c->stab == STAB_MONAGHAN) {
-            if (c->alpha_av > 0) Pi = mom_av(c->alpha_av, c->cs, k->h, c->rho, c->rho, uij, xij);
+            if (c->alpha_av > 0) Pi = mom_av_k(av_coef, k->h, uij, xij);
         } else {
             if (c->stab == STAB_RIEMANN)
-                Pi = mom_riemann(c->eta_r, c->cs, c->rho, uij, xij, r2, jp->kind[jj] != KIND_MATERIAL);
-            if (c->bed_alpha > 0 && qi < R(1.0) && jp->kind[jj] == KIND_MATERIAL) {
+                Pi = mom_riemann(c->eta_r, c->cs, c->rho, uij, xij, r2, !jmat);
+            if (c->bed_alpha > 0 && qi < R(1.0) && jmat) {
                 const real qj = bq ? bq[jj] : stress_static_q(sj, c->bed_k), w = R(1.0) - (qi > qj ? qi : qj);
-                if (w > 0) Pi += w * mom_av(c->bed_alpha, c->cs, k->h, c->rho, c->rho, uij, xij);
+                if (w > 0) Pi += w * mom_av_k(bed_coef, k->h, uij, xij);
             }
             /* the pressure difference less its hydrostatic part rho g.x_ji (Fourtakas et al.
              * 2019): a free surface, where the support is cut, is not driven by rho g */
@@ -297,7 +302,7 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
         if (c->p_back != 0) Pi += c->p_back;
         if (kgc) { /* V_j (sigma_i B_i + sigma_j B_j) grad W / rho, the dissipation on grad W */
             real Bj[6], gi[3], gj[3];
-            for (int q = 0; q < 6; ++q) Bj[q] = jp->kind[jj] == KIND_MATERIAL ? jp->B[q][jj] : Bi[q];
+            for (int q = 0; q < 6; ++q) Bj[q] = jmat ? jp->B[q][jj] : Bi[q];
             linalg_sym_apply(Bi, gradW, gi);
             linalg_sym_apply(Bj, gradW, gj);
             mom_accel_add_kgc(a, c->rho * volj, si, sj, c->rho, Pi, gradW, gi, gj);

@@ -34,14 +34,27 @@ HD_INLINE void mom_strain_spin(const real L[9], real eps[6], real w[3])
 /* Monaghan (1992) artificial viscosity, eq. (3.10), in the units of
  * sigma/rho^2 (m^5/(kg s^2)): Pi_ij = alpha c h (u_ij.x_ij) /
  * (rho_bar (r^2 + 0.01 h^2)) for approaching pairs (u_ij.x_ij < 0), else 0;
- * negative, so it acts as a pressure between approaching particles. */
-HD_INLINE real mom_av(real alpha, real cs, real h, real rho_i, real rho_j, const real uij[3],
-                      const real xij[3])
+ * negative, so it acts as a pressure between approaching particles.
+ * mom_av_coef is its pair-independent factor alpha c h / rho_bar, which a
+ * pair loop makes once and hands to mom_av_k (a division a pair fewer; the
+ * same bits as mom_av). */
+HD_INLINE real mom_av_coef(real alpha, real cs, real h, real rho_i, real rho_j)
+{
+    return alpha * cs * h / (R(0.5) * (rho_i + rho_j));
+}
+
+HD_INLINE real mom_av_k(real coef, real h, const real uij[3], const real xij[3])
 {
     real ux = uij[0] * xij[0] + uij[1] * xij[1] + uij[2] * xij[2];
     if (ux >= 0) return 0;
     real r2 = xij[0] * xij[0] + xij[1] * xij[1] + xij[2] * xij[2];
-    return alpha * cs * h / (R(0.5) * (rho_i + rho_j)) * ux / (r2 + R(0.01) * h * h);
+    return coef * ux / (r2 + R(0.01) * h * h);
+}
+
+HD_INLINE real mom_av(real alpha, real cs, real h, real rho_i, real rho_j, const real uij[3],
+                      const real xij[3])
+{
+    return mom_av_k(mom_av_coef(alpha, cs, h, rho_i, rho_j), h, uij, xij);
 }
 
 /* The pair dissipation of the low-dissipation Riemann solver of Zhang, Hu &
