@@ -385,11 +385,18 @@ template <int SHIFT> static void gpu_flow_kgc(sim_t *s, gpu_t *g, sel sl)
  * nothing between builds. The particles whose stress is current: all, or
  * with the ghosts' refresh in flight (sel_in, levels 3) the owned, then at
  * the boundary pass (sel_bd) the ghosts just received. The staged pass
- * (tile) indexes its neighbours by tile slot and computes q per pair. */
+ * (tile) indexes its neighbours by tile slot and computes q per pair. A
+ * store of fewer than GPU_BEDQ_MIN_3D (2D: _2D) particles, owned and
+ * ghosts, computes it per pair too: there the kernel costs more than it
+ * saves (SPHSEG_GPU_BEDQ=0|1 sets either way; docs/performance.md, "The flow
+ * pass's code"). */
 static void gpu_bed_q(sim_t *s, gpu_t *g, sel sl)
 {
     g->bq = NULL;
     if (!(s->flow.bed_alpha > 0) || (g->tile && g->view.form == GRID_NBR_LIST16)) return;
+    const int want = tuning_get()->gpu_bedq;
+    const double least = s->flow.k.dim == 3 ? GPU_BEDQ_MIN_3D : GPU_BEDQ_MIN_2D;
+    if (want == 0 || (want < 0 && (double)(g->n + g->ng) < least)) return;
     real *bq = (real *)g->pscr[pscr_slot(sizeof(real))];
     const size_t lo = sl.lvl && sl.hi < 3 ? g->n : 0, hi = sl.lvl && sl.hi == 3 ? g->n : g->n + g->ng;
     particles_t p = g->d;

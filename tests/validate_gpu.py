@@ -18,10 +18,13 @@ out: the HCSR classification of the paper scheme, the 3D column, the CI-sized
                 default CPU build by 3.6e-6 in C after the same 40 shear-box
                 steps (measured; the GPU differs by the same 3.6e-6);
   determinism:  the two GPU runs are bit-identical (every dataset): the
-                first replays its steps as CUDA graphs (gpu/gpu_graph.cu),
-                the second launches every kernel directly
-                (SPHSEG_GPU_GRAPH=0); the drum scenes of one rank must have
-                held steps as graphs (its "gpu graphs:" line).
+                first replays its steps as CUDA graphs (gpu/gpu_graph.cu)
+                and reads the bed damping's weights made once a particle
+                (SPHSEG_GPU_BEDQ=1, which these small stores leave off by
+                default: gpu_bed_q), the second launches every kernel
+                directly (SPHSEG_GPU_GRAPH=0) and computes the weights per
+                pair (SPHSEG_GPU_BEDQ=0); the drum scenes of one rank must
+                have held steps as graphs (its "gpu graphs:" line).
 
 Scenes with DEM grains (issue 58; src/dem/dem_body.h run by src/dem/dem.c and
 gpu/gpu_dem.cu) compare their /DEM group too: the grains' centres,
@@ -224,8 +227,8 @@ def main():
     ok = True
     for name, scene, steps, over in cases:
         res, dem = {}, {}
-        for tag, backend, env in (("cpu", "cpu", None), ("gpu", "gpu", None),
-                                  ("gpu2", "gpu", {"SPHSEG_GPU_GRAPH": "0"})):
+        for tag, backend, env in (("cpu", "cpu", None), ("gpu", "gpu", {"SPHSEG_GPU_BEDQ": "1"}),
+                                  ("gpu2", "gpu", {"SPHSEG_GPU_GRAPH": "0", "SPHSEG_GPU_BEDQ": "0"})):
             out = os.path.join(a.work, name + "_" + tag)
             r = run(a.sphseg, scene, out, backend, steps, over, env)
             if r.returncode != 0:
@@ -246,7 +249,7 @@ def main():
         ok &= good
         keys = [k for k in g if k != "path"]
         differ = [k for k in keys if not np.array_equal(np.asarray(g[k]), np.asarray(g2[k]))]
-        print("%s %-14s GPU run to run, graphs against direct launches: %s" % (
+        print("%s %-14s GPU run to run, graphs and weights once a particle against direct launches: %s" % (
             "ok  " if not differ else "FAIL", name, "bit-identical" if not differ else "differ in " + ", ".join(differ)))
         ok &= not differ
         must = name.startswith("drum") and "paper" not in name  # one rank, computed flow, no HCSR builds

@@ -20,6 +20,8 @@ typedef struct tuning {
     int gpu_ipc;      /* SPHSEG_GPU_IPC not 0: CUDA IPC between the GPUs of one node (default 1) */
     int gpu_graph;    /* SPHSEG_GPU_GRAPH not 0: a step between list builds on one rank is replayed as a CUDA
                        * graph (gpu/gpu_graph.cu; default 1) */
+    int gpu_bedq;     /* SPHSEG_GPU_BEDQ: the bed damping's weight once a particle before the flow pass (1) or per
+                       * pair (0); -1 (unset): by the store's size (gpu/gpu_pairs.cu gpu_bed_q) */
     int cuda_aware;   /* SPHSEG_CUDA_AWARE not 0: device buffers to MPI where it reports CUDA support (default 1) */
     int skew_rank;    /* SPHSEG_BALANCE_SKEW=R:F: the load balance counts rank R's compute time F times (the
                        * cut moves, the answer does not beyond round-off); -1: not set (default); -2: set to
