@@ -73,7 +73,7 @@ struct gpu_prof prof;
 static const char *prof_name[P_NPROF] = {"save start, advance, motion", "bounding box (+sync)",
                                           "cell keys, radix sort, start/end", "permute arrays", "neighbour list",
                                           "HCSR classification", "dummy walls, renormalisation L",
-                                          "flow rates (+seg. coefficients)", "concentration rates", "Shepard filter",
+                                          "flow rates (+seg. coefficients, bed weights)", "concentration rates", "Shepard filter",
                                           "dt bounds, blow-up check (+sync)", "particle shifting (a neighbour pass)",
                                           "corrected gradient's moment matrix B", "DEM grid (box +sync, sort, starts)",
                                           "DEM coupling (fraction, drag, source)", "DEM steps (contacts, motion)",
