@@ -63,6 +63,9 @@ ifeq ($(GPU),1)
 endif
 ifeq ($(PRECISION),single)
   override NVFLAGS += -DSPHSEG_SINGLE
+  # the single build's pair loops (gpu/gpu_pairs.cu alone) divide and take square roots at the
+  # hardware's rate, within 2 ulp, denormals flushed: docs/gpu.md, "The flow pass's code"
+  NVFLAGS_PAIRS ?= -prec-div=false -prec-sqrt=false -ftz=true
 endif
 
 ifdef HDF5_DIR
@@ -99,7 +102,7 @@ HEADERS  := $(wildcard src/*.h src/*/*.h mpi/*.h)
 UNIT_TESTS := test_integrate test_kernel test_nbr test_bound test_grad test_flux test_scene test_io test_io_ranks test_rates test_stress test_wall test_flow test_stab test_halo test_checkpoint test_stages test_position test_shift test_ksum test_dem
 UNIT_BINS  := $(UNIT_TESTS:%=$(BUILD)/tests/%)
 
-.PHONY: all deps deps-test run test test-slurm unit bench clean format test-mutants
+.PHONY: all deps deps-test run test test-slurm unit bench clean format test-mutants print-nvflags-pairs
 all: $(BUILD)/sphseg
 
 $(BUILD)/obj/%.o: %.c $(HEADERS)
@@ -108,7 +111,11 @@ $(BUILD)/obj/%.o: %.c $(HEADERS)
 
 $(BUILD)/obj/gpu/%.o: gpu/%.cu $(wildcard gpu/*.cuh) $(HEADERS)
 	@mkdir -p $(dir $@)
-	$(NVCC) $(NVFLAGS) -c $< -o $@
+	$(NVCC) $(NVFLAGS) $(if $(filter gpu_pairs.o,$(notdir $@)),$(NVFLAGS_PAIRS)) -c $< -o $@
+
+# the flags gpu/gpu_pairs.cu compiles with (tools/dev/kernel_frames.py reads them)
+print-nvflags-pairs:
+	@echo $(NVFLAGS) $(NVFLAGS_PAIRS)
 
 $(BUILD)/sphseg: $(DRIVER_OBJ) $(CORE_OBJ) $(GPU_OBJ)
 	$(MPICC) $(LDFLAGS) $^ $(LIBS) $(GPU_LIBS) -o $@

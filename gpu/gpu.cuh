@@ -58,7 +58,7 @@ enum { PSCR_8, PSCR_4, PSCR_1, PSCR_N };
  * made once a particle (gpu_bed_q) rather than computing them per pair, in 3D and in 2D: below it
  * the extra kernel costs more than the pairs save (one H200, single: 3D 1.02x at 2.4e5 particles,
  * 1.05x at 1.1e7; 2D, a quarter of the pairs a particle, 0.94-0.96x at 1.1e4, 0.98-1.00x at 1.6e5,
- * 1.01x at 6.2e5; docs/performance.md, "The flow pass's code") */
+ * 1.01x at 6.2e5; docs/gpu.md, "The flow pass's code") */
 #define GPU_BEDQ_MIN_3D 2e5
 #define GPU_BEDQ_MIN_2D 5e5
 

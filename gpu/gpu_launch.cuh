@@ -77,13 +77,25 @@ template <class F> static void each(const gpu_t *g, size_t n, F f)
  * (tools.dev.kernel_frames --precision double). At 3 blocks (168 registers)
  * the 1.1e7 3D drum ran 1.35x (2 blocks: 1.22x), the 2D drums 1.02x; the
  * predictor-corrector's passes, which spill 144 bytes, ran 0.89x at 3 and
- * keep 4 (docs/performance.md, "The flow pass's code"). The single build
- * keeps 4: its fused pass has no frame at 128. */
+ * keep 4 (docs/gpu.md, "The flow pass's code"). The single build
+ * keeps 4 where a team has 4 or more threads (small 3D stores, the 2D
+ * drums: 0.96x at 5 on the 2D EN drum), and in the list form runs 5 at 1 or
+ * 2 (3D stores past about 5e5 particles): 96 registers and a 56-byte frame
+ * of spills with gpu_pairs.cu's fast division (NVFLAGS_PAIRS in the
+ * Makefile), 1.05x against 4 on the 1.1e7 drum (one H200;
+ * docs/gpu.md, "The flow pass's code"): SPHSEG_FUSED_MINB_T2. */
 #ifndef SPHSEG_FUSED_MINB
 #ifdef SPHSEG_SINGLE
 #define SPHSEG_FUSED_MINB SPHSEG_TEAM_MINB
 #else
 #define SPHSEG_FUSED_MINB 3
+#endif
+#endif
+#ifndef SPHSEG_FUSED_MINB_T2
+#ifdef SPHSEG_SINGLE
+#define SPHSEG_FUSED_MINB_T2 5
+#else
+#define SPHSEG_FUSED_MINB_T2 SPHSEG_FUSED_MINB
 #endif
 #endif
 /* Teams (src/core/hd.h): T consecutive threads per particle, f(i, lane,
@@ -119,14 +131,14 @@ template <int T, int MB, class F> static void team_launch(const gpu_t *g, size_t
 }
 
 /* The neighbour-loop kernels, g->team threads per particle, at least MB
- * blocks a SM (SPHSEG_TEAM_MINB unless given: the fused leapfrog pass's is
- * SPHSEG_FUSED_MINB). */
-template <int MB = SPHSEG_TEAM_MINB, class F> static void team(const gpu_t *g, size_t n, F f)
+ * blocks a SM, MB2 where a team has 1 or 2 threads (SPHSEG_TEAM_MINB unless
+ * given: the fused leapfrog pass's are SPHSEG_FUSED_MINB and _T2). */
+template <int MB = SPHSEG_TEAM_MINB, int MB2 = MB, class F> static void team(const gpu_t *g, size_t n, F f)
 {
     if (n == 0) return;
     switch (g->team) {
-    case 1: team_launch<1, MB>(g, n, f); break;
-    case 2: team_launch<2, MB>(g, n, f); break;
+    case 1: team_launch<1, MB2>(g, n, f); break;
+    case 2: team_launch<2, MB2>(g, n, f); break;
     case 4: team_launch<4, MB>(g, n, f); break;
     case 8: team_launch<8, MB>(g, n, f); break;
     default: team_launch<16, MB>(g, n, f); break;

@@ -142,7 +142,7 @@ void gpu_counts(gpu_t *g, size_t n, size_t ng)
  * (latency), a large one fills the device with fewer; in 3D never fewer than
  * GPU_TEAM_MIN_3D: two lanes read a particle's list in pairs of adjacent
  * entries, 1.06-1.09x one lane's rate from 1.1e6 to 3.4e7 particles at
- * Run:preset fast (one H200, single; docs/performance.md, "GPU kernels"). */
+ * Run:preset fast (one H200, single; docs/gpu.md, "GPU kernels"). */
 static int gpu_team_size(int dim, size_t n)
 {
     const tuning *tu = tuning_get();
@@ -168,7 +168,7 @@ size_t gpu_spare_bytes(const particles_t *p)
  * list (the fastest) where the run fits the device's free memory with it,
  * else the 16-bit list (on the 1.1e7 3D drum, single, leapfrog: 0.92 of the
  * list's rate at 0.69 of its bytes a particle), else no list (cells: 0.28 of
- * the rate, 0.37 of the bytes; docs/performance.md "Neighbour pass"). All three
+ * the rate, 0.37 of the bytes; docs/gpu.md "Neighbour pass"). All three
  * meet a particle's neighbours in the same order: the same bits. The room
  * left: 10 % of the free memory and 15 % of the particles for growth; the
  * list's width as grid_list_est expects it; GPU_SCRATCH_EST bytes a particle

@@ -45,8 +45,9 @@ typedef double preal;
 
 /* The square root of a real, correctly rounded in either precision: sqrtf in
  * the single build (IEEE on the CPU, and in CUDA, which compiles it
- * correctly rounded unless -use_fast_math or -prec-sqrt=false, which the
- * Makefile does not set), sqrt in the double one. It gives the bits of
+ * correctly rounded unless -use_fast_math or -prec-sqrt=false: the Makefile
+ * sets the latter for gpu/gpu_pairs.cu alone in the single build,
+ * NVFLAGS_PAIRS, where it is within 2 ulp), sqrt in the double one. It gives the bits of
  * (float)sqrt((double)x): a double-rounded square root is exact when the
  * wide format has at least 2p + 2 bits (53 >= 2 * 24 + 2; Figueroa 1995,
  * "When is double rounding innocuous?"), so writing it either way changes

@@ -27,7 +27,7 @@ typedef struct grid_view {
     size_t nl_stride;
     unsigned nl_cap;
     /* The GPU's other forms of the pass (SPHSEG_GPU_NBR, core/tuning.h;
-     * docs/performance.md, "Neighbour pass"), each meeting the list's
+     * docs/gpu.md, "Neighbour pass"), each meeting the list's
      * particles in the list's order, lane by lane (test_nbr.c):
      * GRID_NBR_LIST16, the list in 16-bit entries nl16 (grid_enc16);
      * GRID_NBR_CELLS, no list: the cell scan of the build, owned and ghost
@@ -458,7 +458,7 @@ HD_INLINE unsigned grid_list_cap(int dim, double h_dr)
  * CPU's fit test, nlist_init): the lattice count with 15 % room, rounded up
  * to 8. The width a build sets is grid_list_width (below): 144 for a lattice
  * count of 131 on the 3D drum, 1.1 of it (one H200, 2026-11-29,
- * tools/bench/drum_rates.sh; docs/performance.md "Neighbour pass"). */
+ * tools/bench/drum_rates.sh; docs/gpu.md "Neighbour pass"). */
 HD_INLINE unsigned grid_list_est(int dim, double h_dr)
 {
     unsigned c = (unsigned)(1.15 * grid_lattice_count(dim, h_dr) + 0.999);
