@@ -147,12 +147,15 @@ PRESETS = {"fast": {"Material:E": 3e4, "Run:cfl_flow": 0.2}, "converged": {"Mate
 # and their Run:integrator (a row's is leapfrog where its label says so, else the predictor-corrector)
 PRESET_INTEGRATOR = {"fast": "leapfrog", "converged": "predictor_corrector"}
 # Run:integrator leapfrog's rate over the predictor-corrector's with which the rows' hours were measured, on the
-# 1.1e7 3D drum, the scenes' flow at E 10 kPa, chi 0.2, single, one H200 (docs/performance.md "One evaluation a step"
-# and "The flow pass's code", tools/bench/drum_rates.sh): a chain of ratios each measured within one device call,
-# 1.728e8 / 1.029e8 (the leapfrog against the predictor-corrector, 2026-11-29) x 1.888e8 / 1.718e8 (the pair loops'
-# square roots and divisors) x 2.200e8 / 1.890e8 (the fused shift's stack frame); the fast preset runs it
-# (src/scene/scene_preset.c)
-LEAPFROG_RATE = (1.728e8 / 1.029e8) * (1.888e8 / 1.718e8) * (2.200e8 / 1.890e8)
+# 1.1e7 3D drum, the scenes' flow at E 10 kPa, chi 0.2, single, one H200 (docs/performance.md "One evaluation a step",
+# docs/gpu.md "GPU kernels" and "The flow pass's code", tools/bench/drum_rates.sh): a chain of ratios each measured
+# within one device call, 1.728e8 / 1.029e8 (the leapfrog against the predictor-corrector, 2026-11-29) x
+# 1.888e8 / 1.718e8 (the pair loops' square roots and divisors) x 2.200e8 / 1.890e8 (the fused shift's stack frame)
+# x 2.46e8 / 2.31e8 (two threads a particle, not one; at Run:preset fast) x 2.3465e8 / 2.2945e8 (the shift's L
+# from the flow pass) x 2.43e8 / 2.32e8 (the bed weights once a particle) x 2.633e8 / 2.452e8 (the single build's
+# fast division, 5 blocks); the fast preset runs it (src/scene/scene_preset.c)
+LEAPFROG_RATE = ((1.728e8 / 1.029e8) * (1.888e8 / 1.718e8) * (2.200e8 / 1.890e8) * (2.46e8 / 2.31e8)
+                 * (2.3465e8 / 2.2945e8) * (2.43e8 / 2.32e8) * (2.633e8 / 2.452e8))
 RAW_DATA_MOVE = "b1945a9"  # the commit that took the studies' raw data out of docs/data (docs/CHANGELOG.md)
 TTS_DRUM = {"dr": 0.00025, "length": 0.1, "particles": 1.12e7}  # the drum the hours were measured on at dr 0.25 mm
 
