@@ -79,8 +79,9 @@ template <class F> static void each(const gpu_t *g, size_t n, F f)
  * predictor-corrector's passes, which spill 144 bytes, ran 0.89x at 3 and
  * keep 4 (docs/gpu.md, "The flow pass's code"). The single build
  * keeps 4 where a team has 4 or more threads (small 3D stores, the 2D
- * drums: 0.96x at 5 on the 2D EN drum), and in the list form runs 5 at 1 or
- * 2 (3D stores past about 5e5 particles): 96 registers and a 56-byte frame
+ * drums: 0.96x at 5 on the 2D EN drum), and in the list form without the
+ * owned L (gpu_flow_pass's RENORM) runs 5 at 1 or 2 (3D stores past about
+ * 5e5 particles): 96 registers and a 56-byte frame
  * of spills with gpu_pairs.cu's fast division (NVFLAGS_PAIRS in the
  * Makefile), 1.05x against 4 on the 1.1e7 drum (one H200;
  * docs/gpu.md, "The flow pass's code"): SPHSEG_FUSED_MINB_T2. */

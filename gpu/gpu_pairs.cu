@@ -175,10 +175,10 @@ template <int RENORM, int KGC, int SHIFT, int F> static void gpu_flow_pass(sim_t
     const int seg = gpu_plans(s, HOOK_RATES, ST_SEG_COEFFS); /* not in windows: at their close */
     real *amag = g->amag;
     const real *bq = g->bq;
-    /* the fused pass's bounds (gpu_launch.cuh); _T2 in the list form alone (list16 and cells spill
-     * 80 and 96 bytes there, unmeasured) */
+    /* the fused pass's bounds (gpu_launch.cuh); _T2 in the list form without the owned L alone
+     * (list16 and cells spill 80 and 96 bytes there, the owned L's case 152: not kept, or unmeasured) */
     constexpr int MB = SHIFT ? SPHSEG_FUSED_MINB : SPHSEG_TEAM_MINB;
-    constexpr int MB2 = SHIFT && F == GRID_NBR_LIST ? SPHSEG_FUSED_MINB_T2 : MB;
+    constexpr int MB2 = SHIFT && F == GRID_NBR_LIST && !RENORM ? SPHSEG_FUSED_MINB_T2 : MB;
     team<MB, MB2>(g, g->n, [=] __device__(size_t i, int lane, int T) {
         if (!sel_on(sl, i)) return;
         particles_t q = p;
