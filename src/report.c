@@ -70,7 +70,10 @@ void report_end(sim_t *s, diag *d, double io)
     double ntot = (double)comm_sum_ll((long long)s->p.n);
     d->ntot = ntot; /* the last progress line and the done: line count the same particles */
     diag_progress(d, s, 1, io);
-    double wall = diag_wall() - d->wall0, stepping = wall - io;
+    /* the same instant as that line's (diag_progress keeps it), so the two
+     * rates agree to their printed figures however the ranks are scheduled
+     * before the collectives below */
+    double wall = d->wall_last_progress - d->wall0, stepping = wall - io;
     /* the halo time of the done: line is the time the computation stood
      * still for it: all of it on the CPU; on the GPU, which overlaps the
      * refreshes with interior work, what the device timeline shows */
