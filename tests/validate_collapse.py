@@ -80,12 +80,37 @@ def merge_check(work):
     ok = ([q["name"] for q in kept] == ["x"] and kept[0]["runout"] == 8.13 and kept[0]["n"] == 40
           and kept[0]["end_wall"] == 1 and kept[0]["runout_1_5d"] != kept[0]["runout_1_5d"])
     print("%s report --merge: the row not rerun kept as written, the rerun's old row dropped" % ("ok  " if ok else "FAIL"))
+    good = kept and kept[0]["flow"] == "monaghan_1"
+    print("%s report --merge: a glass.csv from before the flow column reads as the scene's flow (alpha_av 1)"
+          % ("ok  " if good else "FAIL"))
+    return ok and good
+
+
+def names_check():
+    """Every case of the glass-bead sets is read back (collapse_study.glass_name) with the flow, floor, E and
+    L0/dr its set gave it; the slot's cases are not glass rows."""
+    want = {"lajeunesse": "monaghan_1", "lajeunesse_flow": "riemann", "lajeunesse_alpha": None}
+    ok, count = True, 0
+    for which, flow in want.items():
+        for c in cs.cases(which):
+            q = cs.glass_name(c.name)
+            fl = flow or "monaghan_%g" % c.over["Flow:alpha_av"]
+            ok &= q is not None and q["flow"] == fl and q["n"] == round(c.meta["L0"] / c.meta["dr"]) and (
+                q["floor"] == "no_slip" and q["E"] == "1e5")
+            ok &= fl == "monaghan_1" or ("Flow:alpha_av" in c.over) == fl.startswith("monaghan_")
+            count += 1
+    cw = cs.glass_name(cs.cases("lajeunesse_coulomb")[0].name)
+    ok &= cw is not None and cw["floor"] == "coulomb" and all(cs.glass_name(c.name) is None
+                                                             for c in cs.cases("lajeunesse_slot"))
+    print("%s the glass sets' %d case names read back with their flow, floor, E and L0/dr" % ("ok  " if ok else "FAIL",
+                                                                                           count))
     return ok
 
 
 def main():
     a = sphseg_work_args()
-    if not detector_check() or not grain_front_check() or not merge_check(os.path.join(a.work, "merge")):
+    if not detector_check() or not grain_front_check() or not merge_check(os.path.join(a.work, "merge")) or (
+            not names_check()):
         sys.exit(1)
     cases = [cs.case("a0.5", 0.5), cs.case("a2", 2), cs.glass_case(2, 10)]
     batch.run_cases_or_exit(cases, a.sphseg, a.work, limit_s=600)

@@ -30,11 +30,18 @@ dr <= d the foremost deposit thicker than 1.5 and 3 bead diameters (GLASS_D).
 
   python3 -m tools.studies.collapse_study run --sphseg build/sphseg --out out/collapse_study [--backend gpu]
   python3 -m tools.studies.collapse_study report --out out/collapse_study [--docs docs/data/collapse]
+  python3 -m tools.studies.collapse_study sheet RUN_DIR [--every K]
+
+`sheet` reads a run's snapshots (run --keep) and prints, for each, the material ahead of the deposit
+thicker than 3 d (the sheet that runs ahead of it): how many particles, how far, its lowest and mean
+height over dr above the floor's face y = 0 (a particle resting on the floor sits at dr/2), the share
+at the tension cut-off (sigma = 0) and its mean speed (docs/validation.md, "What runs ahead").
 """
 import csv
 import math
 import os
 import re
+import sys
 
 import numpy as np
 
@@ -143,6 +150,13 @@ SLOT_W = (0.01, 0.02, 0.04)
 SLOT_A = (2, 0.5)
 SLOT_N = (10, 20, 40)  # at 40 only a = 2, W 1 and 2 cm were run (--only; docs/data/collapse/glass/README.md)
 SLOT_SLIPS = (("fs", "free_slip"), ("cw", "coulomb"))
+# The numerical dissipation's share (sets lajeunesse_flow, lajeunesse_alpha). The scene keeps the paper's
+# stabilisation, Monaghan's artificial viscosity at alpha_av 1, whose viscosity alpha c h falls with dr; the drum
+# scenes' flow (Riemann, bed damping, corrected gradient, Fickian shifting; docs/method.md) dissipates less; and
+# Monaghan's at alpha_av 0.3 and 0.1 at a = 2. The tag names each in the run's name and the report's "flow".
+FLOW_SCENES = {"Flow:stabilization": "riemann", "Flow:bed_damping": 1, "Flow:gradient_correction": "on",
+               "Flow:shifting": "fickian"}
+FLOW_ALPHAS = (0.3, 0.1)
 
 
 def glass_case(a, n, model="glass", L0=0.02, tag="", **extra):
@@ -170,6 +184,10 @@ def cases(which):
         c += [glass_case(a, n, tag="_slot%g_%s" % (W * 1e3, t), **{"Geometry:dim": 3, "Geometry:depth": W,
                                                                   "Walls:end_slip": slip, "Walls:mu_w": 0.4621})
               for n in SLOT_N for a in SLOT_A for W in SLOT_W for t, slip in SLOT_SLIPS]
+    if which == "lajeunesse_flow":  # the drum scenes' flow in place of Monaghan's alpha_av 1
+        c += [glass_case(a, n, tag="_flow", **FLOW_SCENES) for n in GLASS_N for a in GLASS_A]
+    if which == "lajeunesse_alpha":  # Monaghan's viscosity weaker, at a = 2
+        c += [glass_case(2, n, tag="_av%g" % al, **{"Flow:alpha_av": al}) for al in FLOW_ALPHAS for n in GLASS_N]
     if which == "lajeunesse_E":  # the stiffness is numerical: E x 10 at the fastest column
         c += [glass_case(a, n, tag="_E1e6", **{"Material:E": 1e6}) for a, n in ((2, 10), (2, 20), (2, 40), (8, 20))]
     if which in ("full", "aspect"):
@@ -252,11 +270,22 @@ def lagree_table(runs, where, P):
             f3, cd[1], f3 / cd[1], h, cd[2], h / cd[2], r["wall_s"], r.get("backend", "")))
 
 
+def glass_name(n):
+    """What a glass-bead run's name (glass_case) says: its friction model, floor, L0/dr, E and flow; None for
+    another run's (the slot's: slot_report)."""
+    m = re.fullmatch(r"a([0-9.]+)_(glass|const)_n([0-9]+)(_E1e6)?(_cw)?(_flow|_av[0-9.]+)?", n)
+    if not m:
+        return None
+    return dict(model=m.group(2), floor="coulomb" if m.group(5) else "no_slip", n=int(m.group(3)),
+                E="1e6" if m.group(4) else "1e5",
+                flow="riemann" if m.group(6) == "_flow" else "monaghan_" + (m.group(6)[3:] if m.group(6) else "1"))
+
+
 def glass_rows(runs, where):
     """One row per glass-bead run: its final runout and height against Lube et al.'s laws."""
     rows = []
     for n in runs:
-        m = re.fullmatch(r"a([0-9.]+)_(glass|const)_n([0-9]+)(_E1e6)?(_cw)?", n)
+        m = glass_name(n)
         if not m:
             continue
         r, f = runs[n], load(where[n], n)
@@ -269,8 +298,7 @@ def glass_rows(runs, where):
         if dr <= GLASS_D:
             dep = np.genfromtxt(os.path.join(where[n], n, "deposit.csv"), delimiter=",", names=True)
             g15, g3 = thickness_fronts(dep, dr, L0, (1.5 * GLASS_D, 3 * GLASS_D))
-        rows.append(dict(name=n, model=m.group(2), floor="coulomb" if m.group(5) else "no_slip", a=av,
-                         n=int(m.group(3)), E="1e6" if m.group(4) else "1e5",
+        rows.append(dict(name=n, model=m["model"], floor=m["floor"], flow=m["flow"], a=av, n=m["n"], E=m["E"],
                          runout=run, lube_runout=float(lube_runout(av)), height=hf, lube_height=float(lube_height(av)),
                          runout_1_5d=g15, runout_3d=g3,
                          creep_mm_s=creep, wall_s=r["wall_s"], steps=r["steps"], backend=r.get("backend", ""),
@@ -279,11 +307,13 @@ def glass_rows(runs, where):
 
 
 def glass_order(q):
-    return q["floor"], q["model"] != "glass", q["E"], q["n"], q["a"]
+    return q["floor"], q["model"] != "glass", q["E"], q["flow"] != "monaghan_1", q["flow"], q["n"], q["a"]
 
 
-def glass_label(model, floor):
-    return ("mu(I)" if model == "glass" else "tan 27.4") + (", Coulomb floor" if floor == "coulomb" else "")
+def glass_label(model, floor, flow="monaghan_1"):
+    return ("mu(I)" if model == "glass" else "tan 27.4") + (", Coulomb floor" if floor == "coulomb" else "") + (
+        "" if flow == "monaghan_1" else ", the scenes' flow" if flow == "riemann" else
+        ", alpha_av " + flow.split("_")[1])
 
 
 GLASS_FLOATS = ("a", "runout", "lube_runout", "height", "lube_height", "runout_1_5d", "runout_3d", "creep_mm_s")
@@ -299,6 +329,7 @@ def glass_kept(path, rows):
             if q["name"] not in have:
                 q.update({k: float(q[k]) for k in GLASS_FLOATS})
                 q.update(n=int(q["n"]), end_wall=int(q["end_wall"]))
+                q.setdefault("flow", "monaghan_1")  # a glass.csv from before the flow column
                 kept.append(q)
     return kept
 
@@ -313,7 +344,8 @@ def glass_report(runs, where, P, docs, merge=False):
         return
     import matplotlib.pyplot as plt
     os.makedirs(docs, exist_ok=True)
-    batch.write_csv(os.path.join(docs, "glass.csv"), list(rows[0]), [list(q.values()) for q in rows])
+    head = list(rows[0])
+    batch.write_csv(os.path.join(docs, "glass.csv"), head, [[q[k] for k in head] for q in rows])
     P("")
     P("| friction (floor: no slip unless Coulomb, tan 24.8) | E (Pa) | a | L0/dr | runout (L_inf - L0)/L0 | Lube 2005 | ratio | "
       "runout, h > 1.5 d | ratio | runout, h > 3 d | ratio | H_inf/L0 | Lube 2005 | ratio | "
@@ -326,7 +358,7 @@ def glass_report(runs, where, P, docs, merge=False):
         return "%s | %s" % (bound(v, q["end_wall"]), bound(v / q["lube_runout"], q["end_wall"]))
     for q in rows:  # "≥": the front stopped at the floor's end wall
         P("| %s | %s | %g | %d | %s | %.2f | %s | %s | %s | %.2f | %.2f | %.2f | %.1f | %s | %s |" % (
-            glass_label(q["model"], q["floor"]), q["E"], q["a"], q["n"], bound(q["runout"], q["end_wall"]),
+            glass_label(q["model"], q["floor"], q["flow"]), q["E"], q["a"], q["n"], bound(q["runout"], q["end_wall"]),
             q["lube_runout"], bound(q["runout"] / q["lube_runout"], q["end_wall"]), grain(q["runout_1_5d"], q),
             grain(q["runout_3d"], q), q["height"], q["lube_height"],
             q["height"] / q["lube_height"], q["creep_mm_s"], q["wall_s"], q["backend"]))
@@ -339,7 +371,8 @@ def glass_report(runs, where, P, docs, merge=False):
     for k, (model, floor) in enumerate((("glass", "no_slip"), ("const", "no_slip"), ("glass", "coulomb"),
                                         ("const", "coulomb"))):
         for j, nn in enumerate(GLASS_N):
-            sel = [q for q in rows if q["model"] == model and q["floor"] == floor and q["n"] == nn and q["E"] == "1e5"]
+            sel = [q for q in rows if q["model"] == model and q["floor"] == floor and q["n"] == nn and q["E"] == "1e5"
+                   and q["flow"] == "monaghan_1"]
             if not sel:
                 continue
             st = dict(marker="os^v"[k], ls="none", color="C%d" % j, mfc="none" if k % 2 else "C%d" % j,
@@ -367,6 +400,43 @@ def glass_report(runs, where, P, docs, merge=False):
                     "(L0/dr 20 and finer, where dr <= d; runs at the end wall left out)")
     fig.tight_layout()
     fig.savefig(os.path.join(docs, "validation_collapse_glass.png"), dpi=110)
+    plt.close(fig)
+    dissipation_chart(rows, docs)
+
+
+def dissipation_chart(rows, docs):
+    """The numerical dissipation's share (sets lajeunesse_flow, lajeunesse_alpha): the runout over Lube's law
+    against L0/dr for each a and flow (mu(I), no-slip floor, E 1e5), the last particle's and the deposit's thicker
+    than 3 d; dissipation.png in the --docs folder."""
+    sel = [q for q in rows if q["model"] == "glass" and q["floor"] == "no_slip" and q["E"] == "1e5"]
+    if not any(q["flow"] != "monaghan_1" for q in sel):
+        return
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+    flows = sorted({q["flow"] for q in sel}, key=lambda f: (f != "monaghan_1", f))
+    for j, av in enumerate(sorted({q["a"] for q in sel})):
+        for k, fl in enumerate(flows):
+            s = sorted((q for q in sel if q["a"] == av and q["flow"] == fl), key=lambda q: q["n"])
+            if len(s) < 2:
+                continue
+            st = dict(marker="os^v"[k % 4], ls="-:--"[0 if fl == "riemann" else 1 if fl == "monaghan_1" else 2],
+                      color="C%d" % j, label="a = %g, %s" % (av, glass_label("glass", "no_slip", fl)[7:] or "alpha_av 1"))
+            ax[0].semilogx([q["n"] for q in s], [q["runout"] / q["lube_runout"] for q in s], **st)
+            g = [q for q in s if not math.isnan(q["runout_3d"])]
+            ax[1].semilogx([q["n"] for q in g], [q["runout_3d"] / q["lube_runout"] for q in g], **st)
+    from matplotlib.ticker import NullFormatter, ScalarFormatter
+    for x in ax:
+        x.set_xticks(GLASS_N)
+        x.xaxis.set_major_formatter(ScalarFormatter())
+        x.xaxis.set_minor_formatter(NullFormatter())
+        x.axhline(1, color="k", lw=0.6)
+        x.axhspan(0.85, 1.15, color="0.9")
+        x.set_xlabel("L0 / dr"), x.legend(fontsize=6)
+    ax[0].set_ylabel("runout / Lube et al. (2005), last particle")
+    ax[1].set_ylabel("runout / Lube et al. (2005), deposit thicker than 3 d")
+    ax[0].set_title("glass beads, mu(I), no-slip floor: the stabilisation's share", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(os.path.join(docs, "dissipation.png"), dpi=110)
     plt.close(fig)
 
 
@@ -521,8 +591,58 @@ def cmd_report(a):
     batch.report_tables(a, lines)
 
 
+def sheet_rows(snapshot, dr, d=GLASS_D):
+    """The sheet ahead of the deposit thicker than 3 d in one snapshot (snap.read_snapshot's dict, bins of 2 dr
+    as deposit.csv's): None when under 3 particles lie ahead, else (t, the 3-d deposit's front x in m, the
+    sheet's particle count, its foremost x in m, its lowest and mean y over dr, its share at sigma = 0, its
+    mean speed along x in m/s)."""
+    from tools.analysis import snap
+    mat = np.asarray(snapshot["Kind"]) == snap.MATERIAL
+    x = np.asarray(snapshot["Coordinates"])[mat]
+    sig = np.asarray(snapshot["Stress"])[mat]
+    u = np.asarray(snapshot["Velocities"])[mat, 0]
+    b = np.floor(x[:, 0] / (2 * dr)).astype(int)
+    top = np.full(b.max() + 1, -np.inf)
+    np.maximum.at(top, b, x[:, 1] + dr / 2)
+    thick = np.nonzero(top > 3 * d)[0]
+    xf = (thick.max() + 1) * 2 * dr if thick.size else 0.0
+    ahead = x[:, 0] > xf
+    if ahead.sum() < 3:
+        return None
+    apex = np.all(sig[ahead] == 0, axis=1)
+    y = x[ahead, 1] / dr
+    return (float(snapshot["Time"]), xf, int(ahead.sum()), float(x[ahead, 0].max()), float(y.min()),
+            float(y.mean()), float(apex.mean()), float(u[ahead].mean()))
+
+
+def cmd_sheet(argv):
+    import argparse
+    import yaml
+    from tools.analysis import snap
+    ap = argparse.ArgumentParser(prog="collapse_study sheet", description="the sheet ahead of the deposit thicker "
+                                 "than 3 d, snapshot by snapshot (a run kept with run --keep)")
+    ap.add_argument("run", help="a run's folder (its snapshots and used_params.yml)")
+    ap.add_argument("--every", type=int, default=4, help="every K-th snapshot (default 4)")
+    ap.add_argument("--d", type=float, default=GLASS_D, help="grain diameter, m (default the glass beads')")
+    a = ap.parse_args(argv)
+    with open(os.path.join(a.run, "used_params.yml")) as f:
+        par = yaml.safe_load(f)
+    dr, L0 = float(par["Geometry"]["dr"]), float(par["Geometry"]["width"])
+    print("t (s) | deposit > 3 d to (L0) | sheet: particles | to (L0) | lowest y/dr | mean y/dr | at sigma = 0 | u (m/s)")
+    for p in snap.list_snapshots(a.run)[::a.every]:
+        r = sheet_rows(snap.read_snapshot(p), dr, a.d)
+        if r:
+            t, xf, n, xs, ylo, ym, apex, u = r
+            print("%.3f | %.2f | %d | %.2f | %.2f | %.2f | %.2f | %.3f" % (
+                t, (xf - L0) / L0, n, (xs - L0) / L0, ylo, ym, apex, u))
+
+
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["sheet"]:
+        return cmd_sheet(argv[1:])
     batch.study_main(__doc__, ("aspect", "yield", "resolution", "lagree", "lajeunesse", "lajeunesse_const", "lajeunesse_E",
+                                  "lajeunesse_flow", "lajeunesse_alpha",
                                   "lajeunesse_coulomb", "lajeunesse_slot"), cases, reduce_done, cmd_report, "collapse", argv=argv,
                      merge="keep glass.csv's rows (in --docs) of the glass-bead runs not in --out: a rerun of some cases")
 
