@@ -150,7 +150,7 @@ SLOT_W = (0.01, 0.02, 0.04)
 SLOT_A = (2, 0.5)
 SLOT_N = (10, 20, 40)  # at 40 only a = 2, W 1 and 2 cm were run (--only; docs/data/collapse/glass/README.md)
 SLOT_SLIPS = (("fs", "free_slip"), ("cw", "coulomb"))
-# The numerical dissipation's share (sets lajeunesse_flow, lajeunesse_alpha). The scene keeps the paper's
+# The numerical dissipation's share (sets lajeunesse_flow, lajeunesse_alpha). The scene keeps the paper's kind of
 # stabilisation, Monaghan's artificial viscosity at alpha_av 1, whose viscosity alpha c h falls with dr; the drum
 # scenes' flow (Riemann, bed damping, corrected gradient, Fickian shifting; docs/method.md) dissipates less; and
 # Monaghan's at alpha_av 0.3 and 0.1 at a = 2. The tag names each in the run's name and the report's "flow".
