@@ -222,11 +222,18 @@ def reduce_run(outdir, dr, keep=False):
         if not keep:
             os.remove(p)
     batch.write_csv(os.path.join(outdir, "front.csv"), ["t", "front", "height_at_wall", "max_speed", "n"], rows)
-    if last is not None:  # the final deposit's surface: highest material per bin of 2 dr
-        b = np.floor(last[:, 0] / (2 * dr)).astype(int)
-        batch.write_csv(os.path.join(outdir, "deposit.csv"), ["x", "top"],
-                        [[(k + 0.5) * 2 * dr, last[b == k, 1].max() + 0.5 * dr] for k in np.unique(b)])
+    if last is not None:  # the final deposit's surface
+        x, top = deposit_top(last, dr)
+        batch.write_csv(os.path.join(outdir, "deposit.csv"), ["x", "top"], [[a, b] for a, b in zip(x, top)])
     return len(rows)
+
+
+def deposit_top(xy, dr):
+    """A deposit's surface: per occupied bin of 2 dr along x, its centre and the top of its highest material
+    particle (y + dr/2); deposit.csv's columns x and top, which thickness_fronts reads."""
+    b = np.floor(xy[:, 0] / (2 * dr)).astype(int)
+    ks = np.unique(b)
+    return [(k + 0.5) * 2 * dr for k in ks], [xy[b == k, 1].max() + 0.5 * dr for k in ks]
 
 
 def thickness_fronts(deposit, dr, L0, thresholds):
@@ -591,21 +598,19 @@ def cmd_report(a):
     batch.report_tables(a, lines)
 
 
-def sheet_rows(snapshot, dr, d=GLASS_D):
-    """The sheet ahead of the deposit thicker than 3 d in one snapshot (snap.read_snapshot's dict, bins of 2 dr
-    as deposit.csv's): None when under 3 particles lie ahead, else (t, the 3-d deposit's front x in m, the
-    sheet's particle count, its foremost x in m, its lowest and mean y over dr, its share at sigma = 0, its
-    mean speed along x in m/s)."""
+def sheet_rows(snapshot, dr, L0, d=GLASS_D):
+    """The sheet ahead of the deposit thicker than 3 d (thickness_fronts, as the table's h > 3 d) in one
+    snapshot (snap.read_snapshot's dict): None when under 3 particles lie ahead, else (t, the 3-d deposit's
+    front x in m, the sheet's particle count, its foremost x in m, its lowest and mean y over dr, its share at
+    sigma = 0, its mean speed along x in m/s)."""
     from tools.analysis import snap
     mat = np.asarray(snapshot["Kind"]) == snap.MATERIAL
     x = np.asarray(snapshot["Coordinates"])[mat]
     sig = np.asarray(snapshot["Stress"])[mat]
     u = np.asarray(snapshot["Velocities"])[mat, 0]
-    b = np.floor(x[:, 0] / (2 * dr)).astype(int)
-    top = np.full(b.max() + 1, -np.inf)
-    np.maximum.at(top, b, x[:, 1] + dr / 2)
-    thick = np.nonzero(top > 3 * d)[0]
-    xf = (thick.max() + 1) * 2 * dr if thick.size else 0.0
+    bx, top = deposit_top(x, dr)
+    f3 = thickness_fronts({"x": np.array(bx), "top": np.array(top)}, dr, L0, (3 * d,))[0]
+    xf = L0 * (1 + f3) if not math.isnan(f3) else 0.0
     ahead = x[:, 0] > xf
     if ahead.sum() < 3:
         return None
@@ -630,7 +635,7 @@ def cmd_sheet(argv):
     dr, L0 = float(par["Geometry"]["dr"]), float(par["Geometry"]["width"])
     print("t (s) | deposit > 3 d to (L0) | sheet: particles | to (L0) | lowest y/dr | mean y/dr | at sigma = 0 | u (m/s)")
     for p in snap.list_snapshots(a.run)[::a.every]:
-        r = sheet_rows(snap.read_snapshot(p), dr, a.d)
+        r = sheet_rows(snap.read_snapshot(p), dr, L0, a.d)
         if r:
             t, xf, n, xs, ylo, ym, apex, u = r
             print("%.3f | %.2f | %d | %.2f | %.2f | %.2f | %.2f | %.3f" % (
