@@ -164,7 +164,8 @@ void gpu_walls_renorm(sim_t *s, gpu_t *g, int walls, int renorm, int kgc, sel sl
 /* The flow rates of the owned particles in sl, and with segregation their
  * concentration coefficients (seg_coeffs reads only i's C and the shear
  * rate just computed). */
-template <int RENORM, int KGC, int SHIFT, int F> static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
+template <int RENORM, int KGC, int SHIFT, int F, int SPEC = FLOW_SPEC_ANY>
+static void gpu_flow_pass(sim_t *s, gpu_t *g, sel sl)
 {
     particles_t p = g->d;
     grid_view v = g->view;
@@ -185,7 +186,7 @@ template <int RENORM, int KGC, int SHIFT, int F> static void gpu_flow_pass(sim_t
         const int mat = q.kind[i] == KIND_MATERIAL;
         const grid_view w = view_as<F>(v);
         real a = mat ? flow_rates_body(i, &q, &w, &c, lane, T, RENORM, KGC, SHIFT ? &sh : (const shift_ctx *)0,
-                                       SHIFT ? (real)sdt.at(0) : R(0.0), bq)
+                                       SHIFT ? (real)sdt.at(0) : R(0.0), bq, SPEC)
                      : R(0.0);
         if (lane != 0) return;
         amag[i] = a;
@@ -285,7 +286,7 @@ __global__ void __launch_bounds__(32 * T, 512 / (32 * T)) k_flow_tile(const __gr
         particles_t q = p;
         if (q.kind[i] != KIND_MATERIAL) continue;
         const real a = flow_rates_body(i, &q, &wt, &c, lane, T, RENORM, KGC, SHIFT ? &sh : (const shift_ctx *)0, A.sdt,
-                                       (const real *)0);
+                                       (const real *)0, FLOW_SPEC_ANY);
         if (lane != 0) continue;
         A.amag[i] = a;
         if (A.seg) seg_coeffs(i, &q, &A.sc);
@@ -361,14 +362,29 @@ template <int RENORM, int KGC, int SHIFT> static void gpu_flow_tile(sim_t *s, gp
     }
 }
 
-template <int RENORM, int KGC, int SHIFT> static void gpu_flow_form(sim_t *s, gpu_t *g, sel sl)
+template <int RENORM, int KGC, int SHIFT, int SPEC = FLOW_SPEC_ANY> static void gpu_flow_form(sim_t *s, gpu_t *g, sel sl)
 {
     if (g->tile && g->view.form == GRID_NBR_LIST16) return gpu_flow_tile<RENORM, KGC, SHIFT>(s, g, sl);
     switch (g->view.form) {
-    case GRID_NBR_LIST16: gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_LIST16>(s, g, sl); break;
-    case GRID_NBR_CELLS: gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_CELLS>(s, g, sl); break;
-    default: gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_LIST>(s, g, sl); break;
+    case GRID_NBR_LIST16: gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_LIST16, SPEC>(s, g, sl); break;
+    case GRID_NBR_CELLS: gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_CELLS>(s, g, sl); break; /* not specialised */
+    default: gpu_flow_pass<RENORM, KGC, SHIFT, GRID_NBR_LIST, SPEC>(s, g, sl); break;
     }
+}
+
+/* The flow pass's spec (flow.h flow_spec_of): FLOW_SPEC_RIEMANN, the drum
+ * scenes' flow with its switches as constants, where the run's flow allows
+ * it and SPHSEG_GPU_SPEC is not 0 (guide.md, "Tuning and diagnostics
+ * settings": the general kernel, the same bits, for comparing): 1.07x on
+ * the 1.1e7 3D drum (docs/gpu.md, "The flow pass's code"). Specialised are
+ * the kernels that pass runs under the scenes' settings alone: the corrected
+ * gradient, no owned L (concentration windows), the list forms (cells and
+ * the staged tile keep the general kernel): 4 kernels more, not 12 (the
+ * unit's compile 124 s against 117 s before, 146 s with 12: kernel_frames on
+ * the development machine). */
+static int gpu_flow_spec(const sim_t *s)
+{
+    return tuning_get()->gpu_spec == 0 ? FLOW_SPEC_ANY : flow_spec_of(&s->flow);
 }
 
 /* (and the owned particles' L when prepare left them due: a kernel of its
@@ -377,7 +393,9 @@ template <int RENORM, int KGC, int SHIFT> static void gpu_flow_form(sim_t *s, gp
 template <int SHIFT> static void gpu_flow_kgc(sim_t *s, gpu_t *g, sel sl)
 {
     const int kgc = s->flow.kgc; /* its own kernels: the others keep their register count */
-    if (s->renorm_due) kgc ? gpu_flow_form<1, 1, SHIFT>(s, g, sl) : gpu_flow_form<1, 0, SHIFT>(s, g, sl);
+    if (kgc && !s->renorm_due && gpu_flow_spec(s) == FLOW_SPEC_RIEMANN) /* the drum scenes' flow */
+        gpu_flow_form<0, 1, SHIFT, FLOW_SPEC_RIEMANN>(s, g, sl);
+    else if (s->renorm_due) kgc ? gpu_flow_form<1, 1, SHIFT>(s, g, sl) : gpu_flow_form<1, 0, SHIFT>(s, g, sl);
     else kgc ? gpu_flow_form<0, 1, SHIFT>(s, g, sl) : gpu_flow_form<0, 0, SHIFT>(s, g, sl);
 }
 

@@ -60,7 +60,7 @@ lane_tests() {
     run_one preset bash tests/test_preset.sh "$BUILD/sphseg"
     # issue 57: Flow:shift_surface, shifting's free-surface threshold (its default the rule before the key)
     run_one shift_surface bash tests/test_shift_surface.sh "$BUILD/sphseg"
-    # the per-step pair kernels keep no stack frame (ptxas of gpu/gpu_pairs.cu, about 100 s; a skip without nvcc)
+    # the per-step pair kernels keep no stack frame (ptxas of gpu/gpu_pairs.cu, about 2 minutes; a skip without nvcc)
     run_one kernel_frames "$PYTHON" -m tools.dev.kernel_frames --check
     run_one settings_warnings bash tests/test_settings_warnings.sh "$BUILD/sphseg"
     run_one fulldisk bash tests/test_fulldisk.sh "$BUILD/sphseg"

@@ -673,24 +673,49 @@ static void test_bed_q_array(void **st)
     for (size_t k = 0; k < p->n; ++k) {
         if (p->kind[k] != KIND_MATERIAL) continue;
         real acc[3], ds[6], gd, accn[3];
-        flow_rates_body(k, p, &f->g.view, &c, 0, 1, 0, 0, NULL, 0, NULL);
+        flow_rates_body(k, p, &f->g.view, &c, 0, 1, 0, 0, NULL, 0, NULL, FLOW_SPEC_ANY);
         for (int a = 0; a < 3; ++a) acc[a] = p->acc[a][k];
         for (int q = 0; q < 6; ++q) ds[q] = p->dsig[q][k];
         gd = p->gdot[k];
-        flow_rates_body(k, p, &f->g.view, &c, 0, 1, 0, 0, NULL, 0, bq);
+        flow_rates_body(k, p, &f->g.view, &c, 0, 1, 0, 0, NULL, 0, bq, FLOW_SPEC_ANY);
         for (int a = 0; a < 3; ++a) assert_true(p->acc[a][k] == acc[a]);
         for (int q = 0; q < 6; ++q) assert_true(p->dsig[q][k] == ds[q]);
         assert_true(p->gdot[k] == gd);
-        flow_rates_body(k, p, &f->g.view, &c, 0, 1, 0, 0, NULL, 0, bq1);
+        flow_rates_body(k, p, &f->g.view, &c, 0, 1, 0, 0, NULL, 0, bq, FLOW_SPEC_RIEMANN); /* the GPU's */
+        for (int a = 0; a < 3; ++a) assert_true(p->acc[a][k] == acc[a]);
+        for (int q = 0; q < 6; ++q) assert_true(p->dsig[q][k] == ds[q]);
+        assert_true(p->gdot[k] == gd);
+        flow_rates_body(k, p, &f->g.view, &c, 0, 1, 0, 0, NULL, 0, bq1, FLOW_SPEC_ANY);
         for (int a = 0; a < 3; ++a) accn[a] = p->acc[a][k];
         nshifted += accn[0] != acc[0] || accn[1] != acc[1];
-        flow_rates_body(k, p, &f->g.view, &c0, 0, 1, 0, 0, NULL, 0, NULL);
+        flow_rates_body(k, p, &f->g.view, &c0, 0, 1, 0, 0, NULL, 0, NULL, FLOW_SPEC_ANY);
         ndamped += p->acc[0][k] != acc[0] || p->acc[1][k] != acc[1];
         nmat++;
     }
     assert_true(nmat == 81 && ndamped > 20 && nshifted > 20);
     free(bq);
     free(bq1);
+}
+
+/* flow_spec_of: the riemann granular flow alone takes the specialised pass;
+ * each switch its constants drop sends a run back to the general one. */
+static void test_flow_spec(void **st)
+{
+    (void)st;
+    flow_ctx c = make_ctx();
+    c.stab = STAB_RIEMANN, c.pdiff = 0, c.p_back = 0, c.nu = 0, c.bed_alpha = 1;
+    assert_int_equal(flow_spec_of(&c), FLOW_SPEC_RIEMANN);
+    flow_ctx d = c;
+    d.stab = STAB_MONAGHAN;
+    assert_int_equal(flow_spec_of(&d), FLOW_SPEC_ANY);
+    d = c, d.stab = STAB_DELTA;
+    assert_int_equal(flow_spec_of(&d), FLOW_SPEC_ANY);
+    d = c, d.pdiff = (real)1e-3;
+    assert_int_equal(flow_spec_of(&d), FLOW_SPEC_ANY);
+    d = c, d.p_back = (real)1e-4;
+    assert_int_equal(flow_spec_of(&d), FLOW_SPEC_ANY);
+    d = c, d.nu = (real)1e-6;
+    assert_int_equal(flow_spec_of(&d), FLOW_SPEC_ANY);
 }
 
 static void test_advance(void **st)
@@ -876,7 +901,7 @@ int main(void)
         TU_FX_TEST(test_advance),               TU_FX_TEST(test_drum_dummy_stress),
         TU_FX_TEST(test_dummy_above_surface),   cmocka_unit_test(test_drum_wall_motion),
         cmocka_unit_test(test_box_translation),       cmocka_unit_test(test_drum3d_walls),
-        TU_FX_TEST(test_bed_q_array),
+        TU_FX_TEST(test_bed_q_array),                cmocka_unit_test(test_flow_spec),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -22,8 +22,10 @@ out: the HCSR classification of the paper scheme, the 3D column, the CI-sized
                 and reads the bed damping's weights made once a particle
                 (SPHSEG_GPU_BEDQ=1, which these small stores leave off by
                 default: gpu_bed_q), the second launches every kernel
-                directly (SPHSEG_GPU_GRAPH=0) and computes the weights per
-                pair (SPHSEG_GPU_BEDQ=0); the drum scenes of one rank must
+                directly (SPHSEG_GPU_GRAPH=0), computes the weights per
+                pair (SPHSEG_GPU_BEDQ=0) and runs the general flow pass
+                where the first runs the one specialised to the drum
+                scenes' flow (SPHSEG_GPU_SPEC=0); the drum scenes of one rank must
                 have held steps as graphs (its "gpu graphs:" line).
 
 Scenes with DEM grains (issue 58; src/dem/dem_body.h run by src/dem/dem.c and
@@ -228,7 +230,8 @@ def main():
     for name, scene, steps, over in cases:
         res, dem = {}, {}
         for tag, backend, env in (("cpu", "cpu", None), ("gpu", "gpu", {"SPHSEG_GPU_BEDQ": "1"}),
-                                  ("gpu2", "gpu", {"SPHSEG_GPU_GRAPH": "0", "SPHSEG_GPU_BEDQ": "0"})):
+                                  ("gpu2", "gpu", {"SPHSEG_GPU_GRAPH": "0", "SPHSEG_GPU_BEDQ": "0",
+                                                   "SPHSEG_GPU_SPEC": "0"})):
             out = os.path.join(a.work, name + "_" + tag)
             r = run(a.sphseg, scene, out, backend, steps, over, env)
             if r.returncode != 0:
@@ -249,7 +252,7 @@ def main():
         ok &= good
         keys = [k for k in g if k != "path"]
         differ = [k for k in keys if not np.array_equal(np.asarray(g[k]), np.asarray(g2[k]))]
-        print("%s %-14s GPU run to run, graphs and weights once a particle against direct launches: %s" % (
+        print("%s %-14s GPU run to run, graphs, weights once a particle, specialised pass against direct, general: %s" % (
             "ok  " if not differ else "FAIL", name, "bit-identical" if not differ else "differ in " + ", ".join(differ)))
         ok &= not differ
         must = name.startswith("drum") and "paper" not in name  # one rank, computed flow, no HCSR builds

@@ -6,11 +6,11 @@
 #include "error.h"
 
 /* The settings' names, and their values as read (NULL: not set). */
-enum { T_PROFILE, T_TEAM, T_NBR, T_WALLSKIP, T_OVERLAP, T_HOSTX, T_IPC, T_CUDA_AWARE, T_SKEW, T_CPU_NBR, T_GRAPH, T_BEDQ, T_N };
+enum { T_PROFILE, T_TEAM, T_NBR, T_WALLSKIP, T_OVERLAP, T_HOSTX, T_IPC, T_CUDA_AWARE, T_SKEW, T_CPU_NBR, T_GRAPH, T_BEDQ, T_SPEC, T_N };
 static const char *const tuning_names[T_N] = {"SPHSEG_GPU_PROFILE", "SPHSEG_GPU_TEAM",  "SPHSEG_GPU_NBR", "SPHSEG_GPU_WALLSKIP",
                                               "SPHSEG_GPU_OVERLAP", "SPHSEG_GPU_HOSTX", "SPHSEG_GPU_IPC",
                                               "SPHSEG_CUDA_AWARE", "SPHSEG_BALANCE_SKEW", "SPHSEG_CPU_NBR",
-                                              "SPHSEG_GPU_GRAPH", "SPHSEG_GPU_BEDQ"};
+                                              "SPHSEG_GPU_GRAPH", "SPHSEG_GPU_BEDQ", "SPHSEG_GPU_SPEC"};
 static const char *tuning_raw[T_N];
 
 /* Set and not empty. */
@@ -70,6 +70,7 @@ const tuning *tuning_get(void)
                  .gpu_ipc = !is_zero(r[T_IPC]),
                  .gpu_graph = !is_zero(r[T_GRAPH]),
                  .gpu_bedq = !is_set(r[T_BEDQ]) ? -1 : !is_zero(r[T_BEDQ]),
+                 .gpu_spec = !is_zero(r[T_SPEC]),
                  .cuda_aware = !is_zero(r[T_CUDA_AWARE]),
                  .gpu_team_text = is_set(r[T_TEAM]) ? r[T_TEAM] : NULL,
                  .gpu_nbr_text = is_set(r[T_NBR]) ? r[T_NBR] : NULL,

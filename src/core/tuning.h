@@ -22,6 +22,8 @@ typedef struct tuning {
                        * graph (gpu/gpu_graph.cu; default 1) */
     int gpu_bedq;     /* SPHSEG_GPU_BEDQ: the bed damping's weight once a particle before the flow pass (1) or per
                        * pair (0); -1 (unset): by the store's size (gpu/gpu_pairs.cu gpu_bed_q) */
+    int gpu_spec;     /* SPHSEG_GPU_SPEC not 0: the flow pass specialised to the run's flow where one fits
+                       * (gpu/gpu_pairs.cu gpu_flow_spec; default 1); 0: the general kernel, the same bits */
     int cuda_aware;   /* SPHSEG_CUDA_AWARE not 0: device buffers to MPI where it reports CUDA support (default 1) */
     int skew_rank;    /* SPHSEG_BALANCE_SKEW=R:F: the load balance counts rank R's compute time F times (the
                        * cut moves, the answer does not beyond round-off); -1: not set (default); -2: set to

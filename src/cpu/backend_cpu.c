@@ -128,7 +128,8 @@ static void cpu_flow_rates(sim_t *s)
     for (long i = 0; i < n; ++i) {
         if (p->kind[i] != KIND_MATERIAL) continue;
         double a =
-            flow_rates_body((size_t)i, p, &cpu_of(s)->grid.view, &s->flow, 0, 1, renorm, s->flow.kgc, sh, sdt, bq);
+            flow_rates_body((size_t)i, p, &cpu_of(s)->grid.view, &s->flow, 0, 1, renorm, s->flow.kgc, sh, sdt, bq,
+                            FLOW_SPEC_ANY);
         amax = a > amax ? a : amax;
     }
     s->amax = amax;

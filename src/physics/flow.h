@@ -227,6 +227,24 @@ HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6
     *volj = p->vol[j];
 }
 
+/* flow_rates_body's spec: FLOW_SPEC_ANY reads every switch of the flow_ctx
+ * at run time; FLOW_SPEC_RIEMANN stands for the granular flow under riemann
+ * without pressure diffusion or background pressure (the drum scenes' flow,
+ * Run:preset converged and fast), whose switches the GPU's flow pass then
+ * knows at compile time (a template constant, gpu_pairs.cu): the other
+ * stabilisations' and the fluid's branches leave its code, the same
+ * arithmetic in the same order. flow_spec_of says which a run may take: a
+ * new run-time switch of the pair loop is read at the top of flow_rates_body,
+ * fixed there under FLOW_SPEC_RIEMANN only where flow_spec_of checks it
+ * (tests/test_flow.c test_flow_spec, test_bed_q_array). */
+enum { FLOW_SPEC_ANY = 0, FLOW_SPEC_RIEMANN = 1 };
+
+HD_INLINE int flow_spec_of(const flow_ctx *c)
+{
+    const int riemann = c->stab == STAB_RIEMANN && !(c->pdiff > 0) && c->p_back == 0 && !(c->nu > 0);
+    return riemann ? FLOW_SPEC_RIEMANN : FLOW_SPEC_ANY;
+}
+
 /* Material particle i: acc (3.9 + g), dsig (C1) and gdot from the current
  * positions, velocities and stresses of i and its neighbours (material and
  * dummy). Returns |acc|. Lane `lane` of a team of nlanes (hd.h): lane 0
@@ -244,11 +262,19 @@ HD_INLINE void flow_load_j(const particles_t *p, size_t j, real uj[3], real sj[6
  * fields are read through NBR_BEGIN_TJ's jp at jj (the GPU's staged pass:
  * a tile of shared memory). bq: flow_bed_q of every particle, store and
  * ghosts, indexed as the store (so not with a tile), or NULL: the bed
- * damping's weight computed per pair. */
+ * damping's weight computed per pair. spec: FLOW_SPEC_ANY, or
+ * FLOW_SPEC_RIEMANN where flow_spec_of(c) gives it (a compile-time constant
+ * on the GPU). */
 HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
-                               int nlanes, int renorm, int kgc, const shift_ctx *sh, real sdt, const real *bq)
+                               int nlanes, int renorm, int kgc, const shift_ctx *sh, real sdt, const real *bq,
+                               int spec)
 {
     const sph_ctx *k = &c->k;
+    /* the switches, constants where spec says (flow_spec_of) */
+    const int stab = spec == FLOW_SPEC_RIEMANN ? STAB_RIEMANN : c->stab;
+    const real pdiff = spec == FLOW_SPEC_RIEMANN ? R(0.0) : c->pdiff;
+    const real p_back = spec == FLOW_SPEC_RIEMANN ? R(0.0) : c->p_back;
+    const real nu = spec == FLOW_SPEC_RIEMANN ? R(0.0) : c->nu;
     real L[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, a[3] = {0, 0, 0}, m[6] = {0, 0, 0, 0, 0, 0};
     real si[6] = {p->sig[0][i], p->sig[1][i], p->sig[2][i], p->sig[3][i], p->sig[4][i], p->sig[5][i]};
     /* i's own values read once (the compiler cannot hoist them out of the
@@ -283,10 +309,10 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
         real uij[3] = {ui[0] - uj[0], ui[1] - uj[1], ui[2] - uj[2]};
         mom_velgrad_add(L, volj, uij, gradW);
         real Pi = R(0.0);
-        if (c->stab == STAB_MONAGHAN) {
+        if (stab == STAB_MONAGHAN) {
             if (c->alpha_av > 0) Pi = mom_av_k(av_coef, k->h, uij, xij);
         } else {
-            if (c->stab == STAB_RIEMANN)
+            if (stab == STAB_RIEMANN)
                 Pi = mom_riemann(c->eta_r, c->cs, c->rho, uij, xij, r2, !jmat);
             if (c->bed_alpha > 0 && qi < R(1.0) && jmat) {
                 const real qj = bq ? bq[jj] : stress_static_q(sj, c->bed_k), w = R(1.0) - (qi > qj ? qi : qj);
@@ -294,12 +320,12 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
             }
             /* the pressure difference less its hydrostatic part rho g.x_ji (Fourtakas et al.
              * 2019): a free surface, where the support is cut, is not driven by rho g */
-            if (c->pdiff > 0) {
+            if (pdiff > 0) {
                 const real dpH = c->rho * (c->g[0] * xij[0] + c->g[1] * xij[1] + c->g[2] * xij[2]);
-                pd += mom_pdiff(stress_pressure(sj) - pi + dpH, volj, f, r2, k->eta2, c->stab == STAB_RIEMANN);
+                pd += mom_pdiff(stress_pressure(sj) - pi + dpH, volj, f, r2, k->eta2, stab == STAB_RIEMANN);
             }
         }
-        if (c->p_back != 0) Pi += c->p_back;
+        if (p_back != 0) Pi += p_back;
         if (kgc) { /* V_j (sigma_i B_i + sigma_j B_j) grad W / rho, the dissipation on grad W */
             real Bj[6], gi[3], gj[3];
             for (int q = 0; q < 6; ++q) Bj[q] = jmat ? jp->B[q][jj] : Bi[q];
@@ -309,11 +335,11 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
         } else {
             mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
         }
-        if (c->nu > 0) mom_visc_add(a, volj, c->nu * c->visc_norm, f, uij);
+        if (nu > 0) mom_visc_add(a, volj, nu * c->visc_norm, f, uij);
     NBR_END
     team_sum(L, 9, nlanes);
     team_sum(a, 3, nlanes);
-    if (c->pdiff > 0) team_sum(&pd, 1, nlanes);
+    if (pdiff > 0) team_sum(&pd, 1, nlanes);
     if (renorm) team_sum(m, 6, nlanes);
     if (sh) shift_finish(i, p, sh, sdt, &ss, L, ui, lane, nlanes); /* L: the shift's velocity gradient */
     if (lane != 0) return R(0.0);
@@ -326,8 +352,8 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
     }
     mom_strain_spin(L, eps, w);
     stress_rate_elastic(si, eps, w, c->m.G, c->m.K, ds);
-    if (c->pdiff > 0) {
-        const real dp = c->pdiff * pd; /* dp_i/dt += dp: sigma_kk -= dp */
+    if (pdiff > 0) {
+        const real dp = pdiff * pd; /* dp_i/dt += dp: sigma_kk -= dp */
         ds[0] -= dp, ds[1] -= dp, ds[2] -= dp;
     }
     for (int q = 0; q < 6; ++q) p->dsig[q][i] = ds[q];
@@ -340,7 +366,8 @@ HD_INLINE real flow_rates_body(size_t i, particles_t *p, const grid_view *g, con
 HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, int lane,
                                int nlanes, int renorm, int kgc)
 {
-    return flow_rates_body(i, p, g, c, lane, nlanes, renorm, kgc, (const shift_ctx *)0, R(0.0), (const real *)0);
+    return flow_rates_body(i, p, g, c, lane, nlanes, renorm, kgc, (const shift_ctx *)0, R(0.0), (const real *)0,
+                           FLOW_SPEC_ANY);
 }
 
 HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)

@@ -5,9 +5,9 @@
                                      [--log FILE]
 
 compiles gpu/gpu_pairs.cu (every neighbour-loop kernel: the flow pass in its
-template cases <RENORM, KGC, SHIFT, FORM>, the walls, the shift, the Shepard
+template cases <RENORM, KGC, SHIFT, FORM, SPEC>, the walls, the shift, the Shepard
 sums, dC/dt, the classification) with the Makefile's flags for it (`make
-print-nvflags-pairs`) and `-Xptxas -v`, about 90 s on 2
+print-nvflags-pairs`) and `-Xptxas -v`, about 2 minutes on 2
 cores, and prints one row per host function and template case: the largest
 register count, stack frame and spill stores over its team sizes.
 
@@ -44,7 +44,7 @@ LIMIT = 32  # bytes of stack frame a per-step pair kernel may keep (0 today: doc
 # at 4 blocks. Instantiations bound to NARROW_MINB blocks or more are held to NARROW_LIMIT instead.
 NARROW_MINB, NARROW_LIMIT = 5, 64
 # the per-step passes --check holds to LIMIT: the flow pass without the owned L (RENORM 0), the shift pass
-CHECKED = re.compile(r"^gpu_flow_pass<0, \d, \d, \d>$|^gpu_shift_f<\d>$|^k_flow_tile<\d+, 0, \d, \d>$")
+CHECKED = re.compile(r"^gpu_flow_pass<0, \d, \d, \d, \d>$|^gpu_shift_f<\d>$|^k_flow_tile<\d+, 0, \d, \d>$")
 
 
 def make_flags(precision, arch):
@@ -110,7 +110,7 @@ def main():
         sys.exit("no pair kernels found in ptxas's report")
     bad = []
     print("%-34s %9s %12s %13s  (gpu/gpu_pairs.cu, %s, %s; the largest over team sizes)"
-          % ("kernel <RENORM, KGC, SHIFT, FORM>", "registers", "stack bytes", "spill stores", a.precision, a.arch))
+          % ("kernel <RENORM, KGC, SHIFT, FORM, SPEC>", "registers", "stack bytes", "spill stores", a.precision, a.arch))
     for k in sorted(table):
         reg, stack, spill, narrow = table[k]
         held = bool(CHECKED.match(k))
