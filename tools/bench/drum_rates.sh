@@ -3,8 +3,9 @@
 # gradient, Fickian shifting; E 10 kPa, chi 0.2: issue 56's settings), one run
 # per (binary, integrator, neighbour form) given: particle-steps/s (sphseg's
 # "done:" line, set-up and output excluded), the per-stage profile
-# (SPHSEG_GPU_PROFILE=1) and the peak device memory (nvidia-smi every 100 ms, and
-# the backend's "gpu memory:" line where the binary prints it). Run them on one
+# (SPHSEG_GPU_PROFILE=1, with the run's "tuning:" line: the settings it saw) and
+# the peak device memory (nvidia-smi every 100 ms, and the backend's "gpu memory:"
+# line where the binary prints it). Run them on one
 # otherwise idle GPU, one after the other (this script does): compare the rows
 # of one run as ratios.
 #   tools/bench/drum_rates.sh OUT STEPS LENGTH_M SPEC [SPEC ...]
@@ -41,6 +42,6 @@ for spec in "$@"; do
     peak=$(sort -n "$tmp/mem" | tail -1)
     [ $rc -ne 0 ] && rate="failed rc $rc"
     echo "$name,$(basename "$bin"),$integ,$form,$n,$steps,$wall,$rate,$peak,$gpu" >> "$csv"
-    { echo "== $name (exit $rc)"; grep -E "^gpu|^fields|ms/step|^done" "$tmp/log"; } >> "$out/profiles.txt"
+    { echo "== $name (exit $rc)"; grep -E "^tuning|^gpu|^fields|ms/step|^done" "$tmp/log"; } >> "$out/profiles.txt"
     echo "$name: $rate particle-steps/s, peak $peak MiB"
 done
