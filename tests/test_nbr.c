@@ -544,7 +544,8 @@ static void check_rows(int dim, int ghosts, int lattice)
             const size_t m = d == 0 ? k % side : d == 1 ? k / side % side : k / (side * side);
             x[d] = lattice ? ((double)m + 0.5) * dr + 0.02 * dr * (2.0 * rand() / RAND_MAX - 1) : rand() / (double)RAND_MAX;
         }
-        tu_put(&p, x[0], x[1], dim == 3 ? x[2] : 0, k % 4 ? KIND_MATERIAL : KIND_DUMMY, 1.0);
+        /* dummies: every fourth, and a slab x < 0.3 of them alone (out of the material's reach) */
+        tu_put(&p, x[0], x[1], dim == 3 ? x[2] : 0, k % 4 && x[0] >= 0.3 ? KIND_MATERIAL : KIND_DUMMY, 1.0);
         p.id[k] = (int64_t)((k * 7919u) % n);
     }
     if (ghosts) p.ng = n / 3, p.n = n - p.ng; /* the last third: ghosts */
@@ -556,7 +557,7 @@ static void check_rows(int dim, int ghosts, int lattice)
     nlist_init(&L, &p, h, h / 1.5, 0.1);
     assert_true(L.on);
     nlist_update(&L, &g, &p, 0);
-    size_t *seq = malloc(nt * sizeof *seq), resorted = 0, met = 0;
+    size_t *seq = malloc(nt * sizeof *seq), resorted = 0, met = 0, skipped = 0;
     for (int round = 0; round < 12; ++round) {
         /* rounds 0-4 and 6-10: a step of skin/12 at most along each axis; round 5: past the skin */
         const double step = round == 5 ? 2 * skin : skin / 12;
@@ -570,9 +571,19 @@ static void check_rows(int dim, int ghosts, int lattice)
         cv.form = GRID_NBR_LIST, cv.nl = cv.ncnt = NULL;
         for (size_t i = 0; i < nt; ++i) {
             met += same_pairs(&cv, &g.view, p.x, dim, i, s2, seq);
+            /* the wall skip (nlist_wall_due): a dummy that the scan finds material within 2h of
+             * is due; one not due meets none (ST_WALLS gives it flow_wall_none's result) */
+            int reach = 0;
+            NBR_BEGIN(&cv, p.x, i, j)
+                real xij[3];
+                reach |= p.kind[j] == KIND_MATERIAL && grid_pair(dim, p.x, i, j, xij) < s2;
+            NBR_END
+            if (p.kind[i] == KIND_DUMMY && reach) assert_true(nlist_wall_due(&L, i));
+            skipped += p.kind[i] == KIND_DUMMY && !nlist_wall_due(&L, i);
         }
     }
     assert_true(met > 10 * nt); /* real neighbours to meet */
+    assert_true(skipped > nt / 20); /* the slab's dummies out of reach skip their loop */
     assert_true(resorted > 0);  /* the sorts moved particles in the store */
     if (ghosts) {
         assert_int_equal(L.follows, 0); /* ghosts are made afresh: every sort builds */

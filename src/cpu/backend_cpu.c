@@ -240,10 +240,16 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
         for (long i = 0; i < ng; ++i)
             if (p->kind[i] == KIND_MATERIAL) flow_kgc_team((size_t)i, p, &cpu_of(s)->grid.view, &s->flow, 0, 1);
         return 1;
-    case ST_WALLS: /* ghosts included: a ghost dummy next to the slab has its whole support here */
+    case ST_WALLS: /* ghosts included: a ghost dummy next to the slab has its whole support here; a
+                    * dummy no material reaches until the list's next build skips its loop (nlist.h) */
 #pragma omp parallel for schedule(dynamic, CPU_CHUNK)
         for (long i = 0; i < ng; ++i)
-            if (p->kind[i] == KIND_DUMMY) flow_wall((size_t)i, p, &cpu_of(s)->grid.view, &s->flow);
+            if (p->kind[i] == KIND_DUMMY) {
+                if (nlist_wall_due(&cpu_of(s)->list, (size_t)i))
+                    flow_wall((size_t)i, p, &cpu_of(s)->grid.view, &s->flow);
+                else
+                    flow_wall_none((size_t)i, p, &s->flow);
+            }
         return 1;
     case ST_FLOW: cpu_flow_rates(s); return 1;
     case ST_SEG_COEFFS: cpu_seg_coeffs(&s->seg, p); return 1;

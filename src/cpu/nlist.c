@@ -17,7 +17,7 @@ static size_t nlist_row_bytes(unsigned cap) { return 2 * ((size_t)cap + 1) * siz
 /* Bytes a particle of rows of cap entries: the rows, counts, build
  * positions (each twice: the sort moves them into their spares) and the
  * inverse permutation. */
-static size_t nlist_part_bytes(unsigned cap) { return nlist_row_bytes(cap) + 6 * sizeof(real) + sizeof(unsigned); }
+static size_t nlist_part_bytes(unsigned cap) { return nlist_row_bytes(cap) + 6 * sizeof(real) + sizeof(unsigned) + 2; }
 
 size_t nlist_bytes(const nlist *L) { return L->on ? nlist_part_bytes(L->cap) : 0; }
 
@@ -75,6 +75,8 @@ static void nlist_reserve(nlist *L, size_t n, int rows)
         L->cnt = nlist_grow(L->cnt, m, sizeof(unsigned));
         L->cnt2 = nlist_grow(L->cnt2, m, sizeof(unsigned));
         L->inv = nlist_grow(L->inv, m, sizeof(unsigned));
+        L->wact = nlist_grow(L->wact, m, 1);
+        L->wact2 = nlist_grow(L->wact2, m, 1);
         for (int d = 0; d < 3; ++d) {
             L->xb[d] = nlist_grow(L->xb[d], m, sizeof(real));
             L->xb2[d] = nlist_grow(L->xb2[d], m, sizeof(real));
@@ -108,6 +110,15 @@ static void nlist_build(nlist *L, const nbr_grid *g, particles_t *p)
         if (most <= L->cap) break;
         L->cap = grid_list_width(most);
         nlist_reserve(L, nt, 1);
+    }
+    const unsigned *nl = L->nl, *cnt = L->cnt;
+    const size_t cap = L->cap;
+    unsigned char *wa = L->wact;
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < (long)nt; ++i) { /* the material reaches row i until the next build (the skin) */
+        int r = cnt[i] > cap;
+        for (unsigned e = 0; e < cnt[i] && !r; ++e) r = p->kind[nl[(size_t)i * cap + e]] == KIND_MATERIAL;
+        wa[i] = (unsigned char)r;
     }
     for (int d = 0; d < p->dim; ++d) memcpy(L->xb[d], p->x[d], nt * sizeof(real));
     L->n = nt;
@@ -168,6 +179,7 @@ static void nlist_follow(nlist *L, const nbr_grid *g, int dim, size_t n_owned)
             const size_t o = perm[k];
             const unsigned c = cnt[o];
             cnt2[k] = c;
+            L->wact2[k] = L->wact[o]; /* the row's particles, renamed: the same kinds */
             for (int d = 0; d < dim; ++d) L->xb2[d][k] = L->xb[d][o];
             if (c > cap) continue; /* overflowed: this particle scans the cells */
             const unsigned *a = src + o * cap;
@@ -193,6 +205,8 @@ static void nlist_follow(nlist *L, const nbr_grid *g, int dim, size_t n_owned)
         }
     }
     L->nl = dst, L->nl2 = src, L->cnt = cnt2, L->cnt2 = cnt;
+    unsigned char *w = L->wact;
+    L->wact = L->wact2, L->wact2 = w;
     for (int d = 0; d < 3; ++d) {
         real *t = L->xb[d];
         L->xb[d] = L->xb2[d], L->xb2[d] = t;
@@ -227,7 +241,7 @@ void nlist_forget(nlist *L) { L->valid = 0; }
 
 void nlist_free(nlist *L)
 {
-    free(L->nl), free(L->nl2), free(L->cnt), free(L->cnt2), free(L->inv);
+    free(L->nl), free(L->nl2), free(L->cnt), free(L->cnt2), free(L->inv), free(L->wact), free(L->wact2);
     for (int d = 0; d < 3; ++d) free(L->xb[d]), free(L->xb2[d]);
     *L = (nlist){0};
 }

@@ -47,10 +47,10 @@ FLOOR_LAW, FLOOR_R0 = 2.0, 2.0
 OLD_FLOOR = 1.4  # X = OLD_FLOOR (1 + law) R0, for runs from before x_end was recorded
 
 
-def floor_reach(a, R0, dr, old=False):
-    """The floor's end, m from the axis, on the lattice."""
+def floor_reach(a, R0, dr, old=False, floor=(FLOOR_LAW, FLOOR_R0)):
+    """The floor's end, m from the axis, on the lattice: floor[0] times the law's runout plus floor[1] R0."""
     law = float(lube_runout(a))
-    X = max(3.0, OLD_FLOOR * (1 + law) if old else FLOOR_LAW * law + FLOOR_R0) * R0
+    X = max(3.0, OLD_FLOOR * (1 + law) if old else floor[0] * law + floor[1]) * R0
     return math.ceil(X / dr) * dr
 
 
@@ -61,12 +61,13 @@ def at_end_wall(r, front):
     return front >= x_end - AT_WALL * dr
 
 
-def case(name, a, R0=0.01, rows=20, **extra):
+def case(name, a, R0=0.01, rows=20, floor=(FLOOR_LAW, FLOOR_R0), **extra):
     """A quarter column R0 wide and a R0 high, R0 / dr = rows, on a floor
-    reaching FLOOR_LAW times the law's runout plus FLOOR_R0 R0 (at least 3 R0)."""
+    reaching floor[0] (FLOOR_LAW) times the law's runout plus floor[1]
+    (FLOOR_R0) R0 (at least 3 R0)."""
     dr = round(R0 / rows, 12)
     H0 = a * R0
-    X = floor_reach(a, R0, dr)
+    X = floor_reach(a, R0, dr, floor=floor)
     top = round(1.5 * H0, 9)
     t_end = 7 * math.sqrt(H0 / G)
     walls = ("[{name: axis_x, from: [0, %.9g], to: [0, 0], slip: free_slip}, {name: floor, from: [0, 0], "
