@@ -11,10 +11,10 @@ a = 2 at R0/dr = 8 (800 material particles), to 5 sqrt(H0 / g) = 0.23 s:
     the law at R0/dr = 10, 20, 40, heading for about 1.5, as in 2D), so at
     R0/dr = 8 the under-run and the model's low friction cancel;
   - the front stops short of the floor's end wall (collapse3d_study.at_end_wall).
-    The floor reaches 1.5 times the law's runout plus R0 (4.4 R0; the
-    study's 2 times plus 2 R0, 6.6 R0, is for its finer columns, whose
-    runouts reach 1.35 of the law): the run lands 9 dr short of it, and
-    its walls hold half the dummies;
+    The floor reaches 1.5 times the law's runout plus R0 (4.5 R0 on the
+    lattice; the study's 2 times plus 2 R0, 6.6 R0, is for its finer
+    columns, whose runouts reach 1.35 of the law): the front stops 10 dr
+    short of it, and the walls hold 17 388 dummies, not 27 843;
   - the deposit is axisymmetric: the front along x (z < 2 dr) and along z
     (x < 2 dr) agree within 2 dr, and both within 3 dr of the front over all
     directions (the lattice's columns are not round, so not closer).
