@@ -176,18 +176,12 @@ static void gpu_list(gpu_t *g, int dim, real list2, size_t n, const unsigned *rk
 static void gpu_marks(gpu_t *g, size_t n, size_t nown)
 {
     particles_t q = g->d;
-    const unsigned *cnt = g->view.ncnt, cap = g->nl_cap; /* cnt NULL: the cells form, no fallback */
     if (g->wact) { /* dummies that no material reaches until the next build (the list's skin) */
         uint8_t *wa = g->wact;
         grid_view vw = g->view;
         each(g, n, [=] __device__(size_t i) {
-            int r = q.kind[i] == KIND_DUMMY && cnt && cnt[i] > cap; /* a cell scan at use: keep the loop */
-            if (q.kind[i] == KIND_DUMMY && !r) {
-                NBR_BEGIN(&vw, q.x, i, j)
-                    r |= q.kind[j] == KIND_MATERIAL;
-                NBR_END
-            }
-            wa[i] = (uint8_t)r;
+            particles_t pq = q;
+            wa[i] = (uint8_t)(q.kind[i] == KIND_DUMMY && flow_wall_reached(i, &pq, &vw));
         });
     }
     if (g->lvl) { /* halo levels (backend_gpu.cu, at the top) from the new list */

@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/omp_shim.h"
 #include "core/tuning.h"
+#include "physics/flow.h"
 
 /* Rows per dynamic chunk of a build (a 3D particle scans about 730 candidates). */
 #define NLIST_CHUNK 64
@@ -89,6 +90,14 @@ static void nlist_reserve(nlist *L, size_t n, int rows)
     }
 }
 
+/* v as the rows of L (GRID_NBR_ROWS, nlist.h). */
+static void nlist_view(const nlist *L, grid_view *v)
+{
+    v->form = GRID_NBR_ROWS;
+    v->nl = L->nl, v->ncnt = L->cnt;
+    v->nl_stride = L->cap, v->nl_cap = L->cap;
+}
+
 /* Every row from the cells of g (grid_list_fill_reach), at the positions
  * now; a row too short for the densest particle grows the rows to its
  * count + 1/16, rounded up to 8 (the GPU's rule, gpu_list), and the build
@@ -111,15 +120,11 @@ static void nlist_build(nlist *L, const nbr_grid *g, particles_t *p)
         L->cap = grid_list_width(most);
         nlist_reserve(L, nt, 1);
     }
-    const unsigned *nl = L->nl, *cnt = L->cnt;
-    const size_t cap = L->cap;
+    grid_view rv = *vc; /* the dummies whose wall loop is due until the next build (the skin) */
+    nlist_view(L, &rv);
     unsigned char *wa = L->wact;
-#pragma omp parallel for schedule(static)
-    for (long i = 0; i < (long)nt; ++i) { /* the material reaches row i until the next build (the skin) */
-        int r = cnt[i] > cap;
-        for (unsigned e = 0; e < cnt[i] && !r; ++e) r = p->kind[nl[(size_t)i * cap + e]] == KIND_MATERIAL;
-        wa[i] = (unsigned char)r;
-    }
+#pragma omp parallel for schedule(dynamic, NLIST_CHUNK)
+    for (long i = 0; i < (long)nt; ++i) wa[i] = p->kind[i] == KIND_DUMMY && flow_wall_reached((size_t)i, p, &rv);
     for (int d = 0; d < p->dim; ++d) memcpy(L->xb[d], p->x[d], nt * sizeof(real));
     L->n = nt;
     L->valid = 1;
@@ -232,9 +237,7 @@ void nlist_update(nlist *L, nbr_grid *g, particles_t *p, int mode)
                    L->n, nt);
     if (build) nlist_build(L, g, p);
     else nlist_follow(L, g, p->dim, p->n);
-    v->form = GRID_NBR_ROWS;
-    v->nl = L->nl, v->ncnt = L->cnt;
-    v->nl_stride = L->cap, v->nl_cap = L->cap;
+    nlist_view(L, v);
 }
 
 void nlist_forget(nlist *L) { L->valid = 0; }

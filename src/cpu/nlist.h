@@ -40,8 +40,8 @@ typedef struct nlist {
     unsigned *nl, *nl2;     /* rows of cap entries, and the spare the next sort moves them into */
     unsigned *cnt, *cnt2;   /* entries of each row (above cap: the row overflowed; that particle scans) */
     real *xb[3], *xb2[3];   /* positions at the last build, for the skin test */
-    unsigned char *wact, *wact2; /* a row holds a material particle (or overflowed): a dummy whose row holds
-                                  * none takes flow_wall_none, no loop, the same bits (the GPU's wact) */
+    unsigned char *wact, *wact2; /* a dummy's wall loop is due until the next build (flow_wall_reached, at
+                                  * each build); a dummy not due takes flow_wall_none (the GPU's wact) */
     unsigned *inv;          /* scratch: the sort's inverse permutation */
     size_t n, cap_part;     /* particles in the rows; allocated */
     unsigned cap;           /* entries a row */
@@ -66,8 +66,8 @@ int nlist_stale(const nlist *L, const particles_t *p);
 /* The store changed outside a sort (drain, load balance, restart): the next
  * update builds. */
 void nlist_forget(nlist *L);
-/* The dummies' wall loop is due (a material particle in its row, or the
- * row overflowed): 1 for every particle without the list. */
+/* Dummy i's wall loop is due (flow_wall_reached at the list's build): 1
+ * for every dummy without the list. */
 static inline int nlist_wall_due(const nlist *L, size_t i) { return !L->on || !L->valid || L->wact[i]; }
 /* Bytes a particle the list holds (0 for the cell scan). */
 size_t nlist_bytes(const nlist *L);

@@ -119,6 +119,21 @@ HD_INLINE void flow_wall_none(size_t d, particles_t *p, const flow_ctx *c)
     flow_wall_set(d, p, c, &ws);
 }
 
+/* Is dummy d's wall loop due until the list's next build: a material
+ * particle in its neighbour list (within 2h + skin: none other reaches d
+ * before the build), or a list row that overflowed (scanned at use)? Else
+ * flow_wall_none gives its result. Each backend marks its dummies with it at
+ * a list build (gpu_marks, gpu/gpu_nbr.cu; nlist_build, src/cpu/nlist.c). */
+HD_INLINE int flow_wall_reached(size_t d, const particles_t *p, const grid_view *g)
+{
+    if (g->ncnt && g->ncnt[d] > g->nl_cap) return 1;
+    int r = 0;
+    NBR_BEGIN(g, p->x, d, j)
+        r |= p->kind[j] == KIND_MATERIAL;
+    NBR_END
+    return r;
+}
+
 /* Dummy particle d: velocity and stress extrapolated from the material in
  * its support (paper §4.1). A dummy with no material in reach takes the
  * wall velocity and zero stress. Lane `lane` of a team of nlanes (hd.h);
