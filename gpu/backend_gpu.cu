@@ -78,7 +78,8 @@ static const char *prof_name[P_NPROF] = {"save start, advance, motion", "boundin
                                           "corrected gradient's moment matrix B", "DEM grid (box +sync, sort, starts)",
                                           "DEM coupling (fraction, drag, source)", "DEM steps (contacts, motion)",
                                           "DEM exchange (ranks: read-back, MPI, upload)",
-                                          "DEM ghost refreshes, sums home (ranks)"};
+                                          "DEM ghost refreshes, sums home (ranks)",
+                                          "wall friction on the particles (a neighbour pass)"};
 
 static void gpu_to_host(sim_t *s)
 {

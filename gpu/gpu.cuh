@@ -211,7 +211,7 @@ extern int g_local_rank; /* backend_gpu(local_rank) (backend_gpu.cu) */
  * the total runs slower than without; a table at the end of the run
  * (gpu_finish; the state is defined in backend_gpu.cu). */
 enum { P_MOTION, P_BBOX, P_SORT, P_PERMUTE, P_LIST, P_CLASSIFY, P_WALLS, P_FLOW, P_SEG, P_FILTER, P_BOUNDS_CHECK,
-       P_SHIFT, P_KGC, P_DEM_GRID, P_DEM_COUPLE, P_DEM_STEP, P_DEM_XCHG, P_DEM_REFRESH, P_NPROF };
+       P_SHIFT, P_KGC, P_DEM_GRID, P_DEM_COUPLE, P_DEM_STEP, P_DEM_XCHG, P_DEM_REFRESH, P_CONTACT, P_NPROF };
 struct gpu_prof {
     int on;
     cudaEvent_t a, b;
@@ -313,6 +313,7 @@ void gpu_flow_rates(sim_t *s, gpu_t *g, sel sl);
 void gpu_tile_need(gpu_t *g);
 void gpu_dcdt(sim_t *s, gpu_t *g, particles_t p, sel sl);
 void gpu_shift_pass(sim_t *s, gpu_t *g);
+void gpu_contact_pass(sim_t *s, gpu_t *g);
 void gpu_shepard_pass(sim_t *s, gpu_t *g);
 void gpu_win_renorm(sim_t *s, gpu_t *g);
 

@@ -470,6 +470,23 @@ template <int F> static void gpu_shift_f(sim_t *s, gpu_t *g)
 
 void gpu_shift_pass(sim_t *s, gpu_t *g) { BY_FORM(g, gpu_shift_f, (s, g)) }
 
+/* ST_CONTACT: the Coulomb walls' friction on the owned material particles
+ * (Walls:coulomb_force particles; flow_contact_team), after the flow pass. */
+template <int F> static void gpu_contact_f(sim_t *s, gpu_t *g)
+{
+    particles_t p = g->d;
+    grid_view v = g->view;
+    flow_ctx c = s->flow;
+    const dscal dt = gpu_scalar(g, &s->dt, 1); /* (gpu.cuh) */
+    team(g, g->n, [=] __device__(size_t i, int lane, int T) {
+        particles_t q = p;
+        const grid_view w = view_as<F>(v);
+        if (q.kind[i] == KIND_MATERIAL) flow_contact_team(i, &q, &w, &c, (real)dt.at(0), lane, T);
+    });
+}
+
+void gpu_contact_pass(sim_t *s, gpu_t *g) { BY_FORM(g, gpu_contact_f, (s, g)) }
+
 /* ST_SHEPARD: the Shepard sums of every material particle (stored by
  * ST_SHEPARD_STORE, gpu_filter). */
 template <int F> static void gpu_shepard_f(sim_t *s, gpu_t *g)

@@ -153,6 +153,11 @@ void gpu_rates(sim_t *s)
             s->renorm_due = 0;
             s->shift_due = 0;
             break;
+        case ST_CONTACT: /* after the flow pass, which reads the dummies it reads */
+            prof_begin(g->st);
+            gpu_contact_pass(s, g);
+            prof_end(g->st, P_CONTACT);
+            break;
         case ST_SEG_COEFFS: break; /* in the flow pass, and the rest with dC/dt */
         case ST_DCDT:
             gpu_settle(s, g);

@@ -136,6 +136,13 @@ CASES = [
     ("drum_EV_partial", "drum_2d_EV.yml", 60, ["Material:mu_law=partial"] + PLAIN),
     # a gate lifted at t = 0.01 s (Geometry:runout, Walls:gate_open): a column collapse
     ("collapse", "column_2d.yml", 1500, COLLAPSE),
+    # Walls:coulomb_force particles (flow.h flow_contact_team, ST_CONTACT): the Coulomb floor's friction on the
+    # particles, under monaghan (the glass-bead collapse) and under riemann with the corrected gradient (a layer
+    # on a Coulomb base, periodic along x)
+    ("collapse_contact", "collapse_2d_glass.yml", 1500, ["Geometry:dr=0.002", "Walls:slip=coulomb",
+                                                         "Walls:mu_w=0.4621", "Walls:coulomb_force=particles"]),
+    ("chute_contact", "chute_2d.yml", 400, ["Walls:slip=coulomb", "Walls:mu_w=0.3", "Walls:coulomb_force=particles",
+                                            "Flow:gradient_correction=on", "Material:mu_s=0.7", "Material:mu_d=0.9"]),
     # an outlet under a silo's opening: the device store shrinks (run_guard.c run_drain)
     ("silo", "column_2d.yml", 5000, SILO),
     # the Newtonian fluid (Material:model newtonian): a film down the incline, tests/validate_film.py

@@ -252,6 +252,12 @@ static int cpu_stage(sim_t *s, int id, cpu_call *c)
             }
         return 1;
     case ST_FLOW: cpu_flow_rates(s); return 1;
+    case ST_CONTACT: /* the Coulomb walls' friction on the owned material (Walls:coulomb_force particles) */
+#pragma omp parallel for schedule(dynamic, CPU_CHUNK)
+        for (long i = 0; i < n; ++i)
+            if (p->kind[i] == KIND_MATERIAL)
+                flow_contact_team((size_t)i, p, &cpu_of(s)->grid.view, &s->flow, (real)s->dt, 0, 1);
+        return 1;
     case ST_SEG_COEFFS: cpu_seg_coeffs(&s->seg, p); return 1;
     case ST_DCDT: cpu_dcdt(s, p); return 1;
     case ST_SAVE:

@@ -38,6 +38,8 @@ typedef struct flow_ctx {
     real rho;      /* bulk density, kg/m^3 */
     real cs;       /* elastic sound speed, m/s (3.10, 3.19) */
     real v_stick;  /* a Coulomb wall's sticking speed (wall_coulomb), m/s: COULOMB_STICK c_s (physics/wall.h) */
+    int contact;   /* Walls:coulomb_force particles: the Coulomb walls whose friction acts on the particles
+                    * (wall_prim.contact 1..contact; flow_contact_team); 0: none, the stage does not run */
     int stab;      /* Flow:stabilization: STAB_MONAGHAN (the paper's 3.10) | STAB_RIEMANN | STAB_DELTA */
     real alpha_av; /* Monaghan coefficient of (3.10), monaghan only; 0 switches it off */
     real eta_r;    /* riemann: the limiter's eta (Zhang, Hu & Adams 2017: 3) */
@@ -388,6 +390,104 @@ HD_INLINE real flow_rates_team(size_t i, particles_t *p, const grid_view *g, con
 HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c)
 {
     return flow_rates_team(i, p, g, c, 0, 1, 0, c->kgc);
+}
+
+/* Walls:coulomb_force particles: the friction of the Coulomb walls acts on
+ * each material particle i, after its flow rates (acc) are made. A layer at
+ * the tension cut-off (sigma = 0: a sheet a grain or two thick ahead of a
+ * collapse's deposit) meets a dummy wall only through the stabilisation's
+ * pair term, whose normal part carries its weight and whose tangential part
+ * is a viscous drag, not Coulomb's; the dummy's own friction (wall_coulomb),
+ * mu_w times the dummy's normal stress, is then none (docs/validation.md,
+ * "Column collapse"). So here the force per unit mass that the dummies of
+ * each contact wall exert on i, a_w = flow_rates_body's pair terms over them
+ * (stress, stabilisation, the fluid's viscosity; a dummy's B is B_i), is split
+ * along the wall's normal n at x_i (into the material) into N = a_w.n and the
+ * tangential T. Where N > 0 (the wall pushes), T is replaced by Coulomb's
+ * friction on the slip s = (u_i - u_w) tangential to the wall: with
+ * s* = s + dt (acc_t - T), the slip at the step's end without the wall's
+ * tangential force, the particle sticks (acc_t = -s / dt) while |s*| <=
+ * mu_w N dt, else slides with acc_t - T - mu_w N s* / |s*|: the frictional
+ * contact of Bardenhagen et al. (2000, MPM) at one particle, its normal load
+ * whatever the discretisation carries it by. The walls are taken one after
+ * another in their slot order. Where the wall pulls (N <= 0) nothing
+ * changes. The time-step bound keeps the flow rates' |acc|. Lane `lane` of a
+ * team of nlanes (hd.h); lane 0 writes. */
+HD_INLINE void flow_contact_team(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, real dt, int lane,
+                                 int nlanes)
+{
+    const sph_ctx *k = &c->k;
+    real aw[3 * WALL_CONTACT_MAX];
+    for (int q = 0; q < 3 * WALL_CONTACT_MAX; ++q) aw[q] = 0;
+    const real si[6] = {p->sig[0][i], p->sig[1][i], p->sig[2][i], p->sig[3][i], p->sig[4][i], p->sig[5][i]};
+    const real xi[3] = {p->x[0][i], p->x[1][i], p->x[2][i]}, ui[3] = {p->v[0][i], p->v[1][i], p->v[2][i]};
+    real Bi[6] = {1, 1, 1, 0, 0, 0};
+    if (c->kgc)
+        for (int q = 0; q < 6; ++q) Bi[q] = p->B[q][i];
+    const real av_coef = mom_av_coef(c->alpha_av, c->cs, k->h, c->rho, c->rho);
+    NBR_BEGIN_T(g, p->x, i, j, lane, nlanes)
+        if (p->kind[j] != KIND_DUMMY) continue;
+        const int slot = wall_of(&c->w, p->wall[j])->contact;
+        if (!slot) continue;
+        real xij[3];
+        const real r2 = grid_pair_xi(k->dim, xi, p->x, j, xij);
+        if (r2 >= k->support2) continue;
+        real uj[3], sj[6], volj;
+        flow_load_j(p, j, uj, sj, &volj);
+        const real f = kernel_f(sqrt_r(r2), k->h, k->alpha);
+        const real gradW[3] = {f * xij[0], f * xij[1], f * xij[2]};
+        const real uij[3] = {ui[0] - uj[0], ui[1] - uj[1], ui[2] - uj[2]};
+        /* flow_rates_body's terms for a dummy neighbour (no bed damping: material pairs only) */
+        real Pi = c->p_back;
+        if (c->stab == STAB_MONAGHAN) {
+            if (c->alpha_av > 0) Pi += mom_av_k(av_coef, k->h, uij, xij);
+        } else if (c->stab == STAB_RIEMANN) {
+            Pi += mom_riemann(c->eta_r, c->cs, c->rho, uij, xij, r2, 1);
+        }
+        real a[3] = {0, 0, 0};
+        if (c->kgc) {
+            real gi[3];
+            linalg_sym_apply(Bi, gradW, gi);
+            mom_accel_add_kgc(a, c->rho * volj, si, sj, c->rho, Pi, gradW, gi, gi);
+        } else {
+            mom_accel_add(a, c->rho * volj, si, c->rho, sj, c->rho, Pi, gradW);
+        }
+        if (c->nu > 0) mom_visc_add(a, volj, c->nu * c->visc_norm, f, uij);
+        for (int w = 0; w < WALL_CONTACT_MAX; ++w) /* a fixed trip count: aw stays in registers */
+            if (w == slot - 1)
+                for (int d = 0; d < 3; ++d) aw[3 * w + d] += a[d];
+    NBR_END
+    team_sum(aw, 3 * WALL_CONTACT_MAX, nlanes);
+    if (lane != 0) return;
+    real acc[3] = {p->acc[0][i], p->acc[1][i], p->acc[2][i]};
+    for (int q = 0; q < c->w.n; ++q) {
+        const wall_prim *wp = &c->w.prim[q];
+        if (!wp->contact) continue;
+        real A[3] = {0, 0, 0}; /* its sums, picked by a fixed trip count (aw stays in registers) */
+        for (int w = 0; w < WALL_CONTACT_MAX; ++w)
+            if (w == wp->contact - 1)
+                for (int d = 0; d < 3; ++d) A[d] = aw[3 * w + d];
+        real n[3], uw[3];
+        wall_prim_normal(wp, xi, n);
+        wall_velocity_at(wp, xi, uw);
+        const real N = A[0] * n[0] + A[1] * n[1] + A[2] * n[2];
+        if (!(N > 0)) continue;
+        real an = 0, sn = 0, s[3], at[3], T[3], ss = 0;
+        for (int d = 0; d < 3; ++d) an += acc[d] * n[d], sn += (ui[d] - uw[d]) * n[d];
+        for (int d = 0; d < 3; ++d) {
+            s[d] = ui[d] - uw[d] - sn * n[d]; /* the slip */
+            T[d] = A[d] - N * n[d];           /* the wall's tangential force */
+            at[d] = acc[d] - an * n[d] - T[d]; /* the tangential acc without it */
+        }
+        real st[3];
+        for (int d = 0; d < 3; ++d) st[d] = s[d] + dt * at[d], ss += st[d] * st[d];
+        const real sm = sqrt_r(ss), cap = wp->mu_w * N;
+        for (int d = 0; d < 3; ++d) {
+            const real tn = sm <= cap * dt ? -s[d] / dt : at[d] - cap * st[d] / sm; /* sticks, or slides */
+            acc[d] = an * n[d] + tn;
+        }
+    }
+    for (int d = 0; d < 3; ++d) p->acc[d][i] = acc[d];
 }
 
 /* Material particle i, a in seconds: x = x_n + a u (in double, x + xr in

@@ -31,6 +31,10 @@ enum wall_move { WALL_FIXED = 0, WALL_TRANSLATE = 1, WALL_ROTATE = 2 };
  * and a lid has 7). The table travels by value in the contexts, so the GPU
  * reads it from the kernel parameters. */
 enum { WALL_PRIM_MAX = 12 };
+/* The most Coulomb walls whose friction acts on the particles
+ * (Walls:coulomb_force particles; wall_prim.contact; flow_contact_team): a 3D
+ * slot's floor, two side walls and an end wall. */
+enum { WALL_CONTACT_MAX = 4 };
 /* wall_prim.claim: how a primitive takes its dummies (wall_id_at). */
 enum wall_claim {
     WALL_CLAIM_NONE = 0,  /* only the dummies its builder placed for it (a gate, a lid) */
@@ -45,6 +49,8 @@ typedef struct wall_prim {
     int move;        /* enum wall_move */
     int slip;        /* 1 free slip (4.2), 0 no slip (4.1) */
     real mu_w;       /* > 0: Coulomb friction (slip 0 while it sticks; wall_coulomb), the coefficient */
+    int contact;     /* Walls:coulomb_force particles: this Coulomb wall's slot 1..WALL_CONTACT_MAX of
+                      * flow_contact_team (physics/flow.h); 0: its friction acts through its dummies alone */
     int bound;       /* 1: material beyond it by more than h has left the container (step_outside);
                       * 0 for a wall with an opening (an outlet's base), a gate, a lid */
     int claim;       /* enum wall_claim */

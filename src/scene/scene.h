@@ -22,6 +22,12 @@ enum periodic_axes {
 enum wall_slip { SLIP_NO = 0, SLIP_FREE = 1, SLIP_COULOMB = 2 };
 /* Walls:end_slip side: the end walls z = 0 and z = depth slip as Walls:side_slip (scene_end_slip) */
 #define SLIP_AS_SIDE 3 /* past enum wall_slip: the key writer reads enums as unsigned */
+/* Walls:coulomb_force: where a Coulomb wall's friction acts: dummies, the
+ * dummy's traction limited to mu_w times its normal stress (wall_coulomb);
+ * particles, besides that, each material particle's tangential force from the
+ * wall is mu_w times the wall's normal force on it, or what stops its slip
+ * (flow_contact_team, physics/flow.h) */
+enum coulomb_force { COULOMB_DUMMIES = 0, COULOMB_PARTICLES = 1 };
 enum rot_dir { ROT_CLOCKWISE = 0, ROT_COUNTERCLOCKWISE = 1 };
 enum init_stress { INIT_STRESS_ZERO = 0, INIT_STRESS_GEOSTATIC = 1 };
 /* Run:preset: a named group of keys (scene_preset.c) */

@@ -243,6 +243,11 @@ static int check_vectors(struct scene_ctx *c, const struct scene *s)
     if (coulomb && !(s->walls.mu_w > 0))
         return scene_fail_at(c, "Walls:mu_w", "a wall with slip coulomb needs Walls:mu_w > 0 (the tangent of the "
                              "wall friction angle); it is %g", s->walls.mu_w);
+    if (s->walls.coulomb_force == COULOMB_PARTICLES && !coulomb)
+        return scene_fail_at(c, "Walls:coulomb_force", "particles needs a wall with slip coulomb (Walls:slip, "
+                             "side_slip, end_slip or a container's entry)");
+    if (s->walls.coulomb_force == COULOMB_PARTICLES && s->kinematics.velocity != KIN_COMPUTED)
+        return scene_fail_at(c, "Walls:coulomb_force", "particles needs computed flow (Kinematics:velocity computed)");
     return 0;
 }
 

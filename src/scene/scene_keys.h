@@ -32,6 +32,7 @@ static const cyaml_strval_t kin_types[] = {
 static const cyaml_strval_t slips[] = {{"no_slip", SLIP_NO}, {"free_slip", SLIP_FREE}, {"coulomb", SLIP_COULOMB}};
 static const cyaml_strval_t end_slips[] = {
     {"side", SLIP_AS_SIDE}, {"no_slip", SLIP_NO}, {"free_slip", SLIP_FREE}, {"coulomb", SLIP_COULOMB}};
+static const cyaml_strval_t coulomb_forces[] = {{"dummies", COULOMB_DUMMIES}, {"particles", COULOMB_PARTICLES}};
 static const cyaml_strval_t rot_dirs[] = {{"clockwise", ROT_CLOCKWISE},
                                           {"counterclockwise", ROT_COUNTERCLOCKWISE}};
 static const cyaml_strval_t init_stresses[] = {{"zero", INIT_STRESS_ZERO},
@@ -403,6 +404,12 @@ SECTION("Walls", walls, scene_walls)
     KF("Walls", walls, scene_walls, mu_w, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "the wall friction coefficient (tan of the wall friction angle) of every wall whose slip is coulomb, -; >= 0, "
       "> 0 where a wall is coulomb; default 0")
+    KE("Walls", walls, scene_walls, coulomb_force, enum coulomb_force, coulomb_forces, "dummies",
+      "where a coulomb wall's friction acts: dummies (the dummy's traction limited to mu_w times its normal stress) | "
+      "particles (besides that, each material particle's tangential force from the wall's dummies is replaced by mu_w "
+      "times their normal force on it while it slides, or by what stops its slip: a stress-free layer, whose weight "
+      "the dummies carry through the stabilisation's pair term, then meets the wall's friction; docs/method.md, "
+      "\"Wall friction on the particles\"); default dummies")
     KF("Walls", walls, scene_walls, gate_open, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,
       "s: the gate of a column with a runout (Geometry:runout) is removed at this time, >= 0; default 0 (at the start)")
     KF("Walls", walls, scene_walls, rpm, OPT, "0", 0, INFINITY, HI_OPEN, ALWAYS,

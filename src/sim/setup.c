@@ -485,8 +485,9 @@ char *wall_list(const sim_t *s, int longer, char *buf, size_t n)
     for (int i = 0; i < s->flow.w.n && k < n; ++i) {
         const wall_prim *q = &s->flow.w.prim[i];
         k += (size_t)snprintf(buf + k, n - k, "%s%d %s", i ? ", " : "", i + 1, s->wall_name[i]);
-        char slip[40];
-        if (q->mu_w > 0) snprintf(slip, sizeof slip, "Coulomb mu_w %.4g", (double)q->mu_w);
+        char slip[64];
+        if (q->mu_w > 0)
+            snprintf(slip, sizeof slip, "Coulomb mu_w %.4g%s", (double)q->mu_w, q->contact ? " on the particles" : "");
         else snprintf(slip, sizeof slip, "%s", q->slip ? "free slip" : "no slip");
         if (longer && k < n)
             k += (size_t)snprintf(buf + k, n - k, " (%s, %s, %s%s)", q->shape == WALL_PLANE ? "plane" : q->outside ? "post" : "cylinder",
@@ -683,6 +684,16 @@ void setup_contexts(sim_t *s)
     memset(w, 0, sizeof *w);
     w->periodic = (int)sc->geometry.periodic;
     setup_builder_of(sc)->walls(s);
+    /* Walls:coulomb_force particles: each Coulomb wall a slot of the contact stage (flow_contact_team) */
+    s->flow.contact = 0;
+    if (sc->walls.coulomb_force == COULOMB_PARTICLES)
+        for (int k = 0; k < w->n; ++k)
+            if (w->prim[k].mu_w > 0) {
+                if (s->flow.contact == WALL_CONTACT_MAX)
+                    input_error("Walls:coulomb_force particles: more than %d Coulomb walls (%s)", WALL_CONTACT_MAX,
+                                s->wall_name[k]);
+                w->prim[k].contact = ++s->flow.contact;
+            }
 
     step_ctx *st = &s->step_c; /* the driver's per-particle checks (step.h) */
     st->h = s->seg.k.h;

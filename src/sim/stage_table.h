@@ -31,6 +31,7 @@ enum stage_id {
     ST_SHIFT,        /* shift_team: the shift into x_n, with v_n and sig_n carried (physics/shift.h) */
     ST_KGC,          /* flow_kgc_team: the gradient correction B of the material (physics/flow.h) */
     ST_DEM_COUPLE,   /* dem_couple: the DEM grains' coupling with the fluid (src/dem/dem.c, dem_body.h) */
+    ST_CONTACT,      /* flow_contact_team: the Coulomb walls' friction on the particles (physics/flow.h) */
     ST_N
 };
 #endif
@@ -68,6 +69,11 @@ const stage stage_table[] = {
     {ST_FLOW, H(HOOK_RATES), "flow_rates_team", SF_FLOW, 0, RANGE_OWNED, NB_FLOW, FLD_ACC | FLD_DSIG | FLD_GDOT, 0,
      FLD_C},
     {ST_FLOW, H(HOOK_RATES), "flow_rates_team", SF_FLOW | SF_KGC, 0, RANGE_OWNED, FLD_B, 0, 0, 0},
+    /* Walls:coulomb_force particles: after the flow rates, the dummies' pair terms again, their tangential
+     * part replaced by the friction (a dummy's B is B_i: FLD_B of i alone) */
+    {ST_CONTACT, H(HOOK_RATES), "flow_contact_team", SF_FLOW | SF_CONTACT, 0, RANGE_OWNED, NB_FLOW | FLD_WALL,
+     FLD_ACC, 0, FLD_ACC},
+    {ST_CONTACT, H(HOOK_RATES), "flow_contact_team", SF_FLOW | SF_CONTACT | SF_KGC, 0, RANGE_OWNED, 0, 0, 0, FLD_B},
     {ST_SEG_COEFFS, H(HOOK_RATES), "seg_coeffs", SF_SEG, SF_WIN, RANGE_ALL, FLD_C | FLD_GDOT, FLD_SEGC, 0, 0},
     {ST_DCDT, H(HOOK_RATES), "seg_dCdt", SF_SEG, SF_WIN, RANGE_OWNED, NB_CONC, FLD_DCDT, 0, FLD_SEGC},
     {ST_DCDT, H(HOOK_RATES), "seg_dCdt", SF_SEG | SF_RENORM, SF_WIN, RANGE_OWNED, FLD_L, 0, 0, 0},

@@ -34,6 +34,7 @@ unsigned stage_flags(const struct sim *s)
     if (s->flow_on && s->flow.kgc) f |= SF_KGC;
     if (s->dem) f |= SF_DEM;
     if (s->dem && s->dem->coupling == DEM_TWO_WAY) f |= SF_DEM2;
+    if (s->flow_on && s->flow.contact) f |= SF_CONTACT;
     return f;
 }
 
@@ -162,7 +163,7 @@ uint32_t stage_moving_fields(unsigned flags)
 
 const stage_sched *stage_schedule(unsigned flags)
 {
-    enum { NF = SF_ALL + 1 }; /* nine flags */
+    enum { NF = SF_ALL + 1 }; /* ten flags */
     static stage_sched memo[NF];
     static int done[NF];
     flags &= NF - 1;

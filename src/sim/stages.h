@@ -40,7 +40,8 @@ enum stage_flag {
     SF_KGC = 1u << 6,    /* the corrected kernel gradient (Flow:gradient_correction on) */
     SF_DEM = 1u << 7,    /* DEM grains (DEM:d > 0; src/dem/) */
     SF_DEM2 = 1u << 8,   /* their coupling two ways (DEM:coupling two_way) */
-    SF_ALL = (1u << 9) - 1
+    SF_CONTACT = 1u << 9, /* the Coulomb walls' friction on the particles (Walls:coulomb_force particles) */
+    SF_ALL = (1u << 10) - 1
 };
 
 /* HOOK_DEM: struct backend's dem_couple, after each rates (src/sim/sim.h). */

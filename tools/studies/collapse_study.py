@@ -137,6 +137,9 @@ GLASS_A = (0.5, 2, 4, 8)
 # The floor with the beads' wall friction angle, 24.8 deg (Kumar's thesis, ch. 4, from Lajeunesse et al.
 # 2004), as a Coulomb wall (Walls:slip coulomb) in place of the scene's no-slip floor.
 COULOMB_FLOOR = {"Walls:slip": "coulomb", "Walls:mu_w": 0.4621}
+# The same floor with its friction on each particle (Walls:coulomb_force particles, set lajeunesse_contact): the
+# dummies' normal force, whatever term carries it, times mu_w resists the slip of a sheet at sigma = 0 too
+CONTACT_FLOOR = dict(COULOMB_FLOOR, **{"Walls:coulomb_force": "particles"})
 # L0 / dr (80: a = 0.5 and 2, 160: a = 0.5, on the development machine; the rest of 80 and 160 want a GPU)
 GLASS_N = (10, 20, 40, 80, 160)
 # The beads' diameter, m (the scene's Grains:d_small; Kumar's table): the grain-scale fronts of the report, the
@@ -179,6 +182,9 @@ def cases(which):
         c += [glass_case(a, n, "const") for n in GLASS_N for a in GLASS_A]
     if which == "lajeunesse_coulomb":  # the floor with the beads' wall friction, tan 24.8 deg (Kumar's table)
         c += [glass_case(a, n, m, tag="_cw", **COULOMB_FLOOR) for m in ("glass", "const") for n in GLASS_N
+              for a in GLASS_A]
+    if which == "lajeunesse_contact":  # that floor's friction on the particles (Walls:coulomb_force particles)
+        c += [glass_case(a, n, m, tag="_ct", **CONTACT_FLOOR) for m in ("glass", "const") for n in GLASS_N
               for a in GLASS_A]
     if which == "lajeunesse_slot":
         c += [glass_case(a, n, tag="_slot%g_%s" % (W * 1e3, t), **{"Geometry:dim": 3, "Geometry:depth": W,
@@ -280,10 +286,11 @@ def lagree_table(runs, where, P):
 def glass_name(n):
     """What a glass-bead run's name (glass_case) says: its friction model, floor, L0/dr, E and flow; None for
     another run's (the slot's: slot_report)."""
-    m = re.fullmatch(r"a([0-9.]+)_(glass|const)_n([0-9]+)(_E1e6)?(_cw)?(_flow|_av[0-9.]+)?", n)
+    m = re.fullmatch(r"a([0-9.]+)_(glass|const)_n([0-9]+)(_E1e6)?(_cw|_ct)?(_flow|_av[0-9.]+)?", n)
     if not m:
         return None
-    return dict(model=m.group(2), floor="coulomb" if m.group(5) else "no_slip", n=int(m.group(3)),
+    floor = {"_cw": "coulomb", "_ct": "contact"}.get(m.group(5), "no_slip")
+    return dict(model=m.group(2), floor=floor, n=int(m.group(3)),
                 E="1e6" if m.group(4) else "1e5",
                 flow="riemann" if m.group(6) == "_flow" else "monaghan_" + (m.group(6)[3:] if m.group(6) else "1"))
 
@@ -318,7 +325,8 @@ def glass_order(q):
 
 
 def glass_label(model, floor, flow="monaghan_1"):
-    return ("mu(I)" if model == "glass" else "tan 27.4") + (", Coulomb floor" if floor == "coulomb" else "") + (
+    return ("mu(I)" if model == "glass" else "tan 27.4") + {"coulomb": ", Coulomb floor", "contact": ", Coulomb floor "
+                                                            "on the particles"}.get(floor, "") + (
         "" if flow == "monaghan_1" else ", the scenes' flow" if flow == "riemann" else
         ", alpha_av " + flow.split("_")[1])
 
@@ -409,6 +417,43 @@ def glass_report(runs, where, P, docs, merge=False):
     fig.savefig(os.path.join(docs, "validation_collapse_glass.png"), dpi=110)
     plt.close(fig)
     dissipation_chart(rows, docs)
+    floor_chart(rows, docs)
+
+
+def floor_chart(rows, docs):
+    """The floor's friction (sets lajeunesse, lajeunesse_coulomb, lajeunesse_contact): the runout over Lube's law
+    against L0/dr for each a, under mu(I) (E 1e5, Monaghan's alpha 1), on the no-slip floor, the Coulomb floor
+    through its dummies and the Coulomb floor on the particles (Walls:coulomb_force particles); the last
+    particle's and the deposit's thicker than 1.5 d; floors.png in the --docs folder."""
+    sel = [q for q in rows if q["model"] == "glass" and q["E"] == "1e5" and q["flow"] == "monaghan_1"]
+    if not any(q["floor"] == "contact" for q in sel):
+        return
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 2, figsize=(12, 4.2), sharey=True)
+    styles = {"no_slip": ("-", "o", "no-slip floor"), "coulomb": (":", "s", "Coulomb floor, dummies"),
+              "contact": ("--", "^", "Coulomb floor, on the particles")}
+    for j, av in enumerate(GLASS_A):
+        for floor, (ls, mk, name) in styles.items():
+            q = sorted((q for q in sel if q["a"] == av and q["floor"] == floor and not q["end_wall"]),
+                       key=lambda q: q["n"])
+            if not q:
+                continue
+            lab = "a = %g, %s" % (av, name)
+            ax[0].semilogx([r["n"] for r in q], [r["runout"] / r["lube_runout"] for r in q], ls=ls, marker=mk,
+                           color="C%d" % j, label=lab)
+            g = [r for r in q if not math.isnan(r["runout_1_5d"])]
+            ax[1].semilogx([r["n"] for r in g], [r["runout_1_5d"] / r["lube_runout"] for r in g], ls=ls, marker=mk,
+                           color="C%d" % j, label=lab)
+    for x in ax:
+        x.axhspan(0.85, 1.15, color="0.88"), x.axhline(1, color="k", lw=0.6)
+        x.set_xlabel("L0 / dr")
+    ax[0].set_ylabel("runout / Lube et al. 2005")
+    ax[0].set_title("last particle"), ax[1].set_title("deposit thicker than 1.5 d")
+    ax[1].legend(fontsize=6, ncol=2)
+    fig.suptitle("glass beads, mu(I): the floor's friction (Coulomb tan 24.8 deg)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(os.path.join(docs, "floors.png"), dpi=110)
+    plt.close(fig)
 
 
 def dissipation_chart(rows, docs):
@@ -648,7 +693,7 @@ def main(argv=None):
         return cmd_sheet(argv[1:])
     batch.study_main(__doc__, ("aspect", "yield", "resolution", "lagree", "lajeunesse", "lajeunesse_const", "lajeunesse_E",
                                   "lajeunesse_flow", "lajeunesse_alpha",
-                                  "lajeunesse_coulomb", "lajeunesse_slot"), cases, reduce_done, cmd_report, "collapse", argv=argv,
+                                  "lajeunesse_coulomb", "lajeunesse_contact", "lajeunesse_slot"), cases, reduce_done, cmd_report, "collapse", argv=argv,
                      merge="keep glass.csv's rows (in --docs) of the glass-bead runs not in --out: a rerun of some cases")
 
 
