@@ -411,11 +411,13 @@ HD_INLINE real flow_rates(size_t i, particles_t *p, const grid_view *g, const fl
  * contact of Bardenhagen et al. (2000, MPM) at one particle, its normal load
  * whatever the discretisation carries it by. The walls are taken one after
  * another in their slot order. Where the wall pulls (N <= 0) nothing
- * changes. The time-step bound keeps the flow rates' |acc|. Lane `lane` of a
+ * changes, and so with dt = 0. The time-step bound keeps the flow rates'
+ * |acc|. Lane `lane` of a
  * team of nlanes (hd.h); lane 0 writes. */
 HD_INLINE void flow_contact_team(size_t i, particles_t *p, const grid_view *g, const flow_ctx *c, real dt, int lane,
                                  int nlanes)
 {
+    if (!(dt > 0)) return; /* no step to stop a slip in (and -s / dt undefined): acc as the flow rates made it */
     const sph_ctx *k = &c->k;
     real aw[3 * WALL_CONTACT_MAX];
     for (int q = 0; q < 3 * WALL_CONTACT_MAX; ++q) aw[q] = 0;
